@@ -1,0 +1,213 @@
+//! Loads a `.glb` / `.gltf` file: its JSON document, its buffers, and (on request) its images.
+//! External files are read only from inside the input's own folder.
+
+use std::path::{Component, Path, PathBuf};
+
+use base64::Engine;
+use gltf::json;
+
+use crate::error::{Result, SceneError};
+
+/// Extensions whose presence in `extensionsRequired` we can honour.
+pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
+    "KHR_mesh_quantization",
+    "KHR_texture_transform",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_unlit",
+];
+
+/// A parsed glTF document with its binary buffers resolved.
+pub struct GltfSource {
+    /// The file the document came from (used in every error message).
+    pub path: PathBuf,
+    /// The folder that external resources must stay inside.
+    pub dir: PathBuf,
+    /// The JSON document.
+    pub root: json::Root,
+    /// Buffer contents, index-aligned with `root.buffers`.
+    pub buffers: Vec<Vec<u8>>,
+}
+
+impl GltfSource {
+    /// Reads and parses `path`, resolving every buffer.
+    pub fn open(path: &Path) -> Result<Self> {
+        let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_bytes(path, &bytes)
+    }
+
+    /// Parses `bytes` as if read from `path` (which locates external resources).
+    pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self> {
+        let err = |p: String| SceneError::invalid(path, p);
+        let parse = |json_bytes: &[u8]| -> Result<json::Root> {
+            serde_json::from_slice(json_bytes)
+                .map_err(|e| err(format!("not a valid glTF JSON document ({e})")))
+        };
+        let (root, glb_bin): (json::Root, Option<Vec<u8>>) = if bytes.starts_with(b"glTF") {
+            let glb = gltf::binary::Glb::from_slice(bytes)
+                .map_err(|e| err(format!("truncated or malformed GLB container ({e})")))?;
+            (parse(&glb.json)?, glb.bin.map(|b| b.into_owned()))
+        } else {
+            let first = bytes.iter().find(|b| !b.is_ascii_whitespace()).copied();
+            if first != Some(b'{') {
+                return Err(err(
+                    "not a glTF file (neither GLB magic nor a JSON object)".into()
+                ));
+            }
+            (parse(bytes)?, None)
+        };
+        for ext in &root.extensions_required {
+            if !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext.as_str()) {
+                return Err(SceneError::UnsupportedExtension {
+                    path: path.to_path_buf(),
+                    extension: ext.clone(),
+                });
+            }
+        }
+        let dir = path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| PathBuf::from("."));
+        let mut src = GltfSource {
+            path: path.to_path_buf(),
+            dir,
+            root,
+            buffers: Vec::new(),
+        };
+        let mut glb_bin = glb_bin;
+        let mut buffers = Vec::with_capacity(src.root.buffers.len());
+        for (i, buffer) in src.root.buffers.iter().enumerate() {
+            let declared = buffer.byte_length.0 as usize;
+            let data = match &buffer.uri {
+                None => glb_bin.take().ok_or_else(|| {
+                    err(format!(
+                        "buffer {i} has no uri and the file has no GLB binary chunk"
+                    ))
+                })?,
+                Some(uri) => src.read_uri(uri, &format!("buffer {i}"))?,
+            };
+            if data.len() < declared {
+                return Err(err(format!(
+                    "buffer {i} holds {} bytes but declares byteLength {declared} (truncated file?)",
+                    data.len()
+                )));
+            }
+            buffers.push(data);
+        }
+        src.buffers = buffers;
+        Ok(src)
+    }
+
+    /// An error about this document.
+    pub fn invalid(&self, problem: impl Into<String>) -> SceneError {
+        SceneError::invalid(&self.path, problem)
+    }
+
+    /// Reads a `data:` URI or a relative file inside the input's folder.
+    pub fn read_uri(&self, uri: &str, what: &str) -> Result<Vec<u8>> {
+        if let Some(rest) = uri.strip_prefix("data:") {
+            let (_, payload) = rest
+                .split_once(";base64,")
+                .ok_or_else(|| self.invalid(format!("{what}: data URI is not base64")))?;
+            return base64::engine::general_purpose::STANDARD
+                .decode(payload)
+                .map_err(|e| self.invalid(format!("{what}: bad base64 data URI ({e})")));
+        }
+        let rel = percent_decode(uri);
+        if rel.contains("://") || rel.starts_with('/') || rel.starts_with('\\') {
+            return Err(self.invalid(format!(
+                "{what}: external URI '{uri}' is outside the input folder (only relative paths inside it are read)"
+            )));
+        }
+        let rel_path = Path::new(&rel);
+        let escapes = rel_path.components().any(|c| {
+            matches!(
+                c,
+                Component::ParentDir | Component::RootDir | Component::Prefix(_)
+            )
+        });
+        if escapes {
+            return Err(self.invalid(format!(
+                "{what}: external URI '{uri}' is outside the input folder"
+            )));
+        }
+        let full = self.dir.join(rel_path);
+        // Symlinks could still point elsewhere: compare canonical paths.
+        if let (Ok(canon), Ok(dir)) = (full.canonicalize(), self.dir.canonicalize())
+            && !canon.starts_with(&dir)
+        {
+            return Err(self.invalid(format!(
+                "{what}: external URI '{uri}' resolves outside the input folder"
+            )));
+        }
+        std::fs::read(&full)
+            .map_err(|e| self.invalid(format!("{what}: cannot read '{}' ({e})", full.display())))
+    }
+
+    /// The encoded bytes of image `index` (from a buffer view, a data URI or a file).
+    pub fn image_bytes(&self, index: usize) -> Result<Vec<u8>> {
+        let image = self
+            .root
+            .images
+            .get(index)
+            .ok_or_else(|| self.invalid(format!("image {index} does not exist")))?;
+        let what = format!("image {index}");
+        if let Some(view) = image.buffer_view {
+            return Ok(self.view_bytes(view.value(), &what)?.to_vec());
+        }
+        match &image.uri {
+            Some(uri) => self.read_uri(uri, &what),
+            None => Err(self.invalid(format!("{what} has neither uri nor bufferView"))),
+        }
+    }
+
+    /// The bytes of buffer view `index`, bounds-checked.
+    pub fn view_bytes(&self, index: usize, what: &str) -> Result<&[u8]> {
+        let view =
+            self.root.buffer_views.get(index).ok_or_else(|| {
+                self.invalid(format!("{what}: bufferView {index} does not exist"))
+            })?;
+        let buffer = self.buffers.get(view.buffer.value()).ok_or_else(|| {
+            self.invalid(format!(
+                "{what}: bufferView {index} names buffer {} which does not exist",
+                view.buffer.value()
+            ))
+        })?;
+        let start = view.byte_offset.map(|o| o.0).unwrap_or(0) as usize;
+        let end = start.checked_add(view.byte_length.0 as usize);
+        match end {
+            Some(end) if end <= buffer.len() => Ok(&buffer[start..end]),
+            _ => Err(self.invalid(format!(
+                "{what}: bufferView {index} (offset {start}, length {}) runs past the end of buffer {} ({} bytes)",
+                view.byte_length.0,
+                view.buffer.value(),
+                buffer.len()
+            ))),
+        }
+    }
+}
+
+/// Decodes `%XX` escapes in a relative URI.
+fn percent_decode(s: &str) -> String {
+    let bytes = s.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%'
+            && i + 2 < bytes.len()
+            && let Ok(v) = u8::from_str_radix(
+                std::str::from_utf8(&bytes[i + 1..i + 3]).unwrap_or("zz"),
+                16,
+            )
+        {
+            out.push(v);
+            i += 3;
+            continue;
+        }
+        out.push(bytes[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}

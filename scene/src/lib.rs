@@ -1,0 +1,18 @@
+//! frond's first stage: the tree model, glTF import and writing, animation sampling and the
+//! sample-tree generator.
+
+pub mod accessor;
+pub mod animation;
+pub mod binding;
+pub mod classify;
+pub mod error;
+pub mod gltf_source;
+pub mod import;
+pub mod model;
+pub mod sampling;
+pub mod skinning;
+
+pub use error::{Result, SceneError};
+pub use import::{ImportOptions, import, import_bytes};
+pub use model::*;
+pub use sampling::{Motion, SampleOptions, Sampled, sample};

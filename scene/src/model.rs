@@ -1,0 +1,262 @@
+//! The tree model every later stage works on: node hierarchy, skeleton, skinned geometry split
+//! into wood and foliage, materials, textures and animation clips (spec animated-billboard-clouds §1).
+
+use std::path::PathBuf;
+
+use glam::{Mat4, Quat, Vec2, Vec3};
+use serde::Serialize;
+
+use crate::animation::Clip;
+
+/// A node's local transform as translation, rotation, scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trs {
+    pub translation: Vec3,
+    pub rotation: Quat,
+    pub scale: Vec3,
+}
+
+impl Trs {
+    /// The identity transform.
+    pub const IDENTITY: Trs = Trs {
+        translation: Vec3::ZERO,
+        rotation: Quat::IDENTITY,
+        scale: Vec3::ONE,
+    };
+    /// As a column-major matrix (T · R · S).
+    pub fn matrix(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+    }
+}
+
+/// One node of the glTF hierarchy.
+#[derive(Clone, Debug)]
+pub struct Node {
+    pub name: String,
+    pub parent: Option<usize>,
+    pub children: Vec<usize>,
+    /// Rest (un-animated) local transform.
+    pub rest: Trs,
+    /// The bone this node is, if it is a skin joint.
+    pub bone: Option<usize>,
+    /// The node's `extras`, verbatim JSON (empty when absent).
+    pub extras: Option<serde_json::Value>,
+}
+
+/// A bone: a node that is a joint of some skin.
+#[derive(Clone, Debug)]
+pub struct Bone {
+    pub name: String,
+    pub node: usize,
+    /// The nearest ancestor node that is also a bone.
+    pub parent: Option<usize>,
+    /// 1 for a root bone, parent's depth + 1 otherwise.
+    pub depth: u32,
+    /// World transform at rest (no animation applied).
+    pub rest_world: Mat4,
+}
+
+/// What a group of vertices is deformed by.
+#[derive(Clone, Debug)]
+pub enum Binding {
+    /// Linear-blend skinned: palette entry k = world(joint_k) · inverse_bind_k.
+    Skin {
+        joints: Vec<usize>,
+        inverse_bind: Vec<Mat4>,
+    },
+    /// Rigidly attached to a node (unskinned mesh): palette entry 0 = world(node).
+    Node(usize),
+}
+
+impl Binding {
+    /// Node of palette entry `k`.
+    pub fn node_of(&self, k: usize, bones: &[Bone]) -> usize {
+        match self {
+            Binding::Skin { joints, .. } => bones[joints[k]].node,
+            Binding::Node(n) => *n,
+        }
+    }
+}
+
+/// Whether a triangle belongs to the wood or the foliage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Part {
+    Wood,
+    Foliage,
+}
+
+/// How the wood/foliage decision for one primitive was made.
+#[derive(Clone, Debug, Serialize)]
+pub struct Classification {
+    pub mesh: String,
+    pub primitive: usize,
+    pub material: String,
+    pub part: Part,
+    pub reason: String,
+    pub triangles: usize,
+}
+
+/// Per-vertex data, in the mesh space the binding expects.
+#[derive(Clone, Debug, Default)]
+pub struct Vertices {
+    pub position: Vec<Vec3>,
+    pub normal: Vec<Vec3>,
+    pub uv: Vec<Vec2>,
+    /// Index into `Tree::bindings`.
+    pub binding: Vec<u32>,
+    /// Palette entries of the binding (skin-local joint indices); unused slots weigh 0.
+    pub joints: Vec<[u16; 4]>,
+    /// Normalised weights (sum 1).
+    pub weights: Vec<[f32; 4]>,
+}
+
+impl Vertices {
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+    /// True when there are no vertices.
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+}
+
+/// One triangle of the tree.
+#[derive(Clone, Copy, Debug)]
+pub struct Triangle {
+    pub v: [u32; 3],
+    pub material: u32,
+    pub part: Part,
+    /// Zero area at rest: counted but skipped by later stages.
+    pub degenerate: bool,
+    /// For foliage: the single bone it follows (spec §1.3). None when the tree has no bones.
+    pub bone: Option<u32>,
+}
+
+/// glTF alpha mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "UPPERCASE")]
+pub enum AlphaMode {
+    Opaque,
+    Mask,
+    Blend,
+}
+
+/// A material as far as billboards care: colour, texture, cut-out.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    pub base_color: [f32; 4],
+    /// Index into `Tree::textures`.
+    pub base_color_texture: Option<usize>,
+    pub alpha_mode: AlphaMode,
+    pub alpha_cutoff: f32,
+    pub double_sided: bool,
+}
+
+/// A decoded RGBA8 texture (sRGB, straight alpha).
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+}
+
+/// Axis-aligned bounds.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct Bounds {
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+}
+
+impl Bounds {
+    /// Bounds of a point set (zero box at the origin when empty).
+    pub fn of(points: impl IntoIterator<Item = Vec3>) -> Bounds {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for p in points {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        if lo.x > hi.x {
+            lo = Vec3::ZERO;
+            hi = Vec3::ZERO;
+        }
+        Bounds {
+            min: lo.to_array(),
+            max: hi.to_array(),
+        }
+    }
+    /// Largest extent of the box.
+    pub fn size(&self) -> f32 {
+        (Vec3::from(self.max) - Vec3::from(self.min)).max_element()
+    }
+    /// Height along +Y (glTF up).
+    pub fn height(&self) -> f32 {
+        self.max[1] - self.min[1]
+    }
+}
+
+/// A whole tree as imported.
+#[derive(Clone, Debug)]
+pub struct Tree {
+    pub source: PathBuf,
+    pub nodes: Vec<Node>,
+    /// Nodes ordered parents-first (for global transforms).
+    pub node_order: Vec<usize>,
+    pub bones: Vec<Bone>,
+    pub bindings: Vec<Binding>,
+    pub vertices: Vertices,
+    pub triangles: Vec<Triangle>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub clips: Vec<Clip>,
+    pub classification: Vec<Classification>,
+    /// Foliage triangles whose vertices were not all rigidly bound to their chosen bone.
+    pub foliage_reassigned: usize,
+    /// Warnings met while importing (static tree, unsupported channels, ...).
+    pub warnings: Vec<String>,
+    /// Rest-pose world bounds of all triangles.
+    pub bounds: Bounds,
+}
+
+impl Tree {
+    /// Skeleton depth: the longest chain of bones from a root bone.
+    pub fn skeleton_depth(&self) -> u32 {
+        self.bones.iter().map(|b| b.depth).max().unwrap_or(0)
+    }
+    /// Indices of non-degenerate foliage triangles, in file order.
+    pub fn foliage(&self) -> Vec<usize> {
+        self.triangles
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.part == Part::Foliage && !t.degenerate)
+            .map(|(i, _)| i)
+            .collect()
+    }
+    /// Number of triangles of a part (degenerate ones included).
+    pub fn count(&self, part: Part) -> usize {
+        self.triangles.iter().filter(|t| t.part == part).count()
+    }
+    /// Number of distinct bones that foliage is bound to.
+    pub fn foliage_bones(&self) -> usize {
+        let mut seen = vec![false; self.bones.len()];
+        for t in &self.triangles {
+            if t.part == Part::Foliage
+                && let Some(b) = t.bone
+            {
+                seen[b as usize] = true;
+            }
+        }
+        seen.iter().filter(|s| **s).count()
+    }
+    /// Find a clip by name, or the first clip.
+    pub fn clip_index(&self, name: Option<&str>) -> Option<usize> {
+        match name {
+            None => (!self.clips.is_empty()).then_some(0),
+            Some(n) => self.clips.iter().position(|c| c.name == n),
+        }
+    }
+}

@@ -1,0 +1,59 @@
+//! Linear-blend skinning of the tree's vertices for a set of node world matrices
+//! (spec animated-billboard-clouds §7: v' = Σ w · world(joint) · inverseBind · v).
+
+use glam::{Mat4, Vec3};
+use rayon::prelude::*;
+
+use crate::model::{Binding, Tree};
+
+/// Per-binding matrix palettes for the given node world matrices.
+pub fn palettes(tree: &Tree, world: &[Mat4]) -> Vec<Vec<Mat4>> {
+    tree.bindings
+        .iter()
+        .map(|b| match b {
+            Binding::Skin {
+                joints,
+                inverse_bind,
+            } => joints
+                .iter()
+                .zip(inverse_bind)
+                .map(|(&j, ibm)| world[tree.bones[j].node] * *ibm)
+                .collect(),
+            Binding::Node(n) => vec![world[*n]],
+        })
+        .collect()
+}
+
+/// Skinned positions of every vertex.
+pub fn skin_positions(tree: &Tree, world: &[Mat4]) -> Vec<Vec3> {
+    let pal = palettes(tree, world);
+    let mut out = vec![Vec3::ZERO; tree.vertices.len()];
+    skin_into(tree, &pal, &mut out);
+    out
+}
+
+/// Skins every vertex into `out` (same length as the vertex arrays), in parallel.
+pub fn skin_into(tree: &Tree, pal: &[Vec<Mat4>], out: &mut [Vec3]) {
+    let v = &tree.vertices;
+    out.par_chunks_mut(4096).enumerate().for_each(|(c, chunk)| {
+        let base = c * 4096;
+        for (k, o) in chunk.iter_mut().enumerate() {
+            let i = base + k;
+            let p = v.position[i];
+            let palette = &pal[v.binding[i] as usize];
+            let w = v.weights[i];
+            let j = v.joints[i];
+            if w[0] >= 1.0 {
+                *o = palette[j[0] as usize].transform_point3(p);
+                continue;
+            }
+            let mut acc = Vec3::ZERO;
+            for s in 0..4 {
+                if w[s] > 0.0 {
+                    acc += palette[j[s] as usize].transform_point3(p) * w[s];
+                }
+            }
+            *o = acc;
+        }
+    });
+}

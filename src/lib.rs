@@ -1,0 +1,4 @@
+//! The `frond` pipeline: each CLI command's work as a library function, so tests can call it.
+
+pub mod inspect;
+pub mod output;
