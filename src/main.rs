@@ -7,6 +7,8 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
 use frond::inspect::inspect;
+use frond::output::write_atomic;
+use frond_scene::generator::{Preset, generate};
 use frond_scene::{ImportOptions, import};
 
 #[derive(Parser)]
@@ -55,6 +57,18 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Write a skinned, wind-animated sample tree (.glb).
+    Sample {
+        /// Size: small (~2k foliage triangles), medium (~20k), large (~200k), xlarge (~1M).
+        #[arg(long, default_value = "small", value_parser = ["small", "medium", "large", "xlarge"])]
+        preset: String,
+        /// Random seed: same preset and seed, same bytes.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Output .glb path.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -70,6 +84,12 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 print!("{}", report.text());
             }
+        }
+        Command::Sample { preset, seed, output } => {
+            let preset = Preset::parse(&preset).with_context(|| format!("unknown preset '{preset}'"))?;
+            let tree = generate(preset, seed).context("generating the sample tree")?;
+            write_atomic(&output, &tree.glb)?;
+            tracing::info!("wrote {} ({} bytes)", output.display(), tree.glb.len());
         }
     }
     Ok(())

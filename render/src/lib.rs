@@ -1,0 +1,51 @@
+//! `frond-render`: a small offscreen wgpu renderer for plain triangle meshes.
+//!
+//! It draws already-posed meshes (the caller skins vertices on the CPU) into an
+//! sRGB RGBA8 image plus an exact per-pixel coverage mask, on real GPUs and on CPU
+//! adapters (Mesa llvmpipe over GL, lavapipe over Vulkan) alike. It is used for
+//! baking billboard textures and for measuring how LODs differ on screen.
+//!
+//! Conventions: Y-up right-handed world (as in glTF), counter-clockwise front faces,
+//! depth in [0, 1] (Depth32Float), a fixed world-space light from above
+//! ([`LIGHT_DIRECTION`]). Textures are sampled without mipmaps, so alpha-tested
+//! coverage is never thinned by mip averaging.
+//!
+//! ```no_run
+//! use frond_render::{Camera, DrawMaterial, DrawMesh, DrawScene, Projection, Renderer};
+//! # fn main() -> Result<(), frond_render::RenderError> {
+//! let renderer = Renderer::new()?;
+//! let scene = DrawScene {
+//!     meshes: vec![DrawMesh {
+//!         positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+//!         normals: None,
+//!         uvs: None,
+//!         indices: vec![0, 1, 2],
+//!         material: 0,
+//!     }],
+//!     materials: vec![DrawMaterial::opaque([1.0, 0.0, 0.0, 1.0])],
+//!     textures: vec![],
+//! };
+//! let (min, max) = scene.bounds().unwrap_or_default();
+//! let camera = Camera::framing(min, max, 0.0, 0.0, Projection::Perspective { fov_y_deg: 45.0 });
+//! let frame = renderer.render(&scene, &camera, 128, 128, [0.0, 0.0, 0.0, 0.0])?;
+//! println!("{} of the image is covered", frame.coverage_fraction());
+//! # Ok(())
+//! # }
+//! ```
+
+mod adapter;
+mod batch;
+mod camera;
+mod error;
+mod frame;
+mod pipeline;
+mod readback;
+mod renderer;
+mod scene;
+
+pub use camera::{Camera, Projection};
+pub use error::RenderError;
+pub use frame::Frame;
+pub use pipeline::LIGHT_DIRECTION;
+pub use renderer::Renderer;
+pub use scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};

@@ -1,0 +1,432 @@
+//! The renderer: owns the device and pipelines and turns a [`DrawScene`] into a [`Frame`].
+
+use std::collections::BTreeMap;
+
+use wgpu::util::DeviceExt;
+
+use crate::adapter::{self, Gpu};
+use crate::batch::{self, Batch};
+use crate::camera::Camera;
+use crate::error::RenderError;
+use crate::frame::Frame;
+use crate::pipeline::{
+    self, COLOR_FORMAT, COVERAGE_FORMAT, DEPTH_FORMAT, Globals, LIGHT_DIRECTION, MaterialUniform,
+    Pipelines,
+};
+use crate::readback::{self, Readback};
+use crate::scene::DrawScene;
+
+/// Largest single vertex or index buffer we create, even where the device allows
+/// more: keeps allocations moderate (about 7M vertices per buffer).
+const BUFFER_CAP: u64 = 256 << 20;
+
+/// An offscreen renderer, reusable for many renders and shareable across threads.
+///
+/// Creating one opens a device (a few seconds on CPU adapters); keep it around.
+pub struct Renderer {
+    gpu: Gpu,
+    pipelines: Pipelines,
+    info: String,
+}
+
+impl std::fmt::Debug for Renderer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Renderer")
+            .field("adapter", &self.info)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Renderer {
+    /// Opens the best available adapter (GPU first, then CPU rasterisers such as
+    /// lavapipe or llvmpipe) and builds the pipelines. Honours `WGPU_BACKEND` and
+    /// `WGPU_ADAPTER_NAME`.
+    pub fn new() -> Result<Renderer, RenderError> {
+        let gpu = adapter::open()?;
+        // Errors inside `render` are caught by error scopes; anything else is logged
+        // instead of wgpu's default panic.
+        gpu.device
+            .on_uncaptured_error(std::sync::Arc::new(|e: wgpu::Error| {
+                tracing::error!("uncaptured wgpu error: {e}");
+            }));
+        let info = adapter::describe(&gpu.adapter.get_info());
+        let pipelines = Pipelines::new(&gpu.device, &gpu.queue);
+        Ok(Renderer {
+            gpu,
+            pipelines,
+            info,
+        })
+    }
+
+    /// Short description of the adapter in use, e.g. "llvmpipe (LLVM 15) [Gl, Cpu]".
+    pub fn adapter_info(&self) -> String {
+        self.info.clone()
+    }
+
+    /// Full wgpu adapter information.
+    pub fn wgpu_adapter_info(&self) -> wgpu::AdapterInfo {
+        self.gpu.adapter.get_info()
+    }
+
+    /// Whether rendering happens on a CPU rasteriser (llvmpipe, lavapipe, WARP).
+    pub fn is_cpu(&self) -> bool {
+        self.gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// Largest image width or height this device can render.
+    pub fn max_dimension(&self) -> u32 {
+        self.gpu.device.limits().max_texture_dimension_2d
+    }
+
+    /// The wgpu instance (e.g. to enumerate adapters for diagnostics).
+    pub fn instance(&self) -> &wgpu::Instance {
+        &self.gpu.instance
+    }
+
+    /// Renders `scene` from `camera` into a `width` x `height` image cleared to
+    /// `background` (linear RGBA, stored sRGB-encoded).
+    ///
+    /// Inputs are validated first; bad indices, sizes or references return an error
+    /// without touching the GPU.
+    pub fn render(
+        &self,
+        scene: &DrawScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        background: [f32; 4],
+    ) -> Result<Frame, RenderError> {
+        self.render_with_buffer_cap(scene, camera, width, height, background, BUFFER_CAP)
+    }
+
+    fn check_size(&self, width: u32, height: u32) -> Result<(), RenderError> {
+        let limits = self.gpu.device.limits();
+        let invalid = |reason: String| {
+            Err(RenderError::InvalidSize {
+                width,
+                height,
+                reason,
+            })
+        };
+        if width == 0 || height == 0 {
+            return invalid("width and height must be at least 1".into());
+        }
+        let max = limits.max_texture_dimension_2d;
+        if width > max || height > max {
+            return invalid(format!("the device renders at most {max} pixels per side"));
+        }
+        let readback = readback::padded_row_bytes(width, 4) * u64::from(height);
+        if readback > limits.max_buffer_size {
+            return invalid(format!(
+                "the readback buffer ({readback} bytes) exceeds the device's max_buffer_size ({})",
+                limits.max_buffer_size
+            ));
+        }
+        Ok(())
+    }
+
+    pub(crate) fn render_with_buffer_cap(
+        &self,
+        scene: &DrawScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        background: [f32; 4],
+        buffer_cap: u64,
+    ) -> Result<Frame, RenderError> {
+        self.check_size(width, height)?;
+        camera.validate()?;
+        let limits = self.gpu.device.limits();
+        scene.validate(limits.max_texture_dimension_2d)?;
+        let batches = batch::build_batches(scene, buffer_cap.min(limits.max_buffer_size));
+
+        let device = &self.gpu.device;
+        let oom_scope = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation_scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+
+        let readbacks = self.encode_and_submit(scene, camera, width, height, background, &batches);
+
+        let validation = pollster::block_on(validation_scope.pop());
+        let oom = pollster::block_on(oom_scope.pop());
+        if let Some(e) = validation.or(oom) {
+            return Err(RenderError::Gpu(e.to_string()));
+        }
+
+        let mut images = Readback::read_all(device, &readbacks)?.into_iter();
+        let (Some(rgba), Some(coverage)) = (images.next(), images.next()) else {
+            return Err(RenderError::Readback("missing readback image".into()));
+        };
+        Ok(Frame {
+            width,
+            height,
+            rgba,
+            coverage: coverage.into_iter().map(|c| c >= 128).collect(),
+        })
+    }
+
+    /// Records and submits the render pass and the copies of both targets.
+    fn encode_and_submit(
+        &self,
+        scene: &DrawScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        background: [f32; 4],
+        batches: &[Batch],
+    ) -> [Readback; 2] {
+        let device = &self.gpu.device;
+        let p = &self.pipelines;
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
+        let target = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let attach = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+        let color = target("frond-render color", COLOR_FORMAT, attach);
+        let coverage = target("frond-render coverage", COVERAGE_FORMAT, attach);
+        let depth = target(
+            "frond-render depth",
+            DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let color_view = color.create_view(&Default::default());
+        let coverage_view = coverage.create_view(&Default::default());
+        let depth_view = depth.create_view(&Default::default());
+
+        let aspect = width as f32 / height as f32;
+        let view_proj = match scene.bounds() {
+            Some((min, max)) => camera.view_proj_for_bounds(aspect, min, max),
+            None => camera.view_proj(aspect),
+        };
+        let [lx, ly, lz] = LIGHT_DIRECTION;
+        let globals = Globals {
+            view_proj: view_proj.to_cols_array_2d(),
+            light_dir: [lx, ly, lz, 0.0],
+        };
+        let globals_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("frond-render globals"),
+            contents: bytemuck::bytes_of(&globals),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let globals_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("frond-render globals"),
+            layout: &p.globals_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: globals_buffer.as_entire_binding(),
+            }],
+        });
+        let material_groups = self.material_groups(scene, batches);
+
+        let gpu_batches: Vec<(wgpu::Buffer, wgpu::Buffer, &Batch)> = batches
+            .iter()
+            .map(|b| {
+                let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("frond-render vertices"),
+                    contents: bytemuck::cast_slice(&b.vertices),
+                    usage: wgpu::BufferUsages::VERTEX,
+                });
+                let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("frond-render indices"),
+                    contents: bytemuck::cast_slice(&b.indices),
+                    usage: wgpu::BufferUsages::INDEX,
+                });
+                (vertices, indices, b)
+            })
+            .collect();
+
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("frond-render"),
+        });
+        {
+            let [r, g, b, a] = background.map(f64::from);
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("frond-render pass"),
+                color_attachments: &[
+                    Some(wgpu::RenderPassColorAttachment {
+                        view: &color_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a }),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    }),
+                    Some(wgpu::RenderPassColorAttachment {
+                        view: &coverage_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    }),
+                ],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &globals_group, &[]);
+            for (vertices, indices, batch) in &gpu_batches {
+                pass.set_vertex_buffer(0, vertices.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                for draw in &batch.draws {
+                    let Some(group) = material_groups.get(&draw.material) else {
+                        continue;
+                    };
+                    let double_sided = scene.materials[draw.material].double_sided;
+                    pass.set_pipeline(if double_sided {
+                        &p.double_sided
+                    } else {
+                        &p.culled
+                    });
+                    pass.set_bind_group(1, group, &[]);
+                    pass.draw_indexed(
+                        draw.first_index..draw.first_index + draw.index_count,
+                        0,
+                        0..1,
+                    );
+                }
+            }
+        }
+        let readbacks = [
+            Readback::record(device, &mut encoder, &color, 4),
+            Readback::record(device, &mut encoder, &coverage, 1),
+        ];
+        self.gpu.queue.submit([encoder.finish()]);
+        readbacks
+    }
+
+    /// One bind group per material that some batch draws with; textures are uploaded
+    /// once each.
+    fn material_groups(
+        &self,
+        scene: &DrawScene,
+        batches: &[Batch],
+    ) -> BTreeMap<usize, wgpu::BindGroup> {
+        let device = &self.gpu.device;
+        let p = &self.pipelines;
+        let used: std::collections::BTreeSet<usize> = batches
+            .iter()
+            .flat_map(|b| b.draws.iter().map(|d| d.material))
+            .collect();
+        let mut textures: BTreeMap<usize, wgpu::TextureView> = BTreeMap::new();
+        let mut groups = BTreeMap::new();
+        for m in used {
+            let material = &scene.materials[m];
+            let view = match material.texture {
+                Some(t) => textures.entry(t).or_insert_with(|| {
+                    let tex = &scene.textures[t];
+                    pipeline::upload_texture(
+                        device,
+                        &self.gpu.queue,
+                        "frond-render base color",
+                        tex.width,
+                        tex.height,
+                        &tex.rgba,
+                    )
+                }),
+                None => &p.white,
+            };
+            let uniform = MaterialUniform {
+                base_color: material.base_color,
+                params: [material.alpha_cutoff.unwrap_or(-1.0), 0.0, 0.0, 0.0],
+            };
+            let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("frond-render material"),
+                contents: bytemuck::bytes_of(&uniform),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("frond-render material"),
+                layout: &p.material_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::Sampler(&p.sampler),
+                    },
+                ],
+            });
+            groups.insert(m, group);
+        }
+        groups
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{DrawMaterial, DrawMesh, Projection};
+    use glam::Vec3;
+
+    /// Splitting meshes across many small buffers must not change the image.
+    #[test]
+    fn split_buffers_render_identically() {
+        let r = Renderer::new().unwrap_or_else(|e| panic!("no renderer: {e}"));
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for k in 0..40u32 {
+            let (s, c) = (k as f32 * 0.157).sin_cos();
+            positions.extend([
+                [0.0, 0.0, 0.0],
+                [c, s, 0.1],
+                [c * 0.9 - s * 0.2, s * 0.9 + c * 0.2, -0.1],
+            ]);
+            indices.extend([3 * k, 3 * k + 1, 3 * k + 2]);
+        }
+        let scene = DrawScene {
+            meshes: vec![DrawMesh {
+                positions,
+                indices,
+                ..Default::default()
+            }],
+            materials: vec![DrawMaterial {
+                double_sided: true,
+                ..DrawMaterial::opaque([0.2, 0.7, 0.3, 1.0])
+            }],
+            textures: vec![],
+        };
+        let camera = Camera::framing(
+            Vec3::splat(-1.0),
+            Vec3::splat(1.0),
+            10.0,
+            10.0,
+            Projection::Perspective { fov_y_deg: 50.0 },
+        );
+        let whole = r.render(&scene, &camera, 48, 48, [0.0; 4]).expect("render");
+        let cap = 10 * size_of::<crate::batch::Vertex>() as u64;
+        let split = r
+            .render_with_buffer_cap(&scene, &camera, 48, 48, [0.0; 4], cap)
+            .expect("render");
+        assert!(whole.covered_count() > 100);
+        assert_eq!(whole, split);
+    }
+}

@@ -1,0 +1,65 @@
+// frond-render: textured, alpha-tested, simply lit triangles plus a coverage mask.
+
+struct Globals {
+    view_proj: mat4x4<f32>,
+    // xyz: unit direction toward the light (world space).
+    light_dir: vec4<f32>,
+};
+
+struct Material {
+    base_color: vec4<f32>,
+    // x: alpha cutoff, negative for opaque materials.
+    params: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> globals: Globals;
+@group(1) @binding(0) var<uniform> material: Material;
+@group(1) @binding(1) var base_texture: texture_2d<f32>;
+@group(1) @binding(2) var base_sampler: sampler;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    // w = 1 for lit meshes, 0 for meshes without normals.
+    @location(1) normal: vec4<f32>,
+    @location(2) uv: vec2<f32>,
+};
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal: vec4<f32>,
+    @location(1) uv: vec2<f32>,
+};
+
+@vertex
+fn vs_main(in: VertexIn) -> VertexOut {
+    var out: VertexOut;
+    out.clip = globals.view_proj * vec4<f32>(in.position, 1.0);
+    out.normal = in.normal;
+    out.uv = in.uv;
+    return out;
+}
+
+struct FragmentOut {
+    @location(0) color: vec4<f32>,
+    @location(1) coverage: vec4<f32>,
+};
+
+@fragment
+fn fs_main(in: VertexOut) -> FragmentOut {
+    let texel = textureSample(base_texture, base_sampler, in.uv);
+    let color = texel * material.base_color;
+    let cutoff = material.params.x;
+    if (cutoff >= 0.0 && color.a < cutoff) {
+        discard;
+    }
+    var shade = 1.0;
+    let n = in.normal.xyz;
+    if (in.normal.w > 0.5 && dot(n, n) > 1e-12) {
+        shade = 0.6 + 0.4 * abs(dot(normalize(n), globals.light_dir.xyz));
+    }
+    var out: FragmentOut;
+    // Opaque and alpha-tested surfaces are written fully opaque (glTF MASK semantics).
+    out.color = vec4<f32>(color.rgb * shade, 1.0);
+    out.coverage = vec4<f32>(1.0, 0.0, 0.0, 1.0);
+    return out;
+}

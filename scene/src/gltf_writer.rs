@@ -1,0 +1,380 @@
+//! The one glTF writer: nodes, meshes, skins, animations, materials and embedded PNG images
+//! into a single `.glb` (the sample generator uses it now, `export/` later). Output is
+//! deterministic: same calls, same bytes. Follows the rules in spec gltf-and-toolchain.md.
+
+use glam::Mat4;
+use serde_json::{Map, Value, json};
+
+/// A node to add.
+#[derive(Clone, Debug, Default)]
+pub struct NodeDesc {
+    pub name: String,
+    pub translation: Option<[f32; 3]>,
+    pub rotation: Option<[f32; 4]>,
+    pub scale: Option<[f32; 3]>,
+    pub mesh: Option<usize>,
+    pub skin: Option<usize>,
+    pub extras: Option<Value>,
+}
+
+/// glTF alpha mode of a written material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum WriteAlpha {
+    Opaque,
+    Mask(f32),
+    Blend,
+}
+
+/// A material to add.
+#[derive(Clone, Debug)]
+pub struct MaterialDesc {
+    pub name: String,
+    pub base_color: [f32; 4],
+    /// Index returned by [`GltfBuilder::add_texture`].
+    pub base_color_texture: Option<usize>,
+    pub alpha: WriteAlpha,
+    pub double_sided: bool,
+    pub metallic: f32,
+    pub roughness: f32,
+}
+
+/// One triangle-list primitive. `joints`/`weights` must come together.
+#[derive(Clone, Debug, Default)]
+pub struct PrimitiveDesc {
+    pub positions: Vec<[f32; 3]>,
+    pub normals: Option<Vec<[f32; 3]>>,
+    pub uvs: Option<Vec<[f32; 2]>>,
+    pub joints: Option<Vec<[u16; 4]>>,
+    pub weights: Option<Vec<[f32; 4]>>,
+    pub indices: Vec<u32>,
+    pub material: Option<usize>,
+}
+
+/// Animated node property.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChannelPath {
+    Translation,
+    Rotation,
+    Scale,
+}
+
+/// One animation channel with LINEAR or STEP keys; `values` is 3 or 4 floats per key.
+#[derive(Clone, Debug)]
+pub struct ChannelDesc {
+    pub node: usize,
+    pub path: ChannelPath,
+    pub times: Vec<f32>,
+    pub values: Vec<f32>,
+    pub step: bool,
+}
+
+/// Builds a GLB: add things, then [`GltfBuilder::to_glb`].
+#[derive(Default)]
+pub struct GltfBuilder {
+    generator: String,
+    bin: Vec<u8>,
+    nodes: Vec<Value>,
+    children: Vec<Vec<usize>>,
+    meshes: Vec<Value>,
+    accessors: Vec<Value>,
+    views: Vec<Value>,
+    skins: Vec<Value>,
+    animations: Vec<Value>,
+    materials: Vec<Value>,
+    textures: Vec<Value>,
+    images: Vec<Value>,
+    samplers: Vec<Value>,
+    scene_roots: Vec<usize>,
+    extras: Option<Value>,
+}
+
+fn f32s_to_bytes(v: &[f32]) -> impl Iterator<Item = u8> + '_ {
+    v.iter().flat_map(|x| x.to_le_bytes())
+}
+
+impl GltfBuilder {
+    /// A new, empty document; `generator` goes into `asset.generator`.
+    pub fn new(generator: &str) -> Self {
+        GltfBuilder { generator: generator.to_string(), ..Default::default() }
+    }
+
+    /// Document-level `extras` (e.g. what produced the file and with which seed).
+    pub fn set_extras(&mut self, extras: Value) {
+        self.extras = Some(extras);
+    }
+
+    fn push_view(&mut self, bytes: &[u8], target: Option<u32>, stride: Option<usize>) -> usize {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        let mut v = json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() });
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
+        if let Some(s) = stride {
+            v["byteStride"] = json!(s);
+        }
+        self.bin.extend_from_slice(bytes);
+        self.views.push(v);
+        self.views.len() - 1
+    }
+
+    /// Adds a float accessor (`ty` "SCALAR", "VEC2", "VEC3", "VEC4", "MAT4"); min/max when asked.
+    pub fn add_floats(&mut self, data: &[f32], ty: &str, with_bounds: bool, target: Option<u32>) -> usize {
+        let width = match ty {
+            "SCALAR" => 1,
+            "VEC2" => 2,
+            "VEC3" => 3,
+            "VEC4" => 4,
+            _ => 16,
+        };
+        let bytes: Vec<u8> = f32s_to_bytes(data).collect();
+        let view = self.push_view(&bytes, target, None);
+        let count = data.len() / width;
+        let mut acc = json!({ "bufferView": view, "componentType": 5126, "count": count, "type": ty });
+        if with_bounds && count > 0 {
+            let mut lo = vec![f32::INFINITY; width];
+            let mut hi = vec![f32::NEG_INFINITY; width];
+            for row in data.chunks_exact(width) {
+                for (c, v) in row.iter().enumerate() {
+                    lo[c] = lo[c].min(*v);
+                    hi[c] = hi[c].max(*v);
+                }
+            }
+            acc["min"] = json!(lo);
+            acc["max"] = json!(hi);
+        }
+        self.accessors.push(acc);
+        self.accessors.len() - 1
+    }
+
+    /// Adds an unsigned-integer accessor in the smallest type that holds `max_value`
+    /// (u8 only when `allow_u8`, since indices may not be u8 everywhere).
+    fn add_uints(&mut self, data: &[u32], ty: &str, width: usize, target: Option<u32>, allow_u8: bool) -> usize {
+        let max = data.iter().copied().max().unwrap_or(0);
+        let (ctype, bytes): (u32, Vec<u8>) = if allow_u8 && max < 256 {
+            (5121, data.iter().map(|&v| v as u8).collect())
+        } else if max < 65536 {
+            (5123, data.iter().flat_map(|&v| (v as u16).to_le_bytes()).collect())
+        } else {
+            (5125, data.iter().flat_map(|&v| v.to_le_bytes()).collect())
+        };
+        let view = self.push_view(&bytes, target, None);
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": ctype, "count": data.len() / width, "type": ty
+        }));
+        self.accessors.len() - 1
+    }
+
+    /// Adds a node and returns its index.
+    pub fn add_node(&mut self, d: NodeDesc) -> usize {
+        let mut n = Map::new();
+        n.insert("name".into(), json!(d.name));
+        if let Some(t) = d.translation {
+            n.insert("translation".into(), json!(t));
+        }
+        if let Some(r) = d.rotation {
+            n.insert("rotation".into(), json!(r));
+        }
+        if let Some(s) = d.scale {
+            n.insert("scale".into(), json!(s));
+        }
+        if let Some(m) = d.mesh {
+            n.insert("mesh".into(), json!(m));
+        }
+        if let Some(s) = d.skin {
+            n.insert("skin".into(), json!(s));
+        }
+        if let Some(e) = d.extras {
+            n.insert("extras".into(), e);
+        }
+        self.nodes.push(Value::Object(n));
+        self.children.push(Vec::new());
+        self.nodes.len() - 1
+    }
+
+    /// Makes `child` a child of `parent`.
+    pub fn add_child(&mut self, parent: usize, child: usize) {
+        self.children[parent].push(child);
+    }
+
+    /// Adds `node` to the scene's root list.
+    pub fn add_root(&mut self, node: usize) {
+        self.scene_roots.push(node);
+    }
+
+    /// Embeds a PNG image and makes a texture of it (linear filtering with mipmaps,
+    /// repeat, or clamp-to-edge when `clamp`).
+    pub fn add_texture(&mut self, name: &str, png: &[u8], clamp: bool) -> usize {
+        let view = self.push_view(png, None, None);
+        self.images.push(json!({ "name": name, "mimeType": "image/png", "bufferView": view }));
+        let wrap = if clamp { 33071 } else { 10497 };
+        self.samplers.push(json!({ "magFilter": 9729, "minFilter": 9987, "wrapS": wrap, "wrapT": wrap }));
+        self.textures.push(json!({
+            "name": name, "source": self.images.len() - 1, "sampler": self.samplers.len() - 1
+        }));
+        self.textures.len() - 1
+    }
+
+    /// Adds a metallic-roughness material.
+    pub fn add_material(&mut self, m: &MaterialDesc) -> usize {
+        let mut pbr = json!({
+            "baseColorFactor": m.base_color,
+            "metallicFactor": m.metallic,
+            "roughnessFactor": m.roughness,
+        });
+        if let Some(t) = m.base_color_texture {
+            pbr["baseColorTexture"] = json!({ "index": t });
+        }
+        let mut mat = json!({ "name": m.name, "pbrMetallicRoughness": pbr, "doubleSided": m.double_sided });
+        match m.alpha {
+            WriteAlpha::Opaque => {}
+            WriteAlpha::Mask(c) => {
+                mat["alphaMode"] = json!("MASK");
+                mat["alphaCutoff"] = json!(c);
+            }
+            WriteAlpha::Blend => mat["alphaMode"] = json!("BLEND"),
+        }
+        self.materials.push(mat);
+        self.materials.len() - 1
+    }
+
+    /// Adds a mesh of triangle-list primitives.
+    pub fn add_mesh(&mut self, name: &str, prims: &[PrimitiveDesc]) -> usize {
+        let mut out = Vec::new();
+        for p in prims {
+            let flat: Vec<f32> = p.positions.iter().flatten().copied().collect();
+            let mut attrs = Map::new();
+            attrs.insert("POSITION".into(), json!(self.add_floats(&flat, "VEC3", true, Some(34962))));
+            if let Some(n) = &p.normals {
+                let flat: Vec<f32> = n.iter().flatten().copied().collect();
+                attrs.insert("NORMAL".into(), json!(self.add_floats(&flat, "VEC3", false, Some(34962))));
+            }
+            if let Some(uv) = &p.uvs {
+                let flat: Vec<f32> = uv.iter().flatten().copied().collect();
+                attrs.insert("TEXCOORD_0".into(), json!(self.add_floats(&flat, "VEC2", false, Some(34962))));
+            }
+            if let (Some(j), Some(w)) = (&p.joints, &p.weights) {
+                let flat: Vec<u32> = j.iter().flatten().map(|&v| v as u32).collect();
+                attrs.insert("JOINTS_0".into(), json!(self.add_uints(&flat, "VEC4", 4, Some(34962), true)));
+                let flat: Vec<f32> = w.iter().flatten().copied().collect();
+                attrs.insert("WEIGHTS_0".into(), json!(self.add_floats(&flat, "VEC4", false, Some(34962))));
+            }
+            let idx = self.add_uints(&p.indices, "SCALAR", 1, Some(34963), false);
+            let mut prim = json!({ "attributes": attrs, "indices": idx, "mode": 4 });
+            if let Some(m) = p.material {
+                prim["material"] = json!(m);
+            }
+            out.push(prim);
+        }
+        self.meshes.push(json!({ "name": name, "primitives": out }));
+        self.meshes.len() - 1
+    }
+
+    /// Adds a skin over `joints` (node indices) with their inverse bind matrices.
+    pub fn add_skin(&mut self, name: &str, joints: &[usize], inverse_bind: &[Mat4], skeleton: Option<usize>) -> usize {
+        let flat: Vec<f32> = inverse_bind.iter().flat_map(|m| m.to_cols_array()).collect();
+        let acc = self.add_floats(&flat, "MAT4", false, None);
+        let mut skin = json!({ "name": name, "joints": joints, "inverseBindMatrices": acc });
+        if let Some(s) = skeleton {
+            skin["skeleton"] = json!(s);
+        }
+        self.skins.push(skin);
+        self.skins.len() - 1
+    }
+
+    /// Adds an animation clip. Key-time accessors are shared between channels with equal times.
+    pub fn add_animation(&mut self, name: &str, channels: &[ChannelDesc]) -> usize {
+        let mut samplers = Vec::new();
+        let mut chans = Vec::new();
+        let mut time_accessors: Vec<(Vec<f32>, usize)> = Vec::new();
+        for c in channels {
+            let input = match time_accessors.iter().find(|(t, _)| *t == c.times) {
+                Some((_, a)) => *a,
+                None => {
+                    let a = self.add_floats(&c.times, "SCALAR", true, None);
+                    time_accessors.push((c.times.clone(), a));
+                    a
+                }
+            };
+            let ty = if c.path == ChannelPath::Rotation { "VEC4" } else { "VEC3" };
+            let output = self.add_floats(&c.values, ty, false, None);
+            samplers.push(json!({
+                "input": input, "output": output,
+                "interpolation": if c.step { "STEP" } else { "LINEAR" }
+            }));
+            let path = match c.path {
+                ChannelPath::Translation => "translation",
+                ChannelPath::Rotation => "rotation",
+                ChannelPath::Scale => "scale",
+            };
+            chans.push(json!({ "sampler": samplers.len() - 1, "target": { "node": c.node, "path": path } }));
+        }
+        self.animations.push(json!({ "name": name, "samplers": samplers, "channels": chans }));
+        self.animations.len() - 1
+    }
+
+    /// The finished GLB bytes.
+    pub fn to_glb(mut self) -> Vec<u8> {
+        for (i, kids) in self.children.iter().enumerate() {
+            if !kids.is_empty() {
+                self.nodes[i]["children"] = json!(kids);
+            }
+        }
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        let mut root = Map::new();
+        root.insert("asset".into(), json!({ "version": "2.0", "generator": self.generator }));
+        root.insert("scene".into(), json!(0));
+        root.insert("scenes".into(), json!([{ "nodes": self.scene_roots }]));
+        let mut put = |k: &str, v: Vec<Value>| {
+            if !v.is_empty() {
+                root.insert(k.into(), Value::Array(v));
+            }
+        };
+        put("nodes", self.nodes);
+        put("meshes", self.meshes);
+        put("skins", self.skins);
+        put("animations", self.animations);
+        put("materials", self.materials);
+        put("textures", self.textures);
+        put("images", self.images);
+        put("samplers", self.samplers);
+        put("accessors", self.accessors);
+        put("bufferViews", self.views);
+        if !self.bin.is_empty() {
+            root.insert("buffers".into(), json!([{ "byteLength": self.bin.len() }]));
+        }
+        if let Some(e) = self.extras {
+            root.insert("extras".into(), e);
+        }
+        let mut json_bytes = serde_json::to_vec(&Value::Object(root)).unwrap_or_default();
+        while json_bytes.len() % 4 != 0 {
+            json_bytes.push(b' ');
+        }
+        let has_bin = !self.bin.is_empty();
+        let total = 12 + 8 + json_bytes.len() + if has_bin { 8 + self.bin.len() } else { 0 };
+        let mut out = Vec::with_capacity(total);
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&json_bytes);
+        if has_bin {
+            out.extend_from_slice(&(self.bin.len() as u32).to_le_bytes());
+            out.extend_from_slice(b"BIN\0");
+            out.extend_from_slice(&self.bin);
+        }
+        out
+    }
+}
+
+/// Encodes RGBA8 pixels as PNG.
+pub fn encode_png(width: u32, height: u32, rgba: &[u8]) -> Result<Vec<u8>, image::ImageError> {
+    use image::ImageEncoder;
+    let mut out = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut out).write_image(rgba, width, height, image::ExtendedColorType::Rgba8)?;
+    Ok(out)
+}
