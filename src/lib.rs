@@ -2,3 +2,4 @@
 
 pub mod inspect;
 pub mod output;
+pub mod render_cmd;

@@ -8,6 +8,8 @@ use clap::{Parser, Subcommand};
 
 use frond::inspect::inspect;
 use frond::output::write_atomic;
+use frond::render_cmd::{RenderRequest, frame_png, parse_size, render_tree};
+use frond_render::{Renderer, TreeParts};
 use frond_scene::generator::{Preset, generate};
 use frond_scene::{ImportOptions, import};
 
@@ -57,6 +59,41 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Render one frame of a tree (alpha-tested, offscreen) to PNG.
+    Render {
+        #[command(flatten)]
+        import: ImportArgs,
+        /// Time in seconds within the clip.
+        #[arg(long, default_value_t = 0.0)]
+        time: f32,
+        /// Clip name (default: the first).
+        #[arg(long)]
+        clip: Option<String>,
+        /// Camera azimuth in degrees (0 looks from +Z, 90 from +X).
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        azimuth: f32,
+        /// Camera elevation in degrees (positive is above).
+        #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+        elevation: f32,
+        /// Camera distance relative to the framing distance.
+        #[arg(long, default_value_t = 1.0)]
+        zoom: f32,
+        /// Image size as WxH.
+        #[arg(long, default_value = "512x512")]
+        size: String,
+        /// Orthographic instead of perspective.
+        #[arg(long)]
+        ortho: bool,
+        /// Draw only wood or only foliage.
+        #[arg(long, value_parser = ["all", "wood", "foliage"], default_value = "all")]
+        parts: String,
+        /// Output PNG path.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Print coverage and adapter as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Write a skinned, wind-animated sample tree (.glb).
     Sample {
         /// Size: small (~2k foliage triangles), medium (~20k), large (~200k), xlarge (~1M).
@@ -85,8 +122,56 @@ fn run(cli: Cli) -> Result<()> {
                 print!("{}", report.text());
             }
         }
-        Command::Sample { preset, seed, output } => {
-            let preset = Preset::parse(&preset).with_context(|| format!("unknown preset '{preset}'"))?;
+        Command::Render {
+            import,
+            time,
+            clip,
+            azimuth,
+            elevation,
+            zoom,
+            size,
+            ortho,
+            parts,
+            output,
+            json,
+        } => {
+            let (width, height) = parse_size(&size)?;
+            let tree = import.load()?;
+            let renderer = Renderer::new()?;
+            let parts = match parts.as_str() {
+                "wood" => TreeParts::Wood,
+                "foliage" => TreeParts::Foliage,
+                _ => TreeParts::All,
+            };
+            let req = RenderRequest {
+                clip,
+                time,
+                azimuth_deg: azimuth,
+                elevation_deg: elevation,
+                zoom,
+                width,
+                height,
+                orthographic: ortho,
+                parts,
+            };
+            let frame = render_tree(&renderer, &tree, &req)?;
+            write_atomic(&output, &frame_png(&frame)?)?;
+            if json {
+                let v = serde_json::json!({
+                    "output": output.display().to_string(),
+                    "coverage": frame.coverage_fraction(),
+                    "adapter": renderer.adapter_info(),
+                });
+                println!("{v}");
+            }
+        }
+        Command::Sample {
+            preset,
+            seed,
+            output,
+        } => {
+            let preset =
+                Preset::parse(&preset).with_context(|| format!("unknown preset '{preset}'"))?;
             let tree = generate(preset, seed).context("generating the sample tree")?;
             write_atomic(&output, &tree.glb)?;
             tracing::info!("wrote {} ({} bytes)", output.display(), tree.glb.len());
@@ -103,7 +188,10 @@ fn main() -> ExitCode {
         _ => "debug",
     };
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+        // Mesa's EGL probe logs a harmless DRI2 error before falling back to llvmpipe.
+        .unwrap_or_else(|_| {
+            tracing_subscriber::EnvFilter::new(format!("{level},wgpu_hal::gles::egl=off"))
+        });
     tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)

@@ -42,6 +42,7 @@ mod pipeline;
 mod readback;
 mod renderer;
 mod scene;
+mod tree;
 
 pub use camera::{Camera, Projection};
 pub use error::RenderError;
@@ -49,3 +50,4 @@ pub use frame::Frame;
 pub use pipeline::LIGHT_DIRECTION;
 pub use renderer::Renderer;
 pub use scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
+pub use tree::{TreeParts, scene_from_positions, tree_scene};

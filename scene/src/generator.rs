@@ -130,7 +130,8 @@ impl GeneratedTree {
 
     /// Where rest point `p`, rigidly bound to bone `b`, is at time `t`.
     pub fn bound_point(&self, b: usize, p: Vec3, t: f32) -> Vec3 {
-        self.bone_world(b, t).transform_point3(p - self.bones[b].head)
+        self.bone_world(b, t)
+            .transform_point3(p - self.bones[b].head)
     }
 }
 
@@ -166,7 +167,12 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
     let mut branches = vec![Branch {
         level: 0,
         start: Vec3::ZERO,
-        dir: Vec3::new(rng.random_range(-0.05..0.05), 1.0, rng.random_range(-0.05..0.05)).normalize(),
+        dir: Vec3::new(
+            rng.random_range(-0.05..0.05),
+            1.0,
+            rng.random_range(-0.05..0.05),
+        )
+        .normalize(),
         length: trunk_len,
         radius: 0.45,
         parent_bone: None,
@@ -177,10 +183,23 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
     while i < branches.len() {
         // Bones along this branch.
         let nb = bones_per_branch(branches[i].level);
-        let (start, dir, length, level) = (branches[i].start, branches[i].dir, branches[i].length, branches[i].level);
+        let (start, dir, length, level) = (
+            branches[i].start,
+            branches[i].dir,
+            branches[i].length,
+            branches[i].level,
+        );
         for k in 0..nb {
-            let parent = if k == 0 { branches[i].parent_bone } else { Some(bones.len() - 1) };
-            let name = if level == 0 { format!("trunk_{k}") } else { format!("branch{i}_L{level}_{k}") };
+            let parent = if k == 0 {
+                branches[i].parent_bone
+            } else {
+                Some(bones.len() - 1)
+            };
+            let name = if level == 0 {
+                format!("trunk_{k}")
+            } else {
+                format!("branch{i}_L{level}_{k}")
+            };
             bones.push(GenBone {
                 name,
                 parent,
@@ -210,7 +229,9 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
                 let tilt = rng.random_range(0.6..1.0f32);
                 let up = if level == 0 { 0.35 } else { 0.15 };
                 let cdir = (dir * (1.0 - tilt).max(up) + side * tilt).normalize();
-                let clen = length * rng.random_range(0.42..0.58) * if level == 0 { 1.0 - 0.4 * along } else { 1.0 };
+                let clen = length
+                    * rng.random_range(0.42..0.58)
+                    * if level == 0 { 1.0 - 0.4 * along } else { 1.0 };
                 let radius = branches[i].radius * 0.45;
                 branches.push(Branch {
                     level: level + 1,
@@ -244,8 +265,11 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
             .map(|&t| {
                 let w = TAU * t / PERIOD;
                 let gust = 0.5 * amp * (w + gust_phase).sin();
-                let ax = amp * (0.6 * (freqs[0] * w + ph[0]).sin() + 0.4 * (freqs[1] * w + ph[1]).sin());
-                let az = gust + amp * (0.6 * (freqs[0] * w + ph[2]).sin() + 0.4 * (freqs[1] * w + ph[3]).sin());
+                let ax =
+                    amp * (0.6 * (freqs[0] * w + ph[0]).sin() + 0.4 * (freqs[1] * w + ph[1]).sin());
+                let az = gust
+                    + amp
+                        * (0.6 * (freqs[0] * w + ph[2]).sin() + 0.4 * (freqs[1] * w + ph[3]).sin());
                 Quat::from_rotation_x(ax) * Quat::from_rotation_z(az)
             })
             .collect();
@@ -253,7 +277,13 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
 
     // Wood: a tube per branch, rings at bone heads (blended across the joint) and mid-bones.
     let radial = 6usize;
-    let mut wood = PrimitiveDesc { normals: Some(Vec::new()), uvs: Some(Vec::new()), joints: Some(Vec::new()), weights: Some(Vec::new()), ..Default::default() };
+    let mut wood = PrimitiveDesc {
+        normals: Some(Vec::new()),
+        uvs: Some(Vec::new()),
+        joints: Some(Vec::new()),
+        weights: Some(Vec::new()),
+        ..Default::default()
+    };
     for br in &branches {
         let nb = br.bones.len();
         let rings = 2 * nb + 1;
@@ -266,7 +296,10 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
             let radius = br.radius * (1.0 - 0.85 * f);
             let seg = (r / 2).min(nb - 1);
             let (j, wt) = if r % 2 == 0 && r > 0 && r < rings - 1 {
-                ([br.bones[seg - 1] as u16, br.bones[seg] as u16, 0, 0], [0.5, 0.5, 0.0, 0.0])
+                (
+                    [br.bones[seg - 1] as u16, br.bones[seg] as u16, 0, 0],
+                    [0.5, 0.5, 0.0, 0.0],
+                )
             } else {
                 ([br.bones[seg] as u16, 0, 0, 0], [1.0, 0.0, 0.0, 0.0])
             };
@@ -274,10 +307,18 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
                 let a = TAU * s as f32 / radial as f32;
                 let n = u * a.cos() + w * a.sin();
                 wood.positions.push((centre + n * radius).to_array());
-                if let Some(v) = wood.normals.as_mut() { v.push(n.to_array()) }
-                if let Some(v) = wood.uvs.as_mut() { v.push([s as f32 / radial as f32, f * br.length * 0.5]) }
-                if let Some(v) = wood.joints.as_mut() { v.push(j) }
-                if let Some(v) = wood.weights.as_mut() { v.push(wt) }
+                if let Some(v) = wood.normals.as_mut() {
+                    v.push(n.to_array())
+                }
+                if let Some(v) = wood.uvs.as_mut() {
+                    v.push([s as f32 / radial as f32, f * br.length * 0.5])
+                }
+                if let Some(v) = wood.joints.as_mut() {
+                    v.push(j)
+                }
+                if let Some(v) = wood.weights.as_mut() {
+                    v.push(wt)
+                }
             }
         }
         let row = (radial + 1) as u32;
@@ -285,7 +326,8 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
             for s in 0..radial as u32 {
                 let a = base + r * row + s;
                 let b = a + row;
-                wood.indices.extend_from_slice(&[a, a + 1, b, b, a + 1, b + 1]);
+                wood.indices
+                    .extend_from_slice(&[a, a + 1, b, b, a + 1, b + 1]);
             }
         }
     }
@@ -295,7 +337,13 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
     let leaf_bones: Vec<usize> = branches
         .iter()
         .filter(|b| b.level >= last.saturating_sub(1) && b.level > 0)
-        .flat_map(|b| if b.level == last { b.bones.clone() } else { vec![*b.bones.last().unwrap_or(&0)] })
+        .flat_map(|b| {
+            if b.level == last {
+                b.bones.clone()
+            } else {
+                vec![*b.bones.last().unwrap_or(&0)]
+            }
+        })
         .collect();
     let quads = preset.leaf_quads();
     let leaf_size = match preset {
@@ -304,7 +352,13 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
         Preset::Large => 0.3,
         Preset::Xlarge => 0.16,
     };
-    let mut leaves = PrimitiveDesc { normals: Some(Vec::new()), uvs: Some(Vec::new()), joints: Some(Vec::new()), weights: Some(Vec::new()), ..Default::default() };
+    let mut leaves = PrimitiveDesc {
+        normals: Some(Vec::new()),
+        uvs: Some(Vec::new()),
+        joints: Some(Vec::new()),
+        weights: Some(Vec::new()),
+        ..Default::default()
+    };
     let mut leaf_corners = Vec::with_capacity(quads);
     let mut leaf_bone_of_quad = Vec::with_capacity(quads);
     for q in 0..quads {
@@ -314,31 +368,67 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
         let head = bones[bone].head;
         let centre = head
             + br.dir * rng.random_range(0.0..seg_len)
-            + Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-0.6..1.0), rng.random_range(-1.0..1.0)) * (0.45 * seg_len + leaf_size);
-        let normal = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(0.2..1.0), rng.random_range(-1.0..1.0)).normalize();
+            + Vec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-0.6..1.0),
+                rng.random_range(-1.0..1.0),
+            ) * (0.45 * seg_len + leaf_size);
+        let normal = Vec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(0.2..1.0),
+            rng.random_range(-1.0..1.0),
+        )
+        .normalize();
         let tangent = perpendicular(normal);
         let bitangent = normal.cross(tangent);
         let spin = rng.random_range(0.0..TAU);
-        let (su, sv) = (tangent * spin.cos() + bitangent * spin.sin(), -tangent * spin.sin() + bitangent * spin.cos());
+        let (su, sv) = (
+            tangent * spin.cos() + bitangent * spin.sin(),
+            -tangent * spin.sin() + bitangent * spin.cos(),
+        );
         let hw = 0.5 * leaf_size;
         let hh = 0.6 * leaf_size;
-        let corners = [centre - su * hw - sv * hh, centre + su * hw - sv * hh, centre + su * hw + sv * hh, centre - su * hw + sv * hh];
+        let corners = [
+            centre - su * hw - sv * hh,
+            centre + su * hw - sv * hh,
+            centre + su * hw + sv * hh,
+            centre - su * hw + sv * hh,
+        ];
         let base = leaves.positions.len() as u32;
-        for (c, uv) in corners.iter().zip([[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]) {
+        for (c, uv) in corners
+            .iter()
+            .zip([[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]])
+        {
             leaves.positions.push(c.to_array());
-            if let Some(v) = leaves.normals.as_mut() { v.push(normal.to_array()) }
-            if let Some(v) = leaves.uvs.as_mut() { v.push(uv) }
-            if let Some(v) = leaves.joints.as_mut() { v.push([bone as u16, 0, 0, 0]) }
-            if let Some(v) = leaves.weights.as_mut() { v.push([1.0, 0.0, 0.0, 0.0]) }
+            if let Some(v) = leaves.normals.as_mut() {
+                v.push(normal.to_array())
+            }
+            if let Some(v) = leaves.uvs.as_mut() {
+                v.push(uv)
+            }
+            if let Some(v) = leaves.joints.as_mut() {
+                v.push([bone as u16, 0, 0, 0])
+            }
+            if let Some(v) = leaves.weights.as_mut() {
+                v.push([1.0, 0.0, 0.0, 0.0])
+            }
         }
-        leaves.indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        leaves
+            .indices
+            .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
         leaf_corners.push(corners);
         leaf_bone_of_quad.push(bone);
     }
 
     // Document.
-    let mut doc = GltfBuilder::new(concat!("frond ", env!("CARGO_PKG_VERSION"), " sample generator"));
-    doc.set_extras(json!({ "frond": { "preset": format!("{preset:?}").to_lowercase(), "seed": seed } }));
+    let mut doc = GltfBuilder::new(concat!(
+        "frond ",
+        env!("CARGO_PKG_VERSION"),
+        " sample generator"
+    ));
+    doc.set_extras(
+        json!({ "frond": { "preset": format!("{preset:?}").to_lowercase(), "seed": seed } }),
+    );
     let bark = doc.add_texture("bark", &encode_png(64, 64, &bark_texture(&mut rng))?, false);
     let leaf = doc.add_texture("leaf", &encode_png(128, 128, &leaf_texture())?, true);
     let bark_mat = doc.add_material(&MaterialDesc {
@@ -382,10 +472,18 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
             None => doc.add_root(node),
         }
     }
-    let ibms: Vec<Mat4> = bones.iter().map(|b| Mat4::from_translation(-b.head)).collect();
+    let ibms: Vec<Mat4> = bones
+        .iter()
+        .map(|b| Mat4::from_translation(-b.head))
+        .collect();
     let skin = doc.add_skin("tree", &joint_nodes, &ibms, Some(joint_nodes[0]));
     for (name, mesh) in [("branches", branches_mesh), ("leaves", leaves_mesh)] {
-        let n = doc.add_node(NodeDesc { name: name.into(), mesh: Some(mesh), skin: Some(skin), ..Default::default() });
+        let n = doc.add_node(NodeDesc {
+            name: name.into(),
+            mesh: Some(mesh),
+            skin: Some(skin),
+            ..Default::default()
+        });
         doc.add_root(n);
     }
     let channels: Vec<ChannelDesc> = bones

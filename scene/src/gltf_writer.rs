@@ -95,7 +95,10 @@ fn f32s_to_bytes(v: &[f32]) -> impl Iterator<Item = u8> + '_ {
 impl GltfBuilder {
     /// A new, empty document; `generator` goes into `asset.generator`.
     pub fn new(generator: &str) -> Self {
-        GltfBuilder { generator: generator.to_string(), ..Default::default() }
+        GltfBuilder {
+            generator: generator.to_string(),
+            ..Default::default()
+        }
     }
 
     /// Document-level `extras` (e.g. what produced the file and with which seed).
@@ -120,7 +123,13 @@ impl GltfBuilder {
     }
 
     /// Adds a float accessor (`ty` "SCALAR", "VEC2", "VEC3", "VEC4", "MAT4"); min/max when asked.
-    pub fn add_floats(&mut self, data: &[f32], ty: &str, with_bounds: bool, target: Option<u32>) -> usize {
+    pub fn add_floats(
+        &mut self,
+        data: &[f32],
+        ty: &str,
+        with_bounds: bool,
+        target: Option<u32>,
+    ) -> usize {
         let width = match ty {
             "SCALAR" => 1,
             "VEC2" => 2,
@@ -131,7 +140,8 @@ impl GltfBuilder {
         let bytes: Vec<u8> = f32s_to_bytes(data).collect();
         let view = self.push_view(&bytes, target, None);
         let count = data.len() / width;
-        let mut acc = json!({ "bufferView": view, "componentType": 5126, "count": count, "type": ty });
+        let mut acc =
+            json!({ "bufferView": view, "componentType": 5126, "count": count, "type": ty });
         if with_bounds && count > 0 {
             let mut lo = vec![f32::INFINITY; width];
             let mut hi = vec![f32::NEG_INFINITY; width];
@@ -150,12 +160,24 @@ impl GltfBuilder {
 
     /// Adds an unsigned-integer accessor in the smallest type that holds `max_value`
     /// (u8 only when `allow_u8`, since indices may not be u8 everywhere).
-    fn add_uints(&mut self, data: &[u32], ty: &str, width: usize, target: Option<u32>, allow_u8: bool) -> usize {
+    fn add_uints(
+        &mut self,
+        data: &[u32],
+        ty: &str,
+        width: usize,
+        target: Option<u32>,
+        allow_u8: bool,
+    ) -> usize {
         let max = data.iter().copied().max().unwrap_or(0);
         let (ctype, bytes): (u32, Vec<u8>) = if allow_u8 && max < 256 {
             (5121, data.iter().map(|&v| v as u8).collect())
         } else if max < 65536 {
-            (5123, data.iter().flat_map(|&v| (v as u16).to_le_bytes()).collect())
+            (
+                5123,
+                data.iter()
+                    .flat_map(|&v| (v as u16).to_le_bytes())
+                    .collect(),
+            )
         } else {
             (5125, data.iter().flat_map(|&v| v.to_le_bytes()).collect())
         };
@@ -207,9 +229,11 @@ impl GltfBuilder {
     /// repeat, or clamp-to-edge when `clamp`).
     pub fn add_texture(&mut self, name: &str, png: &[u8], clamp: bool) -> usize {
         let view = self.push_view(png, None, None);
-        self.images.push(json!({ "name": name, "mimeType": "image/png", "bufferView": view }));
+        self.images
+            .push(json!({ "name": name, "mimeType": "image/png", "bufferView": view }));
         let wrap = if clamp { 33071 } else { 10497 };
-        self.samplers.push(json!({ "magFilter": 9729, "minFilter": 9987, "wrapS": wrap, "wrapT": wrap }));
+        self.samplers
+            .push(json!({ "magFilter": 9729, "minFilter": 9987, "wrapS": wrap, "wrapT": wrap }));
         self.textures.push(json!({
             "name": name, "source": self.images.len() - 1, "sampler": self.samplers.len() - 1
         }));
@@ -226,7 +250,8 @@ impl GltfBuilder {
         if let Some(t) = m.base_color_texture {
             pbr["baseColorTexture"] = json!({ "index": t });
         }
-        let mut mat = json!({ "name": m.name, "pbrMetallicRoughness": pbr, "doubleSided": m.double_sided });
+        let mut mat =
+            json!({ "name": m.name, "pbrMetallicRoughness": pbr, "doubleSided": m.double_sided });
         match m.alpha {
             WriteAlpha::Opaque => {}
             WriteAlpha::Mask(c) => {
@@ -245,20 +270,35 @@ impl GltfBuilder {
         for p in prims {
             let flat: Vec<f32> = p.positions.iter().flatten().copied().collect();
             let mut attrs = Map::new();
-            attrs.insert("POSITION".into(), json!(self.add_floats(&flat, "VEC3", true, Some(34962))));
+            attrs.insert(
+                "POSITION".into(),
+                json!(self.add_floats(&flat, "VEC3", true, Some(34962))),
+            );
             if let Some(n) = &p.normals {
                 let flat: Vec<f32> = n.iter().flatten().copied().collect();
-                attrs.insert("NORMAL".into(), json!(self.add_floats(&flat, "VEC3", false, Some(34962))));
+                attrs.insert(
+                    "NORMAL".into(),
+                    json!(self.add_floats(&flat, "VEC3", false, Some(34962))),
+                );
             }
             if let Some(uv) = &p.uvs {
                 let flat: Vec<f32> = uv.iter().flatten().copied().collect();
-                attrs.insert("TEXCOORD_0".into(), json!(self.add_floats(&flat, "VEC2", false, Some(34962))));
+                attrs.insert(
+                    "TEXCOORD_0".into(),
+                    json!(self.add_floats(&flat, "VEC2", false, Some(34962))),
+                );
             }
             if let (Some(j), Some(w)) = (&p.joints, &p.weights) {
                 let flat: Vec<u32> = j.iter().flatten().map(|&v| v as u32).collect();
-                attrs.insert("JOINTS_0".into(), json!(self.add_uints(&flat, "VEC4", 4, Some(34962), true)));
+                attrs.insert(
+                    "JOINTS_0".into(),
+                    json!(self.add_uints(&flat, "VEC4", 4, Some(34962), true)),
+                );
                 let flat: Vec<f32> = w.iter().flatten().copied().collect();
-                attrs.insert("WEIGHTS_0".into(), json!(self.add_floats(&flat, "VEC4", false, Some(34962))));
+                attrs.insert(
+                    "WEIGHTS_0".into(),
+                    json!(self.add_floats(&flat, "VEC4", false, Some(34962))),
+                );
             }
             let idx = self.add_uints(&p.indices, "SCALAR", 1, Some(34963), false);
             let mut prim = json!({ "attributes": attrs, "indices": idx, "mode": 4 });
@@ -272,8 +312,17 @@ impl GltfBuilder {
     }
 
     /// Adds a skin over `joints` (node indices) with their inverse bind matrices.
-    pub fn add_skin(&mut self, name: &str, joints: &[usize], inverse_bind: &[Mat4], skeleton: Option<usize>) -> usize {
-        let flat: Vec<f32> = inverse_bind.iter().flat_map(|m| m.to_cols_array()).collect();
+    pub fn add_skin(
+        &mut self,
+        name: &str,
+        joints: &[usize],
+        inverse_bind: &[Mat4],
+        skeleton: Option<usize>,
+    ) -> usize {
+        let flat: Vec<f32> = inverse_bind
+            .iter()
+            .flat_map(|m| m.to_cols_array())
+            .collect();
         let acc = self.add_floats(&flat, "MAT4", false, None);
         let mut skin = json!({ "name": name, "joints": joints, "inverseBindMatrices": acc });
         if let Some(s) = skeleton {
@@ -297,7 +346,11 @@ impl GltfBuilder {
                     a
                 }
             };
-            let ty = if c.path == ChannelPath::Rotation { "VEC4" } else { "VEC3" };
+            let ty = if c.path == ChannelPath::Rotation {
+                "VEC4"
+            } else {
+                "VEC3"
+            };
             let output = self.add_floats(&c.values, ty, false, None);
             samplers.push(json!({
                 "input": input, "output": output,
@@ -310,7 +363,8 @@ impl GltfBuilder {
             };
             chans.push(json!({ "sampler": samplers.len() - 1, "target": { "node": c.node, "path": path } }));
         }
-        self.animations.push(json!({ "name": name, "samplers": samplers, "channels": chans }));
+        self.animations
+            .push(json!({ "name": name, "samplers": samplers, "channels": chans }));
         self.animations.len() - 1
     }
 
@@ -325,7 +379,10 @@ impl GltfBuilder {
             self.bin.push(0);
         }
         let mut root = Map::new();
-        root.insert("asset".into(), json!({ "version": "2.0", "generator": self.generator }));
+        root.insert(
+            "asset".into(),
+            json!({ "version": "2.0", "generator": self.generator }),
+        );
         root.insert("scene".into(), json!(0));
         root.insert("scenes".into(), json!([{ "nodes": self.scene_roots }]));
         let mut put = |k: &str, v: Vec<Value>| {
@@ -375,6 +432,11 @@ impl GltfBuilder {
 pub fn encode_png(width: u32, height: u32, rgba: &[u8]) -> Result<Vec<u8>, image::ImageError> {
     use image::ImageEncoder;
     let mut out = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut out).write_image(rgba, width, height, image::ExtendedColorType::Rgba8)?;
+    image::codecs::png::PngEncoder::new(&mut out).write_image(
+        rgba,
+        width,
+        height,
+        image::ExtendedColorType::Rgba8,
+    )?;
     Ok(out)
 }

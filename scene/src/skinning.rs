@@ -57,3 +57,22 @@ pub fn skin_into(tree: &Tree, pal: &[Vec<Mat4>], out: &mut [Vec3]) {
         }
     });
 }
+
+/// Skinned unit normals of every vertex (weight-blended palette rotation; zero stays zero).
+pub fn skin_normals(tree: &Tree, pal: &[Vec<Mat4>]) -> Vec<Vec3> {
+    let v = &tree.vertices;
+    (0..v.len())
+        .into_par_iter()
+        .map(|i| {
+            let palette = &pal[v.binding[i] as usize];
+            let mut acc = Vec3::ZERO;
+            for s in 0..4 {
+                let w = v.weights[i][s];
+                if w > 0.0 {
+                    acc += palette[v.joints[i][s] as usize].transform_vector3(v.normal[i]) * w;
+                }
+            }
+            acc.normalize_or_zero()
+        })
+        .collect()
+}

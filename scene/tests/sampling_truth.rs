@@ -1,0 +1,220 @@
+//! Sampled motion agrees with ground truth: the generator's own keyed transforms for generated
+//! trees, and `_meta/<name>.structure.json` leaf-to-bone bindings for the shared trees.
+
+use std::path::{Path, PathBuf};
+
+use frond_scene::generator::{GeneratedTree, Preset, generate};
+use frond_scene::{ImportOptions, Part, SampleOptions, Tree, import, import_bytes, sample};
+use glam::Vec3;
+
+fn shared(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../shared/data/trees")
+        .join(name)
+}
+
+/// Imports a generated tree from memory.
+fn load(g: &GeneratedTree) -> Tree {
+    import_bytes(
+        Path::new("generated.glb"),
+        &g.glb,
+        &ImportOptions::default(),
+    )
+    .expect("generated tree imports")
+}
+
+fn check_against_generator(preset: Preset, seed: u64) {
+    let g = generate(preset, seed).expect("generates");
+    let tree = load(&g);
+    assert_eq!(tree.count(Part::Foliage), 2 * g.leaf_corners.len());
+    assert_eq!(tree.count(Part::Wood), g.wood_triangles);
+    assert_eq!(tree.bones.len(), g.bones.len());
+    let s = sample(
+        &tree,
+        &SampleOptions {
+            clip: None,
+            samples: 64,
+        },
+    )
+    .expect("samples");
+    assert_eq!(s.samples(), 64);
+    assert!((s.period - 4.0).abs() < 1e-6);
+    assert!(s.motion.loops && s.motion.moves);
+    let tol = 1e-4 * g.height;
+    let leaf_base = s
+        .foliage
+        .iter()
+        .map(|&ti| tree.triangles[ti].v.iter().copied().min().unwrap_or(0))
+        .min()
+        .unwrap_or(0);
+    let mut worst = 0.0f32;
+    for (k, &ti) in s.foliage.iter().enumerate() {
+        let tri = tree.triangles[ti];
+        let q = ((tri.v.iter().copied().min().unwrap_or(0) - leaf_base) / 4) as usize;
+        let bone = g.leaf_bones[q];
+        assert_eq!(
+            tree.bones[tri.bone.expect("foliage has a bone") as usize].name,
+            g.bones[bone].name
+        );
+        let local: Vec<usize> = tri
+            .v
+            .iter()
+            .map(|&v| (v - leaf_base) as usize % 4)
+            .collect();
+        for (si, &t) in s.times.iter().enumerate() {
+            let expect: Vec3 = local
+                .iter()
+                .map(|&c| g.bound_point(bone, g.leaf_corners[q][c], t))
+                .sum::<Vec3>()
+                / 3.0;
+            worst = worst.max(expect.distance(s.trajectory(k)[si]));
+        }
+    }
+    assert!(
+        worst <= tol,
+        "{preset:?}: worst trajectory error {worst} > {tol}"
+    );
+    // Bone world transforms agree too.
+    for (b, _) in g.bones.iter().enumerate() {
+        for (si, &t) in s.times.iter().enumerate().step_by(7) {
+            let got = s.bone_world[si * tree.bones.len() + b].w_axis.truncate();
+            let want = g.bone_world(b, t).w_axis.truncate();
+            assert!(
+                got.distance(want) <= tol,
+                "bone {b} at {t}: {got} vs {want}"
+            );
+        }
+    }
+}
+
+#[test]
+fn generated_small_tree_trajectories_match_generator_keys() {
+    check_against_generator(Preset::Small, 3);
+}
+
+#[test]
+fn generated_medium_tree_trajectories_match_generator_keys() {
+    check_against_generator(Preset::Medium, 11);
+}
+
+#[test]
+fn generator_is_deterministic_per_seed() {
+    let a = generate(Preset::Small, 5).expect("generates");
+    let b = generate(Preset::Small, 5).expect("generates");
+    let c = generate(Preset::Small, 6).expect("generates");
+    assert_eq!(a.glb, b.glb);
+    assert_ne!(a.glb, c.glb);
+}
+
+#[test]
+fn twigs_sway_faster_than_the_trunk() {
+    // The thesis's observation (§1.5): each level has its own inherent frequencies.
+    let g = generate(Preset::Small, 2).expect("generates");
+    let zero_crossings = |b: usize| {
+        let angles: Vec<f32> = g.bones[b]
+            .keys
+            .iter()
+            .map(|q| q.to_axis_angle().1 * q.x.signum())
+            .collect();
+        let mean = angles.iter().sum::<f32>() / angles.len() as f32;
+        angles
+            .windows(2)
+            .filter(|w| (w[0] - mean) * (w[1] - mean) < 0.0)
+            .count()
+    };
+    let trunk = (0..g.bones.len())
+        .filter(|&b| g.bones[b].level == 0)
+        .map(zero_crossings)
+        .max()
+        .unwrap_or(0);
+    let deepest = g.bones.iter().map(|b| b.level).max().unwrap_or(0);
+    let twig = (0..g.bones.len())
+        .filter(|&b| g.bones[b].level == deepest)
+        .map(zero_crossings)
+        .min()
+        .unwrap_or(0);
+    assert!(twig > trunk, "twig crossings {twig} vs trunk {trunk}");
+    // Seamless: first and last key are the same rotation.
+    for b in &g.bones {
+        let (first, last) = (b.keys[0], b.keys[b.keys.len() - 1]);
+        assert!(first.dot(last).abs() > 1.0 - 1e-6);
+    }
+}
+
+#[test]
+fn shared_rigid_trees_bind_leaves_as_structure_json_says() {
+    for name in ["bush_1", "oak_medium", "oak_large", "pine_medium"] {
+        let tree =
+            import(&shared(&format!("{name}.glb")), &ImportOptions::default()).expect("imports");
+        let text = std::fs::read_to_string(shared(&format!("_meta/{name}.structure.json")))
+            .expect("structure");
+        let st: serde_json::Value = serde_json::from_str(&text).expect("json");
+        let quad_bone = st["leafQuads"]["bone"].as_array().expect("leafQuads.bone");
+        let bones = st["bones"].as_array().expect("bones");
+        let foliage: Vec<_> = tree
+            .triangles
+            .iter()
+            .filter(|t| t.part == Part::Foliage)
+            .collect();
+        assert_eq!(foliage.len(), 2 * quad_bone.len(), "{name}");
+        let base = foliage.iter().flat_map(|t| t.v).min().unwrap_or(0);
+        for t in &foliage {
+            let q = ((t.v.iter().copied().min().unwrap_or(0) - base) / 4) as usize;
+            let want_bone = quad_bone[q].as_u64().expect("bone index") as usize;
+            let want_node = bones[want_bone]["node"].as_u64().expect("node") as usize;
+            let got = tree.bones[t.bone.expect("bound") as usize].node;
+            assert_eq!(got, want_node, "{name}: quad {q}");
+        }
+        assert_eq!(tree.foliage_reassigned, 0, "{name}");
+    }
+}
+
+#[test]
+fn blended_leaves_are_bound_to_a_bone_they_are_weighted_to() {
+    let tree = import(
+        &shared("oak_medium_blendedleaves.glb"),
+        &ImportOptions::default(),
+    )
+    .expect("imports");
+    let v = &tree.vertices;
+    let mut checked = 0;
+    for t in tree.triangles.iter().filter(|t| t.part == Part::Foliage) {
+        let bone = t.bone.expect("bound") as usize;
+        let weighted = t.v.iter().any(|&i| {
+            let i = i as usize;
+            let frond_scene::Binding::Skin { joints, .. } = &tree.bindings[v.binding[i] as usize]
+            else {
+                return false;
+            };
+            (0..4).any(|s| v.weights[i][s] > 0.0 && joints[v.joints[i][s] as usize] == bone)
+        });
+        assert!(
+            weighted,
+            "triangle bound to bone {bone} carries no weight on it"
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 10640);
+    assert_eq!(
+        tree.foliage_reassigned, 10640,
+        "every blended triangle is reported as reassigned"
+    );
+}
+
+#[test]
+fn average_pose_is_the_mean_of_the_samples() {
+    let g = generate(Preset::Small, 9).expect("generates");
+    let tree = load(&g);
+    let s = sample(
+        &tree,
+        &SampleOptions {
+            clip: None,
+            samples: 16,
+        },
+    )
+    .expect("samples");
+    for v in (0..s.vertices).step_by(97) {
+        let mean = (0..16).map(|i| s.pose(i)[v]).sum::<Vec3>() / 16.0;
+        assert!(mean.distance(s.average[v]) < 1e-5);
+    }
+}

@@ -1,0 +1,71 @@
+//! Helpers shared by the end-to-end tests: paths to the shared trees, running the CLI, and the
+//! real glTF clients (Khronos validator, gltfpack) installed into `tools/node_modules`.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+/// The workspace root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `../shared/data/trees/<name>`.
+pub fn shared_tree(name: &str) -> PathBuf {
+    root().join("../shared/data/trees").join(name)
+}
+
+/// The shared MANIFEST.json.
+pub fn manifest() -> serde_json::Value {
+    let text = std::fs::read_to_string(shared_tree("MANIFEST.json"))
+        .expect("shared MANIFEST.json is readable");
+    serde_json::from_str(&text).expect("MANIFEST.json is JSON")
+}
+
+/// Runs the `frond` binary.
+pub fn frond(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_frond"))
+        .args(args)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .expect("frond runs")
+}
+
+/// Installs the Node tools once (npm install into tools/node_modules) and returns the folder.
+pub fn node_tools() -> PathBuf {
+    static READY: OnceLock<PathBuf> = OnceLock::new();
+    READY
+        .get_or_init(|| {
+            let tools = root().join("tools");
+            if !tools.join("node_modules/gltf-validator").exists()
+                || !tools.join("node_modules/gltfpack").exists()
+            {
+                let status = Command::new("npm")
+                    .args(["install", "--no-audit", "--no-fund", "--prefix"])
+                    .arg(&tools)
+                    .status()
+                    .expect("npm is installed (needed for the glTF validator and gltfpack)");
+                assert!(status.success(), "npm install in tools/ failed");
+            }
+            tools
+        })
+        .clone()
+}
+
+/// Runs the Khronos glTF validator on `file`; returns its JSON summary.
+pub fn validate(file: &Path) -> serde_json::Value {
+    let tools = node_tools();
+    let out = Command::new("node")
+        .arg(tools.join("validate.mjs"))
+        .arg(file)
+        .output()
+        .expect("node runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    serde_json::from_str(text.trim()).unwrap_or_else(|e| {
+        panic!(
+            "validator output is not JSON ({e}): {text} {}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    })
+}

@@ -1,0 +1,111 @@
+//! `frond inspect --json` on every shared tree agrees with MANIFEST.json.
+
+mod common;
+
+use common::*;
+
+#[test]
+fn inspect_json_matches_manifest_for_every_shared_tree() {
+    let manifest = manifest();
+    let files = manifest["files"].as_array().expect("files[]");
+    assert!(files.len() >= 7, "the manifest lists the shared trees");
+    for entry in files {
+        let name = entry["file"].as_str().expect("file name");
+        let out = frond(&[
+            "inspect",
+            "--json",
+            shared_tree(name).to_str().expect("utf-8 path"),
+        ]);
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let r: serde_json::Value =
+            serde_json::from_slice(&out.stdout).expect("inspect prints JSON");
+        let t = &entry["triangles"];
+        assert_eq!(
+            r["triangles"]["total"], t["total"],
+            "{name}: total triangles"
+        );
+        assert_eq!(r["triangles"]["wood"], t["wood"], "{name}: wood triangles");
+        assert_eq!(
+            r["triangles"]["foliage"], t["foliage"],
+            "{name}: foliage triangles"
+        );
+        assert_eq!(r["bones"], entry["bones"], "{name}: bones");
+        assert_eq!(
+            r["skeleton_depth"], entry["skeletonDepth"]["maxBoneChainDepth"],
+            "{name}: skeleton depth"
+        );
+        let clip = &r["clips"][0];
+        assert_eq!(
+            clip["name"], entry["animation"]["name"],
+            "{name}: clip name"
+        );
+        assert_eq!(
+            clip["duration_s"].as_f64(),
+            entry["animation"]["durationS"].as_f64(),
+            "{name}: period"
+        );
+        assert_eq!(clip["loops"], entry["animation"]["loops"], "{name}: loops");
+        assert_eq!(clip["moves"], true, "{name}: the wind moves the tree");
+        // Every stable key is present.
+        for key in ["degenerate"] {
+            assert!(r["triangles"][key].is_u64(), "{name}: triangles.{key}");
+        }
+        for key in ["foliage_reassigned", "bones", "skeleton_depth"] {
+            assert!(r[key].is_u64(), "{name}: {key}");
+        }
+        assert_eq!(r["bounds"]["min"].as_array().map(Vec::len), Some(3));
+        assert_eq!(r["bounds"]["max"].as_array().map(Vec::len), Some(3));
+        let rigid = entry["leafBinding"]["multiBonePieces"] == 0;
+        if rigid {
+            assert_eq!(
+                r["foliage_reassigned"], 0,
+                "{name}: rigid leaves need no reassignment"
+            );
+        } else {
+            assert_eq!(
+                r["foliage_reassigned"], t["foliage"],
+                "{name}: every blended leaf triangle was reassigned"
+            );
+        }
+    }
+}
+
+#[test]
+fn inspect_text_names_classification_reasons() {
+    let out = frond(&[
+        "inspect",
+        shared_tree("pine_medium_blender.glb")
+            .to_str()
+            .expect("utf-8"),
+    ]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("Foliage") && text.contains("material name contains 'leaves'"),
+        "{text}"
+    );
+    assert!(text.contains("loops"), "{text}");
+}
+
+#[test]
+fn material_overrides_change_the_split() {
+    // Calling the wood material foliage moves all of its triangles.
+    let path = shared_tree("bush_1.glb");
+    let out = frond(&[
+        "inspect",
+        "--json",
+        "--foliage-material",
+        "branches",
+        path.to_str().expect("utf-8"),
+    ]);
+    assert!(out.status.success());
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(r["triangles"]["foliage"], 13872);
+    assert_eq!(r["triangles"]["wood"], 0);
+    let reason = r["classification"][0]["reason"].as_str().unwrap_or("");
+    assert!(reason.contains("--foliage-material"), "{reason}");
+}
