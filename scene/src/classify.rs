@@ -119,9 +119,9 @@ pub fn classify_primitives(
             .map(|m| m.name.clone())
             .unwrap_or_else(|| "(none)".into());
         let node_name = &tree.nodes[p.node].name;
-        let (part, reason) = if options.foliage_materials.iter().any(|n| *n == mat_name) {
+        let (part, reason) = if options.foliage_materials.contains(&mat_name) {
             (Part::Foliage, format!("--foliage-material {mat_name}"))
-        } else if options.wood_materials.iter().any(|n| *n == mat_name) {
+        } else if options.wood_materials.contains(&mat_name) {
             (Part::Wood, format!("--wood-material {mat_name}"))
         } else if let Some(w) = has_word(&mat_name, FOLIAGE_WORDS) {
             (Part::Foliage, format!("material name contains '{w}'"))

@@ -547,8 +547,8 @@ fn bark_texture(rng: &mut ChaCha8Rng) -> Vec<u8> {
     let streak: Vec<f32> = (0..n).map(|_| rng.random_range(0.7..1.0)).collect();
     let mut px = vec![0u8; n * n * 4];
     for y in 0..n {
-        for x in 0..n {
-            let k = streak[x] * rng.random_range(0.85..1.0f32);
+        for (x, s) in streak.iter().enumerate() {
+            let k = s * rng.random_range(0.85..1.0f32);
             let o = (y * n + x) * 4;
             px[o] = (110.0 * k) as u8;
             px[o + 1] = (78.0 * k) as u8;

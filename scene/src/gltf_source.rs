@@ -31,9 +31,9 @@ pub struct GltfSource {
 impl GltfSource {
     /// Reads and parses `path`, resolving every buffer.
     pub fn open(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        let bytes = std::fs::read(path).map_err(|error| SceneError::Io {
             path: path.to_path_buf(),
-            source,
+            error,
         })?;
         Self::from_bytes(path, &bytes)
     }

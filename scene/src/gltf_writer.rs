@@ -107,7 +107,7 @@ impl GltfBuilder {
     }
 
     fn push_view(&mut self, bytes: &[u8], target: Option<u32>, stride: Option<usize>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut v = json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() });
@@ -375,7 +375,7 @@ impl GltfBuilder {
                 self.nodes[i]["children"] = json!(kids);
             }
         }
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut root = Map::new();
@@ -407,7 +407,7 @@ impl GltfBuilder {
             root.insert("extras".into(), e);
         }
         let mut json_bytes = serde_json::to_vec(&Value::Object(root)).unwrap_or_default();
-        while json_bytes.len() % 4 != 0 {
+        while !json_bytes.len().is_multiple_of(4) {
             json_bytes.push(b' ');
         }
         let has_bin = !self.bin.is_empty();

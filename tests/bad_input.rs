@@ -1,0 +1,217 @@
+//! Bad input: a one-line error naming the file and the problem, exit code 1, no panic, and no
+//! output file left behind.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::*;
+use serde_json::{Value, json};
+
+/// A valid one-triangle glTF with an external `tri.bin`; tests then break one thing.
+fn triangle_gltf() -> Value {
+    json!({
+        "asset": { "version": "2.0" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "name": "leaf", "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1 }] }],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+              "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0] },
+            { "bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR" }
+        ],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": 36 },
+            { "buffer": 0, "byteOffset": 36, "byteLength": 6 }
+        ],
+        "buffers": [{ "uri": "tri.bin", "byteLength": 42 }]
+    })
+}
+
+fn triangle_bin(positions: [f32; 9], indices: [u16; 3]) -> Vec<u8> {
+    let mut b: Vec<u8> = positions.iter().flat_map(|v| v.to_le_bytes()).collect();
+    b.extend(indices.iter().flat_map(|v| v.to_le_bytes()));
+    b
+}
+
+const GOOD: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+
+/// Writes `doc` (and `tri.bin`) into `dir/sub`, returns the .gltf path.
+fn write_case(dir: &Path, name: &str, doc: &Value, bin: &[u8]) -> PathBuf {
+    let sub = dir.join(name);
+    std::fs::create_dir_all(&sub).expect("mkdir");
+    std::fs::write(sub.join("tri.bin"), bin).expect("write bin");
+    let path = sub.join(format!("{name}.gltf"));
+    std::fs::write(&path, serde_json::to_vec(doc).expect("json")).expect("write gltf");
+    path
+}
+
+/// Runs inspect and render on a bad file and checks the error contract.
+fn expect_clean_error(path: &Path, needle: &str) {
+    let p = path.to_str().expect("utf-8");
+    let out = frond(&["inspect", p]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{p}: exit code; stderr: {err}");
+    assert!(!err.contains("panicked"), "{p}: panicked: {err}");
+    assert!(err.contains(p), "{p}: error does not name the file: {err}");
+    assert!(
+        err.contains(needle),
+        "{p}: error does not say '{needle}': {err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "{p}: one line: {err}");
+    let png = path.with_extension("png");
+    let out = frond(&["render", p, "-o", png.to_str().expect("utf-8")]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(!png.exists(), "{p}: a failed render left {png:?}");
+}
+
+#[test]
+fn the_valid_base_case_imports() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let path = write_case(
+        dir.path(),
+        "good",
+        &triangle_gltf(),
+        &triangle_bin(GOOD, [0, 1, 2]),
+    );
+    let out = frond(&["inspect", "--json", path.to_str().expect("utf-8")]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(r["triangles"]["total"], 1);
+    assert_eq!(r["bones"], 0);
+    assert!(r["warnings"].to_string().contains("static tree"), "{r}");
+}
+
+#[test]
+fn not_gltf() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let path = dir.path().join("notes.glb");
+    std::fs::write(&path, "these are not the trees you are looking for").expect("write");
+    expect_clean_error(&path, "not a glTF file");
+}
+
+#[test]
+fn truncated_glb() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let bytes = std::fs::read(shared_tree("bush_1.glb")).expect("read");
+    for cut in [10usize, 100, 5000, bytes.len() / 2] {
+        let path = dir.path().join(format!("cut{cut}.glb"));
+        std::fs::write(&path, &bytes[..cut]).expect("write");
+        expect_clean_error(&path, "truncated");
+    }
+}
+
+#[test]
+fn index_out_of_range() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let path = write_case(
+        dir.path(),
+        "index",
+        &triangle_gltf(),
+        &triangle_bin(GOOD, [0, 1, 5]),
+    );
+    expect_clean_error(&path, "index 5 is out of range");
+}
+
+#[test]
+fn accessor_out_of_range() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let mut doc = triangle_gltf();
+    doc["meshes"][0]["primitives"][0]["indices"] = json!(7);
+    let path = write_case(dir.path(), "accessor", &doc, &triangle_bin(GOOD, [0, 1, 2]));
+    expect_clean_error(&path, "accessor 7 does not exist");
+}
+
+#[test]
+fn accessor_count_larger_than_its_buffer() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let mut doc = triangle_gltf();
+    doc["accessors"][0]["count"] = json!(300);
+    let path = write_case(dir.path(), "count", &doc, &triangle_bin(GOOD, [0, 1, 2]));
+    expect_clean_error(&path, "needs 3600 bytes");
+}
+
+#[test]
+fn nan_and_inf_positions() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let mut p = GOOD;
+    p[4] = f32::NAN;
+    let path = write_case(
+        dir.path(),
+        "nan",
+        &triangle_gltf(),
+        &triangle_bin(p, [0, 1, 2]),
+    );
+    expect_clean_error(&path, "NaN or Inf");
+    p[4] = f32::INFINITY;
+    let path = write_case(
+        dir.path(),
+        "inf",
+        &triangle_gltf(),
+        &triangle_bin(p, [0, 1, 2]),
+    );
+    expect_clean_error(&path, "NaN or Inf");
+}
+
+#[test]
+fn unsupported_required_extension_is_named() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let mut doc = triangle_gltf();
+    doc["extensionsUsed"] = json!(["EXT_meshopt_compression"]);
+    doc["extensionsRequired"] = json!(["EXT_meshopt_compression"]);
+    let path = write_case(dir.path(), "ext", &doc, &triangle_bin(GOOD, [0, 1, 2]));
+    expect_clean_error(
+        &path,
+        "requires unsupported glTF extension EXT_meshopt_compression",
+    );
+}
+
+#[test]
+fn external_uri_outside_the_input_folder() {
+    let dir = tempfile::tempdir().expect("tmp");
+    std::fs::write(dir.path().join("secret.bin"), triangle_bin(GOOD, [0, 1, 2])).expect("write");
+    for uri in [
+        "../secret.bin",
+        "/etc/passwd",
+        "file:///etc/passwd",
+        "sub/../../secret.bin",
+    ] {
+        let mut doc = triangle_gltf();
+        doc["buffers"][0]["uri"] = json!(uri);
+        let path = write_case(dir.path(), "escape", &doc, &triangle_bin(GOOD, [0, 1, 2]));
+        expect_clean_error(&path, "outside the input folder");
+    }
+}
+
+#[test]
+fn missing_image() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let mut doc = triangle_gltf();
+    doc["images"] = json!([{ "uri": "leaf.png" }]);
+    doc["textures"] = json!([{ "source": 0 }]);
+    doc["materials"] = json!([{ "name": "leaves", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]);
+    doc["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let path = write_case(dir.path(), "image", &doc, &triangle_bin(GOOD, [0, 1, 2]));
+    expect_clean_error(&path, "image 0: cannot read");
+}
+
+#[test]
+fn no_mesh_at_all() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let mut doc = triangle_gltf();
+    doc["nodes"] = json!([{ "name": "empty" }]);
+    doc.as_object_mut().expect("object").remove("meshes");
+    let path = write_case(dir.path(), "nomesh", &doc, &triangle_bin(GOOD, [0, 1, 2]));
+    expect_clean_error(&path, "no mesh");
+}
+
+#[test]
+fn missing_input_file() {
+    let dir = tempfile::tempdir().expect("tmp");
+    expect_clean_error(&dir.path().join("nowhere.glb"), "No such file");
+}
