@@ -8,6 +8,10 @@ use gltf::json::validation::Checked;
 use crate::error::Result;
 use crate::gltf_source::GltfSource;
 
+/// Largest element count accepted for an accessor without a bufferView (all zeros plus sparse
+/// substitutions): guards against absurd allocations from a malformed count.
+const MAX_VIEWLESS_ELEMENTS: usize = 1 << 24;
+
 /// A decoded accessor: `count` elements of `width` components each, row-major.
 pub struct Decoded {
     pub width: usize,
@@ -188,15 +192,15 @@ impl GltfSource {
         };
         let cols = width / rows;
         let elem = cols * (rows * csize + col_pad * csize);
-        let mut values = vec![
-            0.0f32;
-            count.checked_mul(width).ok_or_else(
-                || self.invalid(format!("{what}: accessor {index} count overflows"))
-            )?
-        ];
+        let total = count
+            .checked_mul(width)
+            .ok_or_else(|| self.invalid(format!("{what}: accessor {index} count overflows")))?;
+        let mut values;
         if let Some(view) = acc.buffer_view {
             let offset = acc.byte_offset.map(|o| o.0).unwrap_or(0) as usize;
+            // Bounds are checked before anything is allocated.
             let s = self.strided(view.value(), offset, count, elem, what, index)?;
+            values = vec![0.0f32; total];
             for (i, out) in values.chunks_exact_mut(width).enumerate() {
                 let base = s.offset + i * s.stride;
                 for c in 0..cols {
@@ -206,6 +210,13 @@ impl GltfSource {
                     }
                 }
             }
+        } else {
+            if count > MAX_VIEWLESS_ELEMENTS {
+                return Err(self.invalid(format!(
+                    "{what}: accessor {index} has no bufferView but claims {count} elements"
+                )));
+            }
+            values = vec![0.0f32; total];
         }
         if let Some(sparse) = &acc.sparse {
             self.apply_sparse(
@@ -297,16 +308,17 @@ impl GltfSource {
         }
         let count = acc.count.0 as usize;
         let csize = component_size(comp);
-        let mut out = vec![0u32; count.saturating_mul(width)];
-        if let Some(view) = acc.buffer_view {
-            let offset = acc.byte_offset.map(|o| o.0).unwrap_or(0) as usize;
-            let s = self.strided(view.value(), offset, count, width * csize, what, index)?;
-            for (i, o) in out.chunks_exact_mut(width).enumerate() {
-                let base = s.offset + i * s.stride;
-                for (c, v) in o.iter_mut().enumerate() {
-                    let at = base + c * csize;
-                    *v = decode_int(&s.data[at..at + csize], comp).unwrap_or(0);
-                }
+        let Some(view) = acc.buffer_view else {
+            return Err(self.invalid(format!("{what}: accessor {index} has no bufferView")));
+        };
+        let offset = acc.byte_offset.map(|o| o.0).unwrap_or(0) as usize;
+        let s = self.strided(view.value(), offset, count, width * csize, what, index)?;
+        let mut out = vec![0u32; count * width];
+        for (i, o) in out.chunks_exact_mut(width).enumerate() {
+            let base = s.offset + i * s.stride;
+            for (c, v) in o.iter_mut().enumerate() {
+                let at = base + c * csize;
+                *v = decode_int(&s.data[at..at + csize], comp).unwrap_or(0);
             }
         }
         Ok((width, out))

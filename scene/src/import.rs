@@ -227,6 +227,9 @@ fn read_skins(src: &GltfSource, nodes: &[Node]) -> Result<(Vec<Bone>, Vec<Bindin
             });
             joints.push(b);
         }
+        if joints.is_empty() || joints.len() > u16::MAX as usize {
+            return Err(src.invalid(format!("{what}: has {} joints (1 to 65535 supported)", joints.len())));
+        }
         let inverse_bind = match skin.inverse_bind_matrices {
             Some(acc) => {
                 let d = src.read_floats(acc.value(), &format!("{what} inverseBindMatrices"))?;
@@ -680,6 +683,15 @@ fn read_clips(
             }
             if out.values.iter().any(|v| !v.is_finite()) {
                 return Err(src.invalid(format!("{what}: output contains NaN or Inf")));
+            }
+            if times.is_empty() {
+                return Err(src.invalid(format!("{what}: sampler has no keys")));
+            }
+            if property == Property::Rotation
+                && interpolation != Interpolation::CubicSpline
+                && out.values.chunks_exact(4).any(|q| q.iter().map(|c| c * c).sum::<f32>() < 1e-6)
+            {
+                return Err(src.invalid(format!("{what}: a rotation key is not a unit quaternion")));
             }
             let values = (0..out.count())
                 .map(|k| {
