@@ -19,7 +19,14 @@ fn bench(name: &str, runs: usize, load: &dyn Fn() -> frond_scene::Tree) {
         let t0 = Instant::now();
         let tree = load();
         let t1 = Instant::now();
-        let s = sample(&tree, &SampleOptions { clip: None, samples: 64 }).expect("samples");
+        let s = sample(
+            &tree,
+            &SampleOptions {
+                clip: None,
+                samples: 64,
+            },
+        )
+        .expect("samples");
         let t2 = Instant::now();
         foliage = s.foliage.len();
         t_import.push((t1 - t0).as_secs_f64());
@@ -37,7 +44,9 @@ fn bench(name: &str, runs: usize, load: &dyn Fn() -> frond_scene::Tree) {
 
 fn main() {
     let dense = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/trees/oak_dense.glb");
-    bench("oak_dense.glb", 5, &|| import(&dense, &ImportOptions::default()).expect("imports"));
+    bench("oak_dense.glb", 5, &|| {
+        import(&dense, &ImportOptions::default()).expect("imports")
+    });
     let large = generate(Preset::Large, 1).expect("generates").glb;
     bench("large preset", 3, &|| {
         import_bytes(Path::new("large.glb"), &large, &ImportOptions::default()).expect("imports")

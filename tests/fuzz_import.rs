@@ -18,7 +18,11 @@ fn split_glb(bytes: &[u8]) -> (Vec<u8>, Vec<u8>) {
     let jl = u32::from_le_bytes([bytes[12], bytes[13], bytes[14], bytes[15]]) as usize;
     let json = bytes[20..20 + jl].to_vec();
     let rest = &bytes[20 + jl..];
-    let bin = if rest.len() >= 8 { rest[8..].to_vec() } else { Vec::new() };
+    let bin = if rest.len() >= 8 {
+        rest[8..].to_vec()
+    } else {
+        Vec::new()
+    };
     (json, bin)
 }
 
@@ -43,8 +47,27 @@ fn wrap_glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
 }
 
 const EDGE_NUMBERS: &[&str] = &[
-    "0", "1", "-1", "2", "3", "4", "5", "255", "256", "65535", "65536", "4294967295", "1e30", "-0.5", "1e999",
-    "5120", "5121", "5123", "5125", "5126", "9999999",
+    "0",
+    "1",
+    "-1",
+    "2",
+    "3",
+    "4",
+    "5",
+    "255",
+    "256",
+    "65535",
+    "65536",
+    "4294967295",
+    "1e30",
+    "-0.5",
+    "1e999",
+    "5120",
+    "5121",
+    "5123",
+    "5125",
+    "5126",
+    "9999999",
 ];
 
 /// One mutation of a seed file.
@@ -58,9 +81,16 @@ fn mutate(rng: &mut ChaCha8Rng, json: &[u8], bin: &[u8]) -> Vec<u8> {
                 let mut v = Vec::new();
                 let mut i = 0;
                 while i < j.len() {
-                    if j[i].is_ascii_digit() && (i == 0 || !(j[i - 1].is_ascii_alphanumeric() || j[i - 1] == b'_')) {
+                    if j[i].is_ascii_digit()
+                        && (i == 0 || !(j[i - 1].is_ascii_alphanumeric() || j[i - 1] == b'_'))
+                    {
                         let s = i;
-                        while i < j.len() && (j[i].is_ascii_digit() || j[i] == b'.' || j[i] == b'e' || j[i] == b'-') {
+                        while i < j.len()
+                            && (j[i].is_ascii_digit()
+                                || j[i] == b'.'
+                                || j[i] == b'e'
+                                || j[i] == b'-')
+                        {
                             i += 1;
                         }
                         v.push((s, i));
@@ -119,18 +149,31 @@ fn fuzz(runs: usize, seed: u64) {
         let input = mutate(&mut rng, &json, &bin);
         let result = catch_unwind(AssertUnwindSafe(|| {
             let tree = import_bytes(Path::new("fuzz.glb"), &input, &ImportOptions::default())?;
-            sample(&tree, &SampleOptions { clip: None, samples: 4 }).map(|_| ())
+            sample(
+                &tree,
+                &SampleOptions {
+                    clip: None,
+                    samples: 4,
+                },
+            )
+            .map(|_| ())
         }));
         match result {
             Ok(Ok(())) => ok += 1,
             Ok(Err(e)) => {
-                assert!(e.to_string().starts_with("fuzz.glb: "), "error names the file: {e}");
+                assert!(
+                    e.to_string().starts_with("fuzz.glb: "),
+                    "error names the file: {e}"
+                );
                 err += 1
             }
             Err(_) => {
                 let path = std::env::temp_dir().join(format!("frond-fuzz-crash-{seed}-{run}.glb"));
                 let _ = std::fs::write(&path, &input);
-                panic!("importer panicked on run {run}; input saved to {}", path.display());
+                panic!(
+                    "importer panicked on run {run}; input saved to {}",
+                    path.display()
+                );
             }
         }
     }
@@ -145,6 +188,9 @@ fn importer_survives_mutated_shared_trees() {
 #[test]
 #[ignore = "long fuzz run; FROND_FUZZ_RUNS sets the count"]
 fn importer_survives_a_long_fuzz_run() {
-    let runs = std::env::var("FROND_FUZZ_RUNS").ok().and_then(|v| v.parse().ok()).unwrap_or(5000);
+    let runs = std::env::var("FROND_FUZZ_RUNS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(5000);
     fuzz(runs, 2);
 }

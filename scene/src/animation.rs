@@ -147,3 +147,77 @@ pub fn trs(translation: Vec3, rotation: Quat) -> Trs {
         scale: Vec3::ONE,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn channel(
+        interpolation: Interpolation,
+        property: Property,
+        times: &[f32],
+        values: &[Vec4],
+    ) -> Channel {
+        Channel {
+            node: 0,
+            property,
+            interpolation,
+            times: times.to_vec(),
+            values: values.to_vec(),
+        }
+    }
+
+    #[test]
+    fn cubic_spline_is_hermite_with_tangents_scaled_by_the_key_interval() {
+        // p0 = 0, p1 = 1, out-tangent of key 0 = 2, in-tangent of key 1 = 0, interval 2 s:
+        // p(u) = (2u³ - 3u² + 1)·0 + (u³ - 2u² + u)·(2·2) + (-2u³ + 3u²)·1 + (u³ - u²)·0.
+        let v = |x: f32| Vec4::new(x, 0.0, 0.0, 0.0);
+        let c = channel(
+            Interpolation::CubicSpline,
+            Property::Translation,
+            &[0.0, 2.0],
+            &[v(9.0), v(0.0), v(2.0), v(0.0), v(1.0), v(9.0)],
+        );
+        for u in [0.0f32, 0.25, 0.5, 0.9, 1.0] {
+            let want = (u * u * u - 2.0 * u * u + u) * 4.0 + (-2.0 * u * u * u + 3.0 * u * u);
+            assert!((c.sample(2.0 * u).x - want).abs() < 1e-5, "u={u}");
+        }
+        // Outside the key range the end values hold.
+        assert_eq!(c.sample(-1.0).x, 0.0);
+        assert_eq!(c.sample(5.0).x, 1.0);
+    }
+
+    #[test]
+    fn linear_rotation_takes_the_shortest_path() {
+        let a = Quat::from_rotation_y(0.2);
+        let b = -Quat::from_rotation_y(0.6); // same rotation, opposite hemisphere
+        let c = channel(
+            Interpolation::Linear,
+            Property::Rotation,
+            &[0.0, 1.0],
+            &[Vec4::from(a), Vec4::from(b)],
+        );
+        let mid = Quat::from_vec4(c.sample(0.5));
+        assert!(mid.angle_between(Quat::from_rotation_y(0.4)) < 1e-5);
+    }
+
+    #[test]
+    fn linear_translation_interpolates_and_step_holds() {
+        let keys = [Vec4::ZERO, Vec4::new(2.0, 4.0, 6.0, 0.0)];
+        let lin = channel(
+            Interpolation::Linear,
+            Property::Translation,
+            &[1.0, 3.0],
+            &keys,
+        );
+        assert!((lin.sample(2.5) - Vec4::new(1.5, 3.0, 4.5, 0.0)).length() < 1e-6);
+        let step = channel(
+            Interpolation::Step,
+            Property::Translation,
+            &[1.0, 3.0],
+            &keys,
+        );
+        assert_eq!(step.sample(2.99), Vec4::ZERO);
+        assert_eq!(step.sample(3.0), keys[1]);
+    }
+}

@@ -228,7 +228,10 @@ fn read_skins(src: &GltfSource, nodes: &[Node]) -> Result<(Vec<Bone>, Vec<Bindin
             joints.push(b);
         }
         if joints.is_empty() || joints.len() > u16::MAX as usize {
-            return Err(src.invalid(format!("{what}: has {} joints (1 to 65535 supported)", joints.len())));
+            return Err(src.invalid(format!(
+                "{what}: has {} joints (1 to 65535 supported)",
+                joints.len()
+            )));
         }
         let inverse_bind = match skin.inverse_bind_matrices {
             Some(acc) => {
@@ -689,7 +692,10 @@ fn read_clips(
             }
             if property == Property::Rotation
                 && interpolation != Interpolation::CubicSpline
-                && out.values.chunks_exact(4).any(|q| q.iter().map(|c| c * c).sum::<f32>() < 1e-6)
+                && out
+                    .values
+                    .chunks_exact(4)
+                    .any(|q| q.iter().map(|c| c * c).sum::<f32>() < 1e-6)
             {
                 return Err(src.invalid(format!("{what}: a rotation key is not a unit quaternion")));
             }
