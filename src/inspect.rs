@@ -2,7 +2,7 @@
 //! interface (documented in the README).
 
 use frond_scene::sampling::clip_motion;
-use frond_scene::{Bounds, Classification, Part, Tree};
+use frond_scene::{Bounds, Classification, Part, Sampled, Tree};
 use serde::Serialize;
 
 /// Number of poses checked per clip for motion.
@@ -24,7 +24,56 @@ pub struct InspectReport {
     pub textures: Vec<TextureSummary>,
     pub clips: Vec<ClipSummary>,
     pub bounds: Bounds,
+    /// The sampled loop of the chosen clip (`--clip`, `--samples`).
+    pub sampling: SamplingSummary,
     pub warnings: Vec<String>,
+}
+
+/// What sampling the chosen clip produced.
+#[derive(Debug, Serialize)]
+pub struct SamplingSummary {
+    pub clip: Option<String>,
+    pub samples: usize,
+    pub period_s: f32,
+    /// Non-degenerate foliage triangles with a centre trajectory.
+    pub trajectories: usize,
+    /// Largest distance of a foliage triangle centre from its mean position.
+    pub max_leaf_excursion: f32,
+    /// Mean of that distance over foliage triangles.
+    pub mean_leaf_excursion: f32,
+    pub loops: bool,
+    pub moves: bool,
+    /// Wall time of the sampling (not part of the stable output).
+    pub seconds: f64,
+}
+
+impl SamplingSummary {
+    /// Summarises a sampled loop that took `seconds`.
+    pub fn of(s: &Sampled, seconds: f64) -> Self {
+        let n = s.samples();
+        let excursions: Vec<f32> = (0..s.foliage.len())
+            .map(|k| {
+                let tr = s.trajectory(k);
+                let mean = tr.iter().copied().sum::<glam::Vec3>() / n as f32;
+                tr.iter().map(|p| p.distance(mean)).fold(0.0, f32::max)
+            })
+            .collect();
+        SamplingSummary {
+            clip: s.clip.clone(),
+            samples: n,
+            period_s: s.period,
+            trajectories: s.foliage.len(),
+            max_leaf_excursion: excursions.iter().copied().fold(0.0, f32::max),
+            mean_leaf_excursion: if excursions.is_empty() {
+                0.0
+            } else {
+                excursions.iter().sum::<f32>() / excursions.len() as f32
+            },
+            loops: s.motion.loops,
+            moves: s.motion.moves,
+            seconds,
+        }
+    }
 }
 
 /// Triangle counts as the file holds them.
@@ -66,8 +115,8 @@ pub struct ClipSummary {
     pub max_displacement: f32,
 }
 
-/// Builds the report for an imported tree.
-pub fn inspect(tree: &Tree) -> InspectReport {
+/// Builds the report for an imported tree and its sampled loop.
+pub fn inspect(tree: &Tree, sampling: SamplingSummary) -> InspectReport {
     let clips = (0..tree.clips.len())
         .map(|c| {
             let m = clip_motion(tree, c, MOTION_SAMPLES);
@@ -119,6 +168,7 @@ pub fn inspect(tree: &Tree) -> InspectReport {
             .collect(),
         clips,
         bounds: tree.bounds,
+        sampling,
         warnings: tree.warnings.clone(),
     }
 }
@@ -158,6 +208,18 @@ impl InspectReport {
                 if c.moves { "moves" } else { "no motion" }
             );
         }
+        let sm = &self.sampling;
+        let _ = writeln!(
+            s,
+            "  sampled '{}': {} samples over {:.3} s, {} leaf trajectories, leaf excursion mean {:.4} / max {:.4} ({:.3} s)",
+            sm.clip.as_deref().unwrap_or("(rest pose)"),
+            sm.samples,
+            sm.period_s,
+            sm.trajectories,
+            sm.mean_leaf_excursion,
+            sm.max_leaf_excursion,
+            sm.seconds
+        );
         let _ = writeln!(
             s,
             "  bounds: {:?} .. {:?}",

@@ -6,12 +6,12 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
-use frond::inspect::inspect;
+use frond::inspect::{SamplingSummary, inspect};
 use frond::output::write_atomic;
 use frond::render_cmd::{RenderRequest, frame_png, parse_size, render_tree};
 use frond_render::{Renderer, TreeParts};
 use frond_scene::generator::{Preset, generate};
-use frond_scene::{ImportOptions, import};
+use frond_scene::{ImportOptions, SampleOptions, import, sample};
 
 #[derive(Parser)]
 #[command(
@@ -55,6 +55,12 @@ enum Command {
     Inspect {
         #[command(flatten)]
         import: ImportArgs,
+        /// Clip to sample (default: the first).
+        #[arg(long)]
+        clip: Option<String>,
+        /// Uniform samples over the loop.
+        #[arg(long, default_value_t = 64)]
+        samples: usize,
         /// Machine-readable JSON on stdout.
         #[arg(long)]
         json: bool,
@@ -110,9 +116,18 @@ enum Command {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Inspect { import, json } => {
+        Command::Inspect {
+            import,
+            clip,
+            samples,
+            json,
+        } => {
             let tree = import.load()?;
-            let report = inspect(&tree);
+            let start = std::time::Instant::now();
+            let sampled = sample(&tree, &SampleOptions { clip, samples })?;
+            let summary = SamplingSummary::of(&sampled, start.elapsed().as_secs_f64());
+            drop(sampled);
+            let report = inspect(&tree, summary);
             if json {
                 println!(
                     "{}",

@@ -60,6 +60,24 @@ fn inspect_json_matches_manifest_for_every_shared_tree() {
         }
         assert_eq!(r["bounds"]["min"].as_array().map(Vec::len), Some(3));
         assert_eq!(r["bounds"]["max"].as_array().map(Vec::len), Some(3));
+        let sm = &r["sampling"];
+        assert_eq!(sm["samples"], 64, "{name}: default sample count");
+        assert_eq!(
+            sm["clip"], entry["animation"]["name"],
+            "{name}: first clip sampled"
+        );
+        assert_eq!(
+            sm["trajectories"], t["foliage"],
+            "{name}: one trajectory per foliage triangle"
+        );
+        // MANIFEST's Blender check saw leaves move by up to ~2.5 units between frames 0 and 1.
+        let max = sm["max_leaf_excursion"].as_f64().unwrap_or(0.0);
+        let height = r["bounds"]["max"][1].as_f64().unwrap_or(0.0)
+            - r["bounds"]["min"][1].as_f64().unwrap_or(0.0);
+        assert!(
+            max > 1e-3 * height && max < 0.2 * height,
+            "{name}: leaf excursion {max} of height {height}"
+        );
         let rigid = entry["leafBinding"]["multiBonePieces"] == 0;
         if rigid {
             assert_eq!(
