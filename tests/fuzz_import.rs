@@ -28,22 +28,7 @@ fn split_glb(bytes: &[u8]) -> (Vec<u8>, Vec<u8>) {
 
 /// Builds a GLB container around any json and bin bytes.
 fn wrap_glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
-    let mut j = json.to_vec();
-    while j.len() % 4 != 0 {
-        j.push(b' ');
-    }
-    let total = 12 + 8 + j.len() + 8 + bin.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(j.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&j);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(bin);
-    out
+    frond_scene::gltf_writer::glb_container(json, bin)
 }
 
 const EDGE_NUMBERS: &[&str] = &[
@@ -75,7 +60,7 @@ fn mutate(rng: &mut ChaCha8Rng, json: &[u8], bin: &[u8]) -> Vec<u8> {
     let mut j = json.to_vec();
     let mut b = bin.to_vec();
     match rng.random_range(0..6u32) {
-        0 | 1 | 2 => {
+        0..=2 => {
             // Replace a few numeric tokens of the JSON with edge values.
             let spans: Vec<(usize, usize)> = {
                 let mut v = Vec::new();

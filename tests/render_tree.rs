@@ -87,13 +87,23 @@ fn blender_round_trip_poses_like_the_native_file() {
     // skinned meshes below it, TRS channels with STEP keys, split vertices. Posed at the same
     // times it must cover the same pixels as the native file. Blender resampled the 30 fps keys
     // at 24 fps, so only at times on both key grids (multiples of 1/6 s) are the poses equal.
-    let native = import(&shared_tree("pine_medium.glb"), &ImportOptions::default()).expect("imports");
-    let blender = import(&shared_tree("pine_medium_blender.glb"), &ImportOptions::default()).expect("imports");
+    let native =
+        import(&shared_tree("pine_medium.glb"), &ImportOptions::default()).expect("imports");
+    let blender = import(
+        &shared_tree("pine_medium_blender.glb"),
+        &ImportOptions::default(),
+    )
+    .expect("imports");
     let renderer = Renderer::new().expect("a graphics adapter (Mesa llvmpipe on CI)");
     for t in [0.0, 1.0, 1.5, 2.5] {
         let a = render_tree(&renderer, &native, &request(t)).expect("renders");
         let b = render_tree(&renderer, &blender, &request(t)).expect("renders");
-        let differ = a.coverage.iter().zip(&b.coverage).filter(|(x, y)| x != y).count();
+        let differ = a
+            .coverage
+            .iter()
+            .zip(&b.coverage)
+            .filter(|(x, y)| x != y)
+            .count();
         assert!(a.coverage_fraction() > 0.03);
         assert!(differ < 40, "t={t}: {differ} pixels differ");
     }

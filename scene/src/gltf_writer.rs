@@ -406,26 +406,32 @@ impl GltfBuilder {
         if let Some(e) = self.extras {
             root.insert("extras".into(), e);
         }
-        let mut json_bytes = serde_json::to_vec(&Value::Object(root)).unwrap_or_default();
-        while !json_bytes.len().is_multiple_of(4) {
-            json_bytes.push(b' ');
-        }
-        let has_bin = !self.bin.is_empty();
-        let total = 12 + 8 + json_bytes.len() + if has_bin { 8 + self.bin.len() } else { 0 };
-        let mut out = Vec::with_capacity(total);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&(total as u32).to_le_bytes());
-        out.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&json_bytes);
-        if has_bin {
-            out.extend_from_slice(&(self.bin.len() as u32).to_le_bytes());
-            out.extend_from_slice(b"BIN\0");
-            out.extend_from_slice(&self.bin);
-        }
-        out
+        let json_bytes = serde_json::to_vec(&Value::Object(root)).unwrap_or_default();
+        glb_container(&json_bytes, &self.bin)
     }
+}
+
+/// Wraps a JSON document and an optional binary chunk in a GLB container (both padded to
+/// 4 bytes as the format requires; an empty `bin` writes no BIN chunk).
+pub fn glb_container(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let pad = |n: usize| n.next_multiple_of(4);
+    let (jl, bl) = (pad(json.len()), pad(bin.len()));
+    let total = 12 + 8 + jl + if bin.is_empty() { 0 } else { 8 + bl };
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(jl as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(json);
+    out.resize(20 + jl, b' ');
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bl as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(bin);
+        out.resize(total, 0);
+    }
+    out
 }
 
 /// Encodes RGBA8 pixels as PNG.

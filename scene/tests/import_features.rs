@@ -251,28 +251,9 @@ fn alpha_mask_marks_foliage_when_names_say_nothing() {
     assert!(tree.classification[0].reason.contains("alpha-masked"));
 }
 
-/// A raw glTF JSON document with its bin chunk packed from parts, as a GLB.
+/// A raw glTF JSON document with its bin chunk, as a GLB.
 fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
-    let mut j = serde_json::to_vec(json).expect("json");
-    while j.len() % 4 != 0 {
-        j.push(b' ');
-    }
-    let mut b = bin.to_vec();
-    while b.len() % 4 != 0 {
-        b.push(0);
-    }
-    let total = 28 + j.len() + b.len();
-    let mut out = Vec::new();
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(j.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&j);
-    out.extend_from_slice(&(b.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&b);
-    out
+    glb_container(&serde_json::to_vec(json).expect("json"), bin)
 }
 
 #[test]
