@@ -20,6 +20,23 @@ pub struct RenderRequest {
     pub parts: TreeParts,
 }
 
+impl Default for RenderRequest {
+    /// The first clip at t = 0, seen from +Z slightly above, perspective, 256×256, all parts.
+    fn default() -> Self {
+        RenderRequest {
+            clip: None,
+            time: 0.0,
+            azimuth_deg: 0.0,
+            elevation_deg: 10.0,
+            zoom: 1.0,
+            width: 256,
+            height: 256,
+            orthographic: false,
+            parts: TreeParts::All,
+        }
+    }
+}
+
 /// Parses `WxH`.
 pub fn parse_size(s: &str) -> Result<(u32, u32)> {
     let (w, h) = s

@@ -82,15 +82,10 @@ fn gltfpack_quantized_tree_reads_back_with_the_same_counts_and_look() {
     // which needs both positions and texture coordinates dequantised right.
     let renderer = Renderer::new().expect("a graphics adapter (Mesa llvmpipe on CI)");
     let req = RenderRequest {
-        clip: None,
         time: 1.0,
         azimuth_deg: 30.0,
-        elevation_deg: 10.0,
-        zoom: 1.0,
-        width: 256,
-        height: 256,
-        orthographic: false,
         parts: TreeParts::Foliage,
+        ..Default::default()
     };
     let a = render_tree(&renderer, &original, &req).expect("renders");
     let b = render_tree(&renderer, &quantized, &req).expect("renders");

@@ -4,20 +4,13 @@ mod common;
 
 use common::*;
 use frond::render_cmd::{RenderRequest, render_tree};
-use frond_render::{Renderer, TreeParts};
+use frond_render::Renderer;
 use frond_scene::{ImportOptions, import};
 
 fn request(time: f32) -> RenderRequest {
     RenderRequest {
-        clip: None,
         time,
-        azimuth_deg: 0.0,
-        elevation_deg: 10.0,
-        zoom: 1.0,
-        width: 256,
-        height: 256,
-        orthographic: false,
-        parts: TreeParts::All,
+        ..Default::default()
     }
 }
 
