@@ -6,9 +6,12 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
+use frond::cloud_cmd::{CloudRequest, rest_diagonal, run_cloud};
 use frond::inspect::{SamplingSummary, inspect};
 use frond::output::write_atomic;
 use frond::render_cmd::{RenderRequest, frame_png, parse_size, render_tree};
+use frond_billboard::cloud::CloudParams;
+use frond_billboard::plane_search::SearchParams;
 use frond_render::{Renderer, TreeParts};
 use frond_scene::generator::{Preset, generate};
 use frond_scene::{ImportOptions, SampleOptions, import, sample};
@@ -100,6 +103,63 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Build a static billboard cloud of the foliage (average pose) with baked atlases.
+    Cloud {
+        #[command(flatten)]
+        import: ImportArgs,
+        /// Largest vertex distance from a billboard: a length, or a percentage of the rest-pose
+        /// bounding-box diagonal ("5%"); 0 = coplanar up to float noise.
+        #[arg(long, default_value = "5%")]
+        epsilon: String,
+        /// Candidate planes per iteration (the thesis's S).
+        #[arg(long, default_value_t = 500)]
+        planes: usize,
+        /// Random seed: same input and seed, same files.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Animation samples for the average pose.
+        #[arg(long, default_value_t = 64)]
+        samples: usize,
+        /// Clip (default: the first).
+        #[arg(long)]
+        clip: Option<String>,
+        /// Favour billboards seen from this elevation in degrees (0 = vertical billboards).
+        #[arg(long, value_name = "DEG")]
+        view_penalty: Option<f32>,
+        /// Weight contributions by 1/(d/ε+1) (distance falloff).
+        #[arg(long)]
+        falloff: bool,
+        /// Least-squares refit of each plane (kept only if its triangles stay within ε).
+        #[arg(long)]
+        refit: bool,
+        /// At most this many billboards; leftovers join the nearest plane.
+        #[arg(long)]
+        max_planes: Option<usize>,
+        /// Bake every triangle valid for a plane, not only its own.
+        #[arg(long)]
+        increased_density: bool,
+        /// Texels per world unit (default: 2048 across the bounding-box diagonal).
+        #[arg(long)]
+        texels_per_unit: Option<f32>,
+        /// Largest atlas side; density is lowered (and reported) when the quads do not fit.
+        #[arg(long, default_value_t = 4096)]
+        max_atlas: u32,
+        /// Views of the coverage check (0 skips it).
+        #[arg(long, default_value_t = 5)]
+        coverage_views: u32,
+        /// Image size of the coverage check.
+        #[arg(long, default_value = "800x600")]
+        coverage_size: String,
+        /// Use the plain O(planes·S·triangles) search (for comparison).
+        #[arg(long)]
+        plain: bool,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Print stats.json to stdout.
+        #[arg(long)]
+        json: bool,
+    },
     /// Write a skinned, wind-animated sample tree (.glb).
     Sample {
         /// Size: small (~2k foliage triangles), medium (~20k), large (~200k), xlarge (~1M).
@@ -178,6 +238,87 @@ fn run(cli: Cli) -> Result<()> {
                     "adapter": renderer.adapter_info(),
                 });
                 println!("{v}");
+            }
+        }
+        Command::Cloud {
+            import,
+            epsilon,
+            planes,
+            seed,
+            samples,
+            clip,
+            view_penalty,
+            falloff,
+            refit,
+            max_planes,
+            increased_density,
+            texels_per_unit,
+            max_atlas,
+            coverage_views,
+            coverage_size,
+            plain,
+            output,
+            json,
+        } => {
+            let tree = import.load()?;
+            let renderer = Renderer::new()?;
+            let diag = rest_diagonal(&tree);
+            let mut params = CloudParams {
+                increased_density,
+                ..Default::default()
+            };
+            params.search = SearchParams {
+                candidates: planes,
+                seed,
+                view_penalty: view_penalty.map(f32::to_radians),
+                falloff,
+                refit,
+                max_planes,
+                accelerated: !plain,
+                ..Default::default()
+            };
+            params.bake.texels_per_unit =
+                texels_per_unit.unwrap_or(2048.0 / diag.max(f32::MIN_POSITIVE));
+            params.bake.max_atlas = max_atlas;
+            let req = CloudRequest {
+                epsilon,
+                params,
+                samples,
+                clip,
+                coverage_views,
+                coverage_size: parse_size(&coverage_size)?,
+            };
+            let bar = indicatif::ProgressBar::new_spinner();
+            bar.set_message(format!(
+                "building the billboard cloud of {}",
+                import.input.display()
+            ));
+            bar.enable_steady_tick(std::time::Duration::from_millis(120));
+            let result = run_cloud(&renderer, &tree, &req, &output);
+            bar.finish_and_clear();
+            let report = result?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&report).context("serialising stats")?
+                );
+            } else {
+                println!(
+                    "{}: {} billboards (ε = {:.4}), area {:.1}, atlas {}x{}, coverage error {}, search {:.3} s, bake {:.3} s, total {:.3} s",
+                    output.display(),
+                    report.billboards,
+                    report.epsilon,
+                    report.total_area,
+                    report.cloud.atlas_width,
+                    report.cloud.atlas_height,
+                    report
+                        .coverage_error
+                        .map(|c| format!("{c:.4}"))
+                        .unwrap_or_else(|| "skipped".into()),
+                    report.cloud.timings_s.plane_search,
+                    report.cloud.timings_s.bake,
+                    report.cloud.timings_s.total
+                );
             }
         }
         Command::Sample {

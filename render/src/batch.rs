@@ -2,7 +2,8 @@
 //!
 //! Meshes are appended into shared buffers (indices rebased on the CPU, so no
 //! base-vertex support is needed on GL), and a mesh too big for one buffer is split
-//! into triangle chunks with their own compact vertex lists.
+//! into triangle chunks with their own compact vertex lists. For normal output, meshes
+//! without normals are expanded to three vertices per triangle carrying the face normal.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -68,9 +69,22 @@ fn vertex(mesh: &crate::DrawMesh, i: usize) -> Vertex {
     }
 }
 
+/// Unit normal of the counter-clockwise triangle (a, b, c), zero when degenerate.
+fn face_normal(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> [f32; 3] {
+    let [a, b, c] = [a, b, c].map(glam::Vec3::from);
+    (b - a).cross(c - a).normalize_or_zero().to_array()
+}
+
 /// Splits the scene into batches whose vertex and index buffers are at most
 /// `max_buffer_bytes` each. The scene must already be validated.
-pub(crate) fn build_batches(scene: &DrawScene, max_buffer_bytes: u64) -> Vec<Batch> {
+///
+/// With `face_normals`, meshes without normals get per-triangle face normals (their
+/// triangles no longer share vertices); other meshes are unchanged.
+pub(crate) fn build_batches(
+    scene: &DrawScene,
+    max_buffer_bytes: u64,
+    face_normals: bool,
+) -> Vec<Batch> {
     let max_vertices =
         (max_buffer_bytes / size_of::<Vertex>() as u64).clamp(3, u32::MAX as u64) as usize;
     let max_indices = ((max_buffer_bytes / 4).clamp(3, u32::MAX as u64) as usize) / 3 * 3;
@@ -81,6 +95,32 @@ pub(crate) fn build_batches(scene: &DrawScene, max_buffer_bytes: u64) -> Vec<Bat
     let mut remap: Vec<u32> = Vec::new();
 
     for mesh in scene.meshes.iter().filter(|m| !m.indices.is_empty()) {
+        if face_normals && mesh.normals.is_none() {
+            let mut first = current.indices.len();
+            for tri in mesh.indices.chunks_exact(3) {
+                if current.vertices.len() + 3 > max_vertices
+                    || current.indices.len() + 3 > max_indices
+                {
+                    current.push_draw(mesh.material, first);
+                    batches.push(std::mem::take(&mut current));
+                    first = 0;
+                }
+                let corners = [0, 1, 2].map(|k| vertex(mesh, tri[k] as usize));
+                let [nx, ny, nz] = face_normal(
+                    corners[0].position,
+                    corners[1].position,
+                    corners[2].position,
+                );
+                for mut v in corners {
+                    v.normal = [nx, ny, nz, 1.0];
+                    current.indices.push(current.vertices.len() as u32);
+                    current.vertices.push(v);
+                }
+            }
+            current.push_draw(mesh.material, first);
+            continue;
+        }
+
         let (nv, ni) = (mesh.positions.len(), mesh.indices.len());
         if nv <= max_vertices && ni <= max_indices {
             if current.vertices.len() + nv > max_vertices
@@ -193,7 +233,7 @@ mod tests {
             materials: vec![DrawMaterial::default(); 2],
             textures: vec![],
         };
-        let batches = build_batches(&scene, 1 << 20);
+        let batches = build_batches(&scene, 1 << 20, false);
         assert_eq!(batches.len(), 1);
         // Same-material neighbours merge into one draw.
         assert_eq!(batches[0].draws.len(), 2);
@@ -209,7 +249,7 @@ mod tests {
         };
         // Room for 20 vertices / 72 indices per buffer.
         let cap = 20 * size_of::<Vertex>() as u64;
-        let batches = build_batches(&scene, cap);
+        let batches = build_batches(&scene, cap, false);
         assert!(batches.len() > 5);
         for b in &batches {
             assert!(b.vertices.len() <= 20, "{} vertices", b.vertices.len());
@@ -217,5 +257,38 @@ mod tests {
             assert!(b.indices.iter().all(|&i| (i as usize) < b.vertices.len()));
         }
         assert_eq!(triangles(&batches), scene_triangles(&scene));
+    }
+
+    #[test]
+    fn face_normals_expand_meshes_without_normals() {
+        let mut with_normals = strip(2, 0);
+        with_normals.normals = Some(vec![[0.0, 1.0, 0.0]; with_normals.positions.len()]);
+        let scene = DrawScene {
+            meshes: vec![strip(30, 0), with_normals.clone(), strip(1, 1)],
+            materials: vec![DrawMaterial::default(); 2],
+            textures: vec![],
+        };
+        let cap = 20 * size_of::<Vertex>() as u64;
+        let batches = build_batches(&scene, cap, true);
+        assert_eq!(triangles(&batches), scene_triangles(&scene));
+        for b in &batches {
+            assert!(b.vertices.len() <= 20);
+            assert!(b.indices.iter().all(|&i| (i as usize) < b.vertices.len()));
+        }
+        // Strips lie in z = 0 and wind counter-clockwise seen from +Z.
+        let normals: Vec<[f32; 4]> = batches
+            .iter()
+            .flat_map(|b| b.vertices.iter().map(|v| v.normal))
+            .collect();
+        let z_up = normals
+            .iter()
+            .filter(|n| **n == [0.0, 0.0, 1.0, 1.0])
+            .count();
+        let given = normals
+            .iter()
+            .filter(|n| **n == [0.0, 1.0, 0.0, 1.0])
+            .count();
+        assert_eq!(z_up, 3 * 2 * 31);
+        assert_eq!(given, with_normals.positions.len());
     }
 }

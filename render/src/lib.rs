@@ -4,6 +4,9 @@
 //! sRGB RGBA8 image plus an exact per-pixel coverage mask, on real GPUs and on CPU
 //! adapters (Mesa llvmpipe over GL, lavapipe over Vulkan) alike. It is used for
 //! baking billboard textures and for measuring how LODs differ on screen.
+//! [`Renderer::render_view`] takes an explicit view-projection matrix (e.g. an
+//! orthographic view of one billboard quad) and can output world-space normals
+//! ([`Output::Normal`]) for normal-map baking.
 //!
 //! Conventions: Y-up right-handed world (as in glTF), counter-clockwise front faces,
 //! depth in [0, 1] (Depth32Float), a fixed world-space light from above
@@ -48,6 +51,6 @@ pub use camera::{Camera, Projection};
 pub use error::RenderError;
 pub use frame::Frame;
 pub use pipeline::LIGHT_DIRECTION;
-pub use renderer::Renderer;
+pub use renderer::{Output, Renderer};
 pub use scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
 pub use tree::{TreeParts, scene_from_positions, tree_scene};

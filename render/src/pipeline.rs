@@ -1,10 +1,13 @@
-//! GPU state shared by every render: shader, bind group layouts, the two pipelines
-//! (back-face culled and double-sided), the sampler and a white fallback texture.
+//! GPU state shared by every render: shader, bind group layouts, the pipelines (back-face
+//! culled and double-sided, for colour and for normal output), the sampler and a white
+//! fallback texture.
 
 use crate::batch::Vertex;
 
 /// Colour target format; readback bytes are therefore sRGB-encoded.
 pub(crate) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Normal target format: linear, so `n * 0.5 + 0.5` is stored without sRGB encoding.
+pub(crate) const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// Coverage target format: 255 where a fragment survived, 0 elsewhere.
 pub(crate) const COVERAGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 /// Depth buffer format.
@@ -38,6 +41,10 @@ pub(crate) struct Pipelines {
     pub material_layout: wgpu::BindGroupLayout,
     pub culled: wgpu::RenderPipeline,
     pub double_sided: wgpu::RenderPipeline,
+    /// Normal output ([`crate::Output::Normal`]), back faces culled.
+    pub normal_culled: wgpu::RenderPipeline,
+    /// Normal output, both faces drawn.
+    pub normal_double_sided: wgpu::RenderPipeline,
     pub sampler: wgpu::Sampler,
     pub white: wgpu::TextureView,
 }
@@ -99,19 +106,24 @@ impl Pipelines {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &attributes,
         })];
-        let targets = [
-            Some(wgpu::ColorTargetState {
-                format: COLOR_FORMAT,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            }),
-            Some(wgpu::ColorTargetState {
-                format: COVERAGE_FORMAT,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            }),
-        ];
-        let make = |label: &str, cull_mode: Option<wgpu::Face>| {
+        let targets = |format: wgpu::TextureFormat| {
+            [
+                Some(wgpu::ColorTargetState {
+                    format,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                }),
+                Some(wgpu::ColorTargetState {
+                    format: COVERAGE_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                }),
+            ]
+        };
+        let make = |label: &str,
+                    cull_mode: Option<wgpu::Face>,
+                    fragment_entry: &str,
+                    format: wgpu::TextureFormat| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&layout),
@@ -137,16 +149,29 @@ impl Pipelines {
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &shader,
-                    entry_point: Some("fs_main"),
+                    entry_point: Some(fragment_entry),
                     compilation_options: Default::default(),
-                    targets: &targets,
+                    targets: &targets(format),
                 }),
                 multiview_mask: None,
                 cache: None,
             })
         };
-        let culled = make("frond-render culled", Some(wgpu::Face::Back));
-        let double_sided = make("frond-render double-sided", None);
+        let back = Some(wgpu::Face::Back);
+        let culled = make("frond-render culled", back, "fs_main", COLOR_FORMAT);
+        let double_sided = make("frond-render double-sided", None, "fs_main", COLOR_FORMAT);
+        let normal_culled = make(
+            "frond-render normal culled",
+            back,
+            "fs_normal",
+            NORMAL_FORMAT,
+        );
+        let normal_double_sided = make(
+            "frond-render normal double-sided",
+            None,
+            "fs_normal",
+            NORMAL_FORMAT,
+        );
 
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("frond-render sampler"),
@@ -164,6 +189,8 @@ impl Pipelines {
             material_layout,
             culled,
             double_sided,
+            normal_culled,
+            normal_double_sided,
             sampler,
             white,
         }

@@ -11,14 +11,39 @@ use crate::error::RenderError;
 use crate::frame::Frame;
 use crate::pipeline::{
     self, COLOR_FORMAT, COVERAGE_FORMAT, DEPTH_FORMAT, Globals, LIGHT_DIRECTION, MaterialUniform,
-    Pipelines,
+    NORMAL_FORMAT, Pipelines,
 };
 use crate::readback::{self, Readback};
 use crate::scene::DrawScene;
 
+/// Where and how one render draws: matrix, image size, clear colour and output kind.
+struct Target {
+    view_proj: glam::Mat4,
+    width: u32,
+    height: u32,
+    background: [f32; 4],
+    output: Output,
+}
+
 /// Largest single vertex or index buffer we create, even where the device allows
 /// more: keeps allocations moderate (about 7M vertices per buffer).
 const BUFFER_CAP: u64 = 256 << 20;
+
+/// What the colour image of a render holds.
+///
+/// Baking billboards needs both the look of the geometry and its normals
+/// (improved-billboard-cloud §4 items 4 and 8: diffuse texture and normal map).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Output {
+    /// Shaded colour, sRGB-encoded RGBA8 (what [`Renderer::render`] produces).
+    #[default]
+    Color,
+    /// The unit world-space normal of the side facing the viewer (flipped on back faces of
+    /// double-sided materials), stored linearly as `rgb = n * 0.5 + 0.5`, alpha 255. Meshes
+    /// without normals use their triangles' face normals. Alpha test and coverage are the
+    /// same as for [`Output::Color`].
+    Normal,
+}
 
 /// An offscreen renderer, reusable for many renders and shareable across threads.
 ///
@@ -125,6 +150,36 @@ impl Renderer {
         Ok(())
     }
 
+    /// Renders `scene` through an explicit `view_proj` matrix (world to wgpu clip space:
+    /// NDC x and y in [-1, 1] with +y up, z in [0, 1]; keeping the geometry inside the
+    /// depth range is the caller's job) into a `width` x `height` image.
+    ///
+    /// Baking needs cameras the orbit [`Camera`] cannot express, e.g. an orthographic
+    /// view whose window is exactly a billboard quad (animated-billboard-clouds §2.4,
+    /// texturing steps 3 and 4). With [`Output::Color`] the image is what
+    /// [`Renderer::render`] would draw with that matrix and `background` is stored
+    /// sRGB-encoded; with [`Output::Normal`] it holds normals (see [`Output`]) and
+    /// `background` is stored as is (linear). Inputs are validated before any GPU work.
+    pub fn render_view(
+        &self,
+        scene: &DrawScene,
+        view_proj: glam::Mat4,
+        width: u32,
+        height: u32,
+        background: [f32; 4],
+        output: Output,
+    ) -> Result<Frame, RenderError> {
+        self.check_size(width, height)?;
+        if !view_proj.is_finite() {
+            return Err(RenderError::InvalidCamera(
+                "the view-projection matrix has a non-finite entry".into(),
+            ));
+        }
+        self.draw(
+            scene, view_proj, width, height, background, output, BUFFER_CAP,
+        )
+    }
+
     pub(crate) fn render_with_buffer_cap(
         &self,
         scene: &DrawScene,
@@ -136,15 +191,54 @@ impl Renderer {
     ) -> Result<Frame, RenderError> {
         self.check_size(width, height)?;
         camera.validate()?;
+        let aspect = width as f32 / height as f32;
+        let view_proj = match scene.bounds() {
+            Some((min, max)) => camera.view_proj_for_bounds(aspect, min, max),
+            None => camera.view_proj(aspect),
+        };
+        self.draw(
+            scene,
+            view_proj,
+            width,
+            height,
+            background,
+            Output::Color,
+            buffer_cap,
+        )
+    }
+
+    /// Validates the scene, draws it and reads both targets back. The size was checked.
+    #[allow(clippy::too_many_arguments)]
+    fn draw(
+        &self,
+        scene: &DrawScene,
+        view_proj: glam::Mat4,
+        width: u32,
+        height: u32,
+        background: [f32; 4],
+        output: Output,
+        buffer_cap: u64,
+    ) -> Result<Frame, RenderError> {
         let limits = self.gpu.device.limits();
         scene.validate(limits.max_texture_dimension_2d)?;
-        let batches = batch::build_batches(scene, buffer_cap.min(limits.max_buffer_size));
+        let batches = batch::build_batches(
+            scene,
+            buffer_cap.min(limits.max_buffer_size),
+            output == Output::Normal,
+        );
 
         let device = &self.gpu.device;
         let oom_scope = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation_scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
 
-        let readbacks = self.encode_and_submit(scene, camera, width, height, background, &batches);
+        let target = Target {
+            view_proj,
+            width,
+            height,
+            background,
+            output,
+        };
+        let readbacks = self.encode_and_submit(scene, &target, &batches);
 
         let validation = pollster::block_on(validation_scope.pop());
         let oom = pollster::block_on(oom_scope.pop());
@@ -168,14 +262,22 @@ impl Renderer {
     fn encode_and_submit(
         &self,
         scene: &DrawScene,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-        background: [f32; 4],
+        target: &Target,
         batches: &[Batch],
     ) -> [Readback; 2] {
         let device = &self.gpu.device;
         let p = &self.pipelines;
+        let &Target {
+            view_proj,
+            width,
+            height,
+            background,
+            output,
+        } = target;
+        let (color_format, culled, double_sided) = match output {
+            Output::Color => (COLOR_FORMAT, &p.culled, &p.double_sided),
+            Output::Normal => (NORMAL_FORMAT, &p.normal_culled, &p.normal_double_sided),
+        };
         let size = wgpu::Extent3d {
             width,
             height,
@@ -194,7 +296,7 @@ impl Renderer {
             })
         };
         let attach = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
-        let color = target("frond-render color", COLOR_FORMAT, attach);
+        let color = target("frond-render color", color_format, attach);
         let coverage = target("frond-render coverage", COVERAGE_FORMAT, attach);
         let depth = target(
             "frond-render depth",
@@ -205,11 +307,6 @@ impl Renderer {
         let coverage_view = coverage.create_view(&Default::default());
         let depth_view = depth.create_view(&Default::default());
 
-        let aspect = width as f32 / height as f32;
-        let view_proj = match scene.bounds() {
-            Some((min, max)) => camera.view_proj_for_bounds(aspect, min, max),
-            None => camera.view_proj(aspect),
-        };
         let [lx, ly, lz] = LIGHT_DIRECTION;
         let globals = Globals {
             view_proj: view_proj.to_cols_array_2d(),
@@ -294,11 +391,10 @@ impl Renderer {
                     let Some(group) = material_groups.get(&draw.material) else {
                         continue;
                     };
-                    let double_sided = scene.materials[draw.material].double_sided;
-                    pass.set_pipeline(if double_sided {
-                        &p.double_sided
+                    pass.set_pipeline(if scene.materials[draw.material].double_sided {
+                        double_sided
                     } else {
-                        &p.culled
+                        culled
                     });
                     pass.set_bind_group(1, group, &[]);
                     pass.draw_indexed(

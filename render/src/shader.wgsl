@@ -1,4 +1,5 @@
-// frond-render: textured, alpha-tested, simply lit triangles plus a coverage mask.
+// frond-render: textured, alpha-tested, simply lit triangles plus a coverage mask, or
+// (fs_normal) the world-space normal facing the viewer for normal-map baking.
 
 struct Globals {
     view_proj: mat4x4<f32>,
@@ -60,6 +61,31 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     var out: FragmentOut;
     // Opaque and alpha-tested surfaces are written fully opaque (glTF MASK semantics).
     out.color = vec4<f32>(color.rgb * shade, 1.0);
+    out.coverage = vec4<f32>(1.0, 0.0, 0.0, 1.0);
+    return out;
+}
+
+// Normal output: same alpha test and coverage, but the colour target (linear Rgba8Unorm)
+// receives the unit world-space normal of the side facing the viewer, encoded n * 0.5 + 0.5.
+// Meshes without normals arrive with per-triangle face normals (computed on the CPU).
+@fragment
+fn fs_normal(in: VertexOut, @builtin(front_facing) front: bool) -> FragmentOut {
+    let texel = textureSample(base_texture, base_sampler, in.uv);
+    let color = texel * material.base_color;
+    let cutoff = material.params.x;
+    if (cutoff >= 0.0 && color.a < cutoff) {
+        discard;
+    }
+    var n = vec3<f32>(0.0, 0.0, 0.0);
+    if (dot(in.normal.xyz, in.normal.xyz) > 1e-12) {
+        n = normalize(in.normal.xyz);
+    }
+    // Back faces (only drawn for double-sided materials) show their other side.
+    if (!front) {
+        n = -n;
+    }
+    var out: FragmentOut;
+    out.color = vec4<f32>(n * 0.5 + 0.5, 1.0);
     out.coverage = vec4<f32>(1.0, 0.0, 0.0, 1.0);
     return out;
 }

@@ -1,0 +1,995 @@
+//! Bakes the textures of a billboard cloud: each quad's member triangles rendered
+//! orthographically onto the quad, supersampled, downsampled in linear light, dilated into
+//! their padding and packed into one colour atlas and one normal atlas.
+//!
+//! Spec: improved-billboard-cloud §4 (texture size from a uniform texel density, orthographic
+//! projection focused on the rectangle with near/far from the members' depth range, 4x4
+//! supersampling with filters that average only covered samples, one atlas with padding,
+//! alpha test at 0.5 and background dilation, normal maps) and animated-billboard-clouds §2.4
+//! "Texturing details" (camera aligned with the quad edges, view window = the quad, ambient
+//! only, [ENG] texel density clamped per side, one atlas per cloud).
+//!
+//! How it is rendered: quads are first packed (see [`crate::atlas`]); every member triangle is
+//! then transformed on the CPU into the supersampled atlas (the quad's rectangle maps onto its
+//! texture's cell, depth runs from the quad's far to near member), clipped to its cell, and the
+//! whole supersampled atlas is drawn in large tiles with one identity-matrix render per tile
+//! and output. So thousands of quads cost a handful of renders, not thousands.
+
+use std::sync::LazyLock;
+
+use frond_render::{DrawMaterial, DrawMesh, DrawScene, DrawTexture, Output, RenderError, Renderer};
+use glam::{Mat4, Vec2, Vec3};
+use rayon::prelude::*;
+use thiserror::Error;
+
+use crate::atlas::{self, Packing};
+use crate::quad::Quad;
+use crate::soup::TriangleSoup;
+
+/// Largest supported atlas side: keeps both RGBA8 atlases under 2 GiB together.
+pub const MAX_ATLAS_SIDE: u32 = 16384;
+/// Largest supported supersampling factor per axis.
+pub const MAX_SUPERSAMPLE: u32 = 16;
+/// Side of the square render tiles (in supersampled texels) the atlas is drawn in, before
+/// clamping to the device limit: 16 MiB per RGBA8 readback.
+const RENDER_TILE: u32 = 2048;
+/// Factor applied to the texel density each time the textures do not fit the atlas.
+const DENSITY_STEP: f32 = 0.8;
+
+/// Settings of [`bake_cloud`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakeParams {
+    /// Texels per world unit along both quad axes (uniform density, improved-billboard-cloud
+    /// §4 item 1); lowered automatically when the atlas would exceed `max_atlas`.
+    pub texels_per_unit: f32,
+    /// Supersampling factor per axis (4 gives the spec's 4x4, §4 item 4), 1..=16.
+    pub supersample: u32,
+    /// Texels of dilated padding around each quad's texture inside the atlas (§4 item 5: 4 is
+    /// "probably a suitable general choice").
+    pub padding: u32,
+    /// Largest atlas width and height in texels, 4..=[`MAX_ATLAS_SIDE`].
+    pub max_atlas: u32,
+    /// Fraction of a texel's supersamples that must be covered for it to pass the billboard's
+    /// alpha test at 0.5 (stored alpha >= 128 exactly then; §4 item 6), in (0, 1].
+    pub alpha_cutoff: f32,
+    /// Smallest texture side per quad, in texels.
+    pub min_side: u32,
+    /// Largest texture side per quad, in texels (a longer side scales the quad's texture
+    /// down, keeping its aspect ratio).
+    pub max_side: u32,
+}
+
+impl Default for BakeParams {
+    /// 64 texels per unit, 4x4 supersampling, 4 texels of padding, atlases up to 4096²,
+    /// majority coverage, texture sides 4..=1024 (animated-billboard-clouds §2.4 [ENG]).
+    fn default() -> Self {
+        Self {
+            texels_per_unit: 64.0,
+            supersample: 4,
+            padding: 4,
+            max_atlas: 4096,
+            alpha_cutoff: 0.5,
+            min_side: 4,
+            max_side: 1024,
+        }
+    }
+}
+
+/// The two baked atlases of a cloud, same size, rows top to bottom (glTF image convention).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Atlas {
+    /// Width in texels (a multiple of 4).
+    pub width: u32,
+    /// Height in texels (a multiple of 4).
+    pub height: u32,
+    /// `width * height * 4` bytes: sRGB colour with straight alpha. Alpha grows with the
+    /// covered fraction of the texel and is >= 128 exactly when that fraction reaches
+    /// [`BakeParams::alpha_cutoff`]; uncovered texels have alpha 0 and the colour of the
+    /// nearest covered texel of their quad (dilation, improved-billboard-cloud §4 item 6).
+    pub color: Vec<u8>,
+    /// `width * height * 4` bytes, linear: `rgb = n * 0.5 + 0.5` of the unit world-space
+    /// normal facing the quad's front, alpha as in `color` (dilated the same way).
+    pub normal: Vec<u8>,
+}
+
+/// Where one quad's texture lies in the atlas, in texels (its padding ring surrounds it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Cell {
+    /// Left column of the texture.
+    pub x: u32,
+    /// Top row of the texture.
+    pub y: u32,
+    /// Width in texels (along the quad's `axis_u`).
+    pub width: u32,
+    /// Height in texels (along the quad's `axis_v`).
+    pub height: u32,
+}
+
+/// The result of [`bake_cloud`]: atlases plus per-quad texture coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakedCloud {
+    /// Colour and normal atlases.
+    pub atlas: Atlas,
+    /// Per quad: atlas UV (glTF convention, (0, 0) = top-left of the image) of its corners
+    /// in [`Quad::corners`] order. The image shows the quad seen from its front
+    /// (`axis_u × axis_v` toward the viewer): corner 3 (-u, +v) is the cell's top-left.
+    pub uv_rects: Vec<[Vec2; 4]>,
+    /// Per quad: its texture's texel rectangle in the atlas.
+    pub cells: Vec<Cell>,
+    /// The texel density actually used (texels per world unit).
+    pub texels_per_unit: f32,
+    /// True when the density had to be lowered below the requested one to fit `max_atlas`.
+    pub density_reduced: bool,
+    /// Uncompressed bytes of both atlases.
+    pub texture_bytes: usize,
+}
+
+/// Why a cloud could not be baked.
+#[derive(Debug, Error)]
+pub enum BakeError {
+    /// A [`BakeParams`] value is out of range.
+    #[error("invalid bake parameter: {0}")]
+    InvalidParams(String),
+    /// The soup, quads, members or materials are inconsistent or not finite.
+    #[error("invalid bake input: {0}")]
+    InvalidInput(String),
+    /// Even the smallest textures (min_side per quad, plus padding) do not fit the atlas.
+    #[error(
+        "{quads} quads do not fit a {max_atlas}x{max_atlas} atlas even at {min_side} texels per \
+         side with {padding} texels of padding"
+    )]
+    AtlasTooSmall {
+        /// Number of quads.
+        quads: usize,
+        /// The atlas limit.
+        max_atlas: u32,
+        /// The smallest texture side.
+        min_side: u32,
+        /// Padding per texture.
+        padding: u32,
+    },
+    /// The renderer failed.
+    #[error(transparent)]
+    Render(#[from] RenderError),
+}
+
+/// Bakes the cloud's textures: `members[q]` lists the `soup` triangles drawn on `quads[q]`,
+/// with `materials` / `textures` indexed by [`TriangleSoup::material`].
+///
+/// Each quad gets `clamp(ceil(side * density), min_side, max_side)` texels per side; the
+/// density is lowered (x0.8 steps) until all textures fit one `max_atlas`² atlas, never
+/// dropping a quad. Members are drawn double-sided, unlit, with their material's texture and
+/// alpha test; colours are averaged over covered supersamples in linear light, normals
+/// averaged and renormalised, then every uncovered texel of a quad's padded cell takes the
+/// colour and normal of the nearest covered one. The output is deterministic.
+/// Improved-billboard-cloud §4, animated-billboard-clouds §2.4.
+pub fn bake_cloud(
+    renderer: &Renderer,
+    soup: &TriangleSoup,
+    materials: &[DrawMaterial],
+    textures: &[DrawTexture],
+    quads: &[Quad],
+    members: &[Vec<usize>],
+    params: &BakeParams,
+) -> Result<BakedCloud, BakeError> {
+    validate_params(params)?;
+    validate_input(soup, materials, quads, members)?;
+    let layout = layout(quads, params)?;
+    let packing = &layout.packing;
+    let ss = params.supersample;
+    let cells: Vec<Cell> = layout
+        .sizes
+        .iter()
+        .zip(&packing.origins)
+        .map(|(&(width, height), &(x, y))| Cell {
+            x,
+            y,
+            width,
+            height,
+        })
+        .collect();
+
+    let tiles: Vec<Vec<TileTriangle>> = quads
+        .par_iter()
+        .zip(members.par_iter())
+        .zip(cells.par_iter())
+        .map(|((quad, tris), cell)| quad_triangles(soup, quad, tris, cell, ss))
+        .collect();
+
+    let (width, height) = (packing.width, packing.height);
+    let mut samples = Downsampled::new(width, height);
+    render_atlas(
+        renderer,
+        materials,
+        textures,
+        &tiles,
+        &cells,
+        params,
+        &mut samples,
+    )?;
+
+    let normals: Vec<Vec3> = quads.iter().map(front_normal).collect();
+    let atlas = dilate(samples, &cells, &normals, params.padding);
+    let uv_rects = cells.iter().map(|c| uv_rect(c, width, height)).collect();
+    let texture_bytes = atlas.color.len() + atlas.normal.len();
+    Ok(BakedCloud {
+        atlas,
+        uv_rects,
+        cells,
+        texels_per_unit: layout.texels_per_unit,
+        density_reduced: layout.density_reduced,
+        texture_bytes,
+    })
+}
+
+fn validate_params(p: &BakeParams) -> Result<(), BakeError> {
+    let bad = |m: String| Err(BakeError::InvalidParams(m));
+    if !(p.texels_per_unit.is_finite() && p.texels_per_unit > 0.0) {
+        return bad(format!(
+            "texels_per_unit must be finite and positive, got {}",
+            p.texels_per_unit
+        ));
+    }
+    if !(1..=MAX_SUPERSAMPLE).contains(&p.supersample) {
+        return bad(format!(
+            "supersample must be in 1..={MAX_SUPERSAMPLE}, got {}",
+            p.supersample
+        ));
+    }
+    if !(4..=MAX_ATLAS_SIDE).contains(&p.max_atlas) {
+        return bad(format!(
+            "max_atlas must be in 4..={MAX_ATLAS_SIDE}, got {}",
+            p.max_atlas
+        ));
+    }
+    if p.padding > p.max_atlas {
+        return bad(format!(
+            "padding {} exceeds max_atlas {}",
+            p.padding, p.max_atlas
+        ));
+    }
+    if p.min_side == 0 || p.max_side < p.min_side {
+        return bad(format!(
+            "need 1 <= min_side <= max_side, got {}..{}",
+            p.min_side, p.max_side
+        ));
+    }
+    if !(p.alpha_cutoff > 0.0 && p.alpha_cutoff <= 1.0) {
+        return bad(format!(
+            "alpha_cutoff must be in (0, 1], got {}",
+            p.alpha_cutoff
+        ));
+    }
+    Ok(())
+}
+
+fn validate_input(
+    soup: &TriangleSoup,
+    materials: &[DrawMaterial],
+    quads: &[Quad],
+    members: &[Vec<usize>],
+) -> Result<(), BakeError> {
+    let bad = |m: String| Err(BakeError::InvalidInput(m));
+    let n = soup.positions.len();
+    if soup.uvs.len() != n || soup.material.len() != n {
+        return bad(format!(
+            "soup has {n} triangles but {} uv triples and {} materials",
+            soup.uvs.len(),
+            soup.material.len()
+        ));
+    }
+    if members.len() != quads.len() {
+        return bad(format!(
+            "{} member lists for {} quads",
+            members.len(),
+            quads.len()
+        ));
+    }
+    for (q, quad) in quads.iter().enumerate() {
+        let finite = quad.center.is_finite()
+            && quad.axis_u.is_finite()
+            && quad.axis_v.is_finite()
+            && quad.half_size.is_finite();
+        if !finite || quad.half_size.min_element() < 0.0 {
+            return bad(format!("quad {q} is not finite or has a negative size"));
+        }
+    }
+    for (q, list) in members.iter().enumerate() {
+        for &t in list {
+            if t >= n {
+                return bad(format!(
+                    "quad {q}: triangle {t} out of range ({n} triangles)"
+                ));
+            }
+            let m = soup.material[t] as usize;
+            if m >= materials.len() {
+                return bad(format!(
+                    "triangle {t}: material {m} out of range ({} materials)",
+                    materials.len()
+                ));
+            }
+            let finite = soup.positions[t].iter().all(|p| p.is_finite())
+                && soup.uvs[t].iter().all(|uv| uv.is_finite());
+            if !finite {
+                return bad(format!("triangle {t} has a non-finite position or uv"));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Texture sizes and their packing at the density finally used.
+struct Layout {
+    sizes: Vec<(u32, u32)>,
+    packing: Packing,
+    texels_per_unit: f32,
+    density_reduced: bool,
+}
+
+/// Texels along each quad axis at `density`: the quad's aspect ratio, the longest side at
+/// most `max_side`, each side clamped to `min_side..=max_side`.
+fn texture_size(quad: &Quad, density: f32, p: &BakeParams) -> (u32, u32) {
+    let raw = (quad.size().as_dvec2()) * f64::from(density);
+    let longest = raw.max_element();
+    let max = f64::from(p.max_side);
+    let scale = if longest > max { max / longest } else { 1.0 };
+    let side = |x: f64| ((x * scale).ceil().min(max) as u32).clamp(p.min_side, p.max_side);
+    (side(raw.x), side(raw.y))
+}
+
+/// Finds the highest density, at most the requested one, whose textures pack into the atlas.
+fn layout(quads: &[Quad], p: &BakeParams) -> Result<Layout, BakeError> {
+    let too_small = || BakeError::AtlasTooSmall {
+        quads: quads.len(),
+        max_atlas: p.max_atlas,
+        min_side: p.min_side,
+        padding: p.padding,
+    };
+    let sizes_at = |density: f32| -> Vec<(u32, u32)> {
+        quads.iter().map(|q| texture_size(q, density, p)).collect()
+    };
+    let mut density = p.texels_per_unit;
+    let mut reduced = false;
+    // Jump close to a fitting density when the request is far too high: the padded area
+    // grows at most quadratically with the density.
+    let capacity = f64::from(p.max_atlas).powi(2);
+    let area = |sizes: &[(u32, u32)]| -> f64 {
+        let pad = 2.0 * f64::from(p.padding);
+        sizes
+            .iter()
+            .map(|&(w, h)| (f64::from(w) + pad) * (f64::from(h) + pad))
+            .sum()
+    };
+    let first = area(&sizes_at(density));
+    if first > 4.0 * capacity {
+        density = (f64::from(density) * (capacity / first).sqrt()) as f32;
+        reduced = true;
+    }
+    let mut previous: Option<Vec<(u32, u32)>> = None;
+    loop {
+        let sizes = sizes_at(density);
+        if previous.as_ref() != Some(&sizes)
+            && let Some(packing) = atlas::pack(&sizes, p.padding, p.max_atlas)
+        {
+            return Ok(Layout {
+                sizes,
+                packing,
+                texels_per_unit: density,
+                density_reduced: reduced,
+            });
+        }
+        let at_minimum = sizes
+            .iter()
+            .all(|&(w, h)| w == p.min_side && h == p.min_side);
+        if at_minimum || !(density > f32::MIN_POSITIVE) {
+            return Err(too_small());
+        }
+        previous = Some(sizes);
+        density *= DENSITY_STEP;
+        reduced = true;
+    }
+}
+
+/// The quad's front normal, `axis_u × axis_v` (the side its texture shows).
+fn front_normal(quad: &Quad) -> Vec3 {
+    quad.axis_u.cross(quad.axis_v).normalize_or_zero()
+}
+
+/// Atlas UVs of the quad's corners (see [`BakedCloud::uv_rects`]).
+fn uv_rect(c: &Cell, width: u32, height: u32) -> [Vec2; 4] {
+    let (w, h) = (width as f32, height as f32);
+    let (x0, x1) = (c.x as f32 / w, (c.x + c.width) as f32 / w);
+    let (y0, y1) = (c.y as f32 / h, (c.y + c.height) as f32 / h);
+    [
+        Vec2::new(x0, y1),
+        Vec2::new(x1, y1),
+        Vec2::new(x1, y0),
+        Vec2::new(x0, y0),
+    ]
+}
+
+/// A member triangle placed in the supersampled atlas: x right and y down in supersampled
+/// texels, z the wgpu depth (0 = nearest the quad's front), the source uv, the triangle's
+/// world-space face normal and its material.
+#[derive(Clone, Copy, Debug)]
+struct TileTriangle {
+    pos: [[f32; 3]; 3],
+    uv: [[f32; 2]; 3],
+    normal: [f32; 3],
+    material: u32,
+}
+
+/// A polygon vertex while clipping: quad coordinates s, t (0..1 across the quad), signed
+/// distance from the quad's plane, uv.
+type ClipVertex = [f32; 5];
+
+/// Clips the convex polygon to `s, t ∈ [0, 1]` (Sutherland–Hodgman, orientation kept).
+fn clip_to_unit_square(poly: &mut Vec<ClipVertex>, scratch: &mut Vec<ClipVertex>) {
+    for (axis, keep_above, bound) in [
+        (0, true, 0.0),
+        (0, false, 1.0),
+        (1, true, 0.0),
+        (1, false, 1.0),
+    ] {
+        scratch.clear();
+        let inside = |v: &ClipVertex| {
+            if keep_above {
+                v[axis] >= bound
+            } else {
+                v[axis] <= bound
+            }
+        };
+        for i in 0..poly.len() {
+            let a = poly[i];
+            let b = poly[(i + 1) % poly.len()];
+            let (ia, ib) = (inside(&a), inside(&b));
+            if ia {
+                scratch.push(a);
+            }
+            if ia != ib {
+                let f = (bound - a[axis]) / (b[axis] - a[axis]);
+                let mut v = [0.0; 5];
+                for k in 0..5 {
+                    v[k] = a[k] + (b[k] - a[k]) * f;
+                }
+                v[axis] = bound; // exact, so the clipped edge lies on the cell border
+                scratch.push(v);
+            }
+        }
+        std::mem::swap(poly, scratch);
+        if poly.is_empty() {
+            return;
+        }
+    }
+}
+
+/// The quad's member triangles transformed into its cell of the supersampled atlas and
+/// clipped to it (animated-billboard-clouds §2.4 steps 3–4: view window = the quad; improved
+/// §4 item 3: near/far from the members' depth range).
+fn quad_triangles(
+    soup: &TriangleSoup,
+    quad: &Quad,
+    members: &[usize],
+    cell: &Cell,
+    ss: u32,
+) -> Vec<TileTriangle> {
+    let size = quad.size();
+    let n = front_normal(quad);
+    if !(size.min_element() > 0.0) || !size.recip().is_finite() || n == Vec3::ZERO {
+        return Vec::new(); // a degenerate quad shows nothing
+    }
+    let (u, v) = (quad.axis_u.normalize(), quad.axis_v.normalize());
+    let local = |p: Vec3| -> [f32; 3] {
+        let d = p - quad.center;
+        [d.dot(u) / size.x + 0.5, d.dot(v) / size.y + 0.5, d.dot(n)]
+    };
+
+    let mut polys: Vec<(Vec<ClipVertex>, [f32; 3], u32)> = Vec::with_capacity(members.len());
+    let mut scratch = Vec::new();
+    let (mut dmin, mut dmax) = (f32::INFINITY, f32::NEG_INFINITY);
+    for &t in members {
+        let corners = soup.positions[t];
+        let normal = (corners[1] - corners[0])
+            .cross(corners[2] - corners[0])
+            .normalize_or_zero();
+        let mut poly: Vec<ClipVertex> = (0..3)
+            .map(|k| {
+                let [s, tt, d] = local(corners[k]);
+                let uv = soup.uvs[t][k];
+                [s, tt, d, uv.x, uv.y]
+            })
+            .collect();
+        let outside = poly
+            .iter()
+            .any(|p| !(0.0..=1.0).contains(&p[0]) || !(0.0..=1.0).contains(&p[1]));
+        if outside {
+            clip_to_unit_square(&mut poly, &mut scratch);
+        }
+        if poly.len() < 3 {
+            continue;
+        }
+        for p in &poly {
+            dmin = dmin.min(p[2]);
+            dmax = dmax.max(p[2]);
+        }
+        polys.push((poly, normal.to_array(), soup.material[t]));
+    }
+    if polys.is_empty() {
+        return Vec::new();
+    }
+    // Depth: nearest member (largest distance toward the front) -> small z, with margins.
+    let scale = size.max_element().max(dmax.abs()).max(dmin.abs());
+    let margin = (0.01 * (dmax - dmin)).max(1e-6 * scale).max(1e-30);
+    let (near, far) = (dmax + margin, dmin - margin);
+    let ssf = ss as f32;
+    let (x0, y0) = (cell.x as f32 * ssf, cell.y as f32 * ssf);
+    let (w, h) = (cell.width as f32 * ssf, cell.height as f32 * ssf);
+    let place = |p: &ClipVertex| -> [f32; 3] {
+        [
+            x0 + p[0] * w,
+            y0 + (1.0 - p[1]) * h,
+            ((near - p[2]) / (near - far)).clamp(0.0, 1.0),
+        ]
+    };
+    let mut out = Vec::with_capacity(polys.len());
+    for (poly, normal, material) in &polys {
+        for i in 1..poly.len() - 1 {
+            let fan = [&poly[0], &poly[i], &poly[i + 1]];
+            out.push(TileTriangle {
+                pos: fan.map(place),
+                uv: fan.map(|p| [p[3], p[4]]),
+                normal: *normal,
+                material: *material,
+            });
+        }
+    }
+    out
+}
+
+/// Per-texel results of downsampling, before dilation.
+struct Downsampled {
+    width: u32,
+    height: u32,
+    color: Vec<u8>,
+    normal: Vec<u8>,
+    /// Whether any supersample of the texel was covered.
+    covered: Vec<bool>,
+}
+
+impl Downsampled {
+    fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            color: vec![0; n * 4],
+            normal: vec![0; n * 4],
+            covered: vec![false; n],
+        }
+    }
+}
+
+/// sRGB byte -> linear value.
+static SRGB_TO_LINEAR: LazyLock<[f32; 256]> = LazyLock::new(|| {
+    std::array::from_fn(|i| {
+        let c = i as f32 / 255.0;
+        if c <= 0.040_45 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    })
+});
+
+/// Linear values at which the nearest sRGB byte steps up: entry k separates k and k + 1.
+static LINEAR_THRESHOLDS: LazyLock<[f32; 255]> = LazyLock::new(|| {
+    std::array::from_fn(|k| {
+        let c = (k as f64 + 0.5) / 255.0;
+        let l = if c <= 0.040_45 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        };
+        l as f32
+    })
+});
+
+/// Linear value -> nearest sRGB byte (rounding in sRGB space).
+fn linear_to_srgb(x: f32) -> u8 {
+    LINEAR_THRESHOLDS.partition_point(|&t| t <= x) as u8
+}
+
+/// Alpha byte of a texel with `n` of `total` supersamples covered: 0 when none, 255 when all,
+/// monotonic, and >= 128 exactly when `n >= needed` (the alpha-cutoff sample count).
+fn coverage_alpha(n: u32, total: u32, needed: u32) -> u8 {
+    if n == 0 {
+        0
+    } else if n < needed {
+        ((n * 127 + needed / 2) / needed).clamp(1, 127) as u8
+    } else if needed == total {
+        255
+    } else {
+        let extra = total - needed;
+        (128 + ((n - needed) * 127 + extra / 2) / extra).min(255) as u8
+    }
+}
+
+/// Renders the supersampled atlas tile by tile (colour, then normals) and downsamples it.
+fn render_atlas(
+    renderer: &Renderer,
+    materials: &[DrawMaterial],
+    textures: &[DrawTexture],
+    tiles: &[Vec<TileTriangle>],
+    cells: &[Cell],
+    params: &BakeParams,
+    out: &mut Downsampled,
+) -> Result<(), BakeError> {
+    let ss = params.supersample;
+    let (full_w, full_h) = (out.width * ss, out.height * ss);
+    let tile = (RENDER_TILE.min(renderer.max_dimension()) / ss).max(1) * ss;
+    let total = ss * ss;
+    let needed = (0..=total)
+        .find(|&n| f64::from(n) >= f64::from(params.alpha_cutoff) * f64::from(total))
+        .unwrap_or(total);
+
+    // Members drawn from both sides (a billboard is seen from both) with their texture and
+    // alpha test; no normals in the colour pass, so it is unlit (§2.4: ambient only).
+    let mut scene = DrawScene {
+        meshes: Vec::new(),
+        materials: materials
+            .iter()
+            .map(|m| DrawMaterial {
+                double_sided: true,
+                ..m.clone()
+            })
+            .collect(),
+        textures: textures.to_vec(),
+    };
+
+    for ty in (0..full_h).step_by(tile as usize) {
+        for tx in (0..full_w).step_by(tile as usize) {
+            let (tw, th) = (tile.min(full_w - tx), tile.min(full_h - ty));
+            let (meshes, normals) =
+                tile_meshes(tiles, cells, ss, [tx, ty, tw, th], materials.len());
+            if meshes.is_empty() {
+                continue;
+            }
+            scene.meshes = meshes;
+            let color =
+                renderer.render_view(&scene, Mat4::IDENTITY, tw, th, [0.0; 4], Output::Color)?;
+            for (mesh, n) in scene.meshes.iter_mut().zip(normals) {
+                mesh.normals = Some(n);
+            }
+            let normal =
+                renderer.render_view(&scene, Mat4::IDENTITY, tw, th, [0.0; 4], Output::Normal)?;
+            downsample(&color, &normal, [tx / ss, ty / ss], ss, needed, out);
+        }
+    }
+    Ok(())
+}
+
+/// Whether the quad's supersampled cell overlaps the render tile `[x, y, w, h]`.
+fn cell_in_tile(c: &Cell, ss: u32, r: [u32; 4]) -> bool {
+    let (x0, y0) = (c.x * ss, c.y * ss);
+    let (x1, y1) = (x0 + c.width * ss, y0 + c.height * ss);
+    x0 < r[0] + r[2] && r[0] < x1 && y0 < r[1] + r[3] && r[1] < y1
+}
+
+/// Tile triangles of the quads overlapping the render tile, one mesh per material, in NDC
+/// of that tile (drawn with an identity matrix), without normals (unlit), plus per mesh the
+/// world-space face normal of each vertex's triangle for the normal pass (the tile positions
+/// no longer define world normals).
+fn tile_meshes(
+    tiles: &[Vec<TileTriangle>],
+    cells: &[Cell],
+    ss: u32,
+    rect: [u32; 4],
+    material_count: usize,
+) -> (Vec<DrawMesh>, Vec<Vec<[f32; 3]>>) {
+    let mut meshes: Vec<(DrawMesh, Vec<[f32; 3]>)> = (0..material_count)
+        .map(|material| {
+            let mesh = DrawMesh {
+                uvs: Some(Vec::new()),
+                material,
+                ..Default::default()
+            };
+            (mesh, Vec::new())
+        })
+        .collect();
+    let [x, y, w, h] = rect.map(|v| v as f32);
+    for (tris, cell) in tiles.iter().zip(cells) {
+        if !cell_in_tile(cell, ss, rect) {
+            continue;
+        }
+        for t in tris {
+            let (mesh, normals) = &mut meshes[t.material as usize];
+            for k in 0..3 {
+                let [px, py, pz] = t.pos[k];
+                mesh.indices.push(mesh.positions.len() as u32);
+                mesh.positions
+                    .push([(px - x) / w * 2.0 - 1.0, 1.0 - (py - y) / h * 2.0, pz]);
+                if let Some(uvs) = &mut mesh.uvs {
+                    uvs.push(t.uv[k]);
+                }
+                normals.push(t.normal);
+            }
+        }
+    }
+    meshes.retain(|(m, _)| !m.indices.is_empty());
+    meshes.into_iter().unzip()
+}
+
+/// Averages each texel's covered supersamples: colour in linear light, normals renormalised,
+/// alpha from the covered fraction (improved-billboard-cloud §4 item 4).
+fn downsample(
+    color: &frond_render::Frame,
+    normal: &frond_render::Frame,
+    origin: [u32; 2],
+    ss: u32,
+    needed: u32,
+    out: &mut Downsampled,
+) {
+    let lut = &*SRGB_TO_LINEAR;
+    let (tex_w, tex_h) = ((color.width / ss) as usize, (color.height / ss) as usize);
+    let frame_w = color.width as usize;
+    let atlas_w = out.width as usize;
+    let (ox, oy) = (origin[0] as usize, origin[1] as usize);
+    let ss = ss as usize;
+    let total = (ss * ss) as u32;
+    let rows = out
+        .color
+        .par_chunks_mut(atlas_w * 4)
+        .zip(out.normal.par_chunks_mut(atlas_w * 4))
+        .zip(out.covered.par_chunks_mut(atlas_w))
+        .skip(oy)
+        .take(tex_h)
+        .enumerate();
+    rows.for_each(|(row, ((color_row, normal_row), covered_row))| {
+        for col in 0..tex_w {
+            let mut n = 0u32;
+            let mut sum = [0.0f32; 3];
+            let mut nn = 0u32;
+            let mut nsum = Vec3::ZERO;
+            for sy in 0..ss {
+                let base = (row * ss + sy) * frame_w + col * ss;
+                for sx in 0..ss {
+                    let i = base + sx;
+                    if color.coverage[i] {
+                        n += 1;
+                        let p = &color.rgba[i * 4..i * 4 + 3];
+                        for k in 0..3 {
+                            sum[k] += lut[p[k] as usize];
+                        }
+                    }
+                    if normal.coverage[i] {
+                        nn += 1;
+                        let p = &normal.rgba[i * 4..i * 4 + 3];
+                        nsum +=
+                            Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) / 127.5 - Vec3::ONE;
+                    }
+                }
+            }
+            if n == 0 {
+                continue;
+            }
+            let x = ox + col;
+            let alpha = coverage_alpha(n, total, needed);
+            let c = &mut color_row[x * 4..x * 4 + 4];
+            for k in 0..3 {
+                c[k] = linear_to_srgb(sum[k] / n as f32);
+            }
+            c[3] = alpha;
+            covered_row[x] = true;
+            let unit = if nn > 0 {
+                nsum.normalize_or_zero()
+            } else {
+                Vec3::ZERO
+            };
+            // rgb 0 marks "no normal" (no unit vector encodes to it): dilation replaces it
+            // with the quad's normal.
+            let encoded = if unit == Vec3::ZERO {
+                [0, 0, 0, alpha]
+            } else {
+                encode_normal(unit, alpha)
+            };
+            normal_row[x * 4..x * 4 + 4].copy_from_slice(&encoded);
+        }
+    });
+}
+
+/// `rgb = n * 0.5 + 0.5` as bytes, with the given alpha.
+fn encode_normal(n: Vec3, alpha: u8) -> [u8; 4] {
+    let e = |x: f32| ((x * 0.5 + 0.5) * 255.0).round().clamp(0.0, 255.0) as u8;
+    [e(n.x), e(n.y), e(n.z), alpha]
+}
+
+/// Fills every texel of each quad's padded cell that no sample covered with the colour and
+/// normal of the nearest covered texel of that quad (breadth-first over 8-neighbours, ties
+/// broken by a fixed order), alpha staying 0; a quad with nothing covered gets the mean
+/// covered colour of the atlas and its own front normal (improved-billboard-cloud §4 item 6).
+fn dilate(mut d: Downsampled, cells: &[Cell], quad_normals: &[Vec3], padding: u32) -> Atlas {
+    let width = d.width as usize;
+    let fallback = mean_color(&d);
+    let fills: Vec<Vec<(usize, [u8; 3], [u8; 3])>> = cells
+        .par_iter()
+        .zip(quad_normals.par_iter())
+        .map(|(cell, &quad_normal)| {
+            let [nx, ny, nz, _] = encode_normal(quad_normal, 0);
+            let default_normal = [nx, ny, nz];
+            let x0 = cell.x.saturating_sub(padding) as usize;
+            let y0 = cell.y.saturating_sub(padding) as usize;
+            let x1 = ((cell.x + cell.width + padding) as usize).min(width);
+            let y1 = ((cell.y + cell.height + padding).min(d.height)) as usize;
+            let (cw, ch) = (x1 - x0, y1 - y0);
+            // Per cell texel: index of the source texel (in the atlas) it copies.
+            let mut source = vec![usize::MAX; cw * ch];
+            let mut queue = std::collections::VecDeque::new();
+            for y in 0..ch {
+                for x in 0..cw {
+                    let i = (y0 + y) * width + x0 + x;
+                    if d.covered[i] {
+                        source[y * cw + x] = i;
+                        queue.push_back((x, y));
+                    }
+                }
+            }
+            let mut fills = Vec::new();
+            if queue.is_empty() {
+                for y in 0..ch {
+                    for x in 0..cw {
+                        let i = (y0 + y) * width + x0 + x;
+                        fills.push((i, fallback, default_normal));
+                    }
+                }
+                return fills;
+            }
+            while let Some((x, y)) = queue.pop_front() {
+                let src = source[y * cw + x];
+                for (dx, dy) in [
+                    (-1, 0),
+                    (1, 0),
+                    (0, -1),
+                    (0, 1),
+                    (-1, -1),
+                    (1, -1),
+                    (-1, 1),
+                    (1, 1),
+                ] {
+                    let (nx, ny) = (x as isize + dx, y as isize + dy);
+                    if nx < 0 || ny < 0 || nx >= cw as isize || ny >= ch as isize {
+                        continue;
+                    }
+                    let j = ny as usize * cw + nx as usize;
+                    if source[j] == usize::MAX {
+                        source[j] = src;
+                        queue.push_back((nx as usize, ny as usize));
+                    }
+                }
+            }
+            let rgb = |buf: &[u8], i: usize| [buf[i * 4], buf[i * 4 + 1], buf[i * 4 + 2]];
+            for y in 0..ch {
+                for x in 0..cw {
+                    let i = (y0 + y) * width + x0 + x;
+                    let src = source[y * cw + x];
+                    let mut n = rgb(&d.normal, src);
+                    if n == [0, 0, 0] {
+                        n = default_normal;
+                    }
+                    if i != src || n != rgb(&d.normal, i) {
+                        fills.push((i, rgb(&d.color, src), n));
+                    }
+                }
+            }
+            fills
+        })
+        .collect();
+    for cell_fills in fills {
+        for (i, c, n) in cell_fills {
+            d.color[i * 4..i * 4 + 3].copy_from_slice(&c);
+            d.normal[i * 4..i * 4 + 3].copy_from_slice(&n);
+        }
+    }
+    Atlas {
+        width: d.width,
+        height: d.height,
+        color: d.color,
+        normal: d.normal,
+    }
+}
+
+/// Mean colour (in linear light) of all covered texels, mid grey when there are none.
+fn mean_color(d: &Downsampled) -> [u8; 3] {
+    let lut = &*SRGB_TO_LINEAR;
+    let mut sum = [0.0f64; 3];
+    let mut n = 0u64;
+    for (i, _) in d.covered.iter().enumerate().filter(|(_, c)| **c) {
+        for k in 0..3 {
+            sum[k] += f64::from(lut[d.color[i * 4 + k] as usize]);
+        }
+        n += 1;
+    }
+    if n == 0 {
+        return [128; 3];
+    }
+    sum.map(|s| linear_to_srgb((s / n as f64) as f32))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_round_trip_and_rounding() {
+        for b in 0..=255u8 {
+            assert_eq!(linear_to_srgb(SRGB_TO_LINEAR[b as usize]), b);
+        }
+        assert_eq!(linear_to_srgb(0.5), 188);
+        assert_eq!(linear_to_srgb(-1.0), 0);
+        assert_eq!(linear_to_srgb(2.0), 255);
+    }
+
+    #[test]
+    fn alpha_is_128_exactly_at_the_cutoff() {
+        for total in [1u32, 4, 9, 16, 25, 256] {
+            for cutoff in [0.25f64, 0.5, 0.75, 1.0] {
+                let needed = (0..=total)
+                    .find(|&n| f64::from(n) >= cutoff * f64::from(total))
+                    .unwrap_or(total);
+                let mut last = 0;
+                for n in 0..=total {
+                    let a = coverage_alpha(n, total, needed);
+                    assert_eq!(a >= 128, f64::from(n) >= cutoff * f64::from(total));
+                    assert_eq!(a == 0, n == 0);
+                    assert!(a >= last);
+                    last = a;
+                }
+                assert_eq!(coverage_alpha(total, total, needed), 255);
+            }
+        }
+    }
+
+    #[test]
+    fn clipping_keeps_the_part_inside_the_square() {
+        let mut poly: Vec<ClipVertex> = vec![
+            [-1.0, 0.5, 0.0, 0.0, 0.0],
+            [2.0, 0.5, 3.0, 1.0, 0.0],
+            [0.5, 2.0, 0.0, 0.0, 1.0],
+        ];
+        let mut scratch = Vec::new();
+        clip_to_unit_square(&mut poly, &mut scratch);
+        assert!(poly.len() >= 3);
+        for p in &poly {
+            assert!(
+                (0.0..=1.0).contains(&p[0]) && (0.0..=1.0).contains(&p[1]),
+                "{p:?}"
+            );
+            // Attributes stay affine: d = s + 1 - ... along the bottom edge (t = 0.5).
+        }
+        // Signed area keeps its (counter-clockwise) sign.
+        let area: f32 = (0..poly.len())
+            .map(|i| {
+                let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+                a[0] * b[1] - b[0] * a[1]
+            })
+            .sum();
+        assert!(area > 0.0);
+    }
+
+    #[test]
+    fn texture_sizes_follow_density_and_clamps() {
+        let quad = Quad {
+            plane: crate::plane::Plane {
+                normal: Vec3::Z,
+                offset: 0.0,
+            },
+            center: Vec3::ZERO,
+            axis_u: Vec3::X,
+            axis_v: Vec3::Y,
+            half_size: Vec2::new(1.0, 0.25),
+        };
+        let p = BakeParams::default();
+        assert_eq!(texture_size(&quad, 10.0, &p), (20, 5));
+        assert_eq!(texture_size(&quad, 1.0, &p), (4, 4));
+        assert_eq!(texture_size(&quad, 1000.0, &p), (1024, 256));
+    }
+}

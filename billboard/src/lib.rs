@@ -1,0 +1,18 @@
+//! The billboard stage: stochastic billboard clouds (spec animated-billboard-clouds §2.4,
+//! improved-billboard-cloud §2 and §4): plane search, minimal rectangles, baked alpha-tested
+//! textures packed into one atlas.
+
+pub mod atlas;
+pub mod bake;
+pub mod cloud;
+pub mod plane;
+pub mod plane_search;
+pub mod quad;
+pub mod rectangle;
+pub mod soup;
+
+pub use atlas::{Packing, pack};
+pub use bake::{Atlas, BakeError, BakeParams, BakedCloud, Cell, bake_cloud};
+pub use plane::Plane;
+pub use quad::Quad;
+pub use soup::TriangleSoup;

@@ -1,0 +1,718 @@
+//! Lacewell's stochastic plane search (spec animated-billboard-clouds §2.4, with the D_max reset
+//! fixed) plus the options of improved-billboard-cloud §2.4/§2.7/§2.8: view penalty, distance
+//! falloff, least-squares refit, a plane budget. Exact accelerations only: a bounding-volume
+//! hierarchy prunes triangles that cannot be within ε of a candidate plane, candidates are scored
+//! in parallel, and the per-triangle test is the same one the plain scan uses, so the
+//! accelerated search picks exactly the planes the plain one picks for the same seed.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use glam::{Vec3, Vec3A};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use crate::plane::Plane;
+use crate::soup::TriangleSoup;
+
+/// Parameters of the search.
+#[derive(Clone, Debug)]
+pub struct SearchParams {
+    /// Largest allowed vertex distance from a triangle's plane (absolute world units).
+    pub epsilon: f32,
+    /// Candidate planes per iteration (the thesis's S or N).
+    pub candidates: usize,
+    pub seed: u64,
+    /// View-penalty angle φ_v in radians (0 favours vertical billboards), or None for off.
+    pub view_penalty: Option<f32>,
+    /// Weight each triangle's contribution by 1/(d/ε + 1), d its mean vertex distance.
+    pub falloff: bool,
+    /// Least-squares refit of each chosen plane, kept only when its triangles stay within ε.
+    pub refit: bool,
+    /// Stop after this many planes and join the leftovers to the nearest plane.
+    pub max_planes: Option<usize>,
+    /// Use the hierarchy and parallel scoring (false: the plain O(planes·S·triangles) scan).
+    pub accelerated: bool,
+}
+
+impl Default for SearchParams {
+    fn default() -> Self {
+        SearchParams {
+            epsilon: 0.0,
+            candidates: 500,
+            seed: 1,
+            view_penalty: None,
+            falloff: false,
+            refit: false,
+            max_planes: None,
+            accelerated: true,
+        }
+    }
+}
+
+/// One chosen plane and the triangles it simplifies.
+#[derive(Clone, Debug)]
+pub struct Cluster {
+    pub plane: Plane,
+    pub triangles: Vec<usize>,
+}
+
+/// The search result.
+#[derive(Clone, Debug)]
+pub struct PlaneSearch {
+    pub clusters: Vec<Cluster>,
+    /// Cluster of every soup triangle.
+    pub assignment: Vec<u32>,
+    /// Triangles that were joined to the nearest plane (plane budget or zero area), not chosen
+    /// by validity; their vertices may lie farther than ε from it.
+    pub joined: usize,
+    /// Largest vertex distance of any triangle from its cluster's plane.
+    pub max_distance: f32,
+    /// Candidate planes scored.
+    pub candidates_scored: usize,
+}
+
+/// Per-triangle data in the order the hierarchy stores them.
+struct Tris {
+    /// Original soup index.
+    id: Vec<u32>,
+    v: Vec<[Vec3A; 3]>,
+    centroid: Vec<Vec3A>,
+    /// Centroid coordinates as separate arrays, so a leaf's distances vectorise.
+    cx: Vec<f32>,
+    cy: Vec<f32>,
+    cz: Vec<f32>,
+    /// Largest vertex distance from the centroid.
+    radius: Vec<f32>,
+    /// area × unit normal.
+    area_normal: Vec<Vec3A>,
+    alive: Vec<bool>,
+}
+
+/// A node of the bounding-volume hierarchy over triangle centroids.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    /// Bounds of all vertices below (centre and half extents).
+    center: Vec3A,
+    half: Vec3A,
+    start: u32,
+    end: u32,
+    /// Child indices; 0 for a leaf (the root is never a child).
+    left: u32,
+    right: u32,
+    parent: u32,
+    alive: u32,
+    /// Sum of the areas of the alive triangles below: an upper bound of their contribution.
+    alive_area: f32,
+}
+
+const LEAF_SIZE: usize = 32;
+
+struct Bvh {
+    nodes: Vec<Node>,
+    /// Leaf node of each stored triangle.
+    leaf_of: Vec<u32>,
+}
+
+impl Bvh {
+    fn build(t: &mut Tris) -> Bvh {
+        let n = t.id.len();
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        let mut nodes = Vec::with_capacity(2 * n / LEAF_SIZE + 2);
+        let mut leaf_of = vec![0u32; n];
+        build_node(t, &mut order, 0, n, u32::MAX, &mut nodes, &mut leaf_of);
+        // Reorder triangle arrays into hierarchy order.
+        let reorder = |o: &[u32]| -> Tris {
+            Tris {
+                id: o.iter().map(|&i| t.id[i as usize]).collect(),
+                v: o.iter().map(|&i| t.v[i as usize]).collect(),
+                centroid: o.iter().map(|&i| t.centroid[i as usize]).collect(),
+                cx: o.iter().map(|&i| t.centroid[i as usize].x).collect(),
+                cy: o.iter().map(|&i| t.centroid[i as usize].y).collect(),
+                cz: o.iter().map(|&i| t.centroid[i as usize].z).collect(),
+                radius: o.iter().map(|&i| t.radius[i as usize]).collect(),
+                area_normal: o.iter().map(|&i| t.area_normal[i as usize]).collect(),
+                alive: o.iter().map(|&i| t.alive[i as usize]).collect(),
+            }
+        };
+        let mut leaf_sorted = vec![0u32; n];
+        for (pos, &i) in order.iter().enumerate() {
+            leaf_sorted[pos] = leaf_of[i as usize];
+        }
+        *t = reorder(&order);
+        Bvh {
+            nodes,
+            leaf_of: leaf_sorted,
+        }
+    }
+
+    /// Marks stored triangle `i` dead and updates alive counts up to the root.
+    fn kill(&mut self, t: &mut Tris, i: usize) {
+        if !t.alive[i] {
+            return;
+        }
+        t.alive[i] = false;
+        let area = t.area_normal[i].length();
+        let mut n = self.leaf_of[i];
+        while n != u32::MAX {
+            let node = &mut self.nodes[n as usize];
+            node.alive -= 1;
+            node.alive_area = if node.alive == 0 {
+                0.0
+            } else {
+                (node.alive_area - area).max(0.0)
+            };
+            n = node.parent;
+        }
+    }
+}
+
+fn build_node(
+    t: &Tris,
+    order: &mut [u32],
+    start: usize,
+    end: usize,
+    parent: u32,
+    nodes: &mut Vec<Node>,
+    leaf_of: &mut [u32],
+) -> u32 {
+    let idx = nodes.len() as u32;
+    let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+    let (mut clo, mut chi) = (lo, hi);
+    for &i in &order[start..end] {
+        for v in t.v[i as usize] {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+        clo = clo.min(t.centroid[i as usize]);
+        chi = chi.max(t.centroid[i as usize]);
+    }
+    nodes.push(Node {
+        center: (lo + hi) * 0.5,
+        half: (hi - lo) * 0.5,
+        start: start as u32,
+        end: end as u32,
+        left: 0,
+        right: 0,
+        parent,
+        alive: (end - start) as u32,
+        alive_area: order[start..end]
+            .iter()
+            .map(|&i| t.area_normal[i as usize].length())
+            .sum(),
+    });
+    if end - start <= LEAF_SIZE {
+        for &i in &order[start..end] {
+            leaf_of[i as usize] = idx;
+        }
+        return idx;
+    }
+    let ext = chi - clo;
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    let mid = (start + end) / 2;
+    order[start..end].select_nth_unstable_by(mid - start, |&a, &b| {
+        t.centroid[a as usize][axis]
+            .total_cmp(&t.centroid[b as usize][axis])
+            .then(a.cmp(&b))
+    });
+    let l = build_node(t, order, start, mid, idx, nodes, leaf_of);
+    let r = build_node(t, order, mid, end, idx, nodes, leaf_of);
+    nodes[idx as usize].left = l;
+    nodes[idx as usize].right = r;
+    idx
+}
+
+/// The shared exact validity predicate: all three vertices within ε of the plane.
+#[inline]
+fn valid_exact(v: &[Vec3A; 3], n: Vec3A, rho: f32, eps: f32) -> bool {
+    v.iter().all(|p| (n.dot(*p) - rho).abs() <= eps)
+}
+
+/// Contribution of a valid triangle: projected area, optionally with distance falloff.
+#[inline]
+fn contribution(
+    v: &[Vec3A; 3],
+    area_normal: Vec3A,
+    n: Vec3A,
+    rho: f32,
+    eps: f32,
+    falloff: bool,
+) -> f64 {
+    let c = area_normal.dot(n).abs() as f64;
+    if falloff {
+        let d = v.iter().map(|p| (n.dot(*p) - rho).abs()).sum::<f32>() / 3.0;
+        c / (d / eps.max(f32::MIN_POSITIVE) + 1.0) as f64
+    } else {
+        c
+    }
+}
+
+/// The search state shared by the plain and the accelerated scoring.
+struct Search<'a> {
+    t: Tris,
+    bvh: Bvh,
+    eps: f32,
+    /// Safety margin for the conservative tests (float noise), never for the exact one.
+    margin: f32,
+    params: &'a SearchParams,
+}
+
+impl Search<'_> {
+    /// Density of a candidate plane over alive triangles (and the valid ones when `collect`).
+    fn score(&self, n: Vec3A, rho: f32, collect: Option<&mut Vec<usize>>) -> f64 {
+        if self.params.accelerated {
+            self.score_tree(n, rho, collect, 0.0)
+        } else {
+            self.score_plain(n, rho, collect)
+        }
+    }
+
+    fn score_plain(&self, n: Vec3A, rho: f32, mut collect: Option<&mut Vec<usize>>) -> f64 {
+        let t = &self.t;
+        let mut d = 0.0;
+        for i in 0..t.id.len() {
+            if t.alive[i] && valid_exact(&t.v[i], n, rho, self.eps) {
+                d += contribution(
+                    &t.v[i],
+                    t.area_normal[i],
+                    n,
+                    rho,
+                    self.eps,
+                    self.params.falloff,
+                );
+                if let Some(c) = collect.as_deref_mut() {
+                    c.push(i);
+                }
+            }
+        }
+        d
+    }
+
+    /// Density by hierarchy traversal. With `cutoff` > 0 (branch and bound), returns −1 as soon
+    /// as the exact partial density plus the alive area still unvisited (an upper bound, since a
+    /// contribution never exceeds the triangle's area) falls below `cutoff`: such a candidate
+    /// cannot be the best, so pruning it never changes the chosen plane.
+    fn score_tree(
+        &self,
+        n: Vec3A,
+        rho: f32,
+        mut collect: Option<&mut Vec<usize>>,
+        cutoff: f64,
+    ) -> f64 {
+        let t = &self.t;
+        let (eps, m, falloff) = (self.eps, self.margin, self.params.falloff);
+        let na = n.abs();
+        let mut d = 0.0;
+        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        stack.push(0);
+        let mut remaining = self.bvh.nodes[0].alive_area as f64;
+        while let Some(ni) = stack.pop() {
+            let node = &self.bvh.nodes[ni as usize];
+            remaining -= node.alive_area as f64;
+            if node.alive == 0 {
+                continue;
+            }
+            if cutoff > 0.0
+                && (d + remaining.max(0.0) + node.alive_area as f64) * (1.0 + 1e-6) < cutoff
+            {
+                return -1.0;
+            }
+            let dist = (n.dot(node.center) - rho).abs();
+            let ext = na.dot(node.half);
+            if dist - ext > eps + m {
+                continue; // every vertex below is farther than ε
+            }
+            let inside = dist + ext < eps - m; // every vertex below is within ε
+            if !inside && node.left != 0 {
+                stack.push(node.right);
+                stack.push(node.left);
+                remaining += (self.bvh.nodes[node.left as usize].alive_area
+                    + self.bvh.nodes[node.right as usize].alive_area)
+                    as f64;
+                continue;
+            }
+            let (a, b) = (node.start as usize, node.end as usize);
+            let mut dc = [0.0f32; LEAF_SIZE];
+            if !inside {
+                let (cx, cy, cz) = (&t.cx[a..b], &t.cy[a..b], &t.cz[a..b]);
+                for (k, out) in dc.iter_mut().take(b - a).enumerate() {
+                    *out = (n.x * cx[k] + n.y * cy[k] + n.z * cz[k] - rho).abs();
+                }
+            }
+            for i in a..b {
+                if !t.alive[i] {
+                    continue;
+                }
+                let ok = inside || {
+                    let dc = dc[i - a];
+                    if dc > eps + m {
+                        false
+                    } else if dc + t.radius[i] < eps - m {
+                        true
+                    } else {
+                        valid_exact(&t.v[i], n, rho, eps)
+                    }
+                };
+                if ok {
+                    d += contribution(&t.v[i], t.area_normal[i], n, rho, eps, falloff);
+                    if let Some(c) = collect.as_deref_mut() {
+                        c.push(i);
+                    }
+                }
+            }
+        }
+        d
+    }
+
+    /// View-penalty factor `1 − |φ_v − φ_n|/(π/2)` (the thesis's printed factor inverted, erratum §11).
+    fn penalty(&self, n: Vec3A) -> f64 {
+        match self.params.view_penalty {
+            Some(phi_v) => {
+                let phi_n = n.y.abs().min(1.0).asin();
+                (1.0 - (phi_v - phi_n).abs() / std::f32::consts::FRAC_PI_2).max(0.0) as f64
+            }
+            None => 1.0,
+        }
+    }
+}
+
+/// Least-squares plane through points: normal = eigenvector of the smallest eigenvalue of the
+/// covariance (Jacobi iteration on the symmetric 3×3 matrix).
+fn fit_plane(points: impl Iterator<Item = Vec3A> + Clone) -> Option<Plane> {
+    let mut count = 0.0f64;
+    let mut mean = [0.0f64; 3];
+    for p in points.clone() {
+        count += 1.0;
+        for k in 0..3 {
+            mean[k] += p[k] as f64;
+        }
+    }
+    if count < 3.0 {
+        return None;
+    }
+    for m in &mut mean {
+        *m /= count;
+    }
+    let mut a = [[0.0f64; 3]; 3];
+    for p in points {
+        let d = [
+            p.x as f64 - mean[0],
+            p.y as f64 - mean[1],
+            p.z as f64 - mean[2],
+        ];
+        for r in 0..3 {
+            for c in 0..3 {
+                a[r][c] += d[r] * d[c];
+            }
+        }
+    }
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0f64]];
+    for _ in 0..32 {
+        let (mut p, mut q, mut big) = (0, 1, 0.0);
+        for r in 0..3 {
+            for c in r + 1..3 {
+                if a[r][c].abs() > big {
+                    big = a[r][c].abs();
+                    p = r;
+                    q = c;
+                }
+            }
+        }
+        if big < 1e-30 {
+            break;
+        }
+        let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+        let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+        let t = if theta == 0.0 { 1.0 } else { t };
+        let c = 1.0 / (t * t + 1.0).sqrt();
+        let s = t * c;
+        for k in 0..3 {
+            let (akp, akq) = (a[k][p], a[k][q]);
+            a[k][p] = c * akp - s * akq;
+            a[k][q] = s * akp + c * akq;
+        }
+        for k in 0..3 {
+            let (apk, aqk) = (a[p][k], a[q][k]);
+            a[p][k] = c * apk - s * aqk;
+            a[q][k] = s * apk + c * aqk;
+        }
+        for row in &mut v {
+            let (vp, vq) = (row[p], row[q]);
+            row[p] = c * vp - s * vq;
+            row[q] = s * vp + c * vq;
+        }
+    }
+    let k = (0..3).min_by(|&x, &y| a[x][x].total_cmp(&a[y][y]))?;
+    let n = Vec3::new(v[0][k] as f32, v[1][k] as f32, v[2][k] as f32).normalize_or_zero();
+    if n == Vec3::ZERO {
+        return None;
+    }
+    let centre = Vec3::new(mean[0] as f32, mean[1] as f32, mean[2] as f32);
+    Some(Plane {
+        normal: n,
+        offset: n.dot(centre),
+    })
+}
+
+/// Runs the search on `soup`. `scale` is the size used for float-noise margins (e.g. the tree's
+/// bounding-box diagonal).
+pub fn search_planes(soup: &TriangleSoup, params: &SearchParams, scale: f32) -> PlaneSearch {
+    let n = soup.len();
+    let eps = params.epsilon.max(0.0);
+    let mut t = Tris {
+        id: (0..n as u32).collect(),
+        v: soup.positions.iter().map(|v| v.map(Vec3A::from)).collect(),
+        centroid: soup
+            .positions
+            .iter()
+            .map(|v| Vec3A::from((v[0] + v[1] + v[2]) / 3.0))
+            .collect(),
+        cx: Vec::new(),
+        cy: Vec::new(),
+        cz: Vec::new(),
+        radius: Vec::with_capacity(n),
+        area_normal: soup
+            .positions
+            .iter()
+            .map(|v| Vec3A::from(0.5 * (v[1] - v[0]).cross(v[2] - v[0])))
+            .collect(),
+        alive: vec![true; n],
+    };
+    t.radius = (0..n)
+        .map(|i| {
+            t.v[i]
+                .iter()
+                .map(|p| p.distance(t.centroid[i]))
+                .fold(0.0, f32::max)
+        })
+        .collect();
+    let min_area = (scale * scale * 1e-12).max(f32::MIN_POSITIVE);
+    let bvh = Bvh::build(&mut t);
+    let mut s = Search {
+        t,
+        bvh,
+        eps,
+        margin: 1e-5 * scale.max(eps) + 1e-4 * eps,
+        params,
+    };
+
+    // Seeds: alive triangles with a usable area; zero-area ones never seed (they would stop the
+    // search early) and are joined to the nearest plane at the end.
+    // Seeds are drawn in soup order, so the hierarchy's layout never changes which are drawn.
+    let mut stored_of = vec![0u32; n];
+    for (pos, &id) in s.t.id.iter().enumerate() {
+        stored_of[id as usize] = pos as u32;
+    }
+    let mut seedable: Vec<u32> = (0..n as u32)
+        .map(|id| stored_of[id as usize])
+        .filter(|&i| s.t.area_normal[i as usize].length() > min_area)
+        .collect();
+    let mut seed_pos: Vec<u32> = vec![u32::MAX; n];
+    for (k, &i) in seedable.iter().enumerate() {
+        seed_pos[i as usize] = k as u32;
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+    let mut clusters: Vec<Cluster> = Vec::new();
+    let mut assignment = vec![u32::MAX; n];
+    let mut scored = 0usize;
+    let budget = params.max_planes.unwrap_or(usize::MAX).max(1);
+    while !seedable.is_empty() && clusters.len() < budget {
+        // Draw every candidate first (sequential RNG), then score them in parallel.
+        let cands: Vec<(Vec3A, f32, u32)> = (0..params.candidates.max(1))
+            .filter_map(|_| {
+                let seed = seedable[rng.random_range(0..seedable.len())] as usize;
+                let v = s.t.v[seed];
+                let nt = s.t.area_normal[seed].normalize_or_zero();
+                let mut off = [0.0f32; 3];
+                for o in &mut off {
+                    *o = if eps > 0.0 {
+                        rng.random_range(-eps..=eps)
+                    } else {
+                        0.0
+                    };
+                }
+                let p = Plane::through(
+                    Vec3::from(v[0] + nt * off[0]),
+                    Vec3::from(v[1] + nt * off[1]),
+                    Vec3::from(v[2] + nt * off[2]),
+                )?;
+                Some((Vec3A::from(p.normal), p.offset, seed as u32))
+            })
+            .collect();
+        scored += cands.len();
+        let scores: Vec<f64> = if params.accelerated {
+            // Branch and bound against the best density found so far by any thread (f64 bits of
+            // non-negative values order like the values).
+            let best_bits = AtomicU64::new(0);
+            cands
+                .par_iter()
+                .map(|&(nn, rho, _)| {
+                    let pen = s.penalty(nn);
+                    let cutoff = f64::from_bits(best_bits.load(Ordering::Relaxed));
+                    let cut = if pen > 0.0 {
+                        cutoff / pen
+                    } else {
+                        f64::INFINITY
+                    };
+                    let d = s.score_tree(nn, rho, None, cut);
+                    if d < 0.0 {
+                        return -1.0;
+                    }
+                    let score = d * pen;
+                    best_bits.fetch_max(score.to_bits(), Ordering::Relaxed);
+                    score
+                })
+                .collect()
+        } else {
+            cands
+                .iter()
+                .map(|&(nn, rho, _)| s.score(nn, rho, None) * s.penalty(nn))
+                .collect()
+        };
+        // D_max starts at 0 once per iteration (the thesis reset it inside the loop: erratum).
+        let mut best: Option<usize> = None;
+        for (k, &d) in scores.iter().enumerate() {
+            if best.is_none_or(|b| d > scores[b]) {
+                best = Some(k);
+            }
+        }
+        let Some(b) = best else {
+            // Every candidate was degenerate: retire one seed so the loop always progresses.
+            let seed = seedable[rng.random_range(0..seedable.len())];
+            remove_seed(&mut seedable, &mut seed_pos, seed);
+            continue;
+        };
+        let (nn, rho, seed) = cands[b];
+        let mut members = Vec::new();
+        s.score(nn, rho, Some(&mut members));
+        if members.is_empty() {
+            members.push(seed as usize); // float noise at ε = 0: the seed always belongs
+        }
+        let mut plane = Plane {
+            normal: Vec3::from(nn),
+            offset: rho,
+        };
+        if params.refit
+            && let Some(fit) = fit_plane(members.iter().flat_map(|&i| s.t.v[i]))
+        {
+            let fa = Vec3A::from(fit.normal);
+            if members
+                .iter()
+                .all(|&i| valid_exact(&s.t.v[i], fa, fit.offset, eps))
+            {
+                plane = fit;
+            }
+        }
+        let cluster = clusters.len() as u32;
+        let mut tris = Vec::with_capacity(members.len());
+        for &i in &members {
+            let id = s.t.id[i];
+            assignment[id as usize] = cluster;
+            tris.push(id as usize);
+            s.bvh.kill(&mut s.t, i);
+            if seed_pos[i] != u32::MAX {
+                remove_seed(&mut seedable, &mut seed_pos, i as u32);
+            }
+        }
+        tris.sort_unstable();
+        clusters.push(Cluster {
+            plane,
+            triangles: tris,
+        });
+    }
+
+    // Leftovers (plane budget reached, or zero-area triangles): join the nearest plane.
+    let mut joined = 0;
+    for i in 0..n {
+        if !s.t.alive[i] {
+            continue;
+        }
+        let id = s.t.id[i] as usize;
+        let v = s.t.v[i];
+        let nearest = clusters
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                let na = Vec3A::from(c.plane.normal);
+                (
+                    k,
+                    v.iter()
+                        .map(|p| (na.dot(*p) - c.plane.offset).abs())
+                        .fold(0.0, f32::max),
+                )
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+        let k = match nearest {
+            Some((k, _)) => k,
+            None => {
+                let p = fit_plane(v.into_iter()).or_else(|| {
+                    Plane::through(Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]))
+                });
+                clusters.push(Cluster {
+                    plane: p.unwrap_or(Plane {
+                        normal: Vec3::Y,
+                        offset: v[0].y,
+                    }),
+                    triangles: Vec::new(),
+                });
+                clusters.len() - 1
+            }
+        };
+        clusters[k].triangles.push(id);
+        assignment[id] = k as u32;
+        joined += 1;
+    }
+    for c in &mut clusters {
+        c.triangles.sort_unstable();
+    }
+    let max_distance = clusters
+        .iter()
+        .flat_map(|c| {
+            c.triangles.iter().map(move |&i| {
+                soup.positions[i]
+                    .iter()
+                    .map(|p| c.plane.distance(*p).abs())
+                    .fold(0.0, f32::max)
+            })
+        })
+        .fold(0.0, f32::max);
+    PlaneSearch {
+        clusters,
+        assignment,
+        joined,
+        max_distance,
+        candidates_scored: scored,
+    }
+}
+
+fn remove_seed(seedable: &mut Vec<u32>, seed_pos: &mut [u32], i: u32) {
+    let k = seed_pos[i as usize] as usize;
+    let last = *seedable.last().unwrap_or(&i);
+    seedable.swap_remove(k);
+    if last != i {
+        seed_pos[last as usize] = k as u32;
+    }
+    seed_pos[i as usize] = u32::MAX;
+}
+
+/// Soup triangles (all of them, assigned or not) with every vertex within ε of `plane`:
+/// the extra triangles "increased foliage density" bakes onto a billboard (spec §2.4).
+pub fn valid_for_plane(soup: &TriangleSoup, plane: &Plane, epsilon: f32) -> Vec<usize> {
+    let n = Vec3A::from(plane.normal);
+    (0..soup.len())
+        .filter(|&i| {
+            valid_exact(
+                &soup.positions[i].map(Vec3A::from),
+                n,
+                plane.offset,
+                epsilon,
+            )
+        })
+        .collect()
+}

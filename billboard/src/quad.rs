@@ -1,0 +1,49 @@
+//! A billboard quad: a rectangle lying in its plane.
+
+use glam::{Vec2, Vec3};
+
+use crate::plane::Plane;
+
+/// A rectangle in 3-D: centre, two unit in-plane axes and half extents along them.
+/// `axis_u × axis_v = plane.normal`, so the corners run counter-clockwise seen from the front.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quad {
+    pub plane: Plane,
+    pub center: Vec3,
+    pub axis_u: Vec3,
+    pub axis_v: Vec3,
+    pub half_size: Vec2,
+}
+
+impl Quad {
+    /// Corners in order (-u,-v), (+u,-v), (+u,+v), (-u,+v).
+    pub fn corners(&self) -> [Vec3; 4] {
+        let (u, v) = (
+            self.axis_u * self.half_size.x,
+            self.axis_v * self.half_size.y,
+        );
+        [
+            self.center - u - v,
+            self.center + u - v,
+            self.center + u + v,
+            self.center - u + v,
+        ]
+    }
+    /// Width and height in world units.
+    pub fn size(&self) -> Vec2 {
+        self.half_size * 2.0
+    }
+    /// Area in world units².
+    pub fn area(&self) -> f32 {
+        4.0 * self.half_size.x * self.half_size.y
+    }
+    /// Quad coordinates of a world point: (0,0) at corner 0, (1,1) at corner 2.
+    pub fn local_uv(&self, p: Vec3) -> Vec2 {
+        let d = p - self.center;
+        let s = self.size();
+        Vec2::new(
+            d.dot(self.axis_u) / s.x.max(f32::MIN_POSITIVE) + 0.5,
+            d.dot(self.axis_v) / s.y.max(f32::MIN_POSITIVE) + 0.5,
+        )
+    }
+}

@@ -1,0 +1,12 @@
+//! Fidelity metrics (spec animated-billboard-clouds §5).
+//!
+//! So far: the coverage ("colour") metric of §5.4, with the thesis' experiment setup of §8.2
+//! and the checklist rules of §11 item 7, in [`coverage`].
+
+#![warn(missing_docs)]
+
+pub mod coverage;
+
+pub use coverage::{
+    CoverageParams, CoverageReport, MetricError, coverage_error, ring_azimuth_deg, view_camera,
+};

@@ -1,0 +1,290 @@
+//! `frond cloud`: a static billboard cloud of a tree's foliage in the average pose of its loop,
+//! with the wood as it is, baked atlases, and `stats.json` (spec animated-billboard-clouds §2.4,
+//! §5.4 for the coverage check).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use frond_billboard::TriangleSoup;
+use frond_billboard::cloud::{BillboardCloud, CloudParams, CloudStats, build_cloud, parse_epsilon};
+use frond_metrics::{CoverageParams, coverage_error};
+use frond_render::{Renderer, TreeParts, scene_from_positions};
+use frond_scene::gltf_writer::*;
+use frond_scene::{Part, SampleOptions, Tree, sample};
+use glam::Vec3;
+use serde::Serialize;
+
+use crate::output::write_atomic;
+
+/// What `frond cloud` was asked for.
+#[derive(Clone, Debug)]
+pub struct CloudRequest {
+    /// ε as given: "5%" of the rest-pose bounding-box diagonal, or an absolute length.
+    pub epsilon: String,
+    pub params: CloudParams,
+    pub samples: usize,
+    pub clip: Option<String>,
+    /// Coverage views (0 skips the check).
+    pub coverage_views: u32,
+    pub coverage_size: (u32, u32),
+}
+
+/// `stats.json`.
+#[derive(Debug, Serialize)]
+pub struct CloudReport {
+    pub input: String,
+    /// ε in world units, and as given.
+    pub epsilon: f32,
+    pub epsilon_arg: String,
+    pub diagonal: f32,
+    /// Candidate planes per iteration.
+    pub planes: usize,
+    pub seed: u64,
+    pub billboards: usize,
+    pub total_area: f64,
+    pub texture_bytes: usize,
+    /// Static coverage error of the cloud vs the original foliage (spec §5.4), or null if skipped.
+    pub coverage_error: Option<f64>,
+    pub coverage_per_view: Vec<f64>,
+    pub timings_s: serde_json::Value,
+    pub cloud: CloudStats,
+    pub files: Vec<String>,
+}
+
+/// Bounding-box diagonal of the rest pose.
+pub fn rest_diagonal(tree: &Tree) -> f32 {
+    (Vec3::from(tree.bounds.max) - Vec3::from(tree.bounds.min)).length()
+}
+
+/// Builds the cloud and its report; writes nothing.
+pub fn make_cloud(
+    renderer: &Renderer,
+    tree: &Tree,
+    req: &CloudRequest,
+) -> Result<(BillboardCloud, Vec<Vec3>, CloudReport)> {
+    let path = tree.source.display().to_string();
+    let diag = rest_diagonal(tree);
+    let epsilon = parse_epsilon(&req.epsilon, diag).with_context(|| {
+        format!(
+            "--epsilon '{}': expected a length or a percentage like 5%",
+            req.epsilon
+        )
+    })?;
+    let sampled = sample(
+        tree,
+        &SampleOptions {
+            clip: req.clip.clone(),
+            samples: req.samples,
+        },
+    )?;
+    if sampled.foliage.is_empty() {
+        bail!("{path}: the tree has no foliage to turn into a billboard cloud");
+    }
+    let average = sampled.average.clone();
+    let soup = TriangleSoup::from_tree(tree, &average, &sampled.foliage);
+    drop(sampled);
+    let mut params = req.params.clone();
+    params.search.epsilon = epsilon;
+    let full = scene_from_positions(tree, &average, None, TreeParts::Foliage);
+    let cloud = build_cloud(
+        renderer,
+        &soup,
+        &full.materials,
+        &full.textures,
+        &params,
+        diag,
+    )
+    .with_context(|| format!("{path}: building the billboard cloud"))?;
+    let (coverage, per_view) = if req.coverage_views > 0 {
+        let cp = CoverageParams {
+            views: req.coverage_views,
+            width: req.coverage_size.0,
+            height: req.coverage_size.1,
+            ..Default::default()
+        };
+        let r = coverage_error(
+            renderer,
+            &[full],
+            &[cloud.draw_scene()],
+            Vec3::from(tree.bounds.min),
+            Vec3::from(tree.bounds.max),
+            &cp,
+        )
+        .with_context(|| format!("{path}: measuring coverage"))?;
+        (Some(r.mean), r.per_view)
+    } else {
+        (None, Vec::new())
+    };
+    let t = &cloud.stats.timings_s;
+    let report = CloudReport {
+        input: path,
+        epsilon,
+        epsilon_arg: req.epsilon.clone(),
+        diagonal: diag,
+        planes: params.search.candidates,
+        seed: params.search.seed,
+        billboards: cloud.stats.billboards,
+        total_area: cloud.stats.total_area,
+        texture_bytes: cloud.stats.texture_bytes,
+        coverage_error: coverage,
+        coverage_per_view: per_view,
+        timings_s: serde_json::json!({
+            "plane_search": t.plane_search,
+            "rectangles": t.rectangles,
+            "bake": t.bake,
+            "total": t.total,
+        }),
+        cloud: cloud.stats.clone(),
+        files: Vec::new(),
+    };
+    Ok((cloud, average, report))
+}
+
+/// A static GLB: the cloud's quads with the colour atlas (alpha-tested, double-sided) and the
+/// wood at `positions` with its own material.
+pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Result<Vec<u8>> {
+    let mut doc = GltfBuilder::new(concat!("frond ", env!("CARGO_PKG_VERSION")));
+    let atlas = &cloud.baked.atlas;
+    let atlas_png =
+        encode_png(atlas.width, atlas.height, &atlas.color).context("encoding the atlas")?;
+    let tex = doc.add_texture("billboard_atlas", &atlas_png, true);
+    let mat = doc.add_material(&MaterialDesc {
+        name: "billboards".into(),
+        base_color: [1.0; 4],
+        base_color_texture: Some(tex),
+        alpha: WriteAlpha::Mask(0.5),
+        double_sided: true,
+        metallic: 0.0,
+        roughness: 1.0,
+    });
+    let mut quads = PrimitiveDesc {
+        normals: Some(Vec::new()),
+        uvs: Some(Vec::new()),
+        material: Some(mat),
+        ..Default::default()
+    };
+    for (q, uv) in cloud.quads.iter().zip(&cloud.baked.uv_rects) {
+        let base = quads.positions.len() as u32;
+        for (c, t) in q.corners().iter().zip(uv) {
+            quads.positions.push(c.to_array());
+            if let Some(n) = quads.normals.as_mut() {
+                n.push(q.plane.normal.to_array());
+            }
+            if let Some(u) = quads.uvs.as_mut() {
+                u.push(t.to_array());
+            }
+        }
+        quads
+            .indices
+            .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+    let cloud_mesh = doc.add_mesh("foliage_cloud", &[quads]);
+    let node = doc.add_node(NodeDesc {
+        name: "foliage_cloud".into(),
+        mesh: Some(cloud_mesh),
+        ..Default::default()
+    });
+    doc.add_root(node);
+    // Wood: one primitive per material, un-indexed vertices re-used per primitive.
+    let mut prims = Vec::new();
+    let mut tex_of_image: Vec<Option<usize>> = vec![None; tree.textures.len()];
+    for (m, material) in tree.materials.iter().enumerate() {
+        let tris: Vec<_> = tree
+            .triangles
+            .iter()
+            .filter(|t| t.part == Part::Wood && !t.degenerate && t.material as usize == m)
+            .collect();
+        if tris.is_empty() {
+            continue;
+        }
+        let texture = match material.base_color_texture {
+            Some(ti) => Some(match tex_of_image[ti] {
+                Some(t) => t,
+                None => {
+                    let t = &tree.textures[ti];
+                    let png = encode_png(t.width, t.height, &t.rgba)
+                        .context("encoding a wood texture")?;
+                    let id = doc.add_texture(&t.name, &png, false);
+                    tex_of_image[ti] = Some(id);
+                    id
+                }
+            }),
+            None => None,
+        };
+        let mat = doc.add_material(&MaterialDesc {
+            name: material.name.clone(),
+            base_color: material.base_color,
+            base_color_texture: texture,
+            alpha: match material.alpha_mode {
+                frond_scene::AlphaMode::Opaque => WriteAlpha::Opaque,
+                frond_scene::AlphaMode::Mask => WriteAlpha::Mask(material.alpha_cutoff),
+                frond_scene::AlphaMode::Blend => WriteAlpha::Blend,
+            },
+            double_sided: material.double_sided,
+            metallic: 0.0,
+            roughness: 1.0,
+        });
+        let mut p = PrimitiveDesc {
+            uvs: Some(Vec::new()),
+            material: Some(mat),
+            ..Default::default()
+        };
+        let mut remap = std::collections::HashMap::new();
+        for t in tris {
+            for &v in &t.v {
+                let next = p.positions.len() as u32;
+                let id = *remap.entry(v).or_insert_with(|| {
+                    p.positions.push(positions[v as usize].to_array());
+                    if let Some(u) = p.uvs.as_mut() {
+                        u.push(tree.vertices.uv[v as usize].to_array());
+                    }
+                    next
+                });
+                p.indices.push(id);
+            }
+        }
+        prims.push(p);
+    }
+    if !prims.is_empty() {
+        let wood = doc.add_mesh("wood", &prims);
+        let node = doc.add_node(NodeDesc {
+            name: "wood".into(),
+            mesh: Some(wood),
+            ..Default::default()
+        });
+        doc.add_root(node);
+    }
+    Ok(doc.to_glb())
+}
+
+/// Builds the cloud and writes `cloud.glb`, `atlas_color.png`, `atlas_normal.png` and
+/// `stats.json` into `out_dir`. Nothing is written unless everything was built.
+pub fn run_cloud(
+    renderer: &Renderer,
+    tree: &Tree,
+    req: &CloudRequest,
+    out_dir: &Path,
+) -> Result<CloudReport> {
+    let (cloud, average, mut report) = make_cloud(renderer, tree, req)?;
+    let glb = cloud_glb(tree, &average, &cloud)?;
+    let atlas = &cloud.baked.atlas;
+    let color =
+        encode_png(atlas.width, atlas.height, &atlas.color).context("encoding the colour atlas")?;
+    let normal = encode_png(atlas.width, atlas.height, &atlas.normal)
+        .context("encoding the normal atlas")?;
+    let files: Vec<(PathBuf, Vec<u8>)> = vec![
+        (out_dir.join("cloud.glb"), glb),
+        (out_dir.join("atlas_color.png"), color),
+        (out_dir.join("atlas_normal.png"), normal),
+    ];
+    report.files = files.iter().map(|(p, _)| p.display().to_string()).collect();
+    report
+        .files
+        .push(out_dir.join("stats.json").display().to_string());
+    for (p, bytes) in &files {
+        write_atomic(p, bytes)?;
+    }
+    let stats = serde_json::to_vec_pretty(&report).context("serialising stats.json")?;
+    write_atomic(&out_dir.join("stats.json"), &stats)?;
+    Ok(report)
+}
