@@ -1,6 +1,6 @@
 //! Packs the billboard textures of one cloud into a single atlas (improved-billboard-cloud
 //! §4 item 5: "one atlas with a greedy packing algorithm", padding around each texture;
-//! animated-billboard-clouds §2.4 [ENG]: an atlas per cloud).
+//! animated-billboard-clouds §2.4 \[ENG\]: an atlas per cloud).
 //!
 //! The packing itself is the `crunch` crate's greedy best-area-fit packer (largest items
 //! first, free space tracked as overlapping maximal rectangles). This module adds the
@@ -70,13 +70,23 @@ pub fn pack(sizes: &[(u32, u32)], padding: u32, max_size: u32) -> Option<Packing
     );
     let mut attempt = |side: usize| packer.pack(Rect::of_size(side, side)).ok();
 
-    // Smallest square side (multiple of 4) that holds everything, by bisection between
-    // the area / largest-item bound and the limit; the result is then trimmed.
-    let lower = ceil4(widest.max(tallest).max(isqrt_ceil(area))).min(limit);
-    // Invariant: `best` holds the packing for side `hi * 4`, the smallest success so far.
-    let mut best = attempt(limit)?;
-    let (mut lo, mut hi) = (lower / 4, limit / 4);
-    while lo < hi {
+    // A small square side (multiple of 4) that holds everything: grow 10% at a time from
+    // just above the area / largest-item bound until the packer succeeds, then bisect down
+    // to within 1/64 of the side (each attempt packs every item). The result is trimmed.
+    let lower = ceil4(widest.max(tallest).max(isqrt_ceil(area))).min(limit) / 4;
+    let (mut lo, mut hi) = (lower, (lower + lower / 20).max(lower).min(limit / 4));
+    // Invariant: `best` is the packing into a square of side `hi * 4`.
+    let mut best = loop {
+        if let Some(items) = attempt(hi * 4) {
+            break items;
+        }
+        if hi * 4 >= limit {
+            return None;
+        }
+        lo = hi + 1;
+        hi = (hi + hi / 10 + 1).min(limit / 4);
+    };
+    while hi - lo > hi / 64 {
         let mid = lo + (hi - lo) / 2;
         match attempt(mid * 4) {
             Some(items) => {

@@ -14,7 +14,7 @@ impl Plane {
     pub fn through(a: Vec3, b: Vec3, c: Vec3) -> Option<Plane> {
         let n = (b - a).cross(c - a);
         let len = n.length();
-        if !(len > 1e-20) || !len.is_finite() {
+        if !len.is_finite() || len <= 1e-20 {
             return None;
         }
         let normal = n / len;

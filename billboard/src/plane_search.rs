@@ -382,6 +382,8 @@ impl Search<'_> {
     }
 }
 
+// Index loops mirror the Jacobi rotation formulas; iterator forms would obscure them.
+#[allow(clippy::needless_range_loop)]
 /// Least-squares plane through points: normal = eigenvector of the smallest eigenvalue of the
 /// covariance (Jacobi iteration on the symmetric 3×3 matrix).
 fn fit_plane(points: impl Iterator<Item = Vec3A> + Clone) -> Option<Plane> {

@@ -34,6 +34,8 @@ fn params(views: u32, frames: u32) -> CoverageParams {
         height: H,
         elevation_deg: 0.0,
         fov_y_deg: 40.0,
+        // Exact pixel counts below are for plain masks; supersampling has its own test.
+        supersample: 1,
     }
 }
 
@@ -409,4 +411,51 @@ fn bad_arguments_are_errors() {
         err(one, std::slice::from_ref(&broken), params(1, 1)),
         MetricError::Render(_)
     ));
+}
+
+#[test]
+fn supersampled_masks_keep_analytic_answers() {
+    // The half-width shift of a card is still exactly half its pixels different with 4×4
+    // supersampling (edges fall on pixel boundaries at this framing), and identical scenes
+    // still score 0.
+    let r = renderer();
+    let a = DrawScene {
+        meshes: vec![DrawMesh {
+            positions: card(Vec3::ZERO, Vec3::X, 1.0, 1.0),
+            normals: None,
+            uvs: None,
+            indices: vec![0, 1, 2, 0, 2, 3],
+            material: 0,
+        }],
+        materials: vec![DrawMaterial::opaque([1.0, 0.0, 0.0, 1.0])],
+        textures: vec![],
+    };
+    let p = CoverageParams {
+        supersample: 4,
+        ..params(1, 1)
+    };
+    let same = coverage_error(
+        r,
+        std::slice::from_ref(&a),
+        std::slice::from_ref(&a),
+        Vec3::splat(-1.0),
+        Vec3::splat(1.0),
+        &p,
+    )
+    .expect("metric");
+    assert_eq!(same.mean, 0.0);
+    let empty = DrawScene {
+        meshes: vec![],
+        ..a.clone()
+    };
+    let none = coverage_error(
+        r,
+        std::slice::from_ref(&a),
+        &[empty],
+        Vec3::splat(-1.0),
+        Vec3::splat(1.0),
+        &p,
+    )
+    .expect("metric");
+    assert_eq!(none.mean, 1.0);
 }
