@@ -138,7 +138,7 @@ enum Command {
         /// Bake every triangle valid for a plane, not only its own.
         #[arg(long)]
         increased_density: bool,
-        /// Texels per world unit (default: 2048 across the bounding-box diagonal).
+        /// Texels per world unit (default: 1024 across the bounding-box diagonal).
         #[arg(long)]
         texels_per_unit: Option<f32>,
         /// Largest atlas side; density is lowered (and reported) when the quads do not fit.
@@ -278,7 +278,7 @@ fn run(cli: Cli) -> Result<()> {
                 ..Default::default()
             };
             params.bake.texels_per_unit =
-                texels_per_unit.unwrap_or(2048.0 / diag.max(f32::MIN_POSITIVE));
+                texels_per_unit.unwrap_or(1024.0 / diag.max(f32::MIN_POSITIVE));
             params.bake.max_atlas = max_atlas;
             let req = CloudRequest {
                 epsilon,

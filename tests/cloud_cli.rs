@@ -1,0 +1,143 @@
+//! `frond cloud` end to end: files, stats.json keys, validity, determinism, bad arguments.
+
+mod common;
+
+use common::*;
+
+fn cloud(args: &[&str], out: &std::path::Path) -> std::process::Output {
+    let mut all = vec![
+        "cloud",
+        "samples/sapling.glb",
+        "--coverage-views",
+        "3",
+        "--coverage-size",
+        "160x120",
+    ];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["-o", out.to_str().expect("utf-8")]);
+    std::process::Command::new(env!("CARGO_BIN_EXE_frond"))
+        .args(&all)
+        .current_dir(root())
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .expect("frond runs")
+}
+
+#[test]
+fn cloud_writes_a_valid_glb_atlases_and_stats() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("c");
+    let run = cloud(&["--epsilon", "5%", "--planes", "100", "--seed", "3"], &out);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for f in [
+        "cloud.glb",
+        "atlas_color.png",
+        "atlas_normal.png",
+        "stats.json",
+    ] {
+        assert!(out.join(f).exists(), "{f} written");
+    }
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("stats.json")).expect("stats"))
+            .expect("json");
+    for key in [
+        "epsilon",
+        "planes",
+        "seed",
+        "billboards",
+        "total_area",
+        "texture_bytes",
+        "coverage_error",
+    ] {
+        assert!(!stats[key].is_null(), "stats.json has {key}");
+    }
+    for key in ["plane_search", "bake", "total"] {
+        assert!(
+            stats["timings_s"][key].as_f64().is_some(),
+            "timings_s.{key}"
+        );
+    }
+    assert_eq!(stats["planes"], 100);
+    assert_eq!(stats["seed"], 3);
+    let billboards = stats["billboards"].as_u64().expect("count");
+    assert!(
+        (2..200).contains(&billboards),
+        "{billboards} billboards for 2000 leaf triangles at 5%"
+    );
+    let cov = stats["coverage_error"].as_f64().expect("coverage");
+    assert!(cov > 0.0 && cov < 0.6, "coverage error {cov}");
+    // ε = 5 % of the diagonal bounds every vertex's distance to its billboard.
+    let eps = stats["epsilon"].as_f64().expect("eps");
+    let diag = stats["diagonal"].as_f64().expect("diag");
+    assert!((eps - 0.05 * diag).abs() < 1e-4 * diag);
+    assert!(stats["cloud"]["max_distance"].as_f64().expect("max") <= eps * (1.0 + 1e-5));
+    // Real clients accept the GLB: quads + wood, textured, no errors.
+    let report = validate(&out.join("cloud.glb"));
+    assert_eq!(report["errors"], 0, "{report}");
+    assert_eq!(report["info"]["hasTextures"], true);
+    let tris = report["info"]["totalTriangleCount"]
+        .as_u64()
+        .expect("triangles");
+    assert!(tris >= 2 * billboards, "{tris} triangles");
+    // The atlas is an RGBA image whose alpha marks the baked leaves.
+    let atlas = image::open(out.join("atlas_color.png"))
+        .expect("png")
+        .to_rgba8();
+    let opaque = atlas.pixels().filter(|p| p[3] >= 128).count();
+    assert!(opaque > 0 && opaque < (atlas.width() * atlas.height()) as usize);
+}
+
+#[test]
+fn same_seed_gives_byte_identical_files_whatever_the_thread_count() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let run = |name: &str, threads: &str| {
+        let out = dir.path().join(name);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_frond"))
+            .args([
+                "cloud",
+                "samples/sapling.glb",
+                "--epsilon",
+                "3%",
+                "--planes",
+                "60",
+                "--seed",
+                "9",
+            ])
+            .args(["--coverage-views", "0", "-o"])
+            .arg(&out)
+            .current_dir(root())
+            .env("RAYON_NUM_THREADS", threads)
+            .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+            .output()
+            .expect("runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        out
+    };
+    let a = run("a", "1");
+    let b = run("b", "2");
+    for f in ["cloud.glb", "atlas_color.png", "atlas_normal.png"] {
+        let (x, y) = (
+            std::fs::read(a.join(f)).expect("a"),
+            std::fs::read(b.join(f)).expect("b"),
+        );
+        assert!(x == y, "{f} differs between 1 and 2 threads");
+    }
+}
+
+#[test]
+fn bad_epsilon_is_a_clear_error_and_writes_nothing() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("never");
+    for eps in ["-1", "five", "-3%"] {
+        let arg = format!("--epsilon={eps}");
+        let run = cloud(&[&arg], &out);
+        assert_eq!(run.status.code(), Some(1), "{eps}");
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(err.contains("--epsilon"), "{err}");
+        assert!(!out.exists(), "nothing written for a bad ε");
+    }
+}
