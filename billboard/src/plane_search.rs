@@ -5,8 +5,6 @@
 //! in parallel, and the per-triangle test is the same one the plain scan uses, so the
 //! accelerated search picks exactly the planes the plain one picks for the same seed.
 
-use std::sync::atomic::{AtomicU64, Ordering};
-
 use glam::{Vec3, Vec3A};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -102,8 +100,6 @@ struct Node {
     right: u32,
     parent: u32,
     alive: u32,
-    /// Sum of the areas of the alive triangles below: an upper bound of their contribution.
-    alive_area: f32,
 }
 
 const LEAF_SIZE: usize = 32;
@@ -152,16 +148,10 @@ impl Bvh {
             return;
         }
         t.alive[i] = false;
-        let area = t.area_normal[i].length();
         let mut n = self.leaf_of[i];
         while n != u32::MAX {
             let node = &mut self.nodes[n as usize];
             node.alive -= 1;
-            node.alive_area = if node.alive == 0 {
-                0.0
-            } else {
-                (node.alive_area - area).max(0.0)
-            };
             n = node.parent;
         }
     }
@@ -196,10 +186,6 @@ fn build_node(
         right: 0,
         parent,
         alive: (end - start) as u32,
-        alive_area: order[start..end]
-            .iter()
-            .map(|&i| t.area_normal[i as usize].length())
-            .sum(),
     });
     if end - start <= LEAF_SIZE {
         for &i in &order[start..end] {
@@ -267,7 +253,7 @@ impl Search<'_> {
     /// Density of a candidate plane over alive triangles (and the valid ones when `collect`).
     fn score(&self, n: Vec3A, rho: f32, collect: Option<&mut Vec<usize>>) -> f64 {
         if self.params.accelerated {
-            self.score_tree(n, rho, collect, 0.0)
+            self.score_tree(n, rho, collect)
         } else {
             self.score_plain(n, rho, collect)
         }
@@ -294,34 +280,112 @@ impl Search<'_> {
         d
     }
 
-    /// Density by hierarchy traversal. With `cutoff` > 0 (branch and bound), returns −1 as soon
-    /// as the exact partial density plus the alive area still unvisited (an upper bound, since a
-    /// contribution never exceeds the triangle's area) falls below `cutoff`: such a candidate
-    /// cannot be the best, so pruning it never changes the chosen plane.
-    fn score_tree(
-        &self,
-        n: Vec3A,
-        rho: f32,
-        mut collect: Option<&mut Vec<usize>>,
-        cutoff: f64,
-    ) -> f64 {
+    /// Densities of many candidates in one traversal: each node and each leaf's triangles are
+    /// loaded once for every candidate whose ε-slab reaches them, instead of once per candidate
+    /// (the per-candidate walks were memory-bound). Same predicate and summation order per
+    /// candidate as [`Self::score_tree`], so the same densities.
+    fn score_batch(&self, cands: &[(Vec3A, f32)]) -> Vec<f64> {
+        let t = &self.t;
+        let (eps, m, falloff) = (self.eps, self.margin, self.params.falloff);
+        let normals_abs: Vec<Vec3A> = cands.iter().map(|c| c.0.abs()).collect();
+        let mut d = vec![0.0f64; cands.len()];
+        // Stack of (node, start, end) ranges into `lists`, which holds active candidate ids.
+        let mut lists: Vec<u16> = (0..cands.len() as u16).collect();
+        let mut stack: Vec<(u32, usize, usize)> = vec![(0, 0, lists.len())];
+        let mut partial: Vec<u16> = Vec::with_capacity(cands.len());
+        let mut inside: Vec<u16> = Vec::with_capacity(cands.len());
+        let mut dc = [0.0f32; LEAF_SIZE];
+        while let Some((ni, a, b)) = stack.pop() {
+            let node = &self.bvh.nodes[ni as usize];
+            if node.alive == 0 {
+                lists.truncate(a);
+                continue;
+            }
+            partial.clear();
+            inside.clear();
+            for &c in &lists[a..b] {
+                let (n, rho) = cands[c as usize];
+                let dist = (n.dot(node.center) - rho).abs();
+                let ext = normals_abs[c as usize].dot(node.half);
+                if dist - ext > eps + m {
+                    continue;
+                }
+                if dist + ext < eps - m {
+                    inside.push(c);
+                } else {
+                    partial.push(c);
+                }
+            }
+            lists.truncate(a);
+            let (s0, e0) = (node.start as usize, node.end as usize);
+            // Candidates whose slab holds this whole node: every alive triangle counts.
+            if !inside.is_empty() {
+                for i in s0..e0 {
+                    if !t.alive[i] {
+                        continue;
+                    }
+                    for &c in &inside {
+                        let (n, rho) = cands[c as usize];
+                        d[c as usize] +=
+                            contribution(&t.v[i], t.area_normal[i], n, rho, eps, falloff);
+                    }
+                }
+            }
+            if partial.is_empty() {
+                continue;
+            }
+            if node.left != 0 {
+                // Both children get the partial set; right is pushed first so left runs first.
+                let ra = lists.len();
+                lists.extend_from_slice(&partial);
+                let rb = lists.len();
+                lists.extend_from_slice(&partial);
+                let lb = lists.len();
+                stack.push((node.right, ra, rb));
+                stack.push((node.left, rb, lb));
+                continue;
+            }
+            for &c in &partial {
+                let (n, rho) = cands[c as usize];
+                let len = e0 - s0;
+                let (cx, cy, cz) = (&t.cx[s0..e0], &t.cy[s0..e0], &t.cz[s0..e0]);
+                for (k, out) in dc.iter_mut().take(len).enumerate() {
+                    *out = (n.x * cx[k] + n.y * cy[k] + n.z * cz[k] - rho).abs();
+                }
+                let acc = &mut d[c as usize];
+                for i in s0..e0 {
+                    if !t.alive[i] {
+                        continue;
+                    }
+                    let dci = dc[i - s0];
+                    let ok = if dci > eps + m {
+                        false
+                    } else if dci + t.radius[i] < eps - m {
+                        true
+                    } else {
+                        valid_exact(&t.v[i], n, rho, eps)
+                    };
+                    if ok {
+                        *acc += contribution(&t.v[i], t.area_normal[i], n, rho, eps, falloff);
+                    }
+                }
+            }
+        }
+        d
+    }
+
+    /// Density of one candidate by hierarchy traversal (and its valid triangles when `collect`).
+    fn score_tree(&self, n: Vec3A, rho: f32, mut collect: Option<&mut Vec<usize>>) -> f64 {
         let t = &self.t;
         let (eps, m, falloff) = (self.eps, self.margin, self.params.falloff);
         let na = n.abs();
         let mut d = 0.0;
         let mut stack: Vec<u32> = Vec::with_capacity(64);
         stack.push(0);
-        let mut remaining = self.bvh.nodes[0].alive_area as f64;
         while let Some(ni) = stack.pop() {
             let node = &self.bvh.nodes[ni as usize];
-            remaining -= node.alive_area as f64;
             if node.alive == 0 {
                 continue;
-            }
-            if cutoff > 0.0
-                && (d + remaining.max(0.0) + node.alive_area as f64) * (1.0 + 1e-6) < cutoff
-            {
-                return -1.0;
             }
             let dist = (n.dot(node.center) - rho).abs();
             let ext = na.dot(node.half);
@@ -332,9 +396,6 @@ impl Search<'_> {
             if !inside && node.left != 0 {
                 stack.push(node.right);
                 stack.push(node.left);
-                remaining += (self.bvh.nodes[node.left as usize].alive_area
-                    + self.bvh.nodes[node.right as usize].alive_area)
-                    as f64;
                 continue;
             }
             let (a, b) = (node.start as usize, node.end as usize);
@@ -549,26 +610,21 @@ pub fn search_planes(soup: &TriangleSoup, params: &SearchParams, scale: f32) -> 
             .collect();
         scored += cands.len();
         let scores: Vec<f64> = if params.accelerated {
-            // Branch and bound against the best density found so far by any thread (f64 bits of
-            // non-negative values order like the values).
-            let best_bits = AtomicU64::new(0);
-            cands
-                .par_iter()
-                .map(|&(nn, rho, _)| {
-                    let pen = s.penalty(nn);
-                    let cutoff = f64::from_bits(best_bits.load(Ordering::Relaxed));
-                    let cut = if pen > 0.0 {
-                        cutoff / pen
-                    } else {
-                        f64::INFINITY
-                    };
-                    let d = s.score_tree(nn, rho, None, cut);
-                    if d < 0.0 {
-                        return -1.0;
-                    }
-                    let score = d * pen;
-                    best_bits.fetch_max(score.to_bits(), Ordering::Relaxed);
-                    score
+            // Batched traversals, one batch per worker; the order of `scores` is the order of
+            // `cands`, whatever the thread count.
+            let batch = cands
+                .len()
+                .div_ceil(rayon::current_num_threads().max(1) * 2)
+                .max(1);
+            let planes: Vec<(Vec3A, f32)> = cands.iter().map(|c| (c.0, c.1)).collect();
+            planes
+                .par_chunks(batch)
+                .flat_map_iter(|chunk| {
+                    s.score_batch(chunk)
+                        .into_iter()
+                        .zip(chunk)
+                        .map(|(d, c)| d * s.penalty(c.0))
+                        .collect::<Vec<_>>()
                 })
                 .collect()
         } else {
