@@ -19,14 +19,7 @@ fn bench(name: &str, runs: usize, load: &dyn Fn() -> frond_scene::Tree) {
         let t0 = Instant::now();
         let tree = load();
         let t1 = Instant::now();
-        let s = sample(
-            &tree,
-            &SampleOptions {
-                clip: None,
-                samples: 64,
-            },
-        )
-        .expect("samples");
+        let s = sample(&tree, &SampleOptions::default()).expect("samples");
         let t2 = Instant::now();
         foliage = s.foliage.len();
         t_import.push((t1 - t0).as_secs_f64());

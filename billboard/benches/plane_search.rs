@@ -13,14 +13,7 @@ use frond_scene::{ImportOptions, SampleOptions, Tree, import, import_bytes, samp
 use glam::Vec3;
 
 fn soup(tree: &Tree) -> (TriangleSoup, f32) {
-    let s = sample(
-        tree,
-        &SampleOptions {
-            clip: None,
-            samples: 64,
-        },
-    )
-    .expect("samples");
+    let s = sample(tree, &SampleOptions::default()).expect("samples");
     let b = tree.bounds;
     (
         TriangleSoup::from_tree(tree, &s.average, &s.foliage),

@@ -29,14 +29,7 @@ fn check_against_generator(preset: Preset, seed: u64) {
     assert_eq!(tree.count(Part::Foliage), 2 * g.leaf_corners.len());
     assert_eq!(tree.count(Part::Wood), g.wood_triangles);
     assert_eq!(tree.bones.len(), g.bones.len());
-    let s = sample(
-        &tree,
-        &SampleOptions {
-            clip: None,
-            samples: 64,
-        },
-    )
-    .expect("samples");
+    let s = sample(&tree, &SampleOptions::default()).expect("samples");
     assert_eq!(s.samples(), 64);
     assert!((s.period - 4.0).abs() < 1e-6);
     assert!(s.motion.loops && s.motion.moves);

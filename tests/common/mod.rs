@@ -32,6 +32,17 @@ pub fn frond(args: &[&str]) -> Output {
         .expect("frond runs")
 }
 
+/// Runs the `frond` binary and asserts it succeeded (showing its stderr otherwise).
+pub fn frond_ok(args: &[&str]) -> Output {
+    let out = frond(args);
+    assert!(
+        out.status.success(),
+        "frond {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 /// Installs the Node tools once (npm install into tools/node_modules) and returns the folder.
 pub fn node_tools() -> PathBuf {
     static READY: OnceLock<PathBuf> = OnceLock::new();
