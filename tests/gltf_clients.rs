@@ -15,7 +15,7 @@ fn generated_trees_pass_the_khronos_validator() {
     let dir = tempfile::tempdir().expect("temp dir");
     for preset in ["small", "medium"] {
         let out = dir.path().join(format!("{preset}.glb"));
-        let run = frond_ok(&[
+        frond_ok(&[
             "sample",
             "--preset",
             preset,
