@@ -1,9 +1,10 @@
 //! Lacewell's stochastic plane search (spec animated-billboard-clouds §2.4, with the D_max reset
 //! fixed) plus the options of improved-billboard-cloud §2.4/§2.7/§2.8: view penalty, distance
 //! falloff, least-squares refit, a plane budget. Exact accelerations only: a bounding-volume
-//! hierarchy prunes triangles that cannot be within ε of a candidate plane, candidates are scored
-//! in parallel, and the per-triangle test is the same one the plain scan uses, so the
-//! accelerated search picks exactly the planes the plain one picks for the same seed.
+//! hierarchy prunes triangles that cannot be within ε of a candidate plane (centroid boxes for
+//! rejection, vertex boxes for whole-node acceptance), all candidates of an iteration walk it
+//! together in one batch per thread, and the per-triangle test is the one the plain scan uses,
+//! so the accelerated search picks exactly the planes the plain one picks for the same seed.
 
 use glam::{Vec3, Vec3A};
 use rand::{RngExt, SeedableRng};
@@ -93,6 +94,10 @@ struct Node {
     /// Bounds of all vertices below (centre and half extents).
     center: Vec3A,
     half: Vec3A,
+    /// Bounds of the triangle centroids below: a valid triangle's centroid is within ε of the
+    /// plane, so this tighter box decides rejection.
+    ccenter: Vec3A,
+    chalf: Vec3A,
     start: u32,
     end: u32,
     /// Child indices; 0 for a leaf (the root is never a child).
@@ -180,6 +185,8 @@ fn build_node(
     nodes.push(Node {
         center: (lo + hi) * 0.5,
         half: (hi - lo) * 0.5,
+        ccenter: (clo + chi) * 0.5,
+        chalf: (chi - clo) * 0.5,
         start: start as u32,
         end: end as u32,
         left: 0,
@@ -305,12 +312,11 @@ impl Search<'_> {
             inside.clear();
             for &c in &lists[a..b] {
                 let (n, rho) = cands[c as usize];
-                let dist = (n.dot(node.center) - rho).abs();
-                let ext = normals_abs[c as usize].dot(node.half);
-                if dist - ext > eps + m {
+                let na = normals_abs[c as usize];
+                if (n.dot(node.ccenter) - rho).abs() - na.dot(node.chalf) > eps + m {
                     continue;
                 }
-                if dist + ext < eps - m {
+                if (n.dot(node.center) - rho).abs() + na.dot(node.half) < eps - m {
                     inside.push(c);
                 } else {
                     partial.push(c);
@@ -387,12 +393,10 @@ impl Search<'_> {
             if node.alive == 0 {
                 continue;
             }
-            let dist = (n.dot(node.center) - rho).abs();
-            let ext = na.dot(node.half);
-            if dist - ext > eps + m {
-                continue; // every vertex below is farther than ε
+            if (n.dot(node.ccenter) - rho).abs() - na.dot(node.chalf) > eps + m {
+                continue; // every centroid below is farther than ε: no triangle can be valid
             }
-            let inside = dist + ext < eps - m; // every vertex below is within ε
+            let inside = (n.dot(node.center) - rho).abs() + na.dot(node.half) < eps - m; // every vertex below is within ε
             if !inside && node.left != 0 {
                 stack.push(node.right);
                 stack.push(node.left);
@@ -610,11 +614,12 @@ pub fn search_planes(soup: &TriangleSoup, params: &SearchParams, scale: f32) -> 
             .collect();
         scored += cands.len();
         let scores: Vec<f64> = if params.accelerated {
-            // Batched traversals, one batch per worker; the order of `scores` is the order of
+            // One batched traversal per worker (bigger batches share more cache; measured best);
+            // the order of `scores` is the order of
             // `cands`, whatever the thread count.
             let batch = cands
                 .len()
-                .div_ceil(rayon::current_num_threads().max(1) * 2)
+                .div_ceil(rayon::current_num_threads().max(1))
                 .max(1);
             let planes: Vec<(Vec3A, f32)> = cands.iter().map(|c| (c.0, c.1)).collect();
             planes
@@ -669,6 +674,9 @@ pub fn search_planes(soup: &TriangleSoup, params: &SearchParams, scale: f32) -> 
         }
         let cluster = clusters.len() as u32;
         let mut tris = Vec::with_capacity(members.len());
+        // Retire members in soup order, so the seed list (and every later draw) does not depend
+        // on the hierarchy's layout.
+        members.sort_unstable_by_key(|&i| s.t.id[i]);
         for &i in &members {
             let id = s.t.id[i];
             assignment[id as usize] = cluster;
