@@ -1,6 +1,6 @@
 //! Plane-search speed: oak_dense.glb (116,160 leaf triangles, average pose) at ε = 5 % and 1 % of
-//! the bounding-box diagonal with S = 500 (targets ≤ 0.5 s and ≤ 0.9 s on 2 cores), and generated
-//! trees of ~20k, ~200k and ~1M leaf triangles. `FROND_BENCH_PLAIN=1` also times the plain
+//! the bounding-box diagonal with S = 500 (targets ≤ 0.5 s and ≤ 0.9 s on 2 cores), oak_medium
+//! (~10k) and generated trees of ~20k, ~200k and ~1M leaf triangles. `FROND_BENCH_PLAIN=1` also times the plain
 //! O(planes·S·triangles) scan; `FROND_BENCH_SEEDS=N` averages billboard counts over N seeds.
 
 use std::path::Path;
@@ -67,6 +67,13 @@ fn main() {
     }
     if std::env::var("FROND_BENCH_DENSE_ONLY").is_ok() {
         return;
+    }
+    let medium =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/trees/oak_medium.glb");
+    let tree = import(&medium, &ImportOptions::default()).expect("oak_medium imports");
+    let (s, diag) = soup(&tree);
+    for frac in [0.05, 0.01] {
+        run("oak_medium", &s, diag, frac, true, 1);
     }
     for preset in [Preset::Medium, Preset::Large, Preset::Xlarge] {
         let g = generate(preset, 1).expect("generates");

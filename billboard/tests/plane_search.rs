@@ -241,3 +241,78 @@ fn refit_keeps_triangles_within_epsilon_and_never_adds_planes() {
     let r = search_planes(&soup, &p, diag);
     check_invariants(&soup, &r, eps);
 }
+
+/// One large square card and many tiny cards in random orientations.
+fn big_card_among_tiny_ones() -> TriangleSoup {
+    let mut soup = TriangleSoup::default();
+    let mut push = |a: Vec3, b: Vec3, c: Vec3| {
+        soup.positions.push([a, b, c]);
+        soup.uvs.push([glam::Vec2::ZERO; 3]);
+        soup.material.push(0);
+    };
+    let s = 10.0;
+    push(Vec3::ZERO, Vec3::new(s, 0.0, 0.0), Vec3::new(s, s, 0.0));
+    push(Vec3::ZERO, Vec3::new(s, s, 0.0), Vec3::new(0.0, s, 0.0));
+    for i in 0..100 {
+        let f = i as f32;
+        let o = Vec3::new((f * 1.7) % 9.0, (f * 2.3) % 9.0, 3.0 + (f * 0.37) % 5.0);
+        let u = Vec3::new((f * 0.9).cos(), (f * 1.3).sin(), 0.4).normalize() * 0.1;
+        let v = u.cross(Vec3::new(0.3, 0.2, 1.0)).normalize() * 0.1;
+        push(o, o + u, o + v);
+    }
+    soup
+}
+
+#[test]
+fn the_best_of_the_candidates_wins_not_the_last() {
+    // With the thesis's D_max reset inside the candidate loop, the last candidate would win and
+    // the first billboard would usually be a tiny card. With 1000 candidates some seed lies on
+    // the big card (P(miss) ≈ 2e-9), and its plane must be chosen first.
+    let soup = big_card_among_tiny_ones();
+    for accelerated in [true, false] {
+        let p = SearchParams {
+            epsilon: 0.01,
+            candidates: 1000,
+            seed: 4,
+            accelerated,
+            ..Default::default()
+        };
+        let r = search_planes(&soup, &p, 20.0);
+        assert_eq!(
+            r.clusters[0].triangles,
+            vec![0, 1],
+            "accelerated: {accelerated}"
+        );
+        assert!(r.clusters[0].plane.normal.z.abs() > 0.999);
+    }
+}
+
+#[test]
+fn a_soup_of_only_degenerate_triangles_terminates() {
+    // Nothing can seed a plane; the search must still end (no endless retry or refinement),
+    // with every triangle joined to one fitted plane.
+    let mut soup = TriangleSoup::default();
+    for i in 0..20 {
+        let p = Vec3::new(i as f32, 0.0, 0.0);
+        soup.positions.push([p, p + Vec3::X, p + 2.0 * Vec3::X]);
+        soup.uvs.push([glam::Vec2::ZERO; 3]);
+        soup.material.push(0);
+    }
+    let r = search_planes(
+        &soup,
+        &SearchParams {
+            epsilon: 0.1,
+            candidates: 50,
+            seed: 1,
+            refit: true,
+            ..Default::default()
+        },
+        20.0,
+    );
+    assert_eq!(r.joined, 20);
+    assert!(
+        r.assignment
+            .iter()
+            .all(|&a| (a as usize) < r.clusters.len())
+    );
+}
