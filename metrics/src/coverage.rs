@@ -318,7 +318,7 @@ fn coverage_mask(
 ) -> Result<Vec<bool>, MetricError> {
     let ss = params.supersample.max(1);
     let (w, h) = (params.width, params.height);
-    let frame = renderer.render(scene, camera, w * ss, h * ss, BACKGROUND)?;
+    let frame = renderer.render_mipmapped(scene, camera, w * ss, h * ss, BACKGROUND)?;
     if ss == 1 {
         return Ok(frame.coverage);
     }

@@ -180,9 +180,10 @@ impl Pipelines {
             address_mode_w: wgpu::AddressMode::Repeat,
             mag_filter: wgpu::FilterMode::Linear,
             min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
             ..Default::default()
         });
-        let white = upload_texture(device, queue, "frond-render white", 1, 1, &[255; 4]);
+        let white = upload_texture(device, queue, "frond-render white", 1, 1, &[255; 4], false);
 
         Pipelines {
             globals_layout,
@@ -197,7 +198,105 @@ impl Pipelines {
     }
 }
 
-/// Uploads a validated RGBA8 sRGB image as a sampled texture (no mipmaps).
+/// sRGB-encoded byte → linear light.
+fn srgb_to_linear(v: u8) -> f32 {
+    let c = v as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Linear light → sRGB-encoded byte.
+fn linear_to_srgb(c: f32) -> u8 {
+    let c = c.clamp(0.0, 1.0);
+    let e = if c <= 0.003_130_8 {
+        c * 12.92
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
+    (e * 255.0 + 0.5) as u8
+}
+
+/// The next mip level: 2×2 box filter, colour averaged in linear light weighted by alpha (so
+/// transparent texels lend no colour), alpha averaged — minified alpha-tested textures then
+/// cover what their texels cover on average instead of aliasing.
+fn downsample(width: u32, height: u32, rgba: &[u8]) -> (u32, u32, Vec<u8>) {
+    let (w2, h2) = ((width / 2).max(1), (height / 2).max(1));
+    let mut out = vec![0u8; (w2 * h2 * 4) as usize];
+    for y in 0..h2 {
+        for x in 0..w2 {
+            let mut acc = [0.0f32; 3];
+            let (mut alpha, mut weight, mut n) = (0.0f32, 0.0f32, 0.0f32);
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let (sx, sy) = ((2 * x + dx).min(width - 1), (2 * y + dy).min(height - 1));
+                let i = ((sy * width + sx) * 4) as usize;
+                let a = rgba[i + 3] as f32 / 255.0;
+                for k in 0..3 {
+                    acc[k] += srgb_to_linear(rgba[i + k]) * a.max(1e-3);
+                }
+                weight += a.max(1e-3);
+                alpha += a;
+                n += 1.0;
+            }
+            let o = ((y * w2 + x) * 4) as usize;
+            for k in 0..3 {
+                out[o + k] = linear_to_srgb(acc[k] / weight);
+            }
+            out[o + 3] = (alpha / n * 255.0 + 0.5) as u8;
+        }
+    }
+    (w2, h2, out)
+}
+
+/// Fraction of texels whose alpha passes a 0.5 alpha test.
+fn alpha_coverage(rgba: &[u8]) -> f32 {
+    let n = rgba.len() / 4;
+    if n == 0 {
+        return 0.0;
+    }
+    rgba.chunks_exact(4).filter(|p| p[3] >= 128).count() as f32 / n as f32
+}
+
+/// A mip level whose alpha is rescaled so that as many texels pass the 0.5 alpha test as in
+/// level 0 (coverage-preserving mipmaps): averaged alpha alone makes leaves vanish at a
+/// distance. The threshold is put halfway between the weakest texel that should pass and the
+/// strongest that should not, so neither lands on the test's edge.
+fn preserve_coverage(rgba: &[u8], target: f32) -> Vec<u8> {
+    let mut out = rgba.to_vec();
+    let n = rgba.len() / 4;
+    let want = (target * n as f32).round() as usize;
+    if n == 0 || want == 0 {
+        return out;
+    }
+    let mut histogram = [0usize; 256];
+    for p in rgba.chunks_exact(4) {
+        histogram[p[3] as usize] += 1;
+    }
+    // Walk down from opaque until `want` texels are included.
+    let (mut count, mut v_in) = (0usize, 0usize);
+    for v in (0..256).rev() {
+        count += histogram[v];
+        if count >= want {
+            v_in = v;
+            break;
+        }
+    }
+    let v_out = (0..v_in).rev().find(|&v| histogram[v] > 0).unwrap_or(0);
+    let threshold = 0.5 * (v_in + v_out) as f32;
+    if threshold <= 0.0 {
+        return out;
+    }
+    let scale = 127.5 / threshold;
+    for p in out.chunks_exact_mut(4) {
+        p[3] = (p[3] as f32 * scale).round().min(255.0) as u8;
+    }
+    out
+}
+
+/// Uploads a validated RGBA8 sRGB image as a sampled texture; with `mipmaps`, with a full
+/// coverage-preserving mip chain (see [`downsample`], [`preserve_coverage`]).
 pub(crate) fn upload_texture(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -205,36 +304,59 @@ pub(crate) fn upload_texture(
     width: u32,
     height: u32,
     rgba: &[u8],
+    mipmaps: bool,
 ) -> wgpu::TextureView {
-    let size = wgpu::Extent3d {
-        width,
-        height,
-        depth_or_array_layers: 1,
+    let levels = if mipmaps {
+        32 - width.max(height).max(1).leading_zeros()
+    } else {
+        1
     };
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
-        size,
-        mip_level_count: 1,
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: levels,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format: wgpu::TextureFormat::Rgba8UnormSrgb,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    queue.write_texture(
-        wgpu::TexelCopyTextureInfo {
-            texture: &texture,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect: wgpu::TextureAspect::All,
-        },
-        rgba,
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(width * 4),
-            rows_per_image: Some(height),
-        },
-        size,
-    );
+    let (mut w, mut h) = (width, height);
+    let mut data = rgba.to_vec();
+    let coverage0 = alpha_coverage(&data);
+    for level in 0..levels {
+        let upload = if level == 0 {
+            data.clone()
+        } else {
+            preserve_coverage(&data, coverage0)
+        };
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: level,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            &upload,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * 4),
+                rows_per_image: Some(h),
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+        if level + 1 < levels {
+            let next = downsample(w, h, &data);
+            (w, h, data) = next;
+        }
+    }
     texture.create_view(&Default::default())
 }

@@ -259,3 +259,82 @@ fn render_view_rejects_bad_input() {
         Err(RenderError::IndexOutOfRange { .. })
     ));
 }
+
+/// A 512² texture: left half opaque, right half transparent, plus 1-texel transparent
+/// speckles in the opaque half (10 %), so point sampling at a distance aliases.
+fn half_texture() -> DrawTexture {
+    let n = 512u32;
+    let mut rgba = vec![0u8; (n * n * 4) as usize];
+    for y in 0..n {
+        for x in 0..n {
+            let o = ((y * n + x) * 4) as usize;
+            let speckle = (x * 7 + y * 13) % 10 == 0;
+            rgba[o..o + 4].copy_from_slice(&[
+                40,
+                160,
+                40,
+                if x < n / 2 && !speckle { 255 } else { 0 },
+            ]);
+        }
+    }
+    DrawTexture {
+        width: n,
+        height: n,
+        rgba,
+    }
+}
+
+#[test]
+fn mipmapped_renders_keep_coverage_when_minified_and_change_nothing_magnified() {
+    let r = renderer();
+    let mut scene = one_mesh(
+        rect_z([-2.0, -1.0], [2.0, 3.0], -1.0),
+        DrawMaterial {
+            texture: Some(0),
+            alpha_cutoff: Some(0.5),
+            double_sided: true,
+            ..DrawMaterial::default()
+        },
+    );
+    scene.textures.push(half_texture());
+    let camera = Camera::framing(
+        Vec3::new(-2.0, -1.0, -1.0),
+        Vec3::new(2.0, 3.0, -1.0),
+        0.0,
+        0.0,
+        Projection::Orthographic { half_height: 2.0 },
+    );
+    // Minified 32×: the left half stays covered (coverage-preserving mip levels), ≈ half the quad.
+    let small = r
+        .render_mipmapped(&scene, &camera, 16, 16, [0.0; 4])
+        .expect("renders");
+    let quad_pixels = small.covered_count() as f64;
+    let quad_area = {
+        let full = one_mesh(
+            rect_z([-2.0, -1.0], [2.0, 3.0], -1.0),
+            DrawMaterial::opaque([1.0; 4]),
+        );
+        r.render(&full, &camera, 16, 16, [0.0; 4])
+            .expect("renders")
+            .covered_count() as f64
+    };
+    let frac = quad_pixels / quad_area;
+    assert!(
+        (frac - 0.5).abs() <= 2.0 / 16.0 + 1e-9,
+        "minified coverage {frac}"
+    );
+    // Magnified, mip level 0 is used: identical to the plain render.
+    let a = r
+        .render(&scene, &camera, 1024, 1024, [0.0; 4])
+        .expect("renders");
+    let b = r
+        .render_mipmapped(&scene, &camera, 1024, 1024, [0.0; 4])
+        .expect("renders");
+    let differ = a
+        .coverage
+        .iter()
+        .zip(&b.coverage)
+        .filter(|(x, y)| x != y)
+        .count();
+    assert_eq!(differ, 0, "pixels differ at 2× magnification");
+}
