@@ -207,6 +207,7 @@ impl Renderer {
         )
     }
 
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn render_with_buffer_cap(
         &self,
         scene: &DrawScene,
