@@ -157,27 +157,15 @@ pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Res
         metallic: 0.0,
         roughness: 1.0,
     });
-    let mut quads = PrimitiveDesc {
-        normals: Some(Vec::new()),
-        uvs: Some(Vec::new()),
+    let q = cloud.quad_mesh();
+    let quads = PrimitiveDesc {
+        positions: q.positions,
+        normals: Some(q.normals),
+        uvs: Some(q.uvs),
+        indices: q.indices,
         material: Some(mat),
         ..Default::default()
     };
-    for (q, uv) in cloud.quads.iter().zip(&cloud.baked.uv_rects) {
-        let base = quads.positions.len() as u32;
-        for (c, t) in q.corners().iter().zip(uv) {
-            quads.positions.push(c.to_array());
-            if let Some(n) = quads.normals.as_mut() {
-                n.push(q.plane.normal.to_array());
-            }
-            if let Some(u) = quads.uvs.as_mut() {
-                u.push(t.to_array());
-            }
-        }
-        quads
-            .indices
-            .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
-    }
     let cloud_mesh = doc.add_mesh("foliage_cloud", &[quads]);
     let node = doc.add_node(NodeDesc {
         name: "foliage_cloud".into(),

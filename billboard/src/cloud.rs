@@ -175,22 +175,44 @@ pub fn build_cloud(
     })
 }
 
+/// The cloud's quads as one indexed mesh: 4 corners each (in [`Quad::corners`] order), the
+/// plane normal, atlas UVs, two triangles.
+#[derive(Clone, Debug, Default)]
+pub struct QuadMesh {
+    pub positions: Vec<[f32; 3]>,
+    pub normals: Vec<[f32; 3]>,
+    pub uvs: Vec<[f32; 2]>,
+    pub indices: Vec<u32>,
+}
+
 impl BillboardCloud {
+    /// The quads as one mesh, for drawing and for export.
+    pub fn quad_mesh(&self) -> QuadMesh {
+        let mut m = QuadMesh::default();
+        for (q, uv) in self.quads.iter().zip(&self.baked.uv_rects) {
+            let base = m.positions.len() as u32;
+            for (c, t) in q.corners().iter().zip(uv) {
+                m.positions.push(c.to_array());
+                m.normals.push(q.plane.normal.to_array());
+                m.uvs.push(t.to_array());
+            }
+            m.indices
+                .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        }
+        m
+    }
+
     /// The cloud as drawable quads (two triangles each) textured with the colour atlas,
     /// alpha-tested at 0.5 and double-sided.
     pub fn draw_scene(&self) -> frond_render::DrawScene {
-        let mut mesh = frond_render::DrawMesh::default();
-        let mut uvs = Vec::new();
-        for (q, uv) in self.quads.iter().zip(&self.baked.uv_rects) {
-            let base = mesh.positions.len() as u32;
-            for (c, t) in q.corners().iter().zip(uv) {
-                mesh.positions.push(c.to_array());
-                uvs.push(t.to_array());
-            }
-            mesh.indices
-                .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
-        }
-        mesh.uvs = Some(uvs);
+        let q = self.quad_mesh();
+        let mesh = frond_render::DrawMesh {
+            positions: q.positions,
+            normals: None,
+            uvs: Some(q.uvs),
+            indices: q.indices,
+            material: 0,
+        };
         let atlas = &self.baked.atlas;
         frond_render::DrawScene {
             meshes: vec![mesh],
