@@ -141,3 +141,41 @@ fn bad_epsilon_is_a_clear_error_and_writes_nothing() {
         assert!(!out.exists(), "nothing written for a bad ε");
     }
 }
+
+#[test]
+fn increased_density_keeps_the_planes_and_fills_the_cloud() {
+    // Baking every triangle valid for a plane (spec §2.4, §3.6.2) leaves the plane choice alone
+    // and counters the sparse look: the cloud covers more of what the original covers.
+    use frond::cloud_cmd::{CloudRequest, make_cloud};
+    use frond_billboard::cloud::CloudParams;
+    let tree = frond_scene::import(&root().join("samples/sapling.glb"), &Default::default())
+        .expect("imports");
+    let renderer = frond_render::Renderer::new().expect("adapter");
+    let run = |increased_density: bool| {
+        let mut params = CloudParams {
+            increased_density,
+            ..Default::default()
+        };
+        params.search.candidates = 100;
+        params.search.seed = 2;
+        params.bake.texels_per_unit = 24.0;
+        let req = CloudRequest {
+            epsilon: "5%".into(),
+            params,
+            samples: 16,
+            clip: None,
+            coverage_views: 3,
+            coverage_size: (160, 120),
+        };
+        make_cloud(&renderer, &tree, &req).expect("cloud").2
+    };
+    let plain = run(false);
+    let dense = run(true);
+    assert_eq!(plain.billboards, dense.billboards);
+    assert_eq!(plain.total_area, dense.total_area);
+    let (a, b) = (
+        plain.coverage_error.expect("measured"),
+        dense.coverage_error.expect("measured"),
+    );
+    assert!(b < a, "coverage error with increased density {b} vs {a}");
+}
