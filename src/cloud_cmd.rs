@@ -77,12 +77,13 @@ pub fn make_cloud(
             samples: req.samples,
         },
     )?;
-    if sampled.foliage.is_empty() {
+    let frond_scene::Sampled {
+        average, foliage, ..
+    } = sampled;
+    if foliage.is_empty() {
         bail!("{path}: the tree has no foliage to turn into a billboard cloud");
     }
-    let average = sampled.average.clone();
-    let soup = TriangleSoup::from_tree(tree, &average, &sampled.foliage);
-    drop(sampled);
+    let soup = TriangleSoup::from_tree(tree, &average, &foliage);
     let mut params = req.params.clone();
     params.search.epsilon = epsilon;
     let full = scene_from_positions(tree, &average, None, TreeParts::Foliage);

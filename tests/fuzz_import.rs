@@ -9,6 +9,7 @@ mod common;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
+use frond_scene::gltf_writer::glb_container;
 use frond_scene::{ImportOptions, SampleOptions, import_bytes, sample};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -24,11 +25,6 @@ fn split_glb(bytes: &[u8]) -> (Vec<u8>, Vec<u8>) {
         Vec::new()
     };
     (json, bin)
-}
-
-/// Builds a GLB container around any json and bin bytes.
-fn wrap_glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
-    frond_scene::gltf_writer::glb_container(json, bin)
 }
 
 const EDGE_NUMBERS: &[&str] = &[
@@ -113,12 +109,12 @@ fn mutate(rng: &mut ChaCha8Rng, json: &[u8], bin: &[u8]) -> Vec<u8> {
             }
         }
         _ => {
-            let whole = wrap_glb(&j, &b);
+            let whole = glb_container(&j, &b);
             let cut = rng.random_range(0..whole.len());
             return whole[..cut].to_vec();
         }
     }
-    wrap_glb(&j, &b)
+    glb_container(&j, &b)
 }
 
 fn fuzz(runs: usize, seed: u64) {

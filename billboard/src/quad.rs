@@ -37,13 +37,4 @@ impl Quad {
     pub fn area(&self) -> f32 {
         4.0 * self.half_size.x * self.half_size.y
     }
-    /// Quad coordinates of a world point: (0,0) at corner 0, (1,1) at corner 2.
-    pub fn local_uv(&self, p: Vec3) -> Vec2 {
-        let d = p - self.center;
-        let s = self.size();
-        Vec2::new(
-            d.dot(self.axis_u) / s.x.max(f32::MIN_POSITIVE) + 0.5,
-            d.dot(self.axis_v) / s.y.max(f32::MIN_POSITIVE) + 0.5,
-        )
-    }
 }

@@ -4,21 +4,13 @@
 
 use frond_render::{
     Camera, DrawMaterial, DrawMesh, DrawScene, DrawTexture, Frame, Projection, RenderError,
-    Renderer,
 };
 use glam::Vec3;
 
-const BLUE: [f32; 4] = [0.0, 0.0, 1.0, 1.0];
+mod common;
+use common::{quad_z, renderer};
 
-fn renderer() -> Renderer {
-    match Renderer::new() {
-        Ok(r) => {
-            eprintln!("adapter: {}", r.adapter_info());
-            r
-        }
-        Err(e) => panic!("no renderer (CI machines have Mesa llvmpipe): {e}"),
-    }
-}
+const BLUE: [f32; 4] = [0.0, 0.0, 1.0, 1.0];
 
 fn ortho(azimuth_deg: f32, half_height: f32) -> Camera {
     Camera {
@@ -27,22 +19,6 @@ fn ortho(azimuth_deg: f32, half_height: f32) -> Camera {
         elevation_deg: 0.0,
         distance: 10.0,
         projection: Projection::Orthographic { half_height },
-    }
-}
-
-/// Axis-aligned quad facing +Z at depth `z`, counter-clockwise seen from +Z.
-fn quad_z(min: [f32; 2], max: [f32; 2], z: f32, material: usize) -> DrawMesh {
-    DrawMesh {
-        positions: vec![
-            [min[0], min[1], z],
-            [max[0], min[1], z],
-            [max[0], max[1], z],
-            [min[0], max[1], z],
-        ],
-        normals: None,
-        uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
-        indices: vec![0, 1, 2, 0, 2, 3],
-        material,
     }
 }
 
@@ -465,7 +441,7 @@ fn bad_inputs_are_errors_not_panics() {
 #[test]
 fn one_renderer_serves_several_threads() {
     fn assert_send_sync<T: Send + Sync>() {}
-    assert_send_sync::<Renderer>();
+    assert_send_sync::<frond_render::Renderer>();
     let r = renderer();
     let s = scene(
         vec![quad_z([-0.5, -0.5], [0.5, 0.5], 0.0, 0)],

@@ -4,32 +4,16 @@
 
 use frond_render::{
     Camera, DrawMaterial, DrawMesh, DrawScene, DrawTexture, Frame, Output, Projection, RenderError,
-    Renderer,
 };
 use glam::camera::rh::{proj::directx, view};
 use glam::{Mat4, Vec3};
 
-fn renderer() -> Renderer {
-    match Renderer::new() {
-        Ok(r) => r,
-        Err(e) => panic!("no renderer (CI machines have Mesa llvmpipe): {e}"),
-    }
-}
+mod common;
+use common::renderer;
 
 /// Axis-aligned rectangle facing +Z at depth `z`, counter-clockwise seen from +Z.
 fn rect_z(min: [f32; 2], max: [f32; 2], z: f32) -> DrawMesh {
-    DrawMesh {
-        positions: vec![
-            [min[0], min[1], z],
-            [max[0], min[1], z],
-            [max[0], max[1], z],
-            [min[0], max[1], z],
-        ],
-        normals: None,
-        uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
-        indices: vec![0, 1, 2, 0, 2, 3],
-        material: 0,
-    }
+    common::quad_z(min, max, z, 0)
 }
 
 fn one_mesh(mesh: DrawMesh, material: DrawMaterial) -> DrawScene {

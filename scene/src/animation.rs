@@ -1,7 +1,7 @@
 //! Animation clips and their evaluation as glTF specifies (LINEAR with shortest-path slerp for
 //! rotations, STEP, CUBICSPLINE Hermite), plus world transforms of every node at a time.
 
-use glam::{Mat4, Quat, Vec3, Vec4};
+use glam::{Mat4, Quat, Vec4};
 
 use crate::model::{Node, Trs};
 
@@ -137,15 +137,6 @@ pub fn world_matrices(nodes: &[Node], order: &[usize], pose: &[Trs]) -> Vec<Mat4
         };
     }
     world
-}
-
-/// Rest translation helper used by generators and tests.
-pub fn trs(translation: Vec3, rotation: Quat) -> Trs {
-    Trs {
-        translation,
-        rotation,
-        scale: Vec3::ONE,
-    }
 }
 
 #[cfg(test)]

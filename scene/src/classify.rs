@@ -5,7 +5,6 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
-use crate::error::Result;
 use crate::import::ImportOptions;
 use crate::model::{AlphaMode, Classification, Material, Part, Tree, Triangle};
 
@@ -103,7 +102,7 @@ pub fn classify_primitives(
     prims: &[PrimitiveInfo],
     rest: &[Vec3],
     options: &ImportOptions,
-) -> Result<(Vec<Triangle>, Vec<Classification>)> {
+) -> (Vec<Triangle>, Vec<Classification>) {
     let tree_size = crate::model::Bounds::of(
         prims
             .iter()
@@ -181,5 +180,5 @@ pub fn classify_primitives(
             bone: None,
         }));
     }
-    Ok((tris, report))
+    (tris, report)
 }

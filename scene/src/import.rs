@@ -87,7 +87,7 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
     };
     let rest_positions = skin_positions(&tmp, &rest_world);
     let mut tree = tmp;
-    let (triangles, classification) = classify_primitives(&tree, &prims, &rest_positions, options)?;
+    let (triangles, classification) = classify_primitives(&tree, &prims, &rest_positions, options);
     tree.triangles = triangles;
     tree.classification = classification;
     if tree

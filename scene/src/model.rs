@@ -68,16 +68,6 @@ pub enum Binding {
     Node(usize),
 }
 
-impl Binding {
-    /// Node of palette entry `k`.
-    pub fn node_of(&self, k: usize, bones: &[Bone]) -> usize {
-        match self {
-            Binding::Skin { joints, .. } => bones[joints[k]].node,
-            Binding::Node(n) => *n,
-        }
-    }
-}
-
 /// Whether a triangle belongs to the wood or the foliage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
