@@ -2,5 +2,7 @@
 
 pub mod cloud_cmd;
 pub mod inspect;
+pub mod lod_cmd;
 pub mod output;
 pub mod render_cmd;
+pub mod screen_budget;

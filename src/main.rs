@@ -8,10 +8,13 @@ use clap::{Parser, Subcommand};
 
 use frond::cloud_cmd::{CloudRequest, rest_diagonal, run_cloud};
 use frond::inspect::{SamplingSummary, inspect};
+use frond::lod_cmd::{AnimationMode, LodRequest, Method, run_lod};
 use frond::output::write_atomic;
 use frond::render_cmd::{RenderRequest, frame_png, parse_size, render_tree};
+use frond::screen_budget::screen_height_at;
 use frond_billboard::cloud::CloudParams;
 use frond_billboard::plane_search::SearchParams;
+use frond_export::vat::VatFormat;
 use frond_render::{Renderer, TreeParts};
 use frond_scene::generator::{Preset, generate};
 use frond_scene::{ImportOptions, SampleOptions, import, sample};
@@ -157,6 +160,64 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
         /// Print stats.json to stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Animated billboard LOD chain: LOD0 (the input) and one LOD per screen height, skinned
+    /// or vertex-animated, with a combined file, mapping sidecars and report.json.
+    Lod {
+        #[command(flatten)]
+        import: ImportArgs,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Clustering: auto (per-bone for the nearest LOD, static for the others), per-bone,
+        /// static.
+        #[arg(long, default_value = "auto", value_parser = ["auto", "per-bone", "static"])]
+        method: String,
+        /// Screen heights in pixels the whole tree covers, one LOD each, nearest first.
+        #[arg(long, value_delimiter = ',', default_value = "600,200,60")]
+        lods: Vec<f32>,
+        /// LODs by viewing distance instead (world units), with --fov and --resolution.
+        #[arg(long, value_delimiter = ',', conflicts_with = "lods")]
+        distances: Option<Vec<f32>>,
+        /// Vertical field of view in degrees (for --distances).
+        #[arg(long, default_value_t = 60.0)]
+        fov: f32,
+        /// Image height in pixels (for --distances and MSFT_screencoverage).
+        #[arg(long, default_value_t = 1080.0)]
+        resolution: f32,
+        /// Screen-space error budget in pixels.
+        #[arg(long, default_value_t = 1.0)]
+        pixel_error: f32,
+        /// Override the derived ε: a length, or a percentage of the bounding-box diagonal.
+        #[arg(long)]
+        epsilon: Option<String>,
+        /// skin (glTF skin and channels), vat (vertex animation textures, EXR half) or vat-png16.
+        #[arg(long, default_value = "skin", value_parser = ["skin", "vat", "vat-png16"])]
+        animation: String,
+        /// Random seed: same input and seed, same files.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Animation samples over the loop.
+        #[arg(long, default_value_t = 64)]
+        samples: usize,
+        /// Clip the billboards' own motion is sampled from (default: the first).
+        #[arg(long)]
+        clip: Option<String>,
+        /// Candidate planes per iteration of the plane search.
+        #[arg(long, default_value_t = 200)]
+        planes: usize,
+        /// Largest atlas side per LOD.
+        #[arg(long, default_value_t = 4096)]
+        max_atlas: u32,
+        /// Add MSFT_lod (with MSFT_screencoverage) to the combined file.
+        #[arg(long)]
+        msft_lod: bool,
+        /// Write textures as PNG files next to the GLBs instead of embedding them.
+        #[arg(long)]
+        external_textures: bool,
+        /// Print report.json to stdout.
         #[arg(long)]
         json: bool,
     },
@@ -318,6 +379,99 @@ fn run(cli: Cli) -> Result<()> {
                     report.cloud.timings_s.plane_search,
                     report.cloud.timings_s.bake,
                     report.cloud.timings_s.total
+                );
+            }
+        }
+        Command::Lod {
+            import,
+            output,
+            method,
+            lods,
+            distances,
+            fov,
+            resolution,
+            pixel_error,
+            epsilon,
+            animation,
+            seed,
+            samples,
+            clip,
+            planes,
+            max_atlas,
+            msft_lod,
+            external_textures,
+            json,
+        } => {
+            let tree = import.load()?;
+            let renderer = Renderer::new()?;
+            let screen_heights = match distances {
+                Some(d) => {
+                    let h = tree.bounds.height().max(tree.bounds.size() * 1e-3);
+                    d.iter()
+                        .map(|&z| {
+                            if !(z.is_finite() && z > 0.0) {
+                                anyhow::bail!("--distances: {z} is not a positive distance");
+                            }
+                            Ok(screen_height_at(h, z, fov, resolution))
+                        })
+                        .collect::<Result<Vec<_>>>()?
+                }
+                None => lods,
+            };
+            let req = LodRequest {
+                method: Method::parse(&method).unwrap_or(Method::Auto),
+                screen_heights,
+                pixel_error,
+                epsilon,
+                animation: match animation.as_str() {
+                    "vat" => AnimationMode::Vat(VatFormat::ExrHalf),
+                    "vat-png16" => AnimationMode::Vat(VatFormat::Png16),
+                    _ => AnimationMode::Skin,
+                },
+                seed,
+                samples,
+                clip,
+                planes,
+                max_atlas,
+                msft_lod,
+                resolution,
+                external_textures,
+            };
+            let bar = if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+                let b = indicatif::ProgressBar::new_spinner();
+                b.enable_steady_tick(std::time::Duration::from_millis(120));
+                Some(b)
+            } else {
+                None
+            };
+            let progress = |msg: &str| {
+                tracing::info!("{msg}");
+                if let Some(b) = &bar {
+                    b.set_message(msg.to_string());
+                }
+            };
+            let result = run_lod(&renderer, &tree, &req, &output, &progress);
+            if let Some(b) = &bar {
+                b.finish_and_clear();
+            }
+            let report = result?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&report).context("serialising the report")?
+                );
+            } else {
+                for l in &report.lods {
+                    println!(
+                        "{}: {} triangles, {} billboards, {} bones, {} texture bytes ({})",
+                        l.file, l.triangles, l.billboards, l.bones, l.texture_bytes, l.method
+                    );
+                }
+                println!(
+                    "{}: {} LODs combined; report.json; {:.2} s",
+                    report.combined,
+                    report.lods.len(),
+                    report.timings_s["total"].as_f64().unwrap_or(0.0)
                 );
             }
         }

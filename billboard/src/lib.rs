@@ -2,13 +2,17 @@
 //! improved-billboard-cloud §2 and §4): plane search, minimal rectangles, baked alpha-tested
 //! textures packed into one atlas.
 
+pub mod animated;
+pub mod animated_build;
 pub mod atlas;
 pub mod bake;
 pub mod cloud;
+pub mod motion_budget;
 pub mod plane;
 pub mod plane_search;
 pub mod quad;
 pub mod rectangle;
+pub mod rigid_fit;
 pub mod soup;
 
 pub use atlas::{Packing, pack};

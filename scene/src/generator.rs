@@ -494,7 +494,7 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
             path: ChannelPath::Rotation,
             times: key_times.clone(),
             values: b.keys.iter().flat_map(|q| q.to_array()).collect(),
-            step: false,
+            interpolation: WriteInterpolation::Linear,
         })
         .collect();
     doc.add_animation("Wind", &channels);

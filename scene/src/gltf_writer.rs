@@ -44,6 +44,8 @@ pub struct PrimitiveDesc {
     pub positions: Vec<[f32; 3]>,
     pub normals: Option<Vec<[f32; 3]>>,
     pub uvs: Option<Vec<[f32; 2]>>,
+    /// Further texture coordinate sets: TEXCOORD_1, TEXCOORD_2, ...
+    pub extra_uvs: Vec<Vec<[f32; 2]>>,
     pub joints: Option<Vec<[u16; 4]>>,
     pub weights: Option<Vec<[f32; 4]>>,
     pub indices: Vec<u32>,
@@ -58,14 +60,24 @@ pub enum ChannelPath {
     Scale,
 }
 
-/// One animation channel with LINEAR or STEP keys; `values` is 3 or 4 floats per key.
+/// Key interpolation of a written channel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum WriteInterpolation {
+    #[default]
+    Linear,
+    Step,
+    /// `values` holds in-tangent, value, out-tangent per key.
+    CubicSpline,
+}
+
+/// One animation channel; `values` is 3 or 4 floats per key (three times that for cubic).
 #[derive(Clone, Debug)]
 pub struct ChannelDesc {
     pub node: usize,
     pub path: ChannelPath,
     pub times: Vec<f32>,
     pub values: Vec<f32>,
-    pub step: bool,
+    pub interpolation: WriteInterpolation,
 }
 
 /// Builds a GLB: add things, then [`GltfBuilder::to_glb`].
@@ -86,6 +98,7 @@ pub struct GltfBuilder {
     samplers: Vec<Value>,
     scene_roots: Vec<usize>,
     extras: Option<Value>,
+    extensions_used: Vec<String>,
 }
 
 fn f32s_to_bytes(v: &[f32]) -> impl Iterator<Item = u8> + '_ {
@@ -215,6 +228,27 @@ impl GltfBuilder {
         self.nodes.len() - 1
     }
 
+    /// Sets extension `name` (and optionally the `extras`) of an added node, and lists the
+    /// extension in `extensionsUsed`.
+    pub fn set_node_extension(
+        &mut self,
+        node: usize,
+        name: &str,
+        value: Value,
+        extras: Option<Value>,
+    ) {
+        self.use_extension(name);
+        if let Some(n) = self.nodes.get_mut(node) {
+            if !n["extensions"].is_object() {
+                n["extensions"] = json!({});
+            }
+            n["extensions"][name] = value;
+            if let Some(e) = extras {
+                n["extras"] = e;
+            }
+        }
+    }
+
     /// Makes `child` a child of `parent`.
     pub fn add_child(&mut self, parent: usize, child: usize) {
         self.children[parent].push(child);
@@ -225,12 +259,30 @@ impl GltfBuilder {
         self.scene_roots.push(node);
     }
 
+    /// Lists an extension in `extensionsUsed` (once).
+    pub fn use_extension(&mut self, name: &str) {
+        if !self.extensions_used.iter().any(|e| e == name) {
+            self.extensions_used.push(name.to_string());
+        }
+    }
+
     /// Embeds a PNG image and makes a texture of it (linear filtering with mipmaps,
     /// repeat, or clamp-to-edge when `clamp`).
     pub fn add_texture(&mut self, name: &str, png: &[u8], clamp: bool) -> usize {
         let view = self.push_view(png, None, None);
         self.images
             .push(json!({ "name": name, "mimeType": "image/png", "bufferView": view }));
+        self.texture_of_last_image(name, clamp)
+    }
+
+    /// A texture of a PNG file referenced by relative `uri` (written next to the glTF).
+    pub fn add_texture_uri(&mut self, name: &str, uri: &str, clamp: bool) -> usize {
+        self.images
+            .push(json!({ "name": name, "mimeType": "image/png", "uri": uri }));
+        self.texture_of_last_image(name, clamp)
+    }
+
+    fn texture_of_last_image(&mut self, name: &str, clamp: bool) -> usize {
         let wrap = if clamp { 33071 } else { 10497 };
         self.samplers
             .push(json!({ "magFilter": 9729, "minFilter": 9987, "wrapS": wrap, "wrapT": wrap }));
@@ -285,6 +337,13 @@ impl GltfBuilder {
                 let flat: Vec<f32> = uv.iter().flatten().copied().collect();
                 attrs.insert(
                     "TEXCOORD_0".into(),
+                    json!(self.add_floats(&flat, "VEC2", false, Some(34962))),
+                );
+            }
+            for (k, uv) in p.extra_uvs.iter().enumerate() {
+                let flat: Vec<f32> = uv.iter().flatten().copied().collect();
+                attrs.insert(
+                    format!("TEXCOORD_{}", k + 1),
                     json!(self.add_floats(&flat, "VEC2", false, Some(34962))),
                 );
             }
@@ -354,7 +413,11 @@ impl GltfBuilder {
             let output = self.add_floats(&c.values, ty, false, None);
             samplers.push(json!({
                 "input": input, "output": output,
-                "interpolation": if c.step { "STEP" } else { "LINEAR" }
+                "interpolation": match c.interpolation {
+                    WriteInterpolation::Linear => "LINEAR",
+                    WriteInterpolation::Step => "STEP",
+                    WriteInterpolation::CubicSpline => "CUBICSPLINE",
+                }
             }));
             let path = match c.path {
                 ChannelPath::Translation => "translation",
@@ -405,6 +468,9 @@ impl GltfBuilder {
         }
         if let Some(e) = self.extras {
             root.insert("extras".into(), e);
+        }
+        if !self.extensions_used.is_empty() {
+            root.insert("extensionsUsed".into(), json!(self.extensions_used));
         }
         let json_bytes = serde_json::to_vec(&Value::Object(root)).unwrap_or_default();
         glb_container(&json_bytes, &self.bin)

@@ -72,7 +72,11 @@ fn two_bone_card(keys: &[(f32, Quat)], step: bool) -> Vec<u8> {
             path: ChannelPath::Rotation,
             times: keys.iter().map(|k| k.0).collect(),
             values: keys.iter().flat_map(|k| k.1.to_array()).collect(),
-            step,
+            interpolation: if step {
+                WriteInterpolation::Step
+            } else {
+                WriteInterpolation::Linear
+            },
         }],
     );
     doc.to_glb()

@@ -1,0 +1,236 @@
+//! The contract between clustering and export: an animated billboard cloud (spec
+//! animated-billboard-clouds §1.4). Every clustering method (per-bone, static, and later
+//! spectral and skeleton) produces one; `frond-export` writes it without knowing the method.
+//!
+//! Motion of a billboard, in world space at loop time `t`:
+//! `corners(t) = W_b(t) · Rest_b⁻¹ · M(t) · quad.corners()` when it follows rig node `b`, or
+//! `M(t) · quad.corners()` when it follows none, where `W_b(t)` is `b`'s animated world matrix,
+//! `Rest_b` its rest world matrix and `M(t)` its own rigid motion (identity when `None`).
+//! Quads never deform: `M` is rotation plus translation only.
+
+use frond_scene::animation::{Clip, local_pose, world_matrices};
+use frond_scene::{Node, Tree};
+use glam::{Affine3A, Mat4, Vec2, Vec3};
+
+use crate::bake::Atlas;
+use crate::quad::Quad;
+
+/// The output skeleton: a node hierarchy with rest transforms and the clips that drive it.
+/// Node and channel indices are the rig's own (the pipeline may prune or rebuild it).
+#[derive(Clone, Debug)]
+pub struct Rig {
+    /// Nodes; `parent`/`children` index this list, `bone` is unused.
+    pub nodes: Vec<Node>,
+    /// Nodes ordered parents first.
+    pub order: Vec<usize>,
+    /// Clips over these nodes; each keeps the input's name, start and end.
+    pub clips: Vec<Clip>,
+}
+
+impl Rig {
+    /// The tree's whole node hierarchy and every clip, unchanged.
+    pub fn from_tree(tree: &Tree) -> Rig {
+        Rig {
+            nodes: tree.nodes.clone(),
+            order: tree.node_order.clone(),
+            clips: tree.clips.clone(),
+        }
+    }
+
+    /// World matrices of every node at time `t` of clip `clip` (rest pose when None).
+    pub fn world_at(&self, clip: Option<usize>, t: f32) -> Vec<Mat4> {
+        let local = local_pose(&self.nodes, clip.and_then(|c| self.clips.get(c)), t);
+        world_matrices(&self.nodes, &self.order, &local)
+    }
+
+    /// Rest world matrices of every node.
+    pub fn rest_world(&self) -> Vec<Mat4> {
+        self.world_at(None, 0.0)
+    }
+
+    /// Index of the clip named `name`.
+    pub fn clip_named(&self, name: &str) -> Option<usize> {
+        self.clips.iter().position(|c| c.name == name)
+    }
+
+    /// Keeps only `keep` (and their ancestors), remapping indices; returns old → new index.
+    /// Channels of removed nodes are dropped; clips are kept (names and lengths), even when
+    /// left without channels.
+    pub fn retain(&mut self, keep: &[bool]) -> Vec<Option<usize>> {
+        let n = self.nodes.len();
+        let mut kept = vec![false; n];
+        for (i, &k) in keep.iter().enumerate().take(n) {
+            if k {
+                let mut cur = Some(i);
+                while let Some(c) = cur {
+                    if kept[c] {
+                        break;
+                    }
+                    kept[c] = true;
+                    cur = self.nodes[c].parent;
+                }
+            }
+        }
+        let mut map = vec![None; n];
+        let mut next = 0;
+        for (i, k) in kept.iter().enumerate() {
+            if *k {
+                map[i] = Some(next);
+                next += 1;
+            }
+        }
+        let mut nodes = Vec::with_capacity(next);
+        for (i, node) in self.nodes.iter().enumerate() {
+            if !kept[i] {
+                continue;
+            }
+            let mut node = node.clone();
+            node.parent = node.parent.and_then(|p| map[p]);
+            node.children = node.children.iter().filter_map(|&c| map[c]).collect();
+            node.bone = None;
+            nodes.push(node);
+        }
+        self.order = self.order.iter().filter_map(|&i| map[i]).collect();
+        self.nodes = nodes;
+        for clip in &mut self.clips {
+            clip.channels.retain(|c| map[c.node].is_some());
+            for c in &mut clip.channels {
+                c.node = map[c.node].unwrap_or(0);
+            }
+        }
+        map
+    }
+}
+
+/// When a billboard's own motion is sampled: uniformly over one period of one clip.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoopClock {
+    /// Index into [`Rig::clips`], or None for a tree without clips.
+    pub clip: Option<usize>,
+    pub start: f32,
+    /// Loop length in seconds (0 for a static tree).
+    pub period: f32,
+    /// Number of uniform samples; sample `s` is at `start + period · s / samples`.
+    pub samples: usize,
+}
+
+impl LoopClock {
+    /// Time of sample `s`.
+    pub fn time(&self, s: usize) -> f32 {
+        if self.samples == 0 {
+            return self.start;
+        }
+        self.start + self.period * s as f32 / self.samples as f32
+    }
+}
+
+/// A billboard's own rigid motion over the loop, relative to what it follows.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RigidMotion {
+    /// One transform per [`LoopClock`] sample.
+    Sampled(Vec<Affine3A>),
+}
+
+impl RigidMotion {
+    /// The transform at sample `s` of `n` uniform samples of the loop (`n` may differ from the
+    /// number the motion was made with; the loop wraps).
+    pub fn at(&self, s: usize, n: usize) -> Affine3A {
+        match self {
+            RigidMotion::Sampled(frames) => {
+                if frames.is_empty() || n == 0 {
+                    return Affine3A::IDENTITY;
+                }
+                if n == frames.len() {
+                    return frames[s % n];
+                }
+                let x = (s % n) as f32 * frames.len() as f32 / n as f32;
+                let k = x.floor() as usize % frames.len();
+                let u = x - x.floor();
+                interpolate(frames[k], frames[(k + 1) % frames.len()], u)
+            }
+        }
+    }
+
+    /// Number of samples it carries.
+    pub fn len(&self) -> usize {
+        match self {
+            RigidMotion::Sampled(f) => f.len(),
+        }
+    }
+
+    /// True when it carries no sample.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// Rigid interpolation: slerp of rotations, lerp of translations.
+fn interpolate(a: Affine3A, b: Affine3A, u: f32) -> Affine3A {
+    let (_, ra, ta) = a.to_scale_rotation_translation();
+    let (_, rb, tb) = b.to_scale_rotation_translation();
+    Affine3A::from_rotation_translation(ra.slerp(rb, u), ta.lerp(tb, u))
+}
+
+/// One billboard of the cloud.
+#[derive(Clone, Debug)]
+pub struct AnimatedBillboard {
+    /// The quad in the reference pose (see the module docs).
+    pub quad: Quad,
+    /// Atlas UVs of the corners in [`Quad::corners`] order.
+    pub uv: [Vec2; 4],
+    /// Rig node it follows, if any.
+    pub follows: Option<usize>,
+    /// Its own rigid motion relative to what it follows, if any.
+    pub motion: Option<RigidMotion>,
+    /// The input foliage triangles it replaces (indices into `Tree::triangles`).
+    pub triangles: Vec<usize>,
+}
+
+/// A billboard cloud that moves: the output of a clustering method, the input of export.
+#[derive(Clone, Debug)]
+pub struct AnimatedBillboardCloud {
+    /// How the billboards were made (`per-bone`, `static`, ...).
+    pub method: String,
+    pub billboards: Vec<AnimatedBillboard>,
+    /// Colour (and normal) atlas all billboards sample.
+    pub atlas: Atlas,
+    pub texels_per_unit: f32,
+    pub density_reduced: bool,
+    pub rig: Rig,
+    /// The samples [`RigidMotion`] refers to.
+    pub clock: LoopClock,
+    /// Clips the cloud can play correctly (indices into `rig.clips`): every clip when no
+    /// billboard has its own motion, only the clock's clip otherwise.
+    pub playable_clips: Vec<usize>,
+}
+
+impl AnimatedBillboardCloud {
+    /// World corners of billboard `i` given the rig's world and rest world matrices and the
+    /// motion sample `s` of `n`.
+    pub fn corners_at(
+        &self,
+        i: usize,
+        world: &[Mat4],
+        rest: &[Mat4],
+        s: usize,
+        n: usize,
+    ) -> [Vec3; 4] {
+        let b = &self.billboards[i];
+        let m = b.motion.as_ref().map_or(Affine3A::IDENTITY, |m| m.at(s, n));
+        let to_world = match b.follows {
+            Some(node) => world[node] * rest[node].inverse() * Mat4::from(m),
+            None => Mat4::from(m),
+        };
+        b.quad.corners().map(|c| to_world.transform_point3(c))
+    }
+
+    /// Recomputes which clips are playable from the billboards' motions.
+    pub fn update_playable_clips(&mut self) {
+        let own_motion = self.billboards.iter().any(|b| b.motion.is_some());
+        self.playable_clips = if own_motion {
+            self.clock.clip.into_iter().collect()
+        } else {
+            (0..self.rig.clips.len()).collect()
+        };
+    }
+}

@@ -1,0 +1,279 @@
+//! Builds an [`AnimatedBillboardCloud`] from clusters of foliage triangles: one stochastic
+//! billboard cloud per cluster, all baked into one atlas, each billboard moving with the
+//! cluster's driver (spec animated-billboard-clouds §1.4, §2.4, §6 "Bone Clustering"; thesis
+//! §5.2.2 for the rigid fit of a static cloud).
+
+use std::time::Instant;
+
+use frond_render::{Renderer, TreeParts, scene_from_positions};
+use frond_scene::{Sampled, Tree};
+use glam::{Mat4, Vec3};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::animated::{AnimatedBillboard, AnimatedBillboardCloud, LoopClock, Rig, RigidMotion};
+use crate::bake::bake_cloud;
+use crate::cloud::{CloudError, CloudParams, fit_quad};
+use crate::plane_search::{search_planes, valid_for_plane};
+use crate::rigid_fit::rigid_fit;
+use crate::soup::TriangleSoup;
+
+/// How a cluster's billboards move.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Driver {
+    /// Rigidly with a rig node: the cloud is built in that node's rest frame (exact for
+    /// triangles bound to it alone).
+    Node(usize),
+    /// Each billboard gets the best rigid fit of its triangles' sampled motion; the cloud is
+    /// built in the average pose.
+    RigidFit,
+}
+
+/// A set of foliage triangles that share one billboard cloud.
+#[derive(Clone, Debug)]
+pub struct FoliageCluster {
+    /// Indices into `Sampled::foliage` (and so into its trajectories).
+    pub members: Vec<usize>,
+    pub driver: Driver,
+}
+
+/// One billboard of a cluster: its quad, the triangles it replaces and those drawn on it.
+type ClusterQuad = (crate::Quad, Vec<usize>, Vec<usize>);
+
+/// Wall times of the build, seconds.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct BuildTimings {
+    pub reference_pose: f64,
+    pub plane_search: f64,
+    pub bake: f64,
+    pub motion_fit: f64,
+}
+
+/// The rig's world matrices at every sample of `clock`.
+pub fn sampled_worlds(rig: &Rig, clock: &LoopClock) -> Vec<Vec<Mat4>> {
+    (0..clock.samples.max(1))
+        .into_par_iter()
+        .map(|s| rig.world_at(clock.clip, clock.time(s)))
+        .collect()
+}
+
+/// Builds the animated cloud of `clusters`. `sampled` is the tree's sampled loop, `rig` the
+/// output skeleton (node indices as in the tree when built by [`Rig::from_tree`]) and `clock`
+/// the loop the samples come from. `scale` sizes the search's float tolerances.
+#[allow(clippy::too_many_arguments)]
+pub fn build_animated_cloud(
+    renderer: &Renderer,
+    tree: &Tree,
+    sampled: &Sampled,
+    rig: Rig,
+    clock: LoopClock,
+    clusters: &[FoliageCluster],
+    params: &CloudParams,
+    scale: f32,
+    method: &str,
+) -> Result<(AnimatedBillboardCloud, BuildTimings), CloudError> {
+    let mut timings = BuildTimings::default();
+    let t0 = Instant::now();
+    let worlds = sampled_worlds(&rig, &clock);
+    let rest = rig.rest_world();
+    let n = sampled.samples();
+    let nv = sampled.vertices;
+    // Reference positions of every foliage triangle, in its cluster's frame.
+    let mut reference: Vec<[Vec3; 3]> = vec![[Vec3::ZERO; 3]; sampled.foliage.len()];
+    for cluster in clusters {
+        match cluster.driver {
+            Driver::RigidFit => {
+                for &k in &cluster.members {
+                    let tri = &tree.triangles[sampled.foliage[k]];
+                    reference[k] = tri.v.map(|v| sampled.average[v as usize]);
+                }
+            }
+            Driver::Node(node) => {
+                // Rest_b · W_b(s)⁻¹ · p_s, averaged over the loop.
+                let to_rest: Vec<Mat4> = worlds
+                    .iter()
+                    .map(|w| rest[node] * w[node].inverse())
+                    .collect();
+                let refs: Vec<(usize, [Vec3; 3])> = cluster
+                    .members
+                    .par_iter()
+                    .map(|&k| {
+                        let tri = &tree.triangles[sampled.foliage[k]];
+                        let corners = tri.v.map(|v| {
+                            let sum: Vec3 = (0..n)
+                                .map(|s| {
+                                    to_rest[s.min(to_rest.len() - 1)]
+                                        .transform_point3(sampled.positions[s * nv + v as usize])
+                                })
+                                .sum();
+                            sum / n as f32
+                        });
+                        (k, corners)
+                    })
+                    .collect();
+                for (k, c) in refs {
+                    reference[k] = c;
+                }
+            }
+        }
+    }
+    let soup = TriangleSoup {
+        positions: reference,
+        uvs: sampled
+            .foliage
+            .iter()
+            .map(|&t| tree.triangles[t].v.map(|v| tree.vertices.uv[v as usize]))
+            .collect(),
+        material: sampled
+            .foliage
+            .iter()
+            .map(|&t| tree.triangles[t].material)
+            .collect(),
+    };
+    let t1 = Instant::now();
+    timings.reference_pose = (t1 - t0).as_secs_f64();
+
+    // One plane search per cluster, each with its own seed derived from the cluster's index.
+    let per_cluster: Vec<Vec<ClusterQuad>> = clusters
+        .par_iter()
+        .enumerate()
+        .map(|(ci, cluster)| {
+            let sub = TriangleSoup {
+                positions: cluster.members.iter().map(|&k| soup.positions[k]).collect(),
+                uvs: cluster.members.iter().map(|&k| soup.uvs[k]).collect(),
+                material: cluster.members.iter().map(|&k| soup.material[k]).collect(),
+            };
+            let mut sp = params.search.clone();
+            sp.seed = sp
+                .seed
+                .wrapping_add((ci as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+            let search = search_planes(&sub, &sp, scale);
+            search
+                .clusters
+                .iter()
+                .map(|c| {
+                    let quad = fit_quad(&sub, &c.plane, &c.triangles);
+                    let own: Vec<usize> = c.triangles.iter().map(|&t| cluster.members[t]).collect();
+                    let drawn = if params.increased_density {
+                        let mut m: Vec<usize> = valid_for_plane(&sub, &c.plane, sp.epsilon)
+                            .into_iter()
+                            .map(|t| cluster.members[t])
+                            .collect();
+                        m.extend(&own);
+                        m.sort_unstable();
+                        m.dedup();
+                        m
+                    } else {
+                        own.clone()
+                    };
+                    (quad, own, drawn)
+                })
+                .collect()
+        })
+        .collect();
+    let t2 = Instant::now();
+    timings.plane_search = (t2 - t1).as_secs_f64();
+
+    let mut quads = Vec::new();
+    let mut owns = Vec::new();
+    let mut drawn = Vec::new();
+    let mut drivers = Vec::new();
+    for (cluster, list) in clusters.iter().zip(per_cluster) {
+        for (q, own, d) in list {
+            quads.push(q);
+            owns.push(own);
+            drawn.push(d);
+            drivers.push(cluster.driver);
+        }
+    }
+    if quads.is_empty() {
+        return Err(CloudError::Empty);
+    }
+    let draw = scene_from_positions(tree, &sampled.average, None, TreeParts::Foliage);
+    let baked = bake_cloud(
+        renderer,
+        &soup,
+        &draw.materials,
+        &draw.textures,
+        &quads,
+        &drawn,
+        &params.bake,
+    )?;
+    let t3 = Instant::now();
+    timings.bake = (t3 - t2).as_secs_f64();
+
+    let billboards: Vec<AnimatedBillboard> = quads
+        .par_iter()
+        .zip(owns.par_iter())
+        .zip(drivers.par_iter())
+        .zip(baked.uv_rects.par_iter())
+        .map(|(((quad, own), driver), uv)| {
+            let (follows, motion) = match *driver {
+                Driver::Node(node) => (Some(node), None),
+                Driver::RigidFit => {
+                    let from: Vec<Vec3> = own.iter().flat_map(|&k| soup.positions[k]).collect();
+                    let frames = (0..n)
+                        .map(|s| {
+                            let to: Vec<Vec3> = own
+                                .iter()
+                                .flat_map(|&k| {
+                                    tree.triangles[sampled.foliage[k]]
+                                        .v
+                                        .map(|v| sampled.positions[s * nv + v as usize])
+                                })
+                                .collect();
+                            rigid_fit(&from, &to)
+                        })
+                        .collect();
+                    (None, Some(RigidMotion::Sampled(frames)))
+                }
+            };
+            AnimatedBillboard {
+                quad: *quad,
+                uv: *uv,
+                follows,
+                motion,
+                triangles: own.iter().map(|&k| sampled.foliage[k]).collect(),
+            }
+        })
+        .collect();
+    timings.motion_fit = t3.elapsed().as_secs_f64();
+    let mut cloud = AnimatedBillboardCloud {
+        method: method.to_string(),
+        billboards,
+        atlas: baked.atlas,
+        texels_per_unit: baked.texels_per_unit,
+        density_reduced: baked.density_reduced,
+        rig,
+        clock,
+        playable_clips: Vec::new(),
+    };
+    cloud.update_playable_clips();
+    Ok((cloud, timings))
+}
+
+/// `per-bone` clusters: one per rig node that foliage follows (spec §6 "Bone Clustering",
+/// without reduction); foliage without a bone gets one rigid-fit cluster.
+pub fn per_bone_clusters(tree: &Tree, sampled: &Sampled) -> Vec<FoliageCluster> {
+    let mut by_node: std::collections::BTreeMap<Option<usize>, Vec<usize>> = Default::default();
+    for (k, &t) in sampled.foliage.iter().enumerate() {
+        let node = tree.triangles[t].bone.map(|b| tree.bones[b as usize].node);
+        by_node.entry(node).or_default().push(k);
+    }
+    by_node
+        .into_iter()
+        .map(|(node, members)| FoliageCluster {
+            members,
+            driver: node.map_or(Driver::RigidFit, Driver::Node),
+        })
+        .collect()
+}
+
+/// `static` clusters: all foliage in one cloud in the average pose, each billboard following
+/// the rigid fit of its triangles (thesis §5.2.2, Static Co-planar Clustering).
+pub fn static_clusters(sampled: &Sampled) -> Vec<FoliageCluster> {
+    vec![FoliageCluster {
+        members: (0..sampled.foliage.len()).collect(),
+        driver: Driver::RigidFit,
+    }]
+}

@@ -1,0 +1,242 @@
+//! "Model no more than a scene needs" for the animation of a cloud: at a LOD's pixel size,
+//! motion that stays under half a pixel is dropped, billboards are moved to the highest
+//! ancestor bone that still carries them within budget, billboards that cover less than half
+//! a pixel are removed, and rig nodes that then drive nothing are pruned (spec
+//! view-dependent-hierarchies-gpu §2.3–2.4: one pixel at the LOD's viewing distance).
+
+use frond_scene::Sampled;
+use glam::{Mat4, Vec3};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::animated::AnimatedBillboardCloud;
+use crate::animated_build::sampled_worlds;
+
+/// What one LOD can show.
+#[derive(Clone, Copy, Debug)]
+pub struct ScreenBudget {
+    /// World units covered by one screen pixel at the LOD's viewing distance.
+    pub pixel: f32,
+    /// Plane tolerance ε of the LOD (world units): a triangle's centre must stay within it of
+    /// its billboard's plane in every sample.
+    pub epsilon: f32,
+}
+
+/// What was removed, and why (reported per LOD).
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+pub struct Dropped {
+    /// Billboards whose own motion never moves a corner half a pixel: made static.
+    pub motion_under_half_pixel: usize,
+    /// Billboards whose own motion is within half a pixel of an earlier billboard's: they
+    /// share that billboard's motion (and so its joint or VAT track).
+    pub motion_shared: usize,
+    /// Billboards moved to an ancestor bone whose motion differs from their own bone's by less
+    /// than half a pixel (and keeps their triangles within ε of the plane).
+    pub rebound_to_ancestor: usize,
+    /// Billboards whose bone's whole motion stays under half a pixel: they no longer follow one.
+    pub made_static: usize,
+    /// Billboards whose covered area is under half a square pixel.
+    pub billboards_under_half_pixel: usize,
+    /// Rig nodes (bones or their parents) removed because nothing they move is left.
+    pub nodes_pruned: usize,
+}
+
+/// Covered fraction of a billboard's texture (texels passing the alpha test).
+fn covered_fraction(cloud: &AnimatedBillboardCloud, i: usize) -> f32 {
+    let atlas = &cloud.atlas;
+    let uv = &cloud.billboards[i].uv;
+    let (w, h) = (atlas.width as f32, atlas.height as f32);
+    let (mut lo, mut hi) = (uv[0], uv[0]);
+    for p in uv {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    let x0 = (lo.x * w).round().max(0.0) as u32;
+    let x1 = ((hi.x * w).round() as u32).min(atlas.width);
+    let y0 = (lo.y * h).round().max(0.0) as u32;
+    let y1 = ((hi.y * h).round() as u32).min(atlas.height);
+    if x1 <= x0 || y1 <= y0 {
+        return 0.0;
+    }
+    let mut covered = 0usize;
+    for y in y0..y1 {
+        for x in x0..x1 {
+            if atlas.color[((y * atlas.width + x) * 4 + 3) as usize] >= 128 {
+                covered += 1;
+            }
+        }
+    }
+    covered as f32 / ((x1 - x0) * (y1 - y0)) as f32
+}
+
+/// The transform that carries reference-pose points of a billboard following `node` (None:
+/// the world) to sample `s`.
+fn carry(node: Option<usize>, worlds: &[Vec<Mat4>], rest_inv: &[Mat4], s: usize) -> Mat4 {
+    match node {
+        Some(b) => worlds[s][b] * rest_inv[b],
+        None => Mat4::IDENTITY,
+    }
+}
+
+/// Applies `budget` to `cloud` (whose motion was sampled from `sampled`) and prunes its rig.
+/// Returns the old → new rig node map (for the caller's wood mesh) and what was dropped.
+pub fn apply_budget(
+    cloud: &mut AnimatedBillboardCloud,
+    sampled: &Sampled,
+    budget: &ScreenBudget,
+    keep_nodes: &[usize],
+) -> (Vec<Option<usize>>, Dropped) {
+    let mut dropped = Dropped::default();
+    let half = 0.5 * budget.pixel;
+    // 1. Billboards too small to cover a pixel.
+    let min_area = 0.5 * budget.pixel * budget.pixel;
+    let keep: Vec<bool> = (0..cloud.billboards.len())
+        .into_par_iter()
+        .map(|i| cloud.billboards[i].quad.area() * covered_fraction(cloud, i) >= min_area)
+        .collect();
+    let before = cloud.billboards.len();
+    let mut it = keep.iter();
+    cloud.billboards.retain(|_| *it.next().unwrap_or(&true));
+    dropped.billboards_under_half_pixel = before - cloud.billboards.len();
+
+    // 2. Own motion under half a pixel.
+    for b in &mut cloud.billboards {
+        if let Some(m) = &b.motion {
+            let corners = b.quad.corners();
+            let n = m.len();
+            let moves = (0..n).any(|s| {
+                let t = m.at(s, n);
+                corners
+                    .iter()
+                    .any(|c| t.transform_point3(*c).distance(*c) >= half)
+            });
+            if !moves {
+                b.motion = None;
+                dropped.motion_under_half_pixel += 1;
+            }
+        }
+    }
+
+    // 2b. Motions within half a pixel of an earlier one are shared (greedy, in billboard
+    //     order, so the result does not depend on threads).
+    let mut reps: Vec<usize> = Vec::new();
+    for i in 0..cloud.billboards.len() {
+        let Some(own) = &cloud.billboards[i].motion else {
+            continue;
+        };
+        let corners = cloud.billboards[i].quad.corners();
+        let follows = cloud.billboards[i].follows;
+        let n = own.len();
+        let close = reps.iter().copied().find(|&r| {
+            let rb = &cloud.billboards[r];
+            rb.follows == follows
+                && rb.motion.as_ref().is_some_and(|m| {
+                    m.len() == n
+                        && (0..n).all(|s| {
+                            let (a, b) = (own.at(s, n), m.at(s, n));
+                            corners.iter().all(|c| {
+                                a.transform_point3(*c).distance(b.transform_point3(*c)) < half
+                            })
+                        })
+                })
+        });
+        match close {
+            Some(r) => {
+                cloud.billboards[i].motion = cloud.billboards[r].motion.clone();
+                dropped.motion_shared += 1;
+            }
+            None => reps.push(i),
+        }
+    }
+
+    // 3. Bone-bound billboards move to the highest ancestor (or the world) that carries them
+    //    within half a pixel and keeps their triangles' centres within ε of the plane.
+    let worlds = sampled_worlds(&cloud.rig, &cloud.clock);
+    let rest_inv: Vec<Mat4> = cloud.rig.rest_world().iter().map(|m| m.inverse()).collect();
+    let centre_of: std::collections::HashMap<usize, usize> = sampled
+        .foliage
+        .iter()
+        .enumerate()
+        .map(|(k, &t)| (t, k))
+        .collect();
+    let ns = worlds.len();
+    let nodes = &cloud.rig.nodes;
+    let targets: Vec<Option<Option<usize>>> = cloud
+        .billboards
+        .par_iter()
+        .map(|b| {
+            let own = b.follows?;
+            if b.motion.is_some() {
+                return None;
+            }
+            let corners = b.quad.corners();
+            let normal = b.quad.plane.normal;
+            let centre = b.quad.center;
+            let fits = |cand: Option<usize>| {
+                (0..ns).all(|s| {
+                    let a = carry(Some(own), &worlds, &rest_inv, s);
+                    let c = carry(cand, &worlds, &rest_inv, s);
+                    if corners
+                        .iter()
+                        .any(|p| a.transform_point3(*p).distance(c.transform_point3(*p)) >= half)
+                    {
+                        return false;
+                    }
+                    let n = c.transform_vector3(normal).normalize_or_zero();
+                    let o = c.transform_point3(centre);
+                    b.triangles.iter().all(|t| {
+                        centre_of.get(t).is_none_or(|&k| {
+                            let traj = sampled.trajectory(k);
+                            let p: Vec3 = traj[s.min(traj.len() - 1)];
+                            (p - o).dot(n).abs() <= budget.epsilon
+                        })
+                    })
+                })
+            };
+            let mut best = None;
+            let mut cur = nodes[own].parent;
+            loop {
+                if !fits(cur) {
+                    break;
+                }
+                best = Some(cur);
+                match cur {
+                    Some(p) => cur = nodes[p].parent,
+                    None => break,
+                }
+            }
+            best
+        })
+        .collect();
+    for (b, t) in cloud.billboards.iter_mut().zip(targets) {
+        if let Some(target) = t {
+            match target {
+                Some(_) => dropped.rebound_to_ancestor += 1,
+                None => dropped.made_static += 1,
+            }
+            b.follows = target;
+        }
+    }
+
+    // 4. Prune rig nodes nothing needs.
+    let mut needed = vec![false; cloud.rig.nodes.len()];
+    for b in &cloud.billboards {
+        if let Some(f) = b.follows {
+            needed[f] = true;
+        }
+    }
+    for &k in keep_nodes {
+        if k < needed.len() {
+            needed[k] = true;
+        }
+    }
+    let before_nodes = cloud.rig.nodes.len();
+    let map = cloud.rig.retain(&needed);
+    dropped.nodes_pruned = before_nodes - cloud.rig.nodes.len();
+    for b in &mut cloud.billboards {
+        b.follows = b.follows.and_then(|f| map[f]);
+    }
+    cloud.clock.clip = cloud.clock.clip.filter(|&c| c < cloud.rig.clips.len());
+    cloud.update_playable_clips();
+    (map, dropped)
+}

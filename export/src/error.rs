@@ -1,0 +1,20 @@
+//! Why an export failed.
+
+/// Export errors.
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    #[error("more than 65536 joints in one skin")]
+    TooManyJoints,
+    #[error("encoding image '{name}': {source}")]
+    Image {
+        name: String,
+        #[source]
+        source: image::ImageError,
+    },
+    #[error("material {0} does not exist in the tree")]
+    NoMaterial(usize),
+    #[error("nothing to write: no LOD")]
+    NoLod,
+    #[error(transparent)]
+    Vat(#[from] crate::vat::VatError),
+}

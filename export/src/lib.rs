@@ -1,0 +1,14 @@
+//! The export stage: animated billboard clouds as glTF LOD chains engines load as they are
+//! (skinned billboards or vertex animation textures), plus the sidecars the metrics read.
+
+pub mod error;
+pub mod lod_file;
+pub mod lod_scene;
+pub mod mapping;
+pub mod shaders;
+pub mod textures;
+pub mod vat;
+
+pub use error::ExportError;
+pub use lod_file::{FileOptions, GltfFile, write_glb};
+pub use lod_scene::LodInput;

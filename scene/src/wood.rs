@@ -1,0 +1,1179 @@
+//! The wood mesh of a LOD: welded rest-pose geometry with skin weights, simplified to an error budget.
+//!
+//! [`WoodMesh::from_tree`] takes the tree's wood triangles (non-degenerate `Part::Wood`), skins
+//! them into rest-pose world space and welds each tree vertex once per material. Skin influences
+//! are re-expressed as indices into [`Tree::bones`], so a consumer animates the mesh with the
+//! per-bone palette `world(bone.node, t) · rest_world(bone.node)⁻¹` (identity for [`NO_BONE`]):
+//! at `t` = rest that palette is the identity, and for trees whose rest pose is their bind pose
+//! it reproduces the tree's own linear-blend skinning.
+//!
+//! [`WoodMesh::simplify`] runs meshoptimizer's attribute-aware edge collapse per connected piece
+//! (all materials at once, so material borders stay watertight), with the skin weights, normals
+//! and UVs as vertex attributes, and checks the result with true point-to-surface distances,
+//! because meshoptimizer's quadric estimate is far too optimistic on thin curved tubes.
+
+use std::collections::{BTreeMap, HashMap};
+
+use glam::{DVec3, Mat3, Vec2, Vec3};
+use meshopt::{SimplifyOptions, SimplifyVertex};
+use rayon::prelude::*;
+
+use crate::binding::bone_of_node;
+use crate::model::{Binding, Part, Tree};
+use crate::sampling::world_at;
+use crate::skinning::palettes;
+
+/// No bone: the vertex stays where it is in the rest pose (its binding node is not under any bone).
+pub const NO_BONE: u32 = u32::MAX;
+
+/// Dimensions of the skin-weight embedding handed to the simplifier: every bone gets a fixed
+/// pseudo-random unit vector in this space and a vertex's attribute is the weighted sum of its
+/// bones' vectors, so blending weights linearly blends the attribute (what the attribute quadrics
+/// assume) and two different skins land far apart.
+const SKIN_DIMS: usize = 8;
+
+/// Simplifier weight of the skin embedding. meshoptimizer adds attribute error to the
+/// position error without normalising it by area (positions are scaled to a unit cube; attribute
+/// error is area × weight² × deviation²), so this weighs most where the wood is big (trunk,
+/// main limbs) and little on twigs; interpolated skin fields (weights blended across a joint)
+/// cost nothing while they stay linear. On the shared trees weights of 0 to 8 change the result
+/// by a few per cent; the distance checks, not this weight, bound the error.
+const SKIN_WEIGHT: f32 = 0.5;
+/// Simplifier weight of the (unit) normals: shading, secondary to position.
+const NORMAL_WEIGHT: f32 = 0.05;
+/// Simplifier weight of the UVs (texture space units; bark tiles so drift inside a chart is
+/// cheap; seams between charts are kept by meshoptimizer's wedge handling regardless).
+const UV_WEIGHT: f32 = 0.01;
+/// Vertices locked on every border loop (a branch tube's end rings): 3 keeps a thin branch a
+/// triangular prism, visible from every side (2 would allow flat ribbons, ~20 % fewer
+/// triangles on the shared trees, that vanish edge-on).
+const LOOP_LOCKS: usize = 3;
+
+const ATTRS: usize = SKIN_DIMS + 3 + 2;
+
+/// Float slack of the distance check, × the mesh extent.
+const DISTANCE_TOLERANCE: f32 = 1e-6;
+/// Rounds of "lock the vertices that strayed and simplify again" for a piece that failed.
+const LOCK_ROUNDS: usize = 3;
+/// Locking is tried only while at most 1/this of the piece's vertices strayed (beyond that the
+/// triangle-target search does better).
+const STRAY_FRACTION: usize = 20;
+/// Barycentric points of a simplified triangle checked against the original surface.
+const SURFACE_SAMPLES: [(f32, f32, f32); 13] = [
+    (0.5, 0.5, 0.0),
+    (0.0, 0.5, 0.5),
+    (0.5, 0.0, 0.5),
+    (0.25, 0.75, 0.0),
+    (0.75, 0.25, 0.0),
+    (0.0, 0.25, 0.75),
+    (0.0, 0.75, 0.25),
+    (0.25, 0.0, 0.75),
+    (0.75, 0.0, 0.25),
+    (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0),
+    (2.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0),
+    (1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0),
+    (1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0),
+];
+
+/// The wood of a tree as one welded, skinned mesh in rest-pose world space.
+#[derive(Clone, Debug, Default)]
+pub struct WoodMesh {
+    /// Rest-pose world positions (skinned with the rest world matrices).
+    pub positions: Vec<Vec3>,
+    /// Rest-pose world normals (unit).
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    /// Up to 4 influences per vertex as indices into `Tree::bones` ([`NO_BONE`] only when the
+    /// weights are `[1, 0, 0, 0]` and the vertex has no bone), sorted by decreasing weight (ties:
+    /// lower bone first); unused slots: bone of slot 0 and weight 0.
+    pub bones: Vec<[u32; 4]>,
+    /// Skin weights, sum 1.
+    pub weights: Vec<[f32; 4]>,
+    pub primitives: Vec<WoodPrimitive>,
+}
+
+/// The triangles of one material.
+#[derive(Clone, Debug)]
+pub struct WoodPrimitive {
+    /// Index into `Tree::materials`.
+    pub material: usize,
+    /// Triangle list into the mesh's vertex arrays.
+    pub indices: Vec<u32>,
+}
+
+impl WoodMesh {
+    /// The wood (Part::Wood, non-degenerate triangles) of `tree` at rest, one primitive per
+    /// material (ascending material index), vertices deduplicated: a tree vertex used by several
+    /// wood triangles of one material is one vertex; distinct tree vertices are never merged
+    /// (UV seams stay). Vertices are numbered in order of first use over the wood triangles in
+    /// file order. Triangles naming vertices out of range are skipped.
+    pub fn from_tree(tree: &Tree) -> WoodMesh {
+        Self::from_tree_part(tree, Part::Wood)
+    }
+
+    /// [`WoodMesh::from_tree`] for either part: the foliage the same way gives LOD0's leaves
+    /// as one welded, skinned mesh.
+    pub fn from_tree_part(tree: &Tree, part: Part) -> WoodMesh {
+        Self::from_tree_part_mapped(tree, part).0
+    }
+
+    /// [`WoodMesh::from_tree`], plus the tree vertex (index into `Tree::vertices`) each mesh
+    /// vertex came from.
+    pub fn from_tree_mapped(tree: &Tree) -> (WoodMesh, Vec<u32>) {
+        Self::from_tree_part_mapped(tree, Part::Wood)
+    }
+
+    /// [`WoodMesh::from_tree_part`] plus the tree vertex each mesh vertex came from.
+    pub fn from_tree_part_mapped(tree: &Tree, part: Part) -> (WoodMesh, Vec<u32>) {
+        let v = &tree.vertices;
+        let nv = v.len();
+        let vertex_ok = |i: u32| {
+            let i = i as usize;
+            i < nv
+                && i < v.binding.len()
+                && i < v.joints.len()
+                && i < v.weights.len()
+                && v.position[i].is_finite()
+        };
+        // Wood triangles per material, in file order.
+        let mut by_material: BTreeMap<usize, Vec<[u32; 3]>> = BTreeMap::new();
+        let mut order: Vec<(usize, [u32; 3])> = Vec::new();
+        for t in &tree.triangles {
+            if t.part != part || t.degenerate || !t.v.iter().all(|&i| vertex_ok(i)) {
+                continue;
+            }
+            let m = t.material as usize;
+            by_material.entry(m).or_default().push(t.v);
+            order.push((m, t.v));
+        }
+        if order.is_empty() {
+            return (WoodMesh::default(), Vec::new());
+        }
+        // Output vertex per (material, tree vertex), numbered by first use in file order.
+        let mut slot: HashMap<(usize, u32), u32> = HashMap::new();
+        let mut source: Vec<u32> = Vec::new();
+        for (m, tri) in &order {
+            for &i in tri {
+                slot.entry((*m, i)).or_insert_with(|| {
+                    source.push(i);
+                    (source.len() - 1) as u32
+                });
+            }
+        }
+        let primitives: Vec<WoodPrimitive> = by_material
+            .into_iter()
+            .map(|(material, tris)| WoodPrimitive {
+                material,
+                indices: tris
+                    .iter()
+                    .flat_map(|tri| tri.map(|i| slot[&(material, i)]))
+                    .collect(),
+            })
+            .collect();
+
+        let world = world_at(tree, None, 0.0);
+        let pal = palettes(tree, &world);
+        // Tree bone of every palette entry of every binding.
+        let palette_bones: Vec<Vec<u32>> = tree
+            .bindings
+            .iter()
+            .map(|b| match b {
+                Binding::Skin { joints, .. } => joints
+                    .iter()
+                    .map(|&j| {
+                        if j < tree.bones.len() {
+                            j as u32
+                        } else {
+                            NO_BONE
+                        }
+                    })
+                    .collect(),
+                Binding::Node(n) => vec![
+                    (*n < tree.nodes.len())
+                        .then(|| bone_of_node(tree, *n))
+                        .flatten()
+                        .map_or(NO_BONE, |b| b as u32),
+                ],
+            })
+            .collect();
+
+        let n_out = source.len();
+        let mut mesh = WoodMesh {
+            positions: Vec::with_capacity(n_out),
+            normals: Vec::with_capacity(n_out),
+            uvs: Vec::with_capacity(n_out),
+            bones: Vec::with_capacity(n_out),
+            weights: Vec::with_capacity(n_out),
+            primitives,
+        };
+        for &i in &source {
+            let i = i as usize;
+            let palette = pal
+                .get(v.binding[i] as usize)
+                .map(Vec::as_slice)
+                .unwrap_or(&[]);
+            let pbones = palette_bones
+                .get(v.binding[i] as usize)
+                .map(Vec::as_slice)
+                .unwrap_or(&[]);
+            let (j, w) = (v.joints[i], v.weights[i]);
+            let p = v.position[i];
+            // Exactly skinning::skin_into's arithmetic, so positions equal `skin_positions`.
+            let pos = if w[0] >= 1.0 {
+                palette
+                    .get(j[0] as usize)
+                    .map_or(p, |m| m.transform_point3(p))
+            } else {
+                let mut acc = Vec3::ZERO;
+                for s in 0..4 {
+                    if w[s] > 0.0
+                        && let Some(m) = palette.get(j[s] as usize)
+                    {
+                        acc += m.transform_point3(p) * w[s];
+                    }
+                }
+                acc
+            };
+            // Normal: inverse transpose of the blended linear part.
+            let mut blend = Mat3::ZERO;
+            for s in 0..4 {
+                if w[s] > 0.0
+                    && let Some(m) = palette.get(j[s] as usize)
+                {
+                    blend += Mat3::from_mat4(*m) * w[s];
+                }
+            }
+            let n = v.normal.get(i).copied().unwrap_or(Vec3::ZERO);
+            let det = blend.determinant();
+            let normal = if det.is_finite() && det.abs() > 1e-12 {
+                blend.inverse().transpose() * n
+            } else {
+                blend * n
+            };
+            let (bones, weights) = influences(j, w, pbones);
+            mesh.positions.push(pos);
+            mesh.normals.push(normal.normalize_or_zero());
+            mesh.uvs.push(v.uv.get(i).copied().unwrap_or(Vec2::ZERO));
+            mesh.bones.push(bones);
+            mesh.weights.push(weights);
+        }
+        mesh.fill_missing_normals();
+        (mesh, source)
+    }
+
+    /// Number of triangles over all primitives.
+    pub fn triangles(&self) -> usize {
+        self.primitives.iter().map(|p| p.indices.len() / 3).sum()
+    }
+
+    /// Bones (Tree::bones indices) with non-zero weight on some vertex that some triangle uses,
+    /// ascending.
+    pub fn used_bones(&self) -> Vec<u32> {
+        let mut used = vec![false; self.bones.len()];
+        for p in &self.primitives {
+            for &i in &p.indices {
+                if let Some(u) = used.get_mut(i as usize) {
+                    *u = true;
+                }
+            }
+        }
+        let mut out: Vec<u32> = Vec::new();
+        for (i, _) in used.iter().enumerate().filter(|(_, u)| **u) {
+            let w = self.weights.get(i).copied().unwrap_or([0.0; 4]);
+            for (s, &b) in self.bones[i].iter().enumerate() {
+                if w[s] > 0.0 && b != NO_BONE {
+                    out.push(b);
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    /// Simplified so that no surface point moves more than `max_error` world units (checked,
+    /// see below), returning the achieved error too.
+    ///
+    /// How: the mesh is split into its connected pieces (per position-welded topology; a tree's
+    /// branches are usually one piece each) and each piece is simplified on its own, in
+    /// parallel, by meshoptimizer's attribute-aware edge collapse
+    /// (`simplify_with_attributes_and_locks`, absolute error, first with no triangle target). All
+    /// primitives of a piece go in together, a vertex shared by several primitives split per
+    /// primitive, so material borders are attribute seams that stay watertight and in place. The
+    /// attributes are the skin weights (embedded, see `SKIN_WEIGHT`), normals and UVs; their
+    /// error counts against the same budget, so vertices whose skins differ are not merged
+    /// unless that is nearly free. Three vertices of every border loop are locked, so open tubes
+    /// (branches) keep their end rings and never collapse into lines.
+    ///
+    /// meshoptimizer's error is a quadric estimate (an area-weighted mean of squared plane
+    /// distances) that thin curved tubes fool: on the shared trees it reported 0.05 for pieces
+    /// whose vertices ended up 1.6 away. So every piece is then checked with true distances:
+    /// each of its vertices, triangle centroids and edge midpoints must lie within `max_error`
+    /// of the simplified piece, and points spread over each simplified triangle (edge midpoints
+    /// and quarter points, centroid, three interior points) within `max_error` of the original
+    /// piece. A piece that fails in a few places gets those vertices locked and is simplified
+    /// again (up to 3 rounds); otherwise the fewest triangles that pass are found by binary
+    /// search on meshoptimizer's triangle target (the whole piece always passes).
+    ///
+    /// Guarantees: the result's vertices are a subset of this mesh's vertices with unchanged
+    /// position, normal, UV and skin (so its used bones are a subset of these); every triangle
+    /// keeps its primitive's material; collapsed (repeated-vertex or zero-area) triangles are
+    /// dropped, empty primitives removed, unused vertices removed and indices compacted
+    /// (vertices in order of first use); the distance checks above hold (within 1e-6 × the
+    /// mesh extent for rounding); the returned error is the largest of meshoptimizer's
+    /// estimates and the measured distances, never more than `max_error` (a negative or
+    /// non-finite `max_error` counts as 0). Same input, same output. An empty mesh (or one
+    /// whose triangles all name missing vertices) gives an empty mesh and error 0.
+    pub fn simplify(&self, max_error: f32) -> (WoodMesh, f32) {
+        let max_error = if max_error.is_finite() {
+            max_error.max(0.0)
+        } else {
+            0.0
+        };
+        let nv = self.positions.len();
+        let vertex_ok = |i: u32| {
+            let i = i as usize;
+            i < nv
+                && i < self.normals.len()
+                && i < self.uvs.len()
+                && i < self.bones.len()
+                && i < self.weights.len()
+                && self.positions[i].is_finite()
+        };
+        // Internal vertices: one per (primitive, mesh vertex).
+        let mut slot: HashMap<(usize, u32), u32> = HashMap::new();
+        let mut internal: Vec<(usize, u32)> = Vec::new();
+        let mut triangles: Vec<[u32; 3]> = Vec::new();
+        for (pi, p) in self.primitives.iter().enumerate() {
+            for tri in p.indices.chunks_exact(3) {
+                if !tri.iter().all(|&i| vertex_ok(i))
+                    || tri[0] == tri[1]
+                    || tri[1] == tri[2]
+                    || tri[0] == tri[2]
+                {
+                    continue;
+                }
+                triangles.push([0, 1, 2].map(|c| {
+                    *slot.entry((pi, tri[c])).or_insert_with(|| {
+                        internal.push((pi, tri[c]));
+                        (internal.len() - 1) as u32
+                    })
+                }));
+            }
+        }
+        if triangles.is_empty() {
+            return (WoodMesh::default(), 0.0);
+        }
+        let extent = crate::model::Bounds::of(self.positions.iter().copied()).size();
+        let limit = max_error + extent * DISTANCE_TOLERANCE;
+
+        // Connected pieces over position-welded vertices, numbered by first triangle.
+        let welded = weld_positions(internal.iter().map(|&(_, i)| self.positions[i as usize]));
+        let mut parent: Vec<u32> = (0..welded.count as u32).collect();
+        for t in &triangles {
+            let [a, b, c] = t.map(|k| welded.id[k as usize]);
+            union(&mut parent, a, b);
+            union(&mut parent, a, c);
+        }
+        let mut piece_of_root: HashMap<u32, usize> = HashMap::new();
+        let mut pieces: Vec<Vec<[u32; 3]>> = Vec::new();
+        for t in &triangles {
+            let root = find(&mut parent, welded.id[t[0] as usize]);
+            let p = *piece_of_root.entry(root).or_insert_with(|| {
+                pieces.push(Vec::new());
+                pieces.len() - 1
+            });
+            pieces[p].push(*t);
+        }
+
+        let simplified: Vec<(Vec<[u32; 3]>, f32)> = pieces
+            .par_iter()
+            .map(|piece| self.simplify_piece(&internal, piece, max_error, limit))
+            .collect();
+
+        let mut per_prim: Vec<Vec<u32>> = vec![Vec::new(); self.primitives.len()];
+        let mut error = 0.0f32;
+        for (tris, e) in simplified {
+            error = error.max(e);
+            for t in tris {
+                per_prim[internal[t[0] as usize].0].extend(t.map(|k| internal[k as usize].1));
+            }
+        }
+        // Compact: vertices in order of first use.
+        let mut remap = vec![u32::MAX; nv];
+        let mut out = WoodMesh::default();
+        for (pi, idx) in per_prim.into_iter().enumerate() {
+            if idx.is_empty() {
+                continue;
+            }
+            let indices = idx
+                .into_iter()
+                .map(|i| {
+                    let r = &mut remap[i as usize];
+                    if *r == u32::MAX {
+                        *r = out.positions.len() as u32;
+                        let i = i as usize;
+                        out.positions.push(self.positions[i]);
+                        out.normals.push(self.normals[i]);
+                        out.uvs.push(self.uvs[i]);
+                        out.bones.push(self.bones[i]);
+                        out.weights.push(self.weights[i]);
+                    }
+                    *r
+                })
+                .collect();
+            out.primitives.push(WoodPrimitive {
+                material: self.primitives[pi].material,
+                indices,
+            });
+        }
+        (out, error.min(max_error))
+    }
+
+    /// Simplifies one connected piece (triangles over internal vertices), returning its
+    /// triangles (internal vertices) and error; see [`WoodMesh::simplify`].
+    fn simplify_piece(
+        &self,
+        internal: &[(usize, u32)],
+        piece: &[[u32; 3]],
+        max_error: f32,
+        limit: f32,
+    ) -> (Vec<[u32; 3]>, f32) {
+        // Local numbering.
+        let mut local: HashMap<u32, u32> = HashMap::new();
+        let mut global: Vec<u32> = Vec::new();
+        let indices: Vec<u32> = piece
+            .iter()
+            .flatten()
+            .map(|&k| {
+                *local.entry(k).or_insert_with(|| {
+                    global.push(k);
+                    (global.len() - 1) as u32
+                })
+            })
+            .collect();
+        let back = |tris: Vec<[u32; 3]>| -> Vec<[u32; 3]> {
+            tris.into_iter()
+                .map(|t| t.map(|k| global[k as usize]))
+                .collect()
+        };
+        let mesh_vertex = |k: u32| internal[global[k as usize] as usize].1 as usize;
+        let positions: Vec<[f32; 3]> = (0..global.len() as u32)
+            .map(|k| self.positions[mesh_vertex(k)].to_array())
+            .collect();
+        let point = |k: u32| Vec3::from(positions[k as usize]);
+        let mut attributes: Vec<f32> = Vec::with_capacity(global.len() * ATTRS);
+        for k in 0..global.len() as u32 {
+            let i = mesh_vertex(k);
+            let mut skin = [0.0f32; SKIN_DIMS];
+            for s in 0..4 {
+                let w = self.weights[i][s];
+                if w > 0.0 {
+                    let e = bone_embedding(self.bones[i][s]);
+                    for d in 0..SKIN_DIMS {
+                        skin[d] += w * e[d];
+                    }
+                }
+            }
+            attributes.extend_from_slice(&skin);
+            attributes.extend_from_slice(&self.normals[i].to_array());
+            attributes.extend_from_slice(&self.uvs[i].to_array());
+        }
+        let mut attribute_weights = [0.0f32; ATTRS];
+        attribute_weights[..SKIN_DIMS].fill(SKIN_WEIGHT);
+        attribute_weights[SKIN_DIMS..SKIN_DIMS + 3].fill(NORMAL_WEIGHT);
+        attribute_weights[SKIN_DIMS + 3..].fill(UV_WEIGHT);
+
+        // The original piece and the points that must stay near the simplified one: vertices
+        // (with the triangles they belong to, for locking), centroids and edge midpoints.
+        let original: Vec<[Vec3; 3]> = indices
+            .chunks_exact(3)
+            .map(|t| [point(t[0]), point(t[1]), point(t[2])])
+            .collect();
+        let original_bvh = Bvh::new(original.clone());
+        let mut checks: Vec<(Vec3, [u32; 3])> = (0..global.len() as u32)
+            .map(|k| (point(k), [k; 3]))
+            .collect();
+        for (t, p) in indices.chunks_exact(3).zip(&original) {
+            let tri = [t[0], t[1], t[2]];
+            checks.push(((p[0] + p[1] + p[2]) / 3.0, tri));
+            for c in 0..3 {
+                checks.push((
+                    (p[c] + p[(c + 1) % 3]) * 0.5,
+                    [tri[c], tri[(c + 1) % 3], tri[c]],
+                ));
+            }
+        }
+        let mut locks = border_locks(&positions, &indices);
+        // One meshoptimizer run for a triangle target, then the distance checks: the surviving
+        // triangles, the error (estimate and measured) when they pass, and the stray vertices.
+        let attempt = |target_triangles: usize,
+                       locks: &[SimplifyVertex]|
+         -> (Vec<[u32; 3]>, Option<f32>, Vec<u32>) {
+            let mut estimate = 0.0f32;
+            let result = meshopt::simplify_with_attributes_and_locks_decoder(
+                &indices,
+                &positions,
+                &attributes,
+                &attribute_weights,
+                ATTRS * std::mem::size_of::<f32>(),
+                locks,
+                target_triangles * 3,
+                max_error,
+                SimplifyOptions::ErrorAbsolute,
+                Some(&mut estimate),
+            );
+            let tris: Vec<[u32; 3]> = result
+                .chunks_exact(3)
+                .filter_map(|t| {
+                    let t = [t[0], t[1], t[2]];
+                    if t.iter().any(|&k| k as usize >= global.len()) {
+                        return None;
+                    }
+                    let v = t.map(mesh_vertex);
+                    if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] {
+                        return None;
+                    }
+                    let [a, b, c] = t.map(point);
+                    ((b - a).cross(c - a).length_squared() > 0.0).then_some(t)
+                })
+                .collect();
+            let simplified: Vec<[Vec3; 3]> = tris.iter().map(|t| t.map(point)).collect();
+            let bvh = Bvh::new(simplified.clone());
+            let mut measured = estimate;
+            let mut stray: Vec<u32> = Vec::new();
+            for (p, owners) in &checks {
+                let d = bvh.distance(*p);
+                if d > limit {
+                    stray.extend_from_slice(owners);
+                } else {
+                    measured = measured.max(d);
+                }
+            }
+            let mut inward = true;
+            'outer: for s in &simplified {
+                for (wa, wb, wc) in SURFACE_SAMPLES {
+                    let d = original_bvh.distance(s[0] * wa + s[1] * wb + s[2] * wc);
+                    if d > limit {
+                        inward = false;
+                        break 'outer;
+                    }
+                    measured = measured.max(d);
+                }
+            }
+            let pass = stray.is_empty() && inward;
+            (tris, pass.then_some(measured), stray)
+        };
+
+        let n = piece.len();
+        // As far as the error bound allows; a few stray vertices get locked and the piece is
+        // simplified again.
+        let (tris, error, mut stray) = attempt(0, &locks);
+        if let Some(e) = error {
+            return (back(tris), e);
+        }
+        for _ in 0..LOCK_ROUNDS {
+            if stray.len() > global.len() / STRAY_FRACTION {
+                break;
+            }
+            stray.sort_unstable();
+            stray.dedup();
+            for &k in &stray {
+                locks[k as usize] = SimplifyVertex::Lock;
+            }
+            let (tris, error, s) = attempt(0, &locks);
+            if let Some(e) = error {
+                return (back(tris), e);
+            }
+            stray = s;
+        }
+        // Otherwise the fewest triangles that pass (binary search on meshoptimizer's triangle
+        // target; the whole piece always passes).
+        let locks = border_locks(&positions, &indices);
+        let (mut lo, mut hi) = (0usize, n);
+        let mut best: Option<(Vec<[u32; 3]>, f32)> = None;
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            match attempt(mid, &locks) {
+                (tris, Some(e), _) => {
+                    hi = mid;
+                    best = Some((tris, e));
+                }
+                _ => lo = mid,
+            }
+        }
+        match best {
+            Some((tris, e)) => (back(tris), e),
+            None => (piece.to_vec(), 0.0),
+        }
+    }
+
+    /// Replaces zero normals (no normal in the file, or a singular skin) by the area-weighted
+    /// normal of the vertex's triangles (+Y when that is zero too).
+    fn fill_missing_normals(&mut self) {
+        if self.normals.iter().all(|n| *n != Vec3::ZERO) {
+            return;
+        }
+        let mut acc = vec![Vec3::ZERO; self.positions.len()];
+        for p in &self.primitives {
+            for t in p.indices.chunks_exact(3) {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
+                let n = (b - a).cross(c - a);
+                for &i in t {
+                    acc[i as usize] += n;
+                }
+            }
+        }
+        for (n, a) in self.normals.iter_mut().zip(acc) {
+            if *n == Vec3::ZERO {
+                *n = a.try_normalize().unwrap_or(Vec3::Y);
+            }
+        }
+    }
+}
+
+/// A vertex's influences as Tree bone indices: duplicates merged, zero weights dropped, sorted
+/// by decreasing weight (ties: lower bone), renormalised; unused slots repeat slot 0's bone
+/// with weight 0. Palette entries without a bone are dropped unless nothing else is left.
+fn influences(joints: [u16; 4], weights: [f32; 4], palette_bones: &[u32]) -> ([u32; 4], [f32; 4]) {
+    let mut list: Vec<(u32, f32)> = Vec::with_capacity(4);
+    for s in 0..4 {
+        let w = weights[s];
+        if !(w > 0.0 && w.is_finite()) {
+            continue;
+        }
+        let b = palette_bones
+            .get(joints[s] as usize)
+            .copied()
+            .unwrap_or(NO_BONE);
+        if b == NO_BONE {
+            continue;
+        }
+        match list.iter_mut().find(|e| e.0 == b) {
+            Some(e) => e.1 += w,
+            None => list.push((b, w)),
+        }
+    }
+    list.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    let total: f32 = list.iter().map(|e| e.1).sum();
+    if list.is_empty() || total <= 0.0 || !total.is_finite() {
+        // No bone at all: rigid at rest, or the first palette entry's bone if it has one.
+        let b = palette_bones
+            .get(joints[0] as usize)
+            .copied()
+            .unwrap_or(NO_BONE);
+        return ([b; 4], [1.0, 0.0, 0.0, 0.0]);
+    }
+    let mut bones = [list[0].0; 4];
+    let mut out = [0.0f32; 4];
+    for (s, (b, w)) in list.iter().enumerate() {
+        bones[s] = *b;
+        out[s] = w / total;
+    }
+    (bones, out)
+}
+
+/// A fixed pseudo-random unit vector per bone (SplitMix64 of the bone index).
+fn bone_embedding(bone: u32) -> [f32; SKIN_DIMS] {
+    let mut state = u64::from(bone).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03;
+    let mut e = [0.0f32; SKIN_DIMS];
+    let mut len2 = 0.0f32;
+    for x in &mut e {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        *x = (z >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0;
+        len2 += *x * *x;
+    }
+    let len = len2.sqrt().max(1e-6);
+    e.map(|x| x / len)
+}
+
+/// A bounding-volume hierarchy over triangles, for point-to-surface distances.
+struct Bvh {
+    triangles: Vec<[Vec3; 3]>,
+    nodes: Vec<BvhNode>,
+}
+
+struct BvhNode {
+    lo: Vec3,
+    hi: Vec3,
+    first: usize,
+    /// Triangles of a leaf; 0 for an inner node, whose left child is the next node.
+    count: usize,
+    right: usize,
+}
+
+impl Bvh {
+    fn new(mut triangles: Vec<[Vec3; 3]>) -> Bvh {
+        let mut nodes = Vec::with_capacity(triangles.len() / 2 + 1);
+        if !triangles.is_empty() {
+            let n = triangles.len();
+            Self::build(&mut triangles, 0, n, &mut nodes);
+        }
+        Bvh { triangles, nodes }
+    }
+
+    fn build(
+        tris: &mut [[Vec3; 3]],
+        first: usize,
+        count: usize,
+        nodes: &mut Vec<BvhNode>,
+    ) -> usize {
+        let span = &mut tris[first..first + count];
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        let (mut clo, mut chi) = (lo, hi);
+        for t in span.iter() {
+            for p in t {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
+            let c = t[0] + t[1] + t[2];
+            clo = clo.min(c);
+            chi = chi.max(c);
+        }
+        let me = nodes.len();
+        nodes.push(BvhNode {
+            lo,
+            hi,
+            first,
+            count,
+            right: 0,
+        });
+        if count <= 4 {
+            return me;
+        }
+        let ext = chi - clo;
+        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+            0
+        } else if ext.y >= ext.z {
+            1
+        } else {
+            2
+        };
+        let key = |t: &[Vec3; 3]| (t[0] + t[1] + t[2])[axis];
+        let half = count / 2;
+        span.select_nth_unstable_by(half, |a, b| key(a).total_cmp(&key(b)));
+        nodes[me].count = 0;
+        Self::build(tris, first, half, nodes);
+        let right = Self::build(tris, first + half, count - half, nodes);
+        nodes[me].right = right;
+        me
+    }
+
+    /// Distance from `p` to the nearest triangle (infinity when there is none).
+    fn distance(&self, p: Vec3) -> f32 {
+        let mut best = f32::INFINITY;
+        if self.nodes.is_empty() {
+            return best;
+        }
+        let mut stack = vec![0usize];
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n];
+            let d = (node.lo - p).max(p - node.hi).max(Vec3::ZERO).length();
+            if d >= best {
+                continue;
+            }
+            if node.count > 0 {
+                for t in &self.triangles[node.first..node.first + node.count] {
+                    best = best.min(triangle_distance(p, t));
+                }
+            } else {
+                stack.push(node.right);
+                stack.push(n + 1);
+            }
+        }
+        best
+    }
+}
+
+/// Closest point to `p` on triangle `abc` (Ericson, Real-Time Collision Detection §5.1.5).
+/// Distance from `p` to triangle `abc`, in f64: in f32 the closest-point arithmetic loses
+/// ~1e-4 on slivers a tree's branch tips are full of (a triangle's own centroid measured off it).
+fn triangle_distance(p: Vec3, t: &[Vec3; 3]) -> f32 {
+    let p = p.as_dvec3();
+    p.distance(closest_on_triangle(
+        p,
+        t[0].as_dvec3(),
+        t[1].as_dvec3(),
+        t[2].as_dvec3(),
+    )) as f32
+}
+
+fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+/// Vertices numbered by bit-identical position (as meshoptimizer welds them).
+struct Welded {
+    id: Vec<u32>,
+    count: usize,
+}
+
+fn weld_positions(positions: impl Iterator<Item = Vec3>) -> Welded {
+    let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
+    let id = positions
+        .map(|p| {
+            let next = ids.len() as u32;
+            *ids.entry(p.to_array().map(f32::to_bits)).or_insert(next)
+        })
+        .collect();
+    Welded {
+        id,
+        count: ids.len(),
+    }
+}
+
+fn find(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        let up = parent[parent[x as usize] as usize];
+        parent[x as usize] = up;
+        x = up;
+    }
+    x
+}
+
+fn union(parent: &mut [u32], a: u32, b: u32) {
+    let (ra, rb) = (find(parent, a), find(parent, b));
+    if ra != rb {
+        parent[ra.max(rb) as usize] = ra.min(rb);
+    }
+}
+
+/// Locks that keep every open tube open: on every border loop of the position-welded mesh (what
+/// meshoptimizer sees), [`LOOP_LOCKS`] vertices spread evenly around the loop, so a thin branch
+/// can shrink to a prism between its end rings but never collapse into a line (whose triangles
+/// would be dropped, and the branch with them). Border vertices that are not on a simple loop
+/// are locked outright.
+fn border_locks(positions: &[[f32; 3]], indices: &[u32]) -> Vec<SimplifyVertex> {
+    let Welded {
+        id: welded,
+        count: nw,
+    } = weld_positions(positions.iter().map(|p| Vec3::from(*p)));
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in indices.chunks_exact(3) {
+        for c in 0..3 {
+            let (a, b) = (welded[t[c] as usize], welded[t[(c + 1) % 3] as usize]);
+            if a != b {
+                *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+    }
+    let mut border: Vec<(u32, u32)> = edges
+        .into_iter()
+        .filter(|(_, n)| *n == 1)
+        .map(|(e, _)| e)
+        .collect();
+    border.sort_unstable();
+    let mut adjacent: Vec<Vec<u32>> = vec![Vec::new(); nw];
+    for &(a, b) in &border {
+        adjacent[a as usize].push(b);
+        adjacent[b as usize].push(a);
+    }
+    let mut lock = vec![false; nw];
+    let mut seen = vec![false; nw];
+    for start in 0..nw {
+        let degree = adjacent[start].len();
+        if degree == 0 || seen[start] {
+            continue;
+        }
+        if degree != 2 {
+            lock[start] = true;
+            seen[start] = true;
+            continue;
+        }
+        // Walk the loop from its smallest vertex towards its smaller neighbour.
+        let mut walk = vec![start as u32];
+        seen[start] = true;
+        let (mut prev, mut cur) = (start as u32, adjacent[start][0].min(adjacent[start][1]));
+        let mut simple = true;
+        while cur as usize != start {
+            let c = cur as usize;
+            if adjacent[c].len() != 2 || seen[c] {
+                simple = false;
+                break;
+            }
+            seen[c] = true;
+            walk.push(cur);
+            let next = if adjacent[c][0] == prev {
+                adjacent[c][1]
+            } else {
+                adjacent[c][0]
+            };
+            (prev, cur) = (cur, next);
+        }
+        if simple {
+            let n = walk.len();
+            for k in 0..LOOP_LOCKS.min(n) {
+                lock[walk[k * n / LOOP_LOCKS] as usize] = true;
+            }
+        } else {
+            for &w in &walk {
+                lock[w as usize] = true;
+            }
+        }
+    }
+    welded
+        .iter()
+        .map(|&w| {
+            if lock[w as usize] {
+                SimplifyVertex::Lock
+            } else {
+                SimplifyVertex::None
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tube of `rings` rings of `radial` sides (plus a UV seam column) around `axis(t)`,
+    /// t ∈ [0, 1], radius `r`; all on bone 0, open at both ends.
+    fn tube(rings: usize, radial: usize, r: f32, axis: impl Fn(f32) -> Vec3) -> WoodMesh {
+        let mut m = WoodMesh::default();
+        for i in 0..rings {
+            let t = i as f32 / (rings - 1) as f32;
+            let c = axis(t);
+            let tangent = (axis((t + 1e-3).min(1.0)) - axis((t - 1e-3).max(0.0))).normalize();
+            let u = tangent.any_orthonormal_vector();
+            let v = tangent.cross(u);
+            for s in 0..=radial {
+                let a = std::f32::consts::TAU * s as f32 / radial as f32;
+                let n = u * a.cos() + v * a.sin();
+                // The seam column repeats the first one's position bit for bit.
+                let n = if s == radial { u } else { n };
+                m.positions.push(c + n * r);
+                m.normals.push(n);
+                m.uvs.push(Vec2::new(s as f32 / radial as f32, t));
+                m.bones.push([0; 4]);
+                m.weights.push([1.0, 0.0, 0.0, 0.0]);
+            }
+        }
+        let row = (radial + 1) as u32;
+        let mut indices = Vec::new();
+        for i in 0..rings as u32 - 1 {
+            for s in 0..radial as u32 {
+                let (a, b) = (i * row + s, i * row + s + 1);
+                let (c, d) = (a + row, b + row);
+                indices.extend_from_slice(&[a, b, d, a, d, c]);
+            }
+        }
+        m.primitives.push(WoodPrimitive {
+            material: 0,
+            indices,
+        });
+        m
+    }
+
+    /// Largest distance from the original's vertices to the simplified surface.
+    fn forward(original: &WoodMesh, simplified: &WoodMesh) -> f32 {
+        let tris: Vec<[Vec3; 3]> = simplified
+            .primitives
+            .iter()
+            .flat_map(|p| p.indices.chunks_exact(3))
+            .map(|t| [0, 1, 2].map(|k| simplified.positions[t[k] as usize]))
+            .collect();
+        let bvh = Bvh::new(tris);
+        original
+            .positions
+            .iter()
+            .map(|p| bvh.distance(*p))
+            .fold(0.0, f32::max)
+    }
+
+    #[test]
+    fn influences_merge_sort_and_normalise() {
+        let (b, w) = influences([0, 1, 0, 2], [0.25; 4], &[5, 3, 7]);
+        assert_eq!(b, [5, 3, 7, 5]);
+        assert_eq!(w, [0.5, 0.25, 0.25, 0.0]);
+        // Unnormalised input is renormalised; zero weights dropped.
+        let (b, w) = influences([2, 0, 1, 0], [0.2, 0.6, 0.0, 0.0], &[4, 9, 1]);
+        assert_eq!(b, [4, 1, 4, 4]);
+        assert!((w[0] - 0.75).abs() < 1e-6 && (w[1] - 0.25).abs() < 1e-6);
+        assert_eq!(&w[2..], &[0.0, 0.0]);
+        // No bone anywhere: rigid at rest.
+        assert_eq!(
+            influences([0, 0, 0, 0], [1.0, 0.0, 0.0, 0.0], &[NO_BONE]),
+            ([NO_BONE; 4], [1.0, 0.0, 0.0, 0.0])
+        );
+        // A bone-less entry among real ones is dropped; out-of-range palette entries too.
+        let (b, w) = influences([0, 1, 9, 0], [0.5, 0.25, 0.25, 0.0], &[NO_BONE, 6]);
+        assert_eq!((b, w), ([6; 4], [1.0, 0.0, 0.0, 0.0]));
+        // All weights zero: the first entry's bone, weight 1.
+        assert_eq!(
+            influences([1, 0, 0, 0], [0.0; 4], &[2, 8]),
+            ([8; 4], [1.0, 0.0, 0.0, 0.0])
+        );
+    }
+
+    #[test]
+    fn bone_embedding_is_fixed_unit_and_spread() {
+        for b in [0u32, 1, 17, 4000, NO_BONE] {
+            let e = bone_embedding(b);
+            assert_eq!(e, bone_embedding(b));
+            let len: f32 = e.iter().map(|x| x * x).sum::<f32>().sqrt();
+            assert!((len - 1.0).abs() < 1e-5);
+        }
+        // Neighbouring bones land apart.
+        for b in 0..200u32 {
+            let (x, y) = (bone_embedding(b), bone_embedding(b + 1));
+            let d: f32 = x
+                .iter()
+                .zip(&y)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f32>()
+                .sqrt();
+            assert!(d > 0.2, "bones {b} and {} too close: {d}", b + 1);
+        }
+    }
+
+    #[test]
+    fn a_straight_tube_shrinks_to_a_prism_but_not_to_nothing() {
+        let m = tube(12, 8, 0.01, |t| Vec3::new(0.0, t, 0.0));
+        let (s, err) = m.simplify(0.05);
+        assert!(err <= 0.05);
+        assert!(
+            (6..=12).contains(&s.triangles()),
+            "{} triangles",
+            s.triangles()
+        );
+        assert!(forward(&m, &s) <= 0.05 + 1e-6);
+        // Thick: the rings must stay round.
+        let m = tube(12, 8, 1.0, |t| Vec3::new(0.0, 10.0 * t, 0.0));
+        let (s, _) = m.simplify(0.05);
+        assert!(s.triangles() >= 16, "{} triangles", s.triangles());
+        assert!(forward(&m, &s) <= 0.05 + 1e-5);
+    }
+
+    #[test]
+    fn a_curved_thin_tube_keeps_its_curve() {
+        // Quarter circle of radius 1: a straight prism between the ends would be 0.29 off.
+        let axis = |t: f32| {
+            let a = t * std::f32::consts::FRAC_PI_2;
+            Vec3::new(1.0 - a.cos(), a.sin(), 0.0)
+        };
+        let m = tube(33, 6, 0.01, axis);
+        for e in [0.005, 0.02, 0.1] {
+            let (s, err) = m.simplify(e);
+            assert!(err <= e);
+            let d = forward(&m, &s);
+            assert!(d <= e + 1e-5, "e = {e}: {d}");
+            assert!(s.triangles() < m.triangles());
+        }
+    }
+
+    #[test]
+    fn a_flat_sheet_collapses() {
+        let mut m = WoodMesh::default();
+        let n = 10u32;
+        for y in 0..=n {
+            for x in 0..=n {
+                m.positions.push(Vec3::new(x as f32, y as f32, 0.0));
+                m.normals.push(Vec3::Z);
+                m.uvs.push(Vec2::new(x as f32, y as f32) / n as f32);
+                m.bones.push([0; 4]);
+                m.weights.push([1.0, 0.0, 0.0, 0.0]);
+            }
+        }
+        let mut indices = Vec::new();
+        for y in 0..n {
+            for x in 0..n {
+                let a = y * (n + 1) + x;
+                indices.extend_from_slice(&[a, a + 1, a + n + 2, a, a + n + 2, a + n + 1]);
+            }
+        }
+        m.primitives.push(WoodPrimitive {
+            material: 3,
+            indices,
+        });
+        let (s, err) = m.simplify(0.01);
+        assert!(err <= 0.01);
+        assert!(s.triangles() < 40, "{} triangles", s.triangles());
+        assert_eq!(s.primitives[0].material, 3);
+        assert!(forward(&m, &s) <= 0.01 + 1e-5);
+    }
+
+    #[test]
+    fn skins_that_differ_are_not_merged_on_a_big_surface() {
+        // A long thick tube whose two halves follow different bones with a hard switch: the
+        // switch ring must survive (its vertices carry bone 1 on one side, bone 0 on the other).
+        let mut m = tube(21, 8, 2.0, |t| Vec3::new(0.0, 40.0 * t, 0.0));
+        for (i, p) in m.positions.iter().enumerate() {
+            if p.y > 20.0 {
+                m.bones[i] = [1; 4];
+            }
+        }
+        let (s, _) = m.simplify(0.05);
+        // Triangles spanning the switch exist only between y = 18 and 22 (the rings next to it).
+        for t in s.primitives[0].indices.chunks_exact(3) {
+            let bones: Vec<u32> = t.iter().map(|&i| s.bones[i as usize][0]).collect();
+            if bones.contains(&0) && bones.contains(&1) {
+                for &i in t {
+                    let y = s.positions[i as usize].y;
+                    assert!(
+                        (17.9..=22.1).contains(&y),
+                        "a triangle spans the switch from y = {y}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bad_indices_and_positions_are_skipped() {
+        let mut m = tube(4, 4, 0.5, |t| Vec3::new(0.0, t, 0.0));
+        let n = m.positions.len() as u32;
+        m.primitives[0]
+            .indices
+            .extend_from_slice(&[0, 1, n + 5, 2, 2, 3]);
+        m.positions[0] = Vec3::NAN;
+        m.primitives.push(WoodPrimitive {
+            material: 1,
+            indices: vec![1, 2],
+        });
+        let (s, err) = m.simplify(0.01);
+        assert!(err <= 0.01);
+        assert!(s.positions.iter().all(|p| p.is_finite()));
+        assert!(s.triangles() > 0);
+        let mut short = m.clone();
+        short.weights.truncate(3);
+        let _ = short.simplify(0.1);
+    }
+}

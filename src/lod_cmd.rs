@@ -1,0 +1,667 @@
+//! `frond lod`: an animated tree in, a chain of animated LODs out. LOD0 is the input rewritten
+//! cleanly; every further LOD is an animated billboard cloud of the foliage plus the wood
+//! simplified to the LOD's error budget, sized from the screen height it is seen at.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use frond_billboard::animated::{AnimatedBillboardCloud, LoopClock, Rig};
+use frond_billboard::animated_build::{
+    BuildTimings, build_animated_cloud, per_bone_clusters, sampled_worlds, static_clusters,
+};
+use frond_billboard::cloud::{CloudParams, parse_epsilon};
+use frond_billboard::motion_budget::{Dropped, ScreenBudget, apply_budget};
+use frond_billboard::plane_search::SearchParams;
+use frond_export::lod_file::{FileOptions, write_glb};
+use frond_export::mapping::Mapping;
+use frond_export::textures::sanitize;
+use frond_export::vat::{RigidFrame, RigidPiece, VatFormat, VatOptions, encode_rigid_with};
+use frond_export::{GltfFile, LodInput};
+use frond_render::Renderer;
+use frond_scene::wood::{NO_BONE, WoodMesh};
+use frond_scene::{Part, SampleOptions, Sampled, Tree, sample};
+use glam::{Affine3A, Mat4};
+use serde::Serialize;
+
+use crate::output::write_atomic;
+use crate::screen_budget::{LodLevel, lod_levels};
+
+/// How the foliage of a LOD is clustered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// The documented rule of [`auto_method`].
+    Auto,
+    PerBone,
+    Static,
+}
+
+impl Method {
+    /// Parses `auto`, `per-bone` or `static`.
+    pub fn parse(s: &str) -> Option<Method> {
+        match s {
+            "auto" => Some(Method::Auto),
+            "per-bone" => Some(Method::PerBone),
+            "static" => Some(Method::Static),
+            _ => None,
+        }
+    }
+    fn name(self) -> &'static str {
+        match self {
+            Method::Auto => "auto",
+            Method::PerBone => "per-bone",
+            Method::Static => "static",
+        }
+    }
+}
+
+/// The fixed rule of `--method auto`: the nearest LOD gets `per-bone` (exact animation, most
+/// billboards: what a close view needs), every farther LOD `static` (one cloud, fewest
+/// billboards; its rigid-fit motion errors shrink with the pixel size). Returns the method and
+/// the reason written to the report.
+pub fn auto_method(lod_index: usize) -> (Method, &'static str) {
+    if lod_index == 0 {
+        (
+            Method::PerBone,
+            "auto: nearest LOD -> per-bone (exact bone motion, most billboards)",
+        )
+    } else {
+        (
+            Method::Static,
+            "auto: farther LOD -> static (one cloud, fewest billboards, rigid-fit motion)",
+        )
+    }
+}
+
+/// How billboards are animated in the files.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AnimationMode {
+    /// Standard glTF skin and channels.
+    Skin,
+    /// Vertex animation textures (Houdini VAT 3.0 rigid layout) plus a skinned wood.
+    Vat(VatFormat),
+}
+
+/// What `frond lod` was asked for.
+#[derive(Clone, Debug)]
+pub struct LodRequest {
+    pub method: Method,
+    /// Screen heights (pixels) of LOD1, LOD2, ...
+    pub screen_heights: Vec<f32>,
+    /// Pixel-error budget.
+    pub pixel_error: f32,
+    /// ε override as given ("0.5" or "2%"), for experiments.
+    pub epsilon: Option<String>,
+    pub animation: AnimationMode,
+    pub seed: u64,
+    pub samples: usize,
+    pub clip: Option<String>,
+    /// Candidate planes per iteration.
+    pub planes: usize,
+    pub max_atlas: u32,
+    /// Add MSFT_lod to the combined file, with coverages for this image height.
+    pub msft_lod: bool,
+    pub resolution: f32,
+    pub external_textures: bool,
+}
+
+/// One LOD's line of `report.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct LodEntry {
+    pub file: String,
+    pub mapping: Option<String>,
+    /// Pixels the tree covers (None for LOD0, the input itself).
+    pub screen_height: Option<f32>,
+    pub pixel: Option<f32>,
+    pub epsilon: Option<f32>,
+    pub method: String,
+    pub method_reason: String,
+    /// Triangles drawn (wood plus two per billboard).
+    pub triangles: usize,
+    pub wood_triangles: usize,
+    pub billboards: usize,
+    /// Joints of the LOD's skin.
+    pub bones: usize,
+    pub texture_bytes: usize,
+    pub atlas: Option<[u32; 2]>,
+    pub texels_per_unit: Option<f32>,
+    pub density_reduced: bool,
+    pub clips: Vec<String>,
+    pub dropped: DroppedReport,
+    pub vat: Option<Vec<String>>,
+    pub timings_s: LodTimings,
+}
+
+/// What a LOD left out, and why.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct DroppedReport {
+    #[serde(flatten)]
+    pub budget: Dropped,
+    /// Wood triangles removed by simplification within `wood_error` world units.
+    pub wood_triangles: usize,
+    pub wood_error: f32,
+    /// Input clips not written, with the reason.
+    pub clips: Vec<String>,
+}
+
+/// Per-stage wall times of one LOD.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct LodTimings {
+    #[serde(flatten)]
+    pub build: BuildTimings,
+    pub budget: f64,
+    pub wood: f64,
+    pub export: f64,
+}
+
+/// `report.json`.
+#[derive(Debug, Serialize)]
+pub struct LodReport {
+    pub input: String,
+    pub name: String,
+    pub clip: Option<String>,
+    pub period: f32,
+    pub samples: usize,
+    pub seed: u64,
+    pub pixel_error: f32,
+    pub animation: String,
+    pub tree_height: f32,
+    pub lods: Vec<LodEntry>,
+    pub combined: String,
+    pub files: Vec<String>,
+    pub timings_s: serde_json::Value,
+}
+
+/// Input-name stem used for the files.
+pub fn lod_name(tree: &Tree) -> String {
+    let stem = tree
+        .source
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "tree".into());
+    sanitize(&stem)
+}
+
+/// The tree's wood and foliage with bones as rig node indices (a [`Rig::from_tree`] rig).
+fn part_mesh(tree: &Tree, part: Part) -> WoodMesh {
+    let mut m = WoodMesh::from_tree_part(tree, part);
+    to_nodes(tree, &mut m);
+    m
+}
+
+/// Re-expresses a mesh's tree-bone indices as tree node indices.
+fn to_nodes(tree: &Tree, m: &mut WoodMesh) {
+    for b in m.bones.iter_mut().flatten() {
+        if *b != NO_BONE {
+            *b = tree.bones[*b as usize].node as u32;
+        }
+    }
+}
+
+/// Re-maps node indices after a rig was pruned.
+fn remap(m: &mut WoodMesh, map: &[Option<usize>]) {
+    for b in m.bones.iter_mut().flatten() {
+        if *b != NO_BONE {
+            *b = map
+                .get(*b as usize)
+                .copied()
+                .flatten()
+                .map_or(NO_BONE, |n| n as u32);
+        }
+    }
+}
+
+/// Rig nodes a mesh needs.
+fn used_nodes(m: &WoodMesh) -> Vec<usize> {
+    m.used_bones()
+        .into_iter()
+        .filter(|&b| b != NO_BONE)
+        .map(|b| b as usize)
+        .collect()
+}
+
+/// A LOD ready to write.
+struct BuiltLod {
+    name: String,
+    rig: Rig,
+    parts: Vec<WoodMesh>,
+    cloud: Option<AnimatedBillboardCloud>,
+    clips: Vec<usize>,
+    vat: Option<frond_export::vat::VatTextures>,
+    entry: LodEntry,
+}
+
+/// Builds everything in memory, then writes the LOD files, the combined file, the sidecars and
+/// `report.json` into `out_dir`. Nothing is written unless everything was built.
+pub fn run_lod(
+    renderer: &Renderer,
+    tree: &Tree,
+    req: &LodRequest,
+    out_dir: &Path,
+    progress: &dyn Fn(&str),
+) -> Result<LodReport> {
+    let path = tree.source.display().to_string();
+    let t_start = Instant::now();
+    let name = lod_name(tree);
+    let height = {
+        let h = tree.bounds.height();
+        if h > 0.0 { h } else { tree.bounds.size() }
+    };
+    let diag = crate::cloud_cmd::rest_diagonal(tree);
+    let eps_override = match &req.epsilon {
+        Some(e) => Some(parse_epsilon(e, diag).with_context(|| {
+            format!("--epsilon '{e}': expected a length or a percentage like 2%")
+        })?),
+        None => None,
+    };
+    let levels = lod_levels(height, &req.screen_heights, req.pixel_error, eps_override)
+        .with_context(|| format!("{path}: sizing the LODs"))?;
+    progress("sampling the animation");
+    let sampled = sample(
+        tree,
+        &SampleOptions {
+            clip: req.clip.clone(),
+            samples: req.samples,
+        },
+    )?;
+    if sampled.foliage.is_empty() {
+        bail!("{path}: the tree has no foliage to turn into billboards");
+    }
+    let t_sampled = Instant::now();
+    let clock = LoopClock {
+        clip: sampled
+            .clip
+            .as_ref()
+            .and_then(|c| tree.clips.iter().position(|x| &x.name == c)),
+        start: sampled.times.first().copied().unwrap_or(0.0),
+        period: sampled.period,
+        samples: sampled.samples(),
+    };
+
+    let mut built = Vec::new();
+    built.push(build_lod0(tree, &name));
+    let wood = part_mesh(tree, Part::Wood);
+    for (k, level) in levels.iter().enumerate() {
+        progress(&format!(
+            "LOD{}: {} px, ε = {:.4}",
+            k + 1,
+            level.screen_height,
+            level.epsilon
+        ));
+        let lod = build_lod(
+            renderer, tree, &sampled, &clock, &wood, req, level, k, &name,
+        )
+        .with_context(|| format!("{path}: building LOD{}", k + 1))?;
+        built.push(lod);
+    }
+    let t_built = Instant::now();
+
+    // Write everything in memory first.
+    progress("writing files");
+    let prefix = |k: usize| format!("{name}_LOD{k}");
+    let tex_prefix = |k: Option<usize>| {
+        req.external_textures.then(|| match k {
+            Some(k) => format!("{name}_LOD{k}_"),
+            None => format!("{name}_lods_"),
+        })
+    };
+    let extras = serde_json::json!({
+        "generator": concat!("frond ", env!("CARGO_PKG_VERSION")),
+        "seed": req.seed,
+        "source": tree.source.file_name().map(|f| f.to_string_lossy().into_owned()),
+    });
+    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    let mut entries = Vec::new();
+    let inputs: Vec<LodInput> = built
+        .iter()
+        .map(|b| LodInput {
+            name: b.name.clone(),
+            tree,
+            rig: &b.rig,
+            parts: b.parts.iter().collect(),
+            cloud: b.cloud.as_ref(),
+            clips: b.clips.clone(),
+            vat_uvs: b.vat.as_ref().map(|v| {
+                vec![
+                    v.piece_uv.clone(),
+                    v.pivot_uv.iter().map(|p| p[0]).collect(),
+                    v.pivot_uv.iter().map(|p| p[1]).collect(),
+                ]
+            }),
+        })
+        .collect();
+    for (k, (b, input)) in built.iter().zip(&inputs).enumerate() {
+        let t0 = Instant::now();
+        let file: GltfFile = write_glb(
+            std::slice::from_ref(input),
+            &FileOptions {
+                external_textures: tex_prefix(Some(k)),
+                msft_lod: None,
+                extras: Some(extras.clone()),
+            },
+        )
+        .with_context(|| format!("{path}: writing LOD{k}"))?;
+        let glb_name = format!("{}.glb", prefix(k));
+        files.push((out_dir.join(&glb_name), file.glb));
+        for (f, bytes) in file.external {
+            files.push((out_dir.join(f), bytes));
+        }
+        let mut entry = LodEntry {
+            file: glb_name.clone(),
+            bones: file.joints.first().copied().unwrap_or(0),
+            ..b.entry.clone()
+        };
+        if let Some(cloud) = &b.cloud {
+            let mapping = Mapping::of(cloud, k, &glb_name, &sampled.foliage);
+            let mapping_name = format!("{}.mapping.json", prefix(k));
+            files.push((
+                out_dir.join(&mapping_name),
+                serde_json::to_vec_pretty(&mapping).context("serialising a mapping")?,
+            ));
+            entry.mapping = Some(mapping_name);
+        }
+        if let Some(v) = &b.vat {
+            let pos = v.sidecar.textures.position.clone();
+            let rot = v.sidecar.textures.rotation.clone();
+            let json = format!("{}_vat.json", prefix(k));
+            files.push((out_dir.join(&pos), v.position.bytes.clone()));
+            files.push((out_dir.join(&rot), v.rotation.bytes.clone()));
+            files.push((
+                out_dir.join(&json),
+                serde_json::to_vec_pretty(&v.sidecar).context("serialising a VAT sidecar")?,
+            ));
+            entry.vat = Some(vec![pos, rot, json]);
+        }
+        entry.timings_s.export = t0.elapsed().as_secs_f64();
+        entries.push(entry);
+    }
+    // The combined file.
+    let coverage: Option<Vec<f32>> = req.msft_lod.then(|| {
+        let mut c: Vec<f32> = req
+            .screen_heights
+            .iter()
+            .map(|h| (h / req.resolution).min(1.0))
+            .collect();
+        // LOD k is shown down to the size the next LOD was built for; the last one to a
+        // quarter of its own.
+        let last = c.last().copied().unwrap_or(0.0) * 0.25;
+        c.push(last);
+        c
+    });
+    let combined = write_glb(
+        &inputs,
+        &FileOptions {
+            external_textures: tex_prefix(None),
+            msft_lod: coverage,
+            extras: Some(extras),
+        },
+    )
+    .with_context(|| format!("{path}: writing the combined file"))?;
+    let combined_name = format!("{name}_lods.glb");
+    files.push((out_dir.join(&combined_name), combined.glb));
+    for (f, bytes) in combined.external {
+        files.push((out_dir.join(f), bytes));
+    }
+    files.extend(shader_files(req, out_dir));
+    let t_written = Instant::now();
+
+    let mut report = LodReport {
+        input: path,
+        name: name.clone(),
+        clip: sampled.clip.clone(),
+        period: sampled.period,
+        samples: sampled.samples(),
+        seed: req.seed,
+        pixel_error: req.pixel_error,
+        animation: match req.animation {
+            AnimationMode::Skin => "skin".into(),
+            AnimationMode::Vat(f) => format!("vat-{}", f.extension()),
+        },
+        tree_height: height,
+        lods: entries,
+        combined: combined_name,
+        files: files.iter().map(|(p, _)| p.display().to_string()).collect(),
+        timings_s: serde_json::json!({
+            "sample": (t_sampled - t_start).as_secs_f64(),
+            "build": (t_built - t_sampled).as_secs_f64(),
+            "export": (t_written - t_built).as_secs_f64(),
+            "total": (t_written - t_start).as_secs_f64(),
+        }),
+    };
+    report
+        .files
+        .push(out_dir.join("report.json").display().to_string());
+    for (p, bytes) in &files {
+        write_atomic(p, bytes)?;
+    }
+    let json = serde_json::to_vec_pretty(&report).context("serialising report.json")?;
+    write_atomic(&out_dir.join("report.json"), &json)?;
+    Ok(report)
+}
+
+/// The reference shaders, copied next to VAT output.
+fn shader_files(req: &LodRequest, out_dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    if !matches!(req.animation, AnimationMode::Vat(_)) {
+        return Vec::new();
+    }
+    frond_export::shaders::SHADERS
+        .iter()
+        .map(|(file, text)| (out_dir.join("shaders").join(file), text.as_bytes().to_vec()))
+        .collect()
+}
+
+/// LOD0: the input's wood and foliage as one skinned mesh over its bones, every clip.
+fn build_lod0(tree: &Tree, name: &str) -> BuiltLod {
+    let mut rig = Rig::from_tree(tree);
+    let mut wood = part_mesh(tree, Part::Wood);
+    let mut foliage = part_mesh(tree, Part::Foliage);
+    let mut keep = vec![false; rig.nodes.len()];
+    for b in &tree.bones {
+        keep[b.node] = true;
+    }
+    let map = rig.retain(&keep);
+    remap(&mut wood, &map);
+    remap(&mut foliage, &map);
+    let triangles = wood.triangles() + foliage.triangles();
+    let texture_bytes = tree.textures.iter().map(|t| t.rgba.len()).sum::<usize>();
+    let clips: Vec<usize> = (0..rig.clips.len()).collect();
+    BuiltLod {
+        name: format!("{name}_LOD0"),
+        entry: LodEntry {
+            file: String::new(),
+            mapping: None,
+            screen_height: None,
+            pixel: None,
+            epsilon: None,
+            method: "input".into(),
+            method_reason: "LOD0 is the input tree, rewritten".into(),
+            triangles,
+            wood_triangles: wood.triangles(),
+            billboards: 0,
+            bones: 0,
+            texture_bytes,
+            atlas: None,
+            texels_per_unit: None,
+            density_reduced: false,
+            clips: rig.clips.iter().map(|c| c.name.clone()).collect(),
+            dropped: DroppedReport::default(),
+            vat: None,
+            timings_s: LodTimings::default(),
+        },
+        rig,
+        parts: vec![wood, foliage],
+        cloud: None,
+        clips,
+        vat: None,
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn build_lod(
+    renderer: &Renderer,
+    tree: &Tree,
+    sampled: &Sampled,
+    clock: &LoopClock,
+    wood: &WoodMesh,
+    req: &LodRequest,
+    level: &LodLevel,
+    k: usize,
+    name: &str,
+) -> Result<BuiltLod> {
+    let (method, reason) = match req.method {
+        Method::Auto => auto_method(k),
+        m => (m, "given with --method"),
+    };
+    let clusters = match method {
+        Method::PerBone | Method::Auto => per_bone_clusters(tree, sampled),
+        Method::Static => static_clusters(sampled),
+    };
+    let mut params = CloudParams {
+        search: SearchParams {
+            epsilon: level.epsilon,
+            candidates: req.planes,
+            seed: req.seed.wrapping_add(k as u64),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    params.bake.texels_per_unit = level.texels_per_unit;
+    params.bake.max_atlas = req.max_atlas;
+    let diag = crate::cloud_cmd::rest_diagonal(tree);
+    let (mut cloud, build_t) = build_animated_cloud(
+        renderer,
+        tree,
+        sampled,
+        Rig::from_tree(tree),
+        clock.clone(),
+        &clusters,
+        &params,
+        diag,
+        method.name(),
+    )?;
+    let t0 = Instant::now();
+    let (mut wood_lod, _achieved) = wood.simplify(level.wood_error);
+    let t1 = Instant::now();
+    let budget = ScreenBudget {
+        pixel: level.pixel,
+        epsilon: level.epsilon,
+    };
+    let (map, dropped) = apply_budget(&mut cloud, sampled, &budget, &used_nodes(&wood_lod));
+    remap(&mut wood_lod, &map);
+    let t2 = Instant::now();
+    let clips = cloud.playable_clips.clone();
+    let dropped_clips: Vec<String> = (0..cloud.rig.clips.len())
+        .filter(|c| !clips.contains(c))
+        .map(|c| {
+            format!(
+                "{}: billboards have their own motion sampled from clip '{}' only",
+                cloud.rig.clips[c].name,
+                clock
+                    .clip
+                    .map(|i| tree.clips[i].name.as_str())
+                    .unwrap_or("-")
+            )
+        })
+        .collect();
+    let vat = match req.animation {
+        AnimationMode::Skin => None,
+        AnimationMode::Vat(format) => Some(vat_textures(
+            &cloud,
+            format,
+            &format!("{name}_LOD{}_vat", k + 1),
+        )?),
+    };
+    let atlas = &cloud.atlas;
+    let entry = LodEntry {
+        file: String::new(),
+        mapping: None,
+        screen_height: Some(level.screen_height),
+        pixel: Some(level.pixel),
+        epsilon: Some(level.epsilon),
+        method: method.name().into(),
+        method_reason: reason.into(),
+        triangles: wood_lod.triangles() + 2 * cloud.billboards.len(),
+        wood_triangles: wood_lod.triangles(),
+        billboards: cloud.billboards.len(),
+        bones: 0,
+        texture_bytes: atlas.color.len(),
+        atlas: Some([atlas.width, atlas.height]),
+        texels_per_unit: Some(cloud.texels_per_unit),
+        density_reduced: cloud.density_reduced,
+        clips: clips
+            .iter()
+            .map(|&c| cloud.rig.clips[c].name.clone())
+            .collect(),
+        dropped: DroppedReport {
+            budget: dropped,
+            wood_triangles: wood.triangles() - wood_lod.triangles().min(wood.triangles()),
+            wood_error: level.wood_error,
+            clips: dropped_clips,
+        },
+        vat: None,
+        timings_s: LodTimings {
+            build: build_t,
+            budget: (t2 - t1).as_secs_f64(),
+            wood: (t1 - t0).as_secs_f64(),
+            export: 0.0,
+        },
+    };
+    Ok(BuiltLod {
+        name: format!("{name}_LOD{}", k + 1),
+        rig: cloud.rig.clone(),
+        parts: vec![wood_lod],
+        cloud: Some(cloud),
+        clips,
+        vat,
+        entry,
+    })
+}
+
+/// Vertex animation textures of every billboard over the clock's samples; textures are named
+/// `<stem>_pos.<ext>` and `<stem>_rot.<ext>`.
+pub fn vat_textures(
+    cloud: &AnimatedBillboardCloud,
+    format: VatFormat,
+    stem: &str,
+) -> Result<frond_export::vat::VatTextures> {
+    let worlds = sampled_worlds(&cloud.rig, &cloud.clock);
+    let rest_inv: Vec<Mat4> = cloud.rig.rest_world().iter().map(|m| m.inverse()).collect();
+    let n = worlds.len();
+    let pieces: Vec<RigidPiece> = cloud
+        .billboards
+        .iter()
+        .map(|b| {
+            let pivot = b.quad.center;
+            let frames = (0..n)
+                .map(|s| {
+                    let m = b.motion.as_ref().map_or(Affine3A::IDENTITY, |m| m.at(s, n));
+                    let carry = match b.follows {
+                        Some(f) => worlds[s][f] * rest_inv[f],
+                        None => Mat4::IDENTITY,
+                    } * Mat4::from(m);
+                    let (_, r, _) = carry.to_scale_rotation_translation();
+                    RigidFrame {
+                        position: carry.transform_point3(pivot),
+                        rotation: r.normalize(),
+                    }
+                })
+                .collect();
+            RigidPiece { pivot, frames }
+        })
+        .collect();
+    let fps = if cloud.clock.period > 0.0 {
+        n as f32 / cloud.clock.period
+    } else {
+        1.0
+    };
+    Ok(encode_rigid_with(
+        &pieces,
+        fps,
+        format,
+        &VatOptions {
+            file_stem: stem.to_string(),
+            ..Default::default()
+        },
+    )?)
+}

@@ -1,0 +1,89 @@
+//! LOD sizes from a screen-space error budget (spec view-dependent-hierarchies-gpu §2.3–2.4,
+//! Holst & Schumann eq. 3 and 9): a LOD is the screen height in pixels the whole tree covers;
+//! one pixel there is `tree height / screen height` world units, the plane tolerance ε is the
+//! pixel budget in those units, and textures get about one texel per screen pixel.
+
+use anyhow::{Result, bail};
+use serde::Serialize;
+
+/// What one LOD may spend.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct LodLevel {
+    /// Pixels the tree's height covers on screen.
+    pub screen_height: f32,
+    /// World units per screen pixel at that size.
+    pub pixel: f32,
+    /// Plane tolerance (world units).
+    pub epsilon: f32,
+    /// Texels per world unit of the billboards' textures.
+    pub texels_per_unit: f32,
+    /// Geometric error allowed to the wood simplification (world units).
+    pub wood_error: f32,
+}
+
+/// Screen height (pixels) of an object of height `height` at `distance` with a vertical field
+/// of view `fov_deg` and `resolution` pixels of image height: Holst eq. 3,
+/// `s = l / z · (res / 2) · cot(fov / 2)`.
+pub fn screen_height_at(height: f32, distance: f32, fov_deg: f32, resolution: f32) -> f32 {
+    let pc = 0.5 * resolution / (0.5 * fov_deg.to_radians()).tan();
+    height / distance * pc
+}
+
+/// The LOD levels for `screen_heights` (pixels) of a tree `tree_height` high, with an error
+/// budget of `budget_px` pixels; `epsilon` overrides the derived ε.
+pub fn lod_levels(
+    tree_height: f32,
+    screen_heights: &[f32],
+    budget_px: f32,
+    epsilon: Option<f32>,
+) -> Result<Vec<LodLevel>> {
+    if !(tree_height.is_finite() && tree_height > 0.0) {
+        bail!("the tree has no height to size LODs by");
+    }
+    if !(budget_px.is_finite() && budget_px > 0.0) {
+        bail!("--pixel-error must be a positive number of pixels");
+    }
+    screen_heights
+        .iter()
+        .map(|&h| {
+            if !(h.is_finite() && h >= 1.0) {
+                bail!("LOD screen height {h} must be at least 1 pixel");
+            }
+            let pixel = tree_height / h;
+            let eps = epsilon.unwrap_or(budget_px * pixel);
+            Ok(LodLevel {
+                screen_height: h,
+                pixel,
+                epsilon: eps,
+                texels_per_unit: 1.0 / pixel,
+                wood_error: budget_px * pixel,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_pixel_of_a_600_pixel_tree() {
+        let l = lod_levels(30.0, &[600.0, 60.0], 1.0, None).unwrap();
+        assert!((l[0].pixel - 0.05).abs() < 1e-6);
+        assert!((l[0].epsilon - 0.05).abs() < 1e-6);
+        assert!((l[0].texels_per_unit - 20.0).abs() < 1e-4);
+        assert!((l[1].epsilon - 0.5).abs() < 1e-6);
+        let o = lod_levels(30.0, &[600.0], 2.0, Some(0.01)).unwrap();
+        assert_eq!(o[0].epsilon, 0.01);
+        assert!((o[0].wood_error - 0.1).abs() < 1e-6);
+        assert!(lod_levels(30.0, &[0.5], 1.0, None).is_err());
+        assert!(lod_levels(0.0, &[60.0], 1.0, None).is_err());
+    }
+
+    #[test]
+    fn distance_to_screen_height() {
+        // 90° fov: cot(45°) = 1, so a 10-unit tree at distance 10 covers res/2 pixels.
+        let h = screen_height_at(10.0, 10.0, 90.0, 1080.0);
+        assert!((h - 540.0).abs() < 1e-3);
+    }
+}

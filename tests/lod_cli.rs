@@ -1,0 +1,409 @@
+//! `frond lod` end to end: the files, report.json, the Khronos validator on every output, a
+//! round trip through our own importer (billboard corners where the pipeline meant them), the
+//! per-bone ε property, VAT decoding back to motion, determinism and bad arguments.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::*;
+use frond_billboard::animated::{AnimatedBillboardCloud, LoopClock, Rig};
+use frond_billboard::animated_build::{
+    build_animated_cloud, per_bone_clusters, sampled_worlds, static_clusters,
+};
+use frond_billboard::cloud::CloudParams;
+use frond_billboard::motion_budget::{ScreenBudget, apply_budget};
+use frond_export::LodInput;
+use frond_export::lod_file::{FileOptions, write_glb};
+use frond_export::vat::{VatFormat, decode_rigid};
+use frond_render::Renderer;
+use frond_scene::{ImportOptions, SampleOptions, Sampled, Tree, import, import_bytes, sample};
+
+fn lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "lod",
+        input.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+        "--samples",
+        "16",
+        "--planes",
+        "60",
+    ];
+    args.extend_from_slice(extra);
+    frond_ok(&args);
+    serde_json::from_slice(&std::fs::read(out.join("report.json")).expect("report.json"))
+        .expect("report is JSON")
+}
+
+fn sapling() -> PathBuf {
+    root().join("samples/sapling.glb")
+}
+
+fn glbs(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .expect("dir")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "glb"))
+        .collect();
+    v.sort();
+    v
+}
+
+fn assert_valid(file: &Path) {
+    let v = validate(file);
+    assert_eq!(v["errors"], 0, "{}: {}", file.display(), v["messages"]);
+}
+
+#[test]
+fn skin_lods_are_valid_and_reported() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("o");
+    let report = lod(&sapling(), &out, &["--lods", "300,60"]);
+    let lods = report["lods"].as_array().expect("lods");
+    assert_eq!(lods.len(), 3, "LOD0 plus one per --lods entry");
+    for (k, l) in lods.iter().enumerate() {
+        assert_eq!(l["file"], format!("sapling_LOD{k}.glb"));
+        assert!(out.join(l["file"].as_str().expect("file")).exists());
+        for key in [
+            "triangles",
+            "billboards",
+            "bones",
+            "texture_bytes",
+            "dropped",
+            "method",
+        ] {
+            assert!(!l[key].is_null(), "LOD{k} reports {key}");
+        }
+        if k > 0 {
+            assert!(l["epsilon"].as_f64().expect("epsilon") > 0.0);
+            assert!(out.join(l["mapping"].as_str().expect("mapping")).exists());
+            assert!(l["billboards"].as_u64().expect("count") > 0);
+        }
+    }
+    // The rule of --method auto.
+    assert_eq!(lods[1]["method"], "per-bone");
+    assert_eq!(lods[2]["method"], "static");
+    // Nearer LODs cost more: ε grows and billboards shrink in number with distance.
+    assert!(lods[2]["epsilon"].as_f64() > lods[1]["epsilon"].as_f64());
+    assert!(lods[2]["triangles"].as_u64() < lods[0]["triangles"].as_u64());
+    assert!(out.join("sapling_lods.glb").exists());
+    for f in glbs(&out) {
+        assert_valid(&f);
+    }
+    // The combined file: nodes named <name>_LOD<k>, one animation per clip name.
+    let tree = import(&out.join("sapling_lods.glb"), &ImportOptions::default()).expect("import");
+    for k in 0..3 {
+        let name = format!("sapling_LOD{k}");
+        assert!(tree.nodes.iter().any(|n| n.name == name), "{name} node");
+    }
+    let input = import(&sapling(), &ImportOptions::default()).expect("input");
+    assert_eq!(tree.clips.len(), input.clips.len());
+    for (a, b) in tree.clips.iter().zip(&input.clips) {
+        assert_eq!(a.name, b.name);
+        assert!(
+            (a.duration() - b.duration()).abs() < 1e-4,
+            "same clip length"
+        );
+    }
+    // Mapping: every billboard's triangles are input foliage triangles, none twice.
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("sapling_LOD1.mapping.json")).expect("m"))
+            .expect("json");
+    let mut seen = std::collections::HashSet::new();
+    for b in m["billboards"].as_array().expect("billboards") {
+        for t in b["triangles"].as_array().expect("triangles") {
+            let t = t.as_u64().expect("index") as usize;
+            assert_eq!(input.triangles[t].part, frond_scene::Part::Foliage);
+            assert!(seen.insert(t), "triangle {t} mapped twice");
+        }
+    }
+}
+
+#[test]
+fn msft_lod_external_textures_and_vat_are_valid() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("o");
+    let report = lod(
+        &sapling(),
+        &out,
+        &[
+            "--lods",
+            "120",
+            "--msft-lod",
+            "--external-textures",
+            "--animation",
+            "vat",
+            "--method",
+            "static",
+        ],
+    );
+    for f in glbs(&out) {
+        assert_valid(&f);
+    }
+    let l1 = &report["lods"][1];
+    let vat = l1["vat"].as_array().expect("vat files");
+    for f in vat {
+        assert!(out.join(f.as_str().expect("name")).exists(), "{f}");
+    }
+    assert!(out.join("shaders/frond_vat_rigid.wgsl").exists());
+    let combined = std::fs::read(out.join("sapling_lods.glb")).expect("combined");
+    let text = String::from_utf8_lossy(&combined);
+    assert!(text.contains("MSFT_lod") && text.contains("MSFT_screencoverage"));
+    assert!(
+        std::fs::read_dir(&out)
+            .expect("dir")
+            .any(|e| e.is_ok_and(|e| e.path().extension().is_some_and(|x| x == "png"))),
+        "external PNG textures written"
+    );
+}
+
+#[test]
+fn same_seed_same_bytes_whatever_the_threads() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let run = |threads: &str, name: &str| {
+        let out = dir.path().join(name);
+        let status = std::process::Command::new(env!("CARGO_BIN_EXE_frond"))
+            .args(["lod", sapling().to_str().expect("utf-8"), "-o"])
+            .arg(&out)
+            .args(["--lods", "150,40", "--samples", "12", "--planes", "40"])
+            .env("RAYON_NUM_THREADS", threads)
+            .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+            .status()
+            .expect("runs");
+        assert!(status.success());
+        out
+    };
+    let a = run("1", "a");
+    let b = run("2", "b");
+    for f in std::fs::read_dir(&a).expect("dir") {
+        let p = f.expect("entry").path();
+        if p.file_name().is_some_and(|n| n == "report.json") {
+            continue;
+        }
+        let q = b.join(p.file_name().expect("name"));
+        assert_eq!(
+            std::fs::read(&p).expect("a"),
+            std::fs::read(&q).expect("b"),
+            "{} differs between thread counts",
+            p.display()
+        );
+    }
+}
+
+#[test]
+fn bad_arguments_fail_cleanly_without_output() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("o");
+    for args in [
+        vec!["--lods", "0"],
+        vec!["--pixel-error", "-1"],
+        vec!["--epsilon", "abc"],
+    ] {
+        let mut all = vec!["lod".to_string(), sapling().to_str().expect("utf-8").to_string()];
+        all.extend(args.iter().map(|s| s.to_string()));
+        all.extend(["-o".to_string(), out.display().to_string()]);
+        let refs: Vec<&str> = all.iter().map(|s| s.as_str()).collect();
+        let r = frond(&refs);
+        assert!(!r.status.success(), "{args:?} must fail");
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(!out.exists(), "{args:?}: nothing written");
+    }
+    let missing = frond(&[
+        "lod",
+        "no/such/tree.glb",
+        "-o",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no/such/tree.glb"));
+}
+
+// ---- Round trips through the library, with the pipeline's own intent to compare against ----
+
+struct Built {
+    tree: Tree,
+    sampled: Sampled,
+    cloud: AnimatedBillboardCloud,
+    epsilon: f32,
+}
+
+fn build(path: &Path, per_bone: bool, screen: f32) -> Built {
+    let tree = import(path, &ImportOptions::default()).expect("import");
+    let sampled = sample(
+        &tree,
+        &SampleOptions {
+            clip: None,
+            samples: 16,
+        },
+    )
+    .expect("sample");
+    let clock = LoopClock {
+        clip: tree.clip_index(None),
+        start: sampled.times[0],
+        period: sampled.period,
+        samples: sampled.samples(),
+    };
+    let pixel = tree.bounds.height() / screen;
+    let mut params = CloudParams::default();
+    params.search.epsilon = pixel;
+    params.search.candidates = 60;
+    params.bake.texels_per_unit = 1.0 / pixel;
+    let clusters = if per_bone {
+        per_bone_clusters(&tree, &sampled)
+    } else {
+        static_clusters(&sampled)
+    };
+    let renderer = Renderer::new().expect("renderer");
+    let (mut cloud, _) = build_animated_cloud(
+        &renderer,
+        &tree,
+        &sampled,
+        Rig::from_tree(&tree),
+        clock,
+        &clusters,
+        &params,
+        tree.bounds.size(),
+        if per_bone { "per-bone" } else { "static" },
+    )
+    .expect("cloud");
+    apply_budget(
+        &mut cloud,
+        &sampled,
+        &ScreenBudget {
+            pixel,
+            epsilon: pixel,
+        },
+        &[],
+    );
+    Built {
+        tree,
+        sampled,
+        cloud,
+        epsilon: pixel,
+    }
+}
+
+/// Writes the cloud alone, re-imports it and compares every billboard corner at every clock
+/// sample with `corners_at`.
+fn round_trip(b: &Built) {
+    let file = write_glb(
+        &[LodInput {
+            name: "t_LOD1".into(),
+            tree: &b.tree,
+            rig: &b.cloud.rig,
+            parts: Vec::new(),
+            cloud: Some(&b.cloud),
+            clips: b.cloud.playable_clips.clone(),
+            vat_uvs: None,
+        }],
+        &FileOptions::default(),
+    )
+    .expect("write");
+    let back = import_bytes(
+        Path::new("t_LOD1.glb"),
+        &file.glb,
+        &ImportOptions::default(),
+    )
+    .expect("re-import");
+    let clip = b
+        .cloud
+        .clock
+        .clip
+        .map(|c| b.cloud.rig.clips[c].name.clone());
+    let clip_back = clip.as_ref().and_then(|n| back.clip_index(Some(n)));
+    let worlds = sampled_worlds(&b.cloud.rig, &b.cloud.clock);
+    let rest = b.cloud.rig.rest_world();
+    let n = worlds.len();
+    let h = b.tree.bounds.height();
+    let mut worst = 0.0f32;
+    for (s, world) in worlds.iter().enumerate() {
+        let pose = frond_scene::sampling::pose_at(&back, clip_back, b.cloud.clock.time(s));
+        for i in 0..b.cloud.billboards.len() {
+            let want = b.cloud.corners_at(i, world, &rest, s, n);
+            for (c, w) in want.iter().enumerate() {
+                worst = worst.max(pose[4 * i + c].distance(*w));
+            }
+        }
+    }
+    assert!(
+        worst <= 1e-4 * h,
+        "billboard corners after the round trip are off by {worst} (tree height {h})"
+    );
+}
+
+#[test]
+fn per_bone_round_trip_and_epsilon_in_every_sample() {
+    let b = build(&sapling(), true, 300.0);
+    round_trip(&b);
+    // Every foliage triangle's centre stays within ε of its billboard's plane in every sample.
+    let worlds = sampled_worlds(&b.cloud.rig, &b.cloud.clock);
+    let rest = b.cloud.rig.rest_world();
+    let n = worlds.len();
+    let k_of: std::collections::HashMap<usize, usize> = b
+        .sampled
+        .foliage
+        .iter()
+        .enumerate()
+        .map(|(k, &t)| (t, k))
+        .collect();
+    let mut worst = 0.0f32;
+    for (i, bb) in b.cloud.billboards.iter().enumerate() {
+        for (s, world) in worlds.iter().enumerate() {
+            let c = b.cloud.corners_at(i, world, &rest, s, n);
+            let normal = (c[1] - c[0]).cross(c[2] - c[1]).normalize();
+            for t in &bb.triangles {
+                let centre = b.sampled.trajectory(k_of[t])[s];
+                worst = worst.max((centre - c[0]).dot(normal).abs());
+            }
+        }
+    }
+    assert!(
+        worst <= b.epsilon * 1.001,
+        "a triangle centre is {worst} from its plane, ε = {}",
+        b.epsilon
+    );
+}
+
+#[test]
+fn static_round_trip_on_a_shared_tree() {
+    let b = build(&shared_tree("bush_1.glb"), false, 120.0);
+    assert!(b.cloud.billboards.iter().any(|x| x.motion.is_some()));
+    round_trip(&b);
+}
+
+#[test]
+fn vat_textures_decode_back_to_the_motion() {
+    let b = build(&sapling(), false, 150.0);
+    for format in [VatFormat::ExrHalf, VatFormat::Png16] {
+        let vat = frond::lod_cmd::vat_textures(&b.cloud, format, "t").expect("vat");
+        let frames =
+            decode_rigid(&vat.position.bytes, &vat.rotation.bytes, &vat.sidecar).expect("decode");
+        let worlds = sampled_worlds(&b.cloud.rig, &b.cloud.clock);
+        let rest = b.cloud.rig.rest_world();
+        let n = worlds.len();
+        let size = b.tree.bounds.size();
+        // Half floats keep 11 bits; PNG16 maps the bounds onto 65535 steps.
+        let tol = match format {
+            VatFormat::ExrHalf => size * 2e-3,
+            VatFormat::Png16 => size * 2e-4,
+        };
+        let mut worst = 0.0f32;
+        for (i, bb) in b.cloud.billboards.iter().enumerate() {
+            let pivot = bb.quad.center;
+            for s in 0..n {
+                let want = b.cloud.corners_at(i, &worlds[s], &rest, s, n);
+                let f = frames[i][s];
+                for (c, w) in bb.quad.corners().iter().zip(want) {
+                    let got = f.rotation * (*c - pivot) + f.position;
+                    worst = worst.max(got.distance(w));
+                }
+            }
+        }
+        assert!(
+            worst <= tol,
+            "{format:?}: decoded corners off by {worst} > {tol}"
+        );
+    }
+}
