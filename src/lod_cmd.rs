@@ -528,6 +528,8 @@ fn build_lod(
     };
     params.bake.texels_per_unit = level.texels_per_unit;
     params.bake.max_atlas = req.max_atlas;
+    // Far LODs bake sparse foliage into few texels: keep its coverage (see BakeParams).
+    params.bake.preserve_coverage = true;
     let diag = crate::cloud_cmd::rest_diagonal(tree);
     let (mut cloud, build_t) = build_animated_cloud(
         renderer,
@@ -547,7 +549,7 @@ fn build_lod(
         pixel: level.pixel,
         epsilon: level.epsilon,
     };
-    let (map, dropped) = apply_budget(&mut cloud, sampled, &budget, &used_nodes(&wood_lod));
+    let (map, dropped) = apply_budget(&mut cloud, tree, sampled, &budget, &used_nodes(&wood_lod));
     remap(&mut wood_lod, &map);
     let t2 = Instant::now();
     let clips = cloud.playable_clips.clone();

@@ -200,7 +200,10 @@ fn bad_arguments_fail_cleanly_without_output() {
         vec!["--pixel-error", "-1"],
         vec!["--epsilon", "abc"],
     ] {
-        let mut all = vec!["lod".to_string(), sapling().to_str().expect("utf-8").to_string()];
+        let mut all = vec![
+            "lod".to_string(),
+            sapling().to_str().expect("utf-8").to_string(),
+        ];
         all.extend(args.iter().map(|s| s.to_string()));
         all.extend(["-o".to_string(), out.display().to_string()]);
         let refs: Vec<&str> = all.iter().map(|s| s.as_str()).collect();
@@ -270,6 +273,7 @@ fn build(path: &Path, per_bone: bool, screen: f32) -> Built {
     .expect("cloud");
     apply_budget(
         &mut cloud,
+        &tree,
         &sampled,
         &ScreenBudget {
             pixel,

@@ -12,14 +12,17 @@
 //! three.js vertex against the nearest frond vertex of the same time (grid hash).
 //!
 //! Skips (with a message) only when `node` is not installed; `three` comes from tools/package.json
-//! like the validator and gltfpack.
+//! like the validator and gltfpack (`common::node_tools` installs it).
+//!
+//! The same check runs on every file `frond lod` writes (LOD0, the billboard-cloud LODs and the
+//! combined file): three.js plays our skins, billboards included, exactly where frond's importer
+//! and sampler put them, and the LOD clips keep the input's phase and length.
 
 mod common;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::OnceLock;
 
 use frond_scene::sampling::pose_at;
 use frond_scene::{ImportOptions, Tree, import};
@@ -56,31 +59,6 @@ fn have_node() -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
-/// tools/ with `three` installed. `common::node_tools()` only installs when the validator or
-/// gltfpack is missing, so a tools/node_modules made before `three` joined package.json would
-/// lack it: install here in that case (same npm command). Local helper, not in tests/common.
-fn three_tools() -> PathBuf {
-    static READY: OnceLock<PathBuf> = OnceLock::new();
-    READY
-        .get_or_init(|| {
-            let tools = common::node_tools();
-            if !tools.join("node_modules/three/package.json").exists() {
-                let status = Command::new("npm")
-                    .args(["install", "--no-audit", "--no-fund", "--prefix"])
-                    .arg(&tools)
-                    .status()
-                    .expect("npm is installed (needed for three.js)");
-                assert!(status.success(), "npm install in tools/ failed");
-            }
-            assert!(
-                tools.join("node_modules/three/package.json").exists(),
-                "three is not in tools/node_modules after npm install"
-            );
-            tools
-        })
-        .clone()
-}
-
 fn usize_of(v: &serde_json::Value) -> Option<usize> {
     v.as_u64().map(|n| n as usize)
 }
@@ -88,7 +66,7 @@ fn usize_of(v: &serde_json::Value) -> Option<usize> {
 /// Plays `glb` in three.js: clip `clip` (None: the first clip, or the rest pose when the file
 /// has none) at `times` seconds of the file's own time base; world positions per mesh and time.
 pub fn three_play(glb: &Path, clip: Option<&str>, times: &[f32]) -> ThreeClip {
-    let tools = three_tools();
+    let tools = common::node_tools();
     let times_arg = times
         .iter()
         .map(|t| format!("{t:?}"))
@@ -280,6 +258,19 @@ pub fn compare_with_frond(
     let c = &tree.clips[clip];
     let abs: Vec<f32> = rel_times.iter().map(|t| c.start + t).collect();
     let play = three_play(glb, Some(&c.name), &abs);
+    compare_play(glb, tree, clip, &play, radius)
+}
+
+/// [`compare_with_frond`] on a clip already played by [`three_play`] (at absolute clip times).
+pub fn compare_play(
+    glb: &Path,
+    tree: &Tree,
+    clip: usize,
+    play: &ThreeClip,
+    radius: f32,
+) -> Agreement {
+    let c = &tree.clips[clip];
+    let abs = &play.times;
     assert_eq!(play.name.as_deref(), Some(c.name.as_str()));
     assert!(
         (play.duration - c.end).abs() <= 1e-4 * c.end.max(1.0),
@@ -287,8 +278,8 @@ pub fn compare_with_frond(
         play.duration,
         c.end
     );
-    let three = flatten(&play);
-    let order = frond_order(glb, tree, &play);
+    let three = flatten(play);
+    let order = frond_order(glb, tree, play);
     let mut per_time = Vec::with_capacity(abs.len());
     for (s, &t) in abs.iter().enumerate() {
         let frond = pose_at(tree, Some(clip), t);
@@ -399,4 +390,160 @@ fn point_set_fallback_agrees_with_the_one_to_one_match() {
     let mut moved = three[0].clone();
     moved[7] += Vec3::new(0.0, 20.0 * tolerance, 0.0);
     assert!(nearest_max_distance(&moved, &frond, 10.0 * tolerance) > tolerance);
+}
+
+/// Largest displacement of a vertex of `mesh` from its position at the first sampled time.
+fn max_displacement(mesh: &ThreeMesh) -> f32 {
+    let first = &mesh.positions[0];
+    mesh.positions
+        .iter()
+        .flat_map(|pose| pose.iter().zip(first).map(|(p, q)| p.distance(*q)))
+        .fold(0.0, f32::max)
+}
+
+#[test]
+fn threejs_plays_every_lod_file_like_frond_samples_it() {
+    if !have_node() {
+        eprintln!("skipped: `node` is not installed (three.js playback check)");
+        return;
+    }
+    let input_path = common::root().join("samples/sapling.glb");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("lods");
+    common::frond_ok(&[
+        "lod",
+        input_path.to_str().expect("utf-8 path"),
+        "-o",
+        out.to_str().expect("utf-8 path"),
+        "--lods",
+        "300,60",
+        "--samples",
+        "16",
+        "--planes",
+        "60",
+    ]);
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).expect("report.json"))
+            .expect("report is JSON");
+    let lods = report["lods"].as_array().expect("lods");
+    assert_eq!(lods.len(), 3, "LOD0, LOD1, LOD2");
+    let billboards: Vec<usize> = lods
+        .iter()
+        .map(|l| usize_of(&l["billboards"]).expect("billboard count"))
+        .collect();
+    let mut files: Vec<PathBuf> = lods
+        .iter()
+        .map(|l| out.join(l["file"].as_str().expect("file name")))
+        .collect();
+    files.push(out.join(report["combined"].as_str().expect("combined file name")));
+
+    let input = import(&input_path, &ImportOptions::default()).expect("sapling imports");
+    let wind = |tree: &Tree| tree.clips.iter().position(|c| c.name == "Wind");
+    let clip_in = &input.clips[wind(&input).expect("the sapling has a Wind clip")];
+    let period = clip_in.duration();
+    assert!(period > 0.0);
+    let height = input.bounds.height();
+    // Measured: at most 5.5e-7 × height (LOD2 and the combined file at 0.37 P; 1.9e-7 × height
+    // for LOD0 and LOD1), f32 skinning noise as for the input trees.
+    let tolerance = 1e-4 * height;
+    // Quarter points, one time between keys, and the loop's end: three.js wraps t = P to the
+    // clip's first pose, frond's sampler clamps to the last keys, so agreement there also says
+    // the written clip closes its loop.
+    let rel = [
+        0.0,
+        period / 4.0,
+        0.37 * period,
+        period / 2.0,
+        3.0 * period / 4.0,
+        period,
+    ];
+
+    let mut moved = Vec::new();
+    for file in &files {
+        let label = file.file_name().unwrap_or_default().to_string_lossy();
+        let tree = import(file, &ImportOptions::default()).expect("LOD file imports");
+        let ci = wind(&tree).unwrap_or_else(|| panic!("{label}: no Wind clip"));
+        let c = &tree.clips[ci];
+        // In phase and the same length as the input's clip (frond's reading of the file).
+        assert!(
+            (c.start - clip_in.start).abs() <= 1e-4 && (c.end - clip_in.end).abs() <= 1e-4,
+            "{label}: Wind keys span [{}, {}], input [{}, {}]",
+            c.start,
+            c.end,
+            clip_in.start,
+            clip_in.end
+        );
+        let abs: Vec<f32> = rel.iter().map(|t| c.start + t).collect();
+        let play = three_play(file, Some("Wind"), &abs);
+        // three.js's clip duration is its last key time.
+        assert!(
+            (play.duration - clip_in.end).abs() <= 1e-4,
+            "{label}: three.js Wind lasts {} s, input clip ends at {} s",
+            play.duration,
+            clip_in.end
+        );
+        let a = compare_play(file, &tree, ci, &play, 10.0 * tolerance);
+        eprintln!(
+            "{label}: {} vertices, {}, three.js duration {} s, max distance {:.3e} ({:.3e} × height) per time {:?}, motion {:.3e}",
+            a.vertices,
+            if a.one_to_one {
+                "one to one"
+            } else {
+                "as point sets"
+            },
+            play.duration,
+            a.max_distance,
+            a.max_distance / height,
+            a.per_time,
+            a.max_motion,
+        );
+        assert_eq!(a.vertices, tree.vertices.len(), "{label}: vertex count");
+        assert!(a.one_to_one, "{label}: vertices line up one to one");
+        assert!(
+            a.max_distance <= tolerance,
+            "{label}: three.js and frond differ by {} (> {tolerance})",
+            a.max_distance
+        );
+
+        // Billboards: the first primitive of each billboard LOD's mesh node, 4 vertices each.
+        let json = gltf_json(file);
+        let nodes = json["nodes"].as_array().expect("nodes");
+        for (k, &count) in billboards.iter().enumerate().skip(1) {
+            let name = format!("sapling_LOD{k}");
+            let Some(ni) = nodes
+                .iter()
+                .position(|n| n["name"] == name.as_str() && n["mesh"].is_u64())
+            else {
+                continue;
+            };
+            let mesh = play
+                .meshes
+                .iter()
+                .find(|m| m.node == Some(ni) && m.primitive == Some(0))
+                .unwrap_or_else(|| panic!("{label}: three.js has no primitive 0 of {name}"));
+            assert!(mesh.skinned, "{label}: {name}'s billboards are skinned");
+            assert_eq!(
+                mesh.positions[0].len(),
+                4 * count,
+                "{label}: {name} has 4 vertices per billboard"
+            );
+            let d = max_displacement(mesh);
+            eprintln!("{label}: {name} billboards ({count}) move up to {d:.3e} in three.js");
+            // Far above float noise (the wind moves them by ~2 m; 100 × tolerance is 0.1 m).
+            assert!(
+                d > 100.0 * tolerance,
+                "{label}: {name}'s billboards barely move ({d})"
+            );
+            moved.push(name);
+        }
+    }
+    // Both billboard LODs were seen moving, in their own files and in the combined one.
+    for k in 1..3 {
+        let name = format!("sapling_LOD{k}");
+        assert_eq!(
+            moved.iter().filter(|n| **n == name).count(),
+            2,
+            "{name}: billboards checked in its file and the combined file"
+        );
+    }
 }

@@ -62,6 +62,9 @@ pub fn pack(sizes: &[(u32, u32)], padding: u32, max_size: u32) -> Option<Packing
         return None;
     }
 
+    if cells.len() > CRUNCH_MAX_ITEMS {
+        return shelf_pack(&cells, pad, limit, widest, area);
+    }
     let mut packer = Packer::with_items(
         cells
             .iter()
@@ -108,6 +111,84 @@ pub fn pack(sizes: &[(u32, u32)], padding: u32, max_size: u32) -> Option<Packing
         width: ceil4(right).min(limit) as u32,
         height: ceil4(bottom).min(limit) as u32,
         origins,
+    })
+}
+
+/// Above this many textures the shelf packer replaces `crunch`, whose free-rectangle
+/// bookkeeping grows quadratically (27k leaf billboards took minutes to pack).
+const CRUNCH_MAX_ITEMS: usize = 4096;
+
+/// First-fit decreasing-height shelves for many textures: cells sorted by height (then width,
+/// then index, for determinism) fill rows left to right, each into the first shelf with room.
+/// The atlas width is the smallest multiple of 4 whose packing is no taller than it is wide
+/// (bisection; the height shrinks as the width grows), so the atlas comes out near square.
+fn shelf_pack(
+    cells: &[(usize, usize)],
+    pad: usize,
+    limit: usize,
+    widest: usize,
+    area: u128,
+) -> Option<Packing> {
+    let mut order: Vec<usize> = (0..cells.len()).collect();
+    order.sort_by(|&a, &b| {
+        cells[b]
+            .1
+            .cmp(&cells[a].1)
+            .then(cells[b].0.cmp(&cells[a].0))
+            .then(a.cmp(&b))
+    });
+    // Packs into `width`; returns the height used and the cell origins.
+    let run = |width: usize| -> (usize, Vec<(usize, usize)>) {
+        // Shelves: (y, height, used width).
+        let mut shelves: Vec<(usize, usize, usize)> = Vec::new();
+        let mut origins = vec![(0, 0); cells.len()];
+        let mut height = 0;
+        for &i in &order {
+            let (w, h) = cells[i];
+            match shelves.iter_mut().find(|s| s.2 + w <= width) {
+                Some(s) => {
+                    origins[i] = (s.2, s.0);
+                    s.2 += w;
+                }
+                None => {
+                    origins[i] = (0, height);
+                    shelves.push((height, h, w));
+                    height += h;
+                }
+            }
+        }
+        (height, origins)
+    };
+    let lower = ceil4(widest.max(isqrt_ceil(area))).min(limit) / 4;
+    let (mut lo, mut hi) = (lower, limit / 4);
+    let (h, o) = run(hi * 4);
+    if h > limit {
+        return None;
+    }
+    let mut best = (hi * 4, h, o);
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        let (h, o) = run(mid * 4);
+        if h <= mid * 4 {
+            best = (mid * 4, h, o);
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    let (_, _, origins) = best;
+    let (mut right, mut bottom) = (0usize, 0usize);
+    for (&(x, y), &(w, h)) in origins.iter().zip(cells) {
+        right = right.max(x + w);
+        bottom = bottom.max(y + h);
+    }
+    Some(Packing {
+        width: ceil4(right).min(limit) as u32,
+        height: ceil4(bottom).min(limit) as u32,
+        origins: origins
+            .iter()
+            .map(|&(x, y)| ((x + pad) as u32, (y + pad) as u32))
+            .collect(),
     })
 }
 
@@ -190,6 +271,28 @@ mod tests {
         assert_valid(&p, &[(30, 30); 4], 1);
         let zero = pack(&[(0, 0), (0, 5)], 0, 16).expect("fits");
         assert_valid(&zero, &[(0, 0), (0, 5)], 0);
+    }
+
+    #[test]
+    fn many_textures_go_to_shelves_without_overlap() {
+        let sizes: Vec<(u32, u32)> = (0..5000u32)
+            .map(|i| (4 + (i * 37) % 29, 4 + (i * 53) % 23))
+            .collect();
+        let p = pack(&sizes, 2, 4096).expect("fits");
+        assert_valid(&p, &sizes, 2);
+        let used: u64 = sizes
+            .iter()
+            .map(|&(w, h)| u64::from(w + 4) * u64::from(h + 4))
+            .sum();
+        let atlas = u64::from(p.width) * u64::from(p.height);
+        assert!(used as f64 / atlas as f64 > 0.8, "{used} of {atlas}");
+        assert!(
+            p.width.abs_diff(p.height) < p.width / 4,
+            "near square: {p:?}"
+        );
+        assert_eq!(pack(&sizes, 2, 4096), Some(p), "deterministic");
+        // Too much for a small atlas.
+        assert_eq!(pack(&sizes, 2, 256), None);
     }
 
     #[test]

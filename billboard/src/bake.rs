@@ -60,6 +60,11 @@ pub struct BakeParams {
     /// Largest texture side per quad, in texels (a longer side scales the quad's texture
     /// down, keeping its aspect ratio).
     pub max_side: u32,
+    /// Per quad, move the alpha-test threshold so that as many texels pass as the quad's
+    /// summed coverage (in texels): sparse foliage baked at low resolution keeps its density
+    /// instead of vanishing where no texel is half covered (the coverage-preserving rule the
+    /// renderer's mip chains use). Off: a texel passes when `alpha_cutoff` of it is covered.
+    pub preserve_coverage: bool,
 }
 
 impl Default for BakeParams {
@@ -74,6 +79,7 @@ impl Default for BakeParams {
             alpha_cutoff: 0.5,
             min_side: 4,
             max_side: 1024,
+            preserve_coverage: false,
         }
     }
 }
@@ -215,6 +221,9 @@ pub fn bake_cloud(
         &mut samples,
     )?;
     let rendered = start.elapsed();
+    if params.preserve_coverage {
+        preserve_coverage(&mut samples, &cells, ss * ss);
+    }
 
     let normals: Vec<Vec3> = quads.iter().map(front_normal).collect();
     let atlas = dilate(samples, &cells, &normals, params.padding);
@@ -573,6 +582,8 @@ struct Downsampled {
     normal: Vec<u8>,
     /// Whether any supersample of the texel was covered.
     covered: Vec<bool>,
+    /// Covered supersamples per texel.
+    samples: Vec<u16>,
 }
 
 impl Downsampled {
@@ -584,6 +595,7 @@ impl Downsampled {
             color: vec![0; n * 4],
             normal: vec![0; n * 4],
             covered: vec![false; n],
+            samples: vec![0; n],
         }
     }
 }
@@ -630,6 +642,50 @@ fn coverage_alpha(n: u32, total: u32, needed: u32) -> u8 {
     } else {
         let extra = total - needed;
         (128 + ((n - needed) * 127 + extra / 2) / extra).min(255) as u8
+    }
+}
+
+/// Re-thresholds each cell's alpha so that the number of texels passing the 0.5 test equals
+/// the cell's summed coverage in texels, rounded ([`BakeParams::preserve_coverage`]).
+fn preserve_coverage(out: &mut Downsampled, cells: &[Cell], total: u32) {
+    let w = out.width as usize;
+    let mut counts: Vec<u32> = Vec::new();
+    for c in cells {
+        counts.clear();
+        let texels = || {
+            (c.y as usize..(c.y + c.height) as usize)
+                .flat_map(move |y| (c.x as usize..(c.x + c.width) as usize).map(move |x| y * w + x))
+        };
+        counts.extend(
+            texels()
+                .map(|i| u32::from(out.samples[i]))
+                .filter(|&n| n > 0),
+        );
+        if counts.is_empty() {
+            continue;
+        }
+        let sum: u64 = counts.iter().map(|&n| u64::from(n)).sum();
+        let keep = ((sum as f64 / f64::from(total)).round() as usize).min(counts.len());
+        counts.sort_unstable_by(|a, b| b.cmp(a));
+        // Texels with at least `needed` covered samples pass; none when keep == 0.
+        let needed = if keep == 0 {
+            total + 1
+        } else {
+            counts[keep - 1]
+        };
+        for i in texels() {
+            let n = u32::from(out.samples[i]);
+            if n == 0 {
+                continue;
+            }
+            let alpha = if needed > total {
+                ((n * 127) / total).clamp(1, 127) as u8
+            } else {
+                coverage_alpha(n, total, needed)
+            };
+            out.color[i * 4 + 3] = alpha;
+            out.normal[i * 4 + 3] = alpha;
+        }
     }
 }
 
@@ -770,60 +826,64 @@ fn downsample(
         .par_chunks_mut(atlas_w * 4)
         .zip(out.normal.par_chunks_mut(atlas_w * 4))
         .zip(out.covered.par_chunks_mut(atlas_w))
+        .zip(out.samples.par_chunks_mut(atlas_w))
         .skip(oy)
         .take(tex_h)
         .enumerate();
-    rows.for_each(|(row, ((color_row, normal_row), covered_row))| {
-        for col in 0..tex_w {
-            let mut n = 0u32;
-            let mut sum = [0.0f32; 3];
-            let mut nn = 0u32;
-            let mut nsum = Vec3::ZERO;
-            for sy in 0..ss {
-                let base = (row * ss + sy) * frame_w + col * ss;
-                for sx in 0..ss {
-                    let i = base + sx;
-                    if color.coverage[i] {
-                        n += 1;
-                        let p = &color.rgba[i * 4..i * 4 + 3];
-                        for k in 0..3 {
-                            sum[k] += lut[p[k] as usize];
+    rows.for_each(
+        |(row, (((color_row, normal_row), covered_row), samples_row))| {
+            for col in 0..tex_w {
+                let mut n = 0u32;
+                let mut sum = [0.0f32; 3];
+                let mut nn = 0u32;
+                let mut nsum = Vec3::ZERO;
+                for sy in 0..ss {
+                    let base = (row * ss + sy) * frame_w + col * ss;
+                    for sx in 0..ss {
+                        let i = base + sx;
+                        if color.coverage[i] {
+                            n += 1;
+                            let p = &color.rgba[i * 4..i * 4 + 3];
+                            for k in 0..3 {
+                                sum[k] += lut[p[k] as usize];
+                            }
+                        }
+                        if normal.coverage[i] {
+                            nn += 1;
+                            let p = &normal.rgba[i * 4..i * 4 + 3];
+                            nsum += Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) / 127.5
+                                - Vec3::ONE;
                         }
                     }
-                    if normal.coverage[i] {
-                        nn += 1;
-                        let p = &normal.rgba[i * 4..i * 4 + 3];
-                        nsum +=
-                            Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) / 127.5 - Vec3::ONE;
-                    }
                 }
+                if n == 0 {
+                    continue;
+                }
+                let x = ox + col;
+                samples_row[x] = n as u16;
+                let alpha = coverage_alpha(n, total, needed);
+                let c = &mut color_row[x * 4..x * 4 + 4];
+                for k in 0..3 {
+                    c[k] = linear_to_srgb(sum[k] / n as f32);
+                }
+                c[3] = alpha;
+                covered_row[x] = true;
+                let unit = if nn > 0 {
+                    nsum.normalize_or_zero()
+                } else {
+                    Vec3::ZERO
+                };
+                // rgb 0 marks "no normal" (no unit vector encodes to it): dilation replaces it
+                // with the quad's normal.
+                let encoded = if unit == Vec3::ZERO {
+                    [0, 0, 0, alpha]
+                } else {
+                    encode_normal(unit, alpha)
+                };
+                normal_row[x * 4..x * 4 + 4].copy_from_slice(&encoded);
             }
-            if n == 0 {
-                continue;
-            }
-            let x = ox + col;
-            let alpha = coverage_alpha(n, total, needed);
-            let c = &mut color_row[x * 4..x * 4 + 4];
-            for k in 0..3 {
-                c[k] = linear_to_srgb(sum[k] / n as f32);
-            }
-            c[3] = alpha;
-            covered_row[x] = true;
-            let unit = if nn > 0 {
-                nsum.normalize_or_zero()
-            } else {
-                Vec3::ZERO
-            };
-            // rgb 0 marks "no normal" (no unit vector encodes to it): dilation replaces it
-            // with the quad's normal.
-            let encoded = if unit == Vec3::ZERO {
-                [0, 0, 0, alpha]
-            } else {
-                encode_normal(unit, alpha)
-            };
-            normal_row[x * 4..x * 4 + 4].copy_from_slice(&encoded);
-        }
-    });
+        },
+    );
 }
 
 /// `rgb = n * 0.5 + 0.5` as bytes, with the given alpha.
@@ -958,6 +1018,62 @@ mod tests {
         assert_eq!(linear_to_srgb(0.5), 188);
         assert_eq!(linear_to_srgb(-1.0), 0);
         assert_eq!(linear_to_srgb(2.0), 255);
+    }
+
+    #[test]
+    fn preserved_coverage_passes_as_many_texels_as_are_covered() {
+        // A 10x10 cell of texels each a quarter covered (4 of 16 samples), plus a 4x4 cell
+        // fully covered: the 0.5 test keeps none of the first; preserving coverage keeps 25.
+        let mut d = Downsampled::new(16, 12);
+        let cells = [
+            Cell {
+                x: 0,
+                y: 0,
+                width: 10,
+                height: 10,
+            },
+            Cell {
+                x: 12,
+                y: 0,
+                width: 4,
+                height: 4,
+            },
+        ];
+        for y in 0..12usize {
+            for x in 0..16usize {
+                let i = y * 16 + x;
+                let n: u16 = if x < 10 && y < 10 {
+                    // Slightly different counts so the threshold falls between texels.
+                    4 + ((x + y) % 2) as u16
+                } else if x >= 12 && y < 4 {
+                    16
+                } else {
+                    0
+                };
+                d.samples[i] = n;
+                let a = coverage_alpha(u32::from(n), 16, 8);
+                d.color[i * 4 + 3] = a;
+                d.normal[i * 4 + 3] = a;
+            }
+        }
+        let passing = |d: &Downsampled, c: &Cell| {
+            (c.y..c.y + c.height)
+                .flat_map(|y| (c.x..c.x + c.width).map(move |x| (y * 16 + x) as usize))
+                .filter(|&i| d.color[i * 4 + 3] >= 128)
+                .count()
+        };
+        assert_eq!(passing(&d, &cells[0]), 0);
+        preserve_coverage(&mut d, &cells, 16);
+        // Σ n / 16 = (50·4 + 50·5) / 16 = 28.1 → 28 texels; ties at 5 samples: 50 have 5.
+        // The threshold is the 28th largest count (5), so all 50 five-sample texels pass:
+        // the closest achievable count with per-texel thresholds.
+        let kept = passing(&d, &cells[0]);
+        assert!(kept >= 28 && kept <= 50, "{kept}");
+        assert_eq!(passing(&d, &cells[1]), 16, "full cells stay full");
+        for i in 0..d.samples.len() {
+            assert_eq!(d.color[i * 4 + 3], d.normal[i * 4 + 3]);
+            assert_eq!(d.color[i * 4 + 3] == 0, d.samples[i] == 0);
+        }
     }
 
     #[test]

@@ -4,13 +4,14 @@
 //! a pixel are removed, and rig nodes that then drive nothing are pruned (spec
 //! view-dependent-hierarchies-gpu §2.3–2.4: one pixel at the LOD's viewing distance).
 
-use frond_scene::Sampled;
-use glam::{Mat4, Vec3};
+use frond_scene::{Sampled, Tree};
+use glam::{Affine3A, Mat4, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::animated::AnimatedBillboardCloud;
 use crate::animated_build::sampled_worlds;
+use crate::rigid_fit::rigid_fit;
 
 /// What one LOD can show.
 #[derive(Clone, Copy, Debug)]
@@ -27,6 +28,9 @@ pub struct ScreenBudget {
 pub struct Dropped {
     /// Billboards whose own motion never moves a corner half a pixel: made static.
     pub motion_under_half_pixel: usize,
+    /// Billboards whose own motion is within half a pixel of a bone's (one their triangles
+    /// follow, or an ancestor): they follow that bone instead and need no joint of their own.
+    pub attached_to_bone: usize,
     /// Billboards whose own motion is within half a pixel of an earlier billboard's: they
     /// share that billboard's motion (and so its joint or VAT track).
     pub motion_shared: usize,
@@ -78,10 +82,12 @@ fn carry(node: Option<usize>, worlds: &[Vec<Mat4>], rest_inv: &[Mat4], s: usize)
     }
 }
 
-/// Applies `budget` to `cloud` (whose motion was sampled from `sampled`) and prunes its rig.
+/// Applies `budget` to `cloud` (built from `tree`, whose loop `sampled` is; the rig's node
+/// indices still those of the tree) and prunes its rig.
 /// Returns the old → new rig node map (for the caller's wood mesh) and what was dropped.
 pub fn apply_budget(
     cloud: &mut AnimatedBillboardCloud,
+    tree: &Tree,
     sampled: &Sampled,
     budget: &ScreenBudget,
     keep_nodes: &[usize],
@@ -114,6 +120,77 @@ pub fn apply_budget(
                 b.motion = None;
                 dropped.motion_under_half_pixel += 1;
             }
+        }
+    }
+
+    // 2a. Own motion within half a pixel of a bone's: follow the bone.
+    let worlds = sampled_worlds(&cloud.rig, &cloud.clock);
+    let rest_inv: Vec<Mat4> = cloud.rig.rest_world().iter().map(|m| m.inverse()).collect();
+    let nodes = &cloud.rig.nodes;
+    let attach: Vec<Option<(usize, Affine3A)>> = cloud
+        .billboards
+        .par_iter()
+        .map(|b| {
+            let m = b.motion.as_ref()?;
+            if b.follows.is_some() {
+                return None;
+            }
+            let mut candidates: Vec<usize> = Vec::new();
+            for &t in &b.triangles {
+                let Some(bone) = tree.triangles.get(t).and_then(|t| t.bone) else {
+                    continue;
+                };
+                let mut cur = tree.bones.get(bone as usize).map(|b| b.node);
+                while let Some(c) = cur {
+                    if c >= nodes.len() || candidates.contains(&c) {
+                        break;
+                    }
+                    candidates.push(c);
+                    cur = nodes[c].parent;
+                }
+            }
+            candidates.sort_unstable();
+            let corners = b.quad.corners();
+            let n = m.len();
+            // Following `node` puts the quad at Q·corners in the node's rest frame, Q the rigid
+            // fit of Rest·W(s)⁻¹·M(s) over the loop; the deviation is what that costs on screen.
+            let fit = |node: usize| -> (f32, Affine3A) {
+                let mut from = Vec::with_capacity(4 * worlds.len());
+                let mut to = Vec::with_capacity(4 * worlds.len());
+                for s in 0..worlds.len() {
+                    let back = carry(Some(node), &worlds, &rest_inv, s).inverse();
+                    let own = m.at(s, n);
+                    for c in &corners {
+                        from.push(*c);
+                        to.push(back.transform_point3(own.transform_point3(*c)));
+                    }
+                }
+                let q = rigid_fit(&from, &to);
+                let mut worst = 0.0f32;
+                for s in 0..worlds.len() {
+                    let a = carry(Some(node), &worlds, &rest_inv, s);
+                    let own = m.at(s, n);
+                    for c in &corners {
+                        let p = a.transform_point3(q.transform_point3(*c));
+                        worst = worst.max(p.distance(own.transform_point3(*c)));
+                    }
+                }
+                (worst, q)
+            };
+            candidates
+                .into_iter()
+                .map(|c| (fit(c), c))
+                .filter(|((d, _), _)| *d < half)
+                .min_by(|a, b| a.0.0.total_cmp(&b.0.0).then(a.1.cmp(&b.1)))
+                .map(|((_, q), c)| (c, q))
+        })
+        .collect();
+    for (b, a) in cloud.billboards.iter_mut().zip(attach) {
+        if let Some((node, q)) = a {
+            b.quad = b.quad.transformed(q);
+            b.follows = Some(node);
+            b.motion = None;
+            dropped.attached_to_bone += 1;
         }
     }
 
@@ -151,8 +228,6 @@ pub fn apply_budget(
 
     // 3. Bone-bound billboards move to the highest ancestor (or the world) that carries them
     //    within half a pixel and keeps their triangles' centres within ε of the plane.
-    let worlds = sampled_worlds(&cloud.rig, &cloud.clock);
-    let rest_inv: Vec<Mat4> = cloud.rig.rest_world().iter().map(|m| m.inverse()).collect();
     let centre_of: std::collections::HashMap<usize, usize> = sampled
         .foliage
         .iter()

@@ -29,6 +29,21 @@ impl Quad {
             self.center - u + v,
         ]
     }
+    /// The quad moved by a rigid transform (its size and texture stay).
+    pub fn transformed(&self, t: glam::Affine3A) -> Quad {
+        let center = t.transform_point3(self.center);
+        let normal = t.transform_vector3(self.plane.normal).normalize_or_zero();
+        Quad {
+            plane: Plane {
+                normal,
+                offset: normal.dot(center),
+            },
+            center,
+            axis_u: t.transform_vector3(self.axis_u).normalize_or_zero(),
+            axis_v: t.transform_vector3(self.axis_v).normalize_or_zero(),
+            half_size: self.half_size,
+        }
+    }
     /// Width and height in world units.
     pub fn size(&self) -> Vec2 {
         self.half_size * 2.0

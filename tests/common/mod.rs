@@ -43,21 +43,35 @@ pub fn frond_ok(args: &[&str]) -> Output {
     out
 }
 
-/// Installs the Node tools once (npm install into tools/node_modules) and returns the folder.
+/// Installs the Node tools once (npm install into tools/node_modules) and returns the folder:
+/// the validator, gltfpack and three.js. Installs whenever one of them is missing (a
+/// tools/node_modules made before a package joined package.json lacks it).
 pub fn node_tools() -> PathBuf {
     static READY: OnceLock<PathBuf> = OnceLock::new();
     READY
         .get_or_init(|| {
             let tools = root().join("tools");
-            if !tools.join("node_modules/gltf-validator").exists()
-                || !tools.join("node_modules/gltfpack").exists()
-            {
+            let packages = ["gltf-validator", "gltfpack", "three"];
+            let missing = |tools: &Path| {
+                packages.iter().any(|p| {
+                    !tools
+                        .join("node_modules")
+                        .join(p)
+                        .join("package.json")
+                        .exists()
+                })
+            };
+            if missing(&tools) {
                 let status = Command::new("npm")
                     .args(["install", "--no-audit", "--no-fund", "--prefix"])
                     .arg(&tools)
                     .status()
-                    .expect("npm is installed (needed for the glTF validator and gltfpack)");
+                    .expect("npm is installed (needed for the glTF validator, gltfpack, three.js)");
                 assert!(status.success(), "npm install in tools/ failed");
+                assert!(
+                    !missing(&tools),
+                    "{packages:?} not all in tools/node_modules after npm install"
+                );
             }
             tools
         })
