@@ -1068,7 +1068,7 @@ mod tests {
         // The threshold is the 28th largest count (5), so all 50 five-sample texels pass:
         // the closest achievable count with per-texel thresholds.
         let kept = passing(&d, &cells[0]);
-        assert!(kept >= 28 && kept <= 50, "{kept}");
+        assert!((28..=50).contains(&kept), "{kept}");
         assert_eq!(passing(&d, &cells[1]), 16, "full cells stay full");
         for i in 0..d.samples.len() {
             assert_eq!(d.color[i * 4 + 3], d.normal[i * 4 + 3]);
