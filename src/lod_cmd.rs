@@ -100,6 +100,8 @@ pub struct LodRequest {
     /// Candidate planes per iteration.
     pub planes: usize,
     pub max_atlas: u32,
+    /// Supersamples per texel side when baking (4 = the spec's 4×4; 2 bakes ~2.5× faster).
+    pub supersample: u32,
     /// Add MSFT_lod to the combined file, with coverages for this image height.
     pub msft_lod: bool,
     pub resolution: f32,
@@ -530,6 +532,7 @@ fn build_lod(
     params.bake.max_atlas = req.max_atlas;
     // Far LODs bake sparse foliage into few texels: keep its coverage (see BakeParams).
     params.bake.preserve_coverage = true;
+    params.bake.supersample = req.supersample;
     let diag = crate::cloud_cmd::rest_diagonal(tree);
     let (mut cloud, build_t) = build_animated_cloud(
         renderer,

@@ -53,6 +53,7 @@ fn glbs(dir: &Path) -> Vec<PathBuf> {
 fn assert_valid(file: &Path) {
     let v = validate(file);
     assert_eq!(v["errors"], 0, "{}: {}", file.display(), v["messages"]);
+    assert_eq!(v["warnings"], 0, "{}: {}", file.display(), v["messages"]);
 }
 
 #[test]
@@ -410,4 +411,70 @@ fn vat_textures_decode_back_to_the_motion() {
             "{format:?}: decoded corners off by {worst} > {tol}"
         );
     }
+}
+
+#[test]
+fn shared_trees_every_method_and_mode_validate() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let trees = [
+        "bush_1.glb",
+        "pine_medium.glb",
+        "pine_medium_blender.glb",
+        "oak_medium.glb",
+        "oak_medium_blendedleaves.glb",
+    ];
+    for (i, name) in trees.iter().enumerate() {
+        let input = shared_tree(name);
+        let tree = import(&input, &ImportOptions::default()).expect("import");
+        let vat = if i % 2 == 0 { "vat" } else { "vat-png16" };
+        let method = if i % 2 == 0 { "per-bone" } else { "static" };
+        for (k, extra) in [
+            vec!["--lods", "200,60"],
+            vec!["--lods", "100", "--animation", vat, "--method", method],
+        ]
+        .iter()
+        .enumerate()
+        {
+            let out = dir.path().join(format!("{i}_{k}"));
+            let report = lod(&input, &out, extra);
+            let lods = report["lods"].as_array().expect("lods");
+            // LOD0 is the input: every non-degenerate triangle, wood and foliage.
+            let kept = tree.triangles.iter().filter(|t| !t.degenerate).count();
+            assert_eq!(
+                lods[0]["triangles"].as_u64(),
+                Some(kept as u64),
+                "{name} LOD0"
+            );
+            for l in &lods[1..] {
+                assert!(l["billboards"].as_u64().expect("billboards") > 0, "{name}");
+                assert!(
+                    l["triangles"].as_u64() < lods[0]["triangles"].as_u64(),
+                    "{name}: a LOD is smaller than the input"
+                );
+            }
+            for f in glbs(&out) {
+                assert_valid(&f);
+            }
+        }
+    }
+}
+
+#[test]
+fn distances_give_screen_heights_by_holst_eq_3() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("o");
+    let report = lod(
+        &sapling(),
+        &out,
+        &["--distances", "40", "--fov", "90", "--resolution", "1000"],
+    );
+    let h = report["tree_height"].as_f64().expect("height");
+    // 90° fov: pc = 500 pixels per unit of height/distance.
+    let want = h / 40.0 * 500.0;
+    let got = report["lods"][1]["screen_height"]
+        .as_f64()
+        .expect("screen height");
+    assert!((got - want).abs() < 1e-3 * want, "{got} vs {want}");
+    let eps = report["lods"][1]["epsilon"].as_f64().expect("eps");
+    assert!((eps - h / want).abs() < 1e-4 * eps, "ε is one pixel");
 }

@@ -378,9 +378,18 @@ impl GltfBuilder {
         inverse_bind: &[Mat4],
         skeleton: Option<usize>,
     ) -> usize {
+        // glTF requires affine inverse binds with an exact (0, 0, 0, 1) last row; inverting in
+        // f32 leaves 1 ± 1e-7 there, which the validator rejects.
         let flat: Vec<f32> = inverse_bind
             .iter()
-            .flat_map(|m| m.to_cols_array())
+            .flat_map(|m| {
+                let mut a = m.to_cols_array();
+                for i in [3, 7, 11] {
+                    a[i] = 0.0;
+                }
+                a[15] = 1.0;
+                a
+            })
             .collect();
         let acc = self.add_floats(&flat, "MAT4", false, None);
         let mut skin = json!({ "name": name, "joints": joints, "inverseBindMatrices": acc });
