@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use frond_billboard::TriangleSoup;
 use frond_billboard::cloud::{BillboardCloud, CloudParams, CloudStats, build_cloud, parse_epsilon};
+use frond_export::textures::TextureSink;
 use frond_metrics::{CoverageParams, coverage_error};
 use frond_render::{Renderer, TreeParts, scene_from_positions};
 use frond_scene::gltf_writer::*;
@@ -14,7 +15,7 @@ use frond_scene::{Part, SampleOptions, Tree, sample};
 use glam::Vec3;
 use serde::Serialize;
 
-use crate::output::write_atomic;
+use crate::output::write_files_and_report;
 
 /// What `frond cloud` was asked for.
 #[derive(Clone, Debug)]
@@ -145,19 +146,10 @@ pub fn make_cloud(
 /// wood at `positions` with its own material.
 pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Result<Vec<u8>> {
     let mut doc = GltfBuilder::new(concat!("frond ", env!("CARGO_PKG_VERSION")));
-    let atlas = &cloud.baked.atlas;
-    let atlas_png =
-        encode_png(atlas.width, atlas.height, &atlas.color).context("encoding the atlas")?;
-    let tex = doc.add_texture("billboard_atlas", &atlas_png, true);
-    let mat = doc.add_material(&MaterialDesc {
-        name: "billboards".into(),
-        base_color: [1.0; 4],
-        base_color_texture: Some(tex),
-        alpha: WriteAlpha::Mask(0.5),
-        double_sided: true,
-        metallic: 0.0,
-        roughness: 1.0,
-    });
+    let mut sink = TextureSink::new(None);
+    let mat = sink
+        .billboard_material(&mut doc, "cloud", &cloud.baked.atlas)
+        .context("writing the billboard material")?;
     let q = cloud.quad_mesh();
     let quads = PrimitiveDesc {
         positions: q.positions,
@@ -176,8 +168,7 @@ pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Res
     doc.add_root(node);
     // Wood: one primitive per material, un-indexed vertices re-used per primitive.
     let mut prims = Vec::new();
-    let mut tex_of_image: Vec<Option<usize>> = vec![None; tree.textures.len()];
-    for (m, material) in tree.materials.iter().enumerate() {
+    for m in 0..tree.materials.len() {
         let tris: Vec<_> = tree
             .triangles
             .iter()
@@ -186,33 +177,9 @@ pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Res
         if tris.is_empty() {
             continue;
         }
-        let texture = match material.base_color_texture {
-            Some(ti) => Some(match tex_of_image[ti] {
-                Some(t) => t,
-                None => {
-                    let t = &tree.textures[ti];
-                    let png = encode_png(t.width, t.height, &t.rgba)
-                        .context("encoding a wood texture")?;
-                    let id = doc.add_texture(&t.name, &png, false);
-                    tex_of_image[ti] = Some(id);
-                    id
-                }
-            }),
-            None => None,
-        };
-        let mat = doc.add_material(&MaterialDesc {
-            name: material.name.clone(),
-            base_color: material.base_color,
-            base_color_texture: texture,
-            alpha: match material.alpha_mode {
-                frond_scene::AlphaMode::Opaque => WriteAlpha::Opaque,
-                frond_scene::AlphaMode::Mask => WriteAlpha::Mask(material.alpha_cutoff),
-                frond_scene::AlphaMode::Blend => WriteAlpha::Blend,
-            },
-            double_sided: material.double_sided,
-            metallic: 0.0,
-            roughness: 1.0,
-        });
+        let mat = sink
+            .tree_material(&mut doc, tree, m)
+            .context("writing a wood material")?;
         let mut p = PrimitiveDesc {
             uvs: Some(Vec::new()),
             material: Some(mat),
@@ -270,10 +237,6 @@ pub fn run_cloud(
     report
         .files
         .push(out_dir.join("stats.json").display().to_string());
-    for (p, bytes) in &files {
-        write_atomic(p, bytes)?;
-    }
-    let stats = serde_json::to_vec_pretty(&report).context("serialising stats.json")?;
-    write_atomic(&out_dir.join("stats.json"), &stats)?;
+    write_files_and_report(&files, &out_dir.join("stats.json"), &report)?;
     Ok(report)
 }

@@ -24,7 +24,7 @@ use frond_scene::{Part, SampleOptions, Sampled, Tree, sample};
 use glam::{Affine3A, Mat4};
 use serde::Serialize;
 
-use crate::output::write_atomic;
+use crate::output::write_files_and_report;
 use crate::screen_budget::{LodLevel, lod_levels};
 
 /// How the foliage of a LOD is clustered.
@@ -434,11 +434,7 @@ pub fn run_lod(
     report
         .files
         .push(out_dir.join("report.json").display().to_string());
-    for (p, bytes) in &files {
-        write_atomic(p, bytes)?;
-    }
-    let json = serde_json::to_vec_pretty(&report).context("serialising report.json")?;
-    write_atomic(&out_dir.join("report.json"), &json)?;
+    write_files_and_report(&files, &out_dir.join("report.json"), &report)?;
     Ok(report)
 }
 

@@ -253,10 +253,7 @@ fn run(cli: Cli) -> Result<()> {
             drop(sampled);
             let report = inspect(&tree, summary);
             if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&report).context("serialising the report")?
-                );
+                print_json(&report)?;
             } else {
                 print!("{}", report.text());
             }
@@ -352,20 +349,16 @@ fn run(cli: Cli) -> Result<()> {
                 coverage_views,
                 coverage_size: parse_size(&coverage_size)?,
             };
-            let bar = indicatif::ProgressBar::new_spinner();
-            bar.set_message(format!(
+            let bar = Spinner::new();
+            bar.say(&format!(
                 "building the billboard cloud of {}",
                 import.input.display()
             ));
-            bar.enable_steady_tick(std::time::Duration::from_millis(120));
             let result = run_cloud(&renderer, &tree, &req, &output);
-            bar.finish_and_clear();
+            drop(bar);
             let report = result?;
             if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&report).context("serialising stats")?
-                );
+                print_json(&report)?;
             } else {
                 println!(
                     "{}: {} billboards (ε = {:.4}), area {:.1}, atlas {}x{}, coverage error {}, search {:.3} s, bake {:.3} s, total {:.3} s",
@@ -442,29 +435,12 @@ fn run(cli: Cli) -> Result<()> {
                 resolution,
                 external_textures,
             };
-            let bar = if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
-                let b = indicatif::ProgressBar::new_spinner();
-                b.enable_steady_tick(std::time::Duration::from_millis(120));
-                Some(b)
-            } else {
-                None
-            };
-            let progress = |msg: &str| {
-                tracing::info!("{msg}");
-                if let Some(b) = &bar {
-                    b.set_message(msg.to_string());
-                }
-            };
-            let result = run_lod(&renderer, &tree, &req, &output, &progress);
-            if let Some(b) = &bar {
-                b.finish_and_clear();
-            }
+            let bar = Spinner::new();
+            let result = run_lod(&renderer, &tree, &req, &output, &|m: &str| bar.say(m));
+            drop(bar);
             let report = result?;
             if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&report).context("serialising the report")?
-                );
+                print_json(&report)?;
             } else {
                 for l in &report.lods {
                     println!(
@@ -492,6 +468,44 @@ fn run(cli: Cli) -> Result<()> {
             tracing::info!("wrote {} ({} bytes)", output.display(), tree.glb.len());
         }
     }
+    Ok(())
+}
+
+/// A spinner with a message on a terminal (nothing otherwise); messages also go to the log.
+struct Spinner(Option<indicatif::ProgressBar>);
+
+impl Spinner {
+    fn new() -> Self {
+        Spinner(
+            std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
+                let b = indicatif::ProgressBar::new_spinner();
+                b.enable_steady_tick(std::time::Duration::from_millis(120));
+                b
+            }),
+        )
+    }
+    fn say(&self, msg: &str) {
+        tracing::info!("{msg}");
+        if let Some(b) = &self.0 {
+            b.set_message(msg.to_string());
+        }
+    }
+}
+
+impl Drop for Spinner {
+    fn drop(&mut self) {
+        if let Some(b) = &self.0 {
+            b.finish_and_clear();
+        }
+    }
+}
+
+/// Prints a report as pretty JSON on stdout.
+fn print_json(report: &impl serde::Serialize) -> Result<()> {
+    println!(
+        "{}",
+        serde_json::to_string_pretty(report).context("serialising the report")?
+    );
     Ok(())
 }
 

@@ -31,3 +31,18 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     }
     Ok(())
 }
+
+/// Writes every `(path, bytes)` atomically, then `report` as pretty JSON at `report_path` (last,
+/// so a report on disk means the files it lists are there).
+pub fn write_files_and_report(
+    files: &[(std::path::PathBuf, Vec<u8>)],
+    report_path: &Path,
+    report: &impl serde::Serialize,
+) -> Result<()> {
+    for (p, bytes) in files {
+        write_atomic(p, bytes)?;
+    }
+    let json = serde_json::to_vec_pretty(report)
+        .with_context(|| format!("serialising {}", report_path.display()))?;
+    write_atomic(report_path, &json)
+}

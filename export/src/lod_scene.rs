@@ -144,24 +144,7 @@ pub fn add_lod(
     let mut vat_prim = None;
     // Billboards.
     if let Some(cloud) = lod.cloud {
-        let atlas = &cloud.atlas;
-        let tex = sink.add_rgba(
-            doc,
-            &format!("{}_atlas", lod.name),
-            atlas.width,
-            atlas.height,
-            &atlas.color,
-            true,
-        )?;
-        let mat = doc.add_material(&MaterialDesc {
-            name: format!("{}_billboards", lod.name),
-            base_color: [1.0; 4],
-            base_color_texture: Some(tex),
-            alpha: WriteAlpha::Mask(0.5),
-            double_sided: true,
-            metallic: 0.0,
-            roughness: 1.0,
-        });
+        let mat = sink.billboard_material(doc, &lod.name, &cloud.atlas)?;
         let mut p = PrimitiveDesc {
             normals: Some(Vec::new()),
             uvs: Some(Vec::new()),

@@ -62,6 +62,32 @@ impl TextureSink {
         })
     }
 
+    /// The billboards' material: the colour atlas, alpha-tested at 0.5, double-sided, rough.
+    pub fn billboard_material(
+        &mut self,
+        doc: &mut GltfBuilder,
+        name: &str,
+        atlas: &frond_billboard::Atlas,
+    ) -> Result<usize, ExportError> {
+        let tex = self.add_rgba(
+            doc,
+            &format!("{name}_atlas"),
+            atlas.width,
+            atlas.height,
+            &atlas.color,
+            true,
+        )?;
+        Ok(doc.add_material(&MaterialDesc {
+            name: format!("{name}_billboards"),
+            base_color: [1.0; 4],
+            base_color_texture: Some(tex),
+            alpha: WriteAlpha::Mask(0.5),
+            double_sided: true,
+            metallic: 0.0,
+            roughness: 1.0,
+        }))
+    }
+
     /// The document material for tree material `m` (written once, with its texture).
     pub fn tree_material(
         &mut self,
