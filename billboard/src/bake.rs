@@ -646,10 +646,14 @@ fn coverage_alpha(n: u32, total: u32, needed: u32) -> u8 {
 }
 
 /// Re-thresholds each cell's alpha so that the number of texels passing the 0.5 test equals
-/// the cell's summed coverage in texels, rounded ([`BakeParams::preserve_coverage`]).
+/// the cell's summed coverage in texels, rounded with the remainder carried to the next cell
+/// ([`BakeParams::preserve_coverage`]).
 fn preserve_coverage(out: &mut Downsampled, cells: &[Cell], total: u32) {
     let w = out.width as usize;
     let mut counts: Vec<u32> = Vec::new();
+    // Rounding remainders carry over to the next cell (in quad order), so the whole atlas
+    // keeps its coverage even when most cells hold less than one texel of it.
+    let mut carry = 0.0f64;
     for c in cells {
         counts.clear();
         let texels = || {
@@ -665,7 +669,9 @@ fn preserve_coverage(out: &mut Downsampled, cells: &[Cell], total: u32) {
             continue;
         }
         let sum: u64 = counts.iter().map(|&n| u64::from(n)).sum();
-        let keep = ((sum as f64 / f64::from(total)).round() as usize).min(counts.len());
+        let want = sum as f64 / f64::from(total) + carry;
+        let keep = (want.round().max(0.0) as usize).min(counts.len());
+        carry = want - keep as f64;
         counts.sort_unstable_by(|a, b| b.cmp(a));
         // Texels with at least `needed` covered samples pass; none when keep == 0.
         let needed = if keep == 0 {
@@ -678,11 +684,10 @@ fn preserve_coverage(out: &mut Downsampled, cells: &[Cell], total: u32) {
             if n == 0 {
                 continue;
             }
-            let alpha = if needed > total {
-                ((n * 127) / total).clamp(1, 127) as u8
-            } else {
-                coverage_alpha(n, total, needed)
-            };
+            // Binary: a texel that passes is opaque, one that does not is clear, so bilinear
+            // magnification keeps an isolated passing texel (61 % of its area) instead of
+            // eroding one that barely passes to nothing.
+            let alpha = if n >= needed { 255 } else { 0 };
             out.color[i * 4 + 3] = alpha;
             out.normal[i * 4 + 3] = alpha;
         }
@@ -1071,9 +1076,34 @@ mod tests {
         assert!((28..=50).contains(&kept), "{kept}");
         assert_eq!(passing(&d, &cells[1]), 16, "full cells stay full");
         for i in 0..d.samples.len() {
-            assert_eq!(d.color[i * 4 + 3], d.normal[i * 4 + 3]);
-            assert_eq!(d.color[i * 4 + 3] == 0, d.samples[i] == 0);
+            let a = d.color[i * 4 + 3];
+            assert_eq!(a, d.normal[i * 4 + 3]);
+            assert!(a == 0 || a == 255, "binary alpha, got {a}");
+            if d.samples[i] == 0 {
+                assert_eq!(a, 0);
+            }
         }
+    }
+
+    #[test]
+    fn preserved_coverage_carries_remainders_across_cells() {
+        // 40 one-texel cells each 5/16 covered: rounding each alone keeps none; carrying the
+        // remainder keeps round(40 · 5/16) = 12 or 13 of them.
+        let mut d = Downsampled::new(40, 1);
+        let cells: Vec<Cell> = (0..40)
+            .map(|x| Cell {
+                x,
+                y: 0,
+                width: 1,
+                height: 1,
+            })
+            .collect();
+        for i in 0..40 {
+            d.samples[i] = 5;
+        }
+        preserve_coverage(&mut d, &cells, 16);
+        let kept = (0..40).filter(|&i| d.color[i * 4 + 3] >= 128).count();
+        assert!((12..=13).contains(&kept), "{kept}");
     }
 
     #[test]

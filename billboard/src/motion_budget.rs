@@ -39,7 +39,7 @@ pub struct Dropped {
     pub rebound_to_ancestor: usize,
     /// Billboards whose bone's whole motion stays under half a pixel: they no longer follow one.
     pub made_static: usize,
-    /// Billboards whose covered area is under half a square pixel.
+    /// Billboards removed because all of them together cover under half a pixel.
     pub billboards_under_half_pixel: usize,
     /// Rig nodes (bones or their parents) removed because nothing they move is left.
     pub nodes_pruned: usize,
@@ -94,12 +94,25 @@ pub fn apply_budget(
 ) -> (Vec<Option<usize>>, Dropped) {
     let mut dropped = Dropped::default();
     let half = 0.5 * budget.pixel;
-    // 1. Billboards too small to cover a pixel.
-    let min_area = 0.5 * budget.pixel * budget.pixel;
-    let keep: Vec<bool> = (0..cloud.billboards.len())
+    // 1. Billboards too small to see: smallest covered area first, as long as everything
+    //    dropped together covers under half a pixel (alpha-tested quads smaller than a pixel
+    //    still cover one now and then: dropping many would thin the foliage).
+    let pixel_area = budget.pixel * budget.pixel;
+    let covered: Vec<f32> = (0..cloud.billboards.len())
         .into_par_iter()
-        .map(|i| cloud.billboards[i].quad.area() * covered_fraction(cloud, i) >= min_area)
+        .map(|i| cloud.billboards[i].quad.area() * covered_fraction(cloud, i) / pixel_area)
         .collect();
+    let mut order: Vec<usize> = (0..covered.len()).collect();
+    order.sort_by(|&a, &b| covered[a].total_cmp(&covered[b]).then(a.cmp(&b)));
+    let mut keep = vec![true; covered.len()];
+    let mut dropped_area = 0.0f32;
+    for i in order {
+        if dropped_area + covered[i] >= 0.5 {
+            break;
+        }
+        dropped_area += covered[i];
+        keep[i] = false;
+    }
     let before = cloud.billboards.len();
     let mut it = keep.iter();
     cloud.billboards.retain(|_| *it.next().unwrap_or(&true));
