@@ -13,6 +13,7 @@ pub mod import;
 pub mod model;
 pub mod sampling;
 pub mod skinning;
+pub mod surface_distance;
 pub mod wood;
 
 pub use error::{Result, SceneError};

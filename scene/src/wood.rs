@@ -14,7 +14,7 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use glam::{DVec3, Mat3, Vec2, Vec3};
+use glam::{Mat3, Vec2, Vec3};
 use meshopt::{SimplifyOptions, SimplifyVertex};
 use rayon::prelude::*;
 
@@ -22,6 +22,7 @@ use crate::binding::bone_of_node;
 use crate::model::{Binding, Part, Tree};
 use crate::sampling::world_at;
 use crate::skinning::palettes;
+use crate::surface_distance::SurfaceBvh;
 
 /// No bone: the vertex stays where it is in the rest pose (its binding node is not under any bone).
 pub const NO_BONE: u32 = u32::MAX;
@@ -490,7 +491,7 @@ impl WoodMesh {
             .chunks_exact(3)
             .map(|t| [point(t[0]), point(t[1]), point(t[2])])
             .collect();
-        let original_bvh = Bvh::new(original.clone());
+        let original_bvh = SurfaceBvh::new(original.clone());
         let mut checks: Vec<(Vec3, [u32; 3])> = (0..global.len() as u32)
             .map(|k| (point(k), [k; 3]))
             .collect();
@@ -539,7 +540,7 @@ impl WoodMesh {
                 })
                 .collect();
             let simplified: Vec<[Vec3; 3]> = tris.iter().map(|t| t.map(point)).collect();
-            let bvh = Bvh::new(simplified.clone());
+            let bvh = SurfaceBvh::new(simplified.clone());
             let mut measured = estimate;
             let mut stray: Vec<u32> = Vec::new();
             for (p, owners) in &checks {
@@ -689,154 +690,6 @@ fn bone_embedding(bone: u32) -> [f32; SKIN_DIMS] {
     }
     let len = len2.sqrt().max(1e-6);
     e.map(|x| x / len)
-}
-
-/// A bounding-volume hierarchy over triangles, for point-to-surface distances.
-struct Bvh {
-    triangles: Vec<[Vec3; 3]>,
-    nodes: Vec<BvhNode>,
-}
-
-struct BvhNode {
-    lo: Vec3,
-    hi: Vec3,
-    first: usize,
-    /// Triangles of a leaf; 0 for an inner node, whose left child is the next node.
-    count: usize,
-    right: usize,
-}
-
-impl Bvh {
-    fn new(mut triangles: Vec<[Vec3; 3]>) -> Bvh {
-        let mut nodes = Vec::with_capacity(triangles.len() / 2 + 1);
-        if !triangles.is_empty() {
-            let n = triangles.len();
-            Self::build(&mut triangles, 0, n, &mut nodes);
-        }
-        Bvh { triangles, nodes }
-    }
-
-    fn build(
-        tris: &mut [[Vec3; 3]],
-        first: usize,
-        count: usize,
-        nodes: &mut Vec<BvhNode>,
-    ) -> usize {
-        let span = &mut tris[first..first + count];
-        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        let (mut clo, mut chi) = (lo, hi);
-        for t in span.iter() {
-            for p in t {
-                lo = lo.min(*p);
-                hi = hi.max(*p);
-            }
-            let c = t[0] + t[1] + t[2];
-            clo = clo.min(c);
-            chi = chi.max(c);
-        }
-        let me = nodes.len();
-        nodes.push(BvhNode {
-            lo,
-            hi,
-            first,
-            count,
-            right: 0,
-        });
-        if count <= 4 {
-            return me;
-        }
-        let ext = chi - clo;
-        let axis = if ext.x >= ext.y && ext.x >= ext.z {
-            0
-        } else if ext.y >= ext.z {
-            1
-        } else {
-            2
-        };
-        let key = |t: &[Vec3; 3]| (t[0] + t[1] + t[2])[axis];
-        let half = count / 2;
-        span.select_nth_unstable_by(half, |a, b| key(a).total_cmp(&key(b)));
-        nodes[me].count = 0;
-        Self::build(tris, first, half, nodes);
-        let right = Self::build(tris, first + half, count - half, nodes);
-        nodes[me].right = right;
-        me
-    }
-
-    /// Distance from `p` to the nearest triangle (infinity when there is none).
-    fn distance(&self, p: Vec3) -> f32 {
-        let mut best = f32::INFINITY;
-        if self.nodes.is_empty() {
-            return best;
-        }
-        let mut stack = vec![0usize];
-        while let Some(n) = stack.pop() {
-            let node = &self.nodes[n];
-            let d = (node.lo - p).max(p - node.hi).max(Vec3::ZERO).length();
-            if d >= best {
-                continue;
-            }
-            if node.count > 0 {
-                for t in &self.triangles[node.first..node.first + node.count] {
-                    best = best.min(triangle_distance(p, t));
-                }
-            } else {
-                stack.push(node.right);
-                stack.push(n + 1);
-            }
-        }
-        best
-    }
-}
-
-/// Closest point to `p` on triangle `abc` (Ericson, Real-Time Collision Detection §5.1.5).
-/// Distance from `p` to triangle `abc`, in f64: in f32 the closest-point arithmetic loses
-/// ~1e-4 on slivers a tree's branch tips are full of (a triangle's own centroid measured off it).
-fn triangle_distance(p: Vec3, t: &[Vec3; 3]) -> f32 {
-    let p = p.as_dvec3();
-    p.distance(closest_on_triangle(
-        p,
-        t[0].as_dvec3(),
-        t[1].as_dvec3(),
-        t[2].as_dvec3(),
-    )) as f32
-}
-
-fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
-    let ab = b - a;
-    let ac = c - a;
-    let ap = p - a;
-    let d1 = ab.dot(ap);
-    let d2 = ac.dot(ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = p - b;
-    let d3 = ab.dot(bp);
-    let d4 = ac.dot(bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
-    }
-    let cp = p - c;
-    let d5 = ab.dot(cp);
-    let d6 = ac.dot(cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    let denom = 1.0 / (va + vb + vc);
-    a + ab * (vb * denom) + ac * (vc * denom)
 }
 
 /// Vertices numbered by bit-identical position (as meshoptimizer welds them).
@@ -1010,7 +863,7 @@ mod tests {
             .flat_map(|p| p.indices.chunks_exact(3))
             .map(|t| [0, 1, 2].map(|k| simplified.positions[t[k] as usize]))
             .collect();
-        let bvh = Bvh::new(tris);
+        let bvh = SurfaceBvh::new(tris);
         original
             .positions
             .iter()

@@ -8,9 +8,10 @@ use std::time::Instant;
 use frond_scene::generator::{Preset, generate};
 use frond_scene::sampling::{pose_at, world_at};
 use frond_scene::skinning::skin_positions;
+use frond_scene::surface_distance::SurfaceBvh;
 use frond_scene::wood::{NO_BONE, WoodMesh, WoodPrimitive};
 use frond_scene::{ImportOptions, Part, Tree, import, import_bytes};
-use glam::{DVec3, Mat4, Vec3};
+use glam::{Mat4, Vec3};
 
 fn shared(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -34,140 +35,6 @@ fn generated(seed: u64) -> Tree {
 
 // ---------------------------------------------------------------- geometry helpers
 
-/// Closest point to `p` on triangle `abc` (Ericson, Real-Time Collision Detection 5.1.5).
-/// Distance from `p` to triangle `abc`, in f64: in f32 the closest-point arithmetic loses
-/// ~1e-4 on slivers a tree's branch tips are full of (a triangle's own centroid measured off it).
-fn triangle_distance(p: Vec3, t: &[Vec3; 3]) -> f32 {
-    let p = p.as_dvec3();
-    p.distance(closest_on_triangle(
-        p,
-        t[0].as_dvec3(),
-        t[1].as_dvec3(),
-        t[2].as_dvec3(),
-    )) as f32
-}
-
-fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
-    let ab = b - a;
-    let ac = c - a;
-    let ap = p - a;
-    let d1 = ab.dot(ap);
-    let d2 = ac.dot(ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = p - b;
-    let d3 = ab.dot(bp);
-    let d4 = ac.dot(bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
-    }
-    let cp = p - c;
-    let d5 = ab.dot(cp);
-    let d6 = ac.dot(cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    let denom = 1.0 / (va + vb + vc);
-    a + ab * (vb * denom) + ac * (vc * denom)
-}
-
-/// A bounding-volume hierarchy over triangles for nearest-surface distances.
-struct Bvh {
-    tris: Vec<[Vec3; 3]>,
-    /// (min, max, first, count, right child) — `count` 0 means inner node, left child is next.
-    nodes: Vec<(Vec3, Vec3, usize, usize, usize)>,
-}
-
-impl Bvh {
-    fn new(mut tris: Vec<[Vec3; 3]>) -> Bvh {
-        let mut nodes = Vec::new();
-        if !tris.is_empty() {
-            let n = tris.len();
-            Self::build(&mut tris, 0, n, &mut nodes);
-        }
-        Bvh { tris, nodes }
-    }
-
-    fn build(
-        tris: &mut [[Vec3; 3]],
-        first: usize,
-        count: usize,
-        nodes: &mut Vec<(Vec3, Vec3, usize, usize, usize)>,
-    ) -> usize {
-        let span = &mut tris[first..first + count];
-        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        let (mut clo, mut chi) = (lo, hi);
-        for t in span.iter() {
-            for p in t {
-                lo = lo.min(*p);
-                hi = hi.max(*p);
-            }
-            let c = (t[0] + t[1] + t[2]) / 3.0;
-            clo = clo.min(c);
-            chi = chi.max(c);
-        }
-        let me = nodes.len();
-        nodes.push((lo, hi, first, count, 0));
-        if count <= 4 {
-            return me;
-        }
-        let ext = chi - clo;
-        let axis = if ext.x >= ext.y && ext.x >= ext.z {
-            0
-        } else if ext.y >= ext.z {
-            1
-        } else {
-            2
-        };
-        let key = |t: &[Vec3; 3]| (t[0] + t[1] + t[2])[axis];
-        let half = count / 2;
-        span.select_nth_unstable_by(half, |a, b| key(a).total_cmp(&key(b)));
-        nodes[me].3 = 0;
-        Self::build(tris, first, half, nodes);
-        let right = Self::build(tris, first + half, count - half, nodes);
-        nodes[me].4 = right;
-        me
-    }
-
-    /// Distance from `p` to the nearest triangle (infinity when there is none).
-    fn distance(&self, p: Vec3) -> f32 {
-        let mut best = f32::INFINITY;
-        if self.nodes.is_empty() {
-            return best;
-        }
-        let mut stack = vec![0usize];
-        while let Some(n) = stack.pop() {
-            let (lo, hi, first, count, right) = self.nodes[n];
-            let d = (lo - p).max(p - hi).max(Vec3::ZERO).length();
-            if d >= best {
-                continue;
-            }
-            if count > 0 {
-                for t in &self.tris[first..first + count] {
-                    best = best.min(triangle_distance(p, t));
-                }
-            } else {
-                stack.push(right);
-                stack.push(n + 1);
-            }
-        }
-        best
-    }
-}
-
 fn triangles_of(mesh: &WoodMesh, positions: &[Vec3]) -> Vec<[Vec3; 3]> {
     mesh.primitives
         .iter()
@@ -177,7 +44,7 @@ fn triangles_of(mesh: &WoodMesh, positions: &[Vec3]) -> Vec<[Vec3; 3]> {
 }
 
 /// Largest distance from any of `points` to the surface `bvh`.
-fn one_sided(points: &[Vec3], bvh: &Bvh) -> f32 {
+fn one_sided(points: &[Vec3], bvh: &SurfaceBvh) -> f32 {
     use rayon::prelude::*;
     points
         .par_iter()
@@ -231,7 +98,7 @@ fn skin_mesh(tree: &Tree, mesh: &WoodMesh, clip: Option<usize>, t: f32) -> Vec<V
 /// Distances between two wood meshes: (original vertices → simplified surface,
 /// simplified surface samples → original surface), at rest.
 fn rest_distances(original: &WoodMesh, simplified: &WoodMesh) -> (f32, f32) {
-    let simp = Bvh::new(triangles_of(simplified, &simplified.positions));
+    let simp = SurfaceBvh::new(triangles_of(simplified, &simplified.positions));
     let orig_tris = triangles_of(original, &original.positions);
     let used: Vec<Vec3> = used_vertices(original)
         .into_iter()
@@ -240,7 +107,7 @@ fn rest_distances(original: &WoodMesh, simplified: &WoodMesh) -> (f32, f32) {
     let forward = one_sided(&used, &simp);
     let back = one_sided(
         &surface_samples(&triangles_of(simplified, &simplified.positions)),
-        &Bvh::new(orig_tris),
+        &SurfaceBvh::new(orig_tris),
     );
     (forward, back)
 }
@@ -269,7 +136,7 @@ fn animated_distance(
         .map(|&t| {
             let a = skin_mesh(tree, original, Some(0), t);
             let b = skin_mesh(tree, simplified, Some(0), t);
-            let bvh = Bvh::new(triangles_of(simplified, &b));
+            let bvh = SurfaceBvh::new(triangles_of(simplified, &b));
             let pts: Vec<Vec3> = used.iter().map(|&i| a[i]).collect();
             one_sided(&pts, &bvh)
         })
