@@ -11,7 +11,7 @@ use frond_export::textures::TextureSink;
 use frond_metrics::{CoverageParams, coverage_error};
 use frond_render::{Renderer, TreeParts, scene_from_positions};
 use frond_scene::gltf_writer::*;
-use frond_scene::{Part, SampleOptions, Tree, sample};
+use frond_scene::{Part, SampleOptions, Sampled, Tree, sample};
 use glam::Vec3;
 use serde::Serialize;
 
@@ -52,6 +52,25 @@ pub struct CloudReport {
     pub files: Vec<String>,
 }
 
+/// Samples the loop of `clip` (the first when None); an error names the file when the tree
+/// has no foliage to make billboards of.
+pub fn sample_foliage(tree: &Tree, clip: Option<&str>, samples: usize) -> Result<Sampled> {
+    let sampled = sample(
+        tree,
+        &SampleOptions {
+            clip: clip.map(str::to_string),
+            samples,
+        },
+    )?;
+    if sampled.foliage.is_empty() {
+        bail!(
+            "{}: the tree has no foliage to turn into billboards",
+            tree.source.display()
+        );
+    }
+    Ok(sampled)
+}
+
 /// Bounding-box diagonal of the rest pose.
 pub fn rest_diagonal(tree: &Tree) -> f32 {
     (Vec3::from(tree.bounds.max) - Vec3::from(tree.bounds.min)).length()
@@ -71,19 +90,10 @@ pub fn make_cloud(
             req.epsilon
         )
     })?;
-    let sampled = sample(
-        tree,
-        &SampleOptions {
-            clip: req.clip.clone(),
-            samples: req.samples,
-        },
-    )?;
+    let sampled = sample_foliage(tree, req.clip.as_deref(), req.samples)?;
     let frond_scene::Sampled {
         average, foliage, ..
     } = sampled;
-    if foliage.is_empty() {
-        bail!("{path}: the tree has no foliage to turn into a billboard cloud");
-    }
     let soup = TriangleSoup::from_tree(tree, &average, &foliage);
     let mut params = req.params.clone();
     params.search.epsilon = epsilon;

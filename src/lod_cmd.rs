@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use frond_billboard::animated::{AnimatedBillboardCloud, LoopClock, Rig};
 use frond_billboard::animated_build::{
     BuildTimings, build_animated_cloud, per_bone_clusters, sampled_worlds, static_clusters,
@@ -20,10 +20,11 @@ use frond_export::vat::{RigidFrame, RigidPiece, VatFormat, VatOptions, encode_ri
 use frond_export::{GltfFile, LodInput};
 use frond_render::Renderer;
 use frond_scene::wood::{NO_BONE, WoodMesh};
-use frond_scene::{Part, SampleOptions, Sampled, Tree, sample};
+use frond_scene::{Part, Sampled, Tree};
 use glam::{Affine3A, Mat4};
 use serde::Serialize;
 
+use crate::cloud_cmd::{rest_diagonal, sample_foliage};
 use crate::output::write_files_and_report;
 use crate::screen_budget::{LodLevel, lod_levels};
 
@@ -250,7 +251,7 @@ pub fn run_lod(
         let h = tree.bounds.height();
         if h > 0.0 { h } else { tree.bounds.size() }
     };
-    let diag = crate::cloud_cmd::rest_diagonal(tree);
+    let diag = rest_diagonal(tree);
     let eps_override = match &req.epsilon {
         Some(e) => Some(parse_epsilon(e, diag).with_context(|| {
             format!("--epsilon '{e}': expected a length or a percentage like 2%")
@@ -260,16 +261,7 @@ pub fn run_lod(
     let levels = lod_levels(height, &req.screen_heights, req.pixel_error, eps_override)
         .with_context(|| format!("{path}: sizing the LODs"))?;
     progress("sampling the animation");
-    let sampled = sample(
-        tree,
-        &SampleOptions {
-            clip: req.clip.clone(),
-            samples: req.samples,
-        },
-    )?;
-    if sampled.foliage.is_empty() {
-        bail!("{path}: the tree has no foliage to turn into billboards");
-    }
+    let sampled = sample_foliage(tree, req.clip.as_deref(), req.samples)?;
     let t_sampled = Instant::now();
     let clock = LoopClock {
         clip: sampled
@@ -529,7 +521,7 @@ fn build_lod(
     // Far LODs bake sparse foliage into few texels: keep its coverage (see BakeParams).
     params.bake.preserve_coverage = true;
     params.bake.supersample = req.supersample;
-    let diag = crate::cloud_cmd::rest_diagonal(tree);
+    let diag = rest_diagonal(tree);
     let (mut cloud, build_t) = build_animated_cloud(
         renderer,
         tree,

@@ -55,6 +55,20 @@ impl ImportArgs {
     }
 }
 
+/// Seed and loop sampling, shared by the commands that build billboards.
+#[derive(clap::Args, Clone, Debug)]
+struct RunArgs {
+    /// Random seed: same input and seed, same files.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Animation samples over the loop.
+    #[arg(long, default_value_t = 64)]
+    samples: usize,
+    /// Clip to sample (default: the first); billboards' own motion plays only this one.
+    #[arg(long)]
+    clip: Option<String>,
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Report bones, skeleton depth, wood/foliage split, clips, looping and bounds.
@@ -117,15 +131,8 @@ enum Command {
         /// Candidate planes per iteration (the thesis's S).
         #[arg(long, default_value_t = 500)]
         planes: usize,
-        /// Random seed: same input and seed, same files.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Animation samples for the average pose.
-        #[arg(long, default_value_t = 64)]
-        samples: usize,
-        /// Clip (default: the first).
-        #[arg(long)]
-        clip: Option<String>,
+        #[command(flatten)]
+        run: RunArgs,
         /// Favour billboards seen from this elevation in degrees (0 = vertical billboards).
         #[arg(long, value_name = "DEG")]
         view_penalty: Option<f32>,
@@ -196,15 +203,8 @@ enum Command {
         /// skin (glTF skin and channels), vat (vertex animation textures, EXR half) or vat-png16.
         #[arg(long, default_value = "skin", value_parser = ["skin", "vat", "vat-png16"])]
         animation: String,
-        /// Random seed: same input and seed, same files.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Animation samples over the loop.
-        #[arg(long, default_value_t = 64)]
-        samples: usize,
-        /// Clip the billboards' own motion is sampled from (default: the first).
-        #[arg(long)]
-        clip: Option<String>,
+        #[command(flatten)]
+        run: RunArgs,
         /// Candidate planes per iteration of the plane search.
         #[arg(long, default_value_t = 100)]
         planes: usize,
@@ -305,9 +305,12 @@ fn run(cli: Cli) -> Result<()> {
             import,
             epsilon,
             planes,
-            seed,
-            samples,
-            clip,
+            run:
+                RunArgs {
+                    seed,
+                    samples,
+                    clip,
+                },
             view_penalty,
             falloff,
             refit,
@@ -389,9 +392,12 @@ fn run(cli: Cli) -> Result<()> {
             pixel_error,
             epsilon,
             animation,
-            seed,
-            samples,
-            clip,
+            run:
+                RunArgs {
+                    seed,
+                    samples,
+                    clip,
+                },
             planes,
             max_atlas,
             supersample,
