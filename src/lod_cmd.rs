@@ -103,6 +103,8 @@ pub struct LodRequest {
     pub max_atlas: u32,
     /// Supersamples per texel side when baking (4 = the spec's 4×4; 2 bakes ~2.5× faster).
     pub supersample: u32,
+    /// Dilated texels around each billboard's texture in the atlas.
+    pub padding: u32,
     /// Add MSFT_lod to the combined file, with coverages for this image height.
     pub msft_lod: bool,
     pub resolution: f32,
@@ -521,6 +523,7 @@ fn build_lod(
     // Far LODs bake sparse foliage into few texels: keep its coverage (see BakeParams).
     params.bake.preserve_coverage = true;
     params.bake.supersample = req.supersample;
+    params.bake.padding = req.padding;
     let diag = rest_diagonal(tree);
     let (mut cloud, build_t) = build_animated_cloud(
         renderer,

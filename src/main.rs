@@ -214,6 +214,10 @@ enum Command {
         /// Supersamples per texel side when baking (1-16; 4 = 4×4, 2 is ~2.5× faster).
         #[arg(long, default_value_t = 4)]
         supersample: u32,
+        /// Dilated texels around each billboard texture: 2 covers bilinear filtering and the
+        /// first mip level, which is all a LOD shown near its own size uses.
+        #[arg(long, default_value_t = 2)]
+        padding: u32,
         /// Add MSFT_lod (with MSFT_screencoverage) to the combined file.
         #[arg(long)]
         msft_lod: bool,
@@ -401,6 +405,7 @@ fn run(cli: Cli) -> Result<()> {
             planes,
             max_atlas,
             supersample,
+            padding,
             msft_lod,
             external_textures,
             json,
@@ -437,6 +442,7 @@ fn run(cli: Cli) -> Result<()> {
                 planes,
                 max_atlas,
                 supersample,
+                padding,
                 msft_lod,
                 resolution,
                 external_textures,
