@@ -478,3 +478,61 @@ fn distances_give_screen_heights_by_holst_eq_3() {
     let eps = report["lods"][1]["epsilon"].as_f64().expect("eps");
     assert!((eps - h / want).abs() < 1e-4 * eps, "ε is one pixel");
 }
+
+/// `samples/sapling.glb` with its clip duplicated under a second name.
+fn two_clip_sapling(dir: &Path) -> PathBuf {
+    let bytes = std::fs::read(sapling()).expect("sapling");
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().expect("header")) as usize;
+    let mut json: serde_json::Value =
+        serde_json::from_slice(&bytes[20..20 + json_len]).expect("json chunk");
+    let mut gust = json["animations"][0].clone();
+    gust["name"] = serde_json::json!("Gust");
+    json["animations"]
+        .as_array_mut()
+        .expect("animations")
+        .push(gust);
+    let bin_chunk = &bytes[20 + json_len..];
+    let bin =
+        &bin_chunk[8..8 + u32::from_le_bytes(bin_chunk[0..4].try_into().expect("bin")) as usize];
+    let glb =
+        frond_scene::gltf_writer::glb_container(&serde_json::to_vec(&json).expect("json"), bin);
+    let path = dir.join("two_clips.glb");
+    std::fs::write(&path, glb).expect("write");
+    path
+}
+
+#[test]
+fn bone_bound_lods_keep_every_clip_and_rigid_fit_lods_say_what_they_drop() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = two_clip_sapling(dir.path());
+    let out = dir.path().join("o");
+    let report = lod(&input, &out, &["--lods", "300,60"]);
+    let clips = |k: usize| -> Vec<String> {
+        report["lods"][k]["clips"]
+            .as_array()
+            .expect("clips")
+            .iter()
+            .map(|c| c.as_str().expect("name").to_string())
+            .collect()
+    };
+    assert_eq!(clips(0), ["Wind", "Gust"]);
+    // LOD1 is per-bone (auto): billboards follow bones, so every clip plays.
+    assert_eq!(clips(1), ["Wind", "Gust"]);
+    // LOD2 is static: billboards carry motion sampled from the first clip only.
+    assert_eq!(clips(2), ["Wind"]);
+    let dropped = report["lods"][2]["dropped"]["clips"]
+        .as_array()
+        .expect("dropped");
+    assert!(
+        dropped
+            .iter()
+            .any(|d| d.as_str().is_some_and(|s| s.starts_with("Gust")))
+    );
+    for f in glbs(&out) {
+        assert_valid(&f);
+    }
+    // The combined file has both clips, each as long as the input's.
+    let tree = import(&out.join("two_clips_lods.glb"), &ImportOptions::default()).expect("import");
+    let names: Vec<&str> = tree.clips.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["Wind", "Gust"]);
+}
