@@ -96,6 +96,10 @@ pub struct CoverageReport {
     pub original_pixels: Vec<u64>,
     /// `Σ_p |o_p − s_p|` per (view, frame): pixels covered by exactly one of the two renders.
     pub differing_pixels: Vec<u64>,
+    /// Foreground colour error (the thesis' metric ignores colour): over the pixels covered in
+    /// both renders, the mean absolute difference of linear RGB (mean of the three channels,
+    /// 0..1), averaged over the (view, frame) pairs that share any pixel; NaN when none do.
+    pub colour_difference: f64,
 }
 
 /// Why the coverage metric could not be computed.
@@ -254,11 +258,24 @@ pub fn coverage_error(
     let mut differing_pixels = Vec::with_capacity(pairs);
     let mut per_view = Vec::with_capacity(cameras.len());
     let (mut total, mut kept_total, mut discarded) = (0.0f64, 0usize, 0usize);
+    let (mut colour_sum, mut colour_pairs) = (0.0f64, 0usize);
     for camera in &cameras {
         let (mut view_sum, mut view_kept) = (0.0f64, 0usize);
         for (o_scene, s_scene) in original.iter().zip(simplified) {
-            let o = coverage_mask(renderer, o_scene, camera, params)?;
-            let s = coverage_mask(renderer, s_scene, camera, params)?;
+            let (o, o_rgb) = coverage_mask(renderer, o_scene, camera, params)?;
+            let (s, s_rgb) = coverage_mask(renderer, s_scene, camera, params)?;
+            let (mut diff, mut shared) = (0.0f64, 0usize);
+            for p in 0..o.len().min(s.len()) {
+                if o[p] && s[p] {
+                    let d: f32 = (0..3).map(|c| (o_rgb[p][c] - s_rgb[p][c]).abs()).sum();
+                    diff += f64::from(d) / 3.0;
+                    shared += 1;
+                }
+            }
+            if shared > 0 {
+                colour_sum += diff / shared as f64;
+                colour_pairs += 1;
+            }
             for len in [o.len(), s.len()] {
                 if len != expected {
                     return Err(MetricError::MaskSize { len, expected });
@@ -286,6 +303,7 @@ pub fn coverage_error(
         discarded,
         original_pixels,
         differing_pixels,
+        colour_difference: mean_or_nan(colour_sum, colour_pairs),
     })
 }
 
@@ -315,29 +333,50 @@ fn coverage_mask(
     scene: &DrawScene,
     camera: &Camera,
     params: &CoverageParams,
-) -> Result<Vec<bool>, MetricError> {
-    let ss = params.supersample.max(1);
-    let (w, h) = (params.width, params.height);
-    let frame = renderer.render_mipmapped(scene, camera, w * ss, h * ss, BACKGROUND)?;
-    if ss == 1 {
-        return Ok(frame.coverage);
-    }
-    let big_w = (w * ss) as usize;
-    let mut mask = vec![false; (w * h) as usize];
-    for y in 0..h as usize {
-        for x in 0..w as usize {
-            let mut covered = 0;
-            for dy in 0..ss as usize {
-                let row = (y * ss as usize + dy) * big_w + x * ss as usize;
-                covered += frame.coverage[row..row + ss as usize]
-                    .iter()
-                    .filter(|&&c| c)
-                    .count();
+) -> Result<(Vec<bool>, Vec<[f32; 3]>), MetricError> {
+    let ss = params.supersample.max(1) as usize;
+    let (w, h) = (params.width as usize, params.height as usize);
+    let frame = renderer.render_mipmapped(
+        scene,
+        camera,
+        params.width * ss as u32,
+        params.height * ss as u32,
+        BACKGROUND,
+    )?;
+    let big_w = w * ss;
+    let mut mask = vec![false; w * h];
+    let mut colour = vec![[0.0f32; 3]; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let (mut covered, mut sum) = (0usize, [0.0f32; 3]);
+            for dy in 0..ss {
+                let row = (y * ss + dy) * big_w + x * ss;
+                for i in row..row + ss {
+                    if frame.coverage.get(i).copied().unwrap_or(false) {
+                        covered += 1;
+                        for (c, v) in sum.iter_mut().enumerate() {
+                            *v += srgb_to_linear(frame.rgba.get(i * 4 + c).copied().unwrap_or(0));
+                        }
+                    }
+                }
             }
-            mask[y * w as usize + x] = 2 * covered >= (ss * ss) as usize;
+            mask[y * w + x] = 2 * covered >= ss * ss;
+            if covered > 0 {
+                colour[y * w + x] = sum.map(|v| v / covered as f32);
+            }
         }
     }
-    Ok(mask)
+    Ok((mask, colour))
+}
+
+/// sRGB byte to linear light.
+fn srgb_to_linear(b: u8) -> f32 {
+    let c = f32::from(b) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 fn validate(

@@ -459,3 +459,31 @@ fn supersampled_masks_keep_analytic_answers() {
     .expect("metric");
     assert_eq!(none.mean, 1.0);
 }
+
+#[test]
+fn colour_difference_is_zero_for_equal_renders_and_known_for_recoloured_ones() {
+    let p = params(3, 1);
+    let (lo, hi) = (Vec3::splat(-1.0), Vec3::splat(1.0));
+    let a = tree();
+    let one = std::slice::from_ref(&a);
+    let same = coverage_error(renderer(), one, one, lo, hi, &p).expect("metric");
+    assert_eq!(same.colour_difference, 0.0);
+    // Same geometry, pure red against pure blue (unlit, linear 1 vs 0 in two channels): 2/3.
+    let mut red = a.clone();
+    red.materials[0] = DrawMaterial {
+        double_sided: true,
+        ..DrawMaterial::opaque([1.0, 0.0, 0.0, 1.0])
+    };
+    let mut blue = a;
+    blue.materials[0] = DrawMaterial {
+        double_sided: true,
+        ..DrawMaterial::opaque([0.0, 0.0, 1.0, 1.0])
+    };
+    let r = coverage_error(renderer(), &[red], &[blue], lo, hi, &p).expect("metric");
+    assert_eq!(r.mean, 0.0, "same coverage");
+    assert!(
+        (r.colour_difference - 2.0 / 3.0).abs() < 1e-3,
+        "{}",
+        r.colour_difference
+    );
+}
