@@ -20,20 +20,7 @@ use frond_render::Renderer;
 use frond_scene::{ImportOptions, SampleOptions, Sampled, Tree, import, import_bytes, sample};
 
 fn lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
-    let mut args = vec![
-        "lod",
-        input.to_str().expect("utf-8"),
-        "-o",
-        out.to_str().expect("utf-8"),
-        "--samples",
-        "16",
-        "--planes",
-        "60",
-    ];
-    args.extend_from_slice(extra);
-    frond_ok(&args);
-    serde_json::from_slice(&std::fs::read(out.join("report.json")).expect("report.json"))
-        .expect("report is JSON")
+    frond_lod(input, out, extra)
 }
 
 fn sapling() -> PathBuf {

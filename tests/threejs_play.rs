@@ -410,21 +410,7 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
     let input_path = common::root().join("samples/sapling.glb");
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("lods");
-    common::frond_ok(&[
-        "lod",
-        input_path.to_str().expect("utf-8 path"),
-        "-o",
-        out.to_str().expect("utf-8 path"),
-        "--lods",
-        "300,60",
-        "--samples",
-        "16",
-        "--planes",
-        "60",
-    ]);
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("report.json")).expect("report.json"))
-            .expect("report is JSON");
+    let report = common::frond_lod(&input_path, &out, &["--lods", "300,60"]);
     let lods = report["lods"].as_array().expect("lods");
     assert_eq!(lods.len(), 3, "LOD0, LOD1, LOD2");
     let billboards: Vec<usize> = lods

@@ -43,6 +43,25 @@ pub fn frond_ok(args: &[&str]) -> Output {
     out
 }
 
+/// Runs `frond lod INPUT -o OUT` with small test settings (16 samples, 60 candidate planes)
+/// plus `extra`, asserts it succeeded and returns its report.json.
+pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "lod",
+        input.to_str().expect("utf-8 path"),
+        "-o",
+        out.to_str().expect("utf-8 path"),
+        "--samples",
+        "16",
+        "--planes",
+        "60",
+    ];
+    args.extend_from_slice(extra);
+    frond_ok(&args);
+    serde_json::from_slice(&std::fs::read(out.join("report.json")).expect("report.json"))
+        .expect("report is JSON")
+}
+
 /// Installs the Node tools once (npm install into tools/node_modules) and returns the folder:
 /// the validator, gltfpack and three.js. Installs whenever one of them is missing (a
 /// tools/node_modules made before a package joined package.json lacks it).
