@@ -61,17 +61,17 @@ fn frame(c: &[Vec3; 4]) -> (Vec3, Vec3, Vec3, Vec3) {
     (c[0], u, v, u.cross(v))
 }
 
-/// The metrics of one original triangle (`triangle[s]` = its three vertices at sample s) against
-/// the billboard that replaces it (`board[s]` = its corners in quad order at sample s), both
-/// over the same uniform samples of one loop. Empty input gives zeros.
-pub fn triangle_metrics(triangle: &[[Vec3; 3]], board: &[[Vec3; 4]]) -> TriangleMetrics {
-    let n = triangle.len().min(board.len());
-    if n == 0 {
-        return TriangleMetrics::default();
-    }
-    let frames: Vec<(Vec3, Vec3, Vec3, Vec3)> = board[..n].iter().map(frame).collect();
+/// Where a triangle sits on its billboard, in billboard-local coordinates (see the module
+/// docs): its fixed point, its fixed direction, and the sign that turns the billboard's normal
+/// toward it.
+struct Fixed {
+    local: (f32, f32),
+    dir: (f32, f32),
+    sign: f32,
+}
+
+fn fixed(triangle: &[[Vec3; 3]], frames: &[(Vec3, Vec3, Vec3, Vec3)]) -> Fixed {
     let centroid = |s: usize| (triangle[s][0] + triangle[s][1] + triangle[s][2]) / 3.0;
-    // Fixed point and fixed direction in billboard-local coordinates (means over the loop).
     let (mut local, mut dir) = ((0.0f32, 0.0f32), (0.0f32, 0.0f32));
     let mut facing = 0.0f32;
     for (s, (o, u, v, nrm)) in frames.iter().enumerate() {
@@ -86,9 +86,38 @@ pub fn triangle_metrics(triangle: &[[Vec3; 3]], board: &[[Vec3; 4]]) -> Triangle
             .normalize_or_zero();
         facing += tn.dot(*nrm);
     }
-    let inv = 1.0 / n as f32;
-    let local = (local.0 * inv, local.1 * inv);
-    let sign = if facing < 0.0 { -1.0 } else { 1.0 };
+    let inv = 1.0 / frames.len().max(1) as f32;
+    Fixed {
+        local: (local.0 * inv, local.1 * inv),
+        dir,
+        sign: if facing < 0.0 { -1.0 } else { 1.0 },
+    }
+}
+
+/// The trajectory of a triangle's image on its billboard: its fixed point carried by the
+/// billboard, one position per sample (what the animation metrics compare with the triangle's
+/// own centroid trajectory).
+pub fn image_trajectory(triangle: &[[Vec3; 3]], board: &[[Vec3; 4]]) -> Vec<Vec3> {
+    let n = triangle.len().min(board.len());
+    let frames: Vec<(Vec3, Vec3, Vec3, Vec3)> = board[..n].iter().map(frame).collect();
+    let f = fixed(&triangle[..n], &frames);
+    frames
+        .iter()
+        .map(|(o, u, v, _)| *o + *u * f.local.0 + *v * f.local.1)
+        .collect()
+}
+
+/// The metrics of one original triangle (`triangle[s]` = its three vertices at sample s) against
+/// the billboard that replaces it (`board[s]` = its corners in quad order at sample s), both
+/// over the same uniform samples of one loop. Empty input gives zeros.
+pub fn triangle_metrics(triangle: &[[Vec3; 3]], board: &[[Vec3; 4]]) -> TriangleMetrics {
+    let n = triangle.len().min(board.len());
+    if n == 0 {
+        return TriangleMetrics::default();
+    }
+    let frames: Vec<(Vec3, Vec3, Vec3, Vec3)> = board[..n].iter().map(frame).collect();
+    let centroid = |s: usize| (triangle[s][0] + triangle[s][1] + triangle[s][2]) / 3.0;
+    let Fixed { local, dir, sign } = fixed(triangle, &frames);
     let (mut plane, mut projected, mut euclid, mut orient) = (
         Vec::with_capacity(n),
         Vec::with_capacity(n),
@@ -160,6 +189,35 @@ mod tests {
         assert!(m.plane_distance.max < 1e-5, "{m:?}");
         assert!(m.projected_distance.max < 1e-5, "{m:?}");
         assert!(m.orientation.max < 1e-5, "{m:?}");
+    }
+
+    #[test]
+    fn the_image_of_a_leaf_riding_its_billboard_follows_the_leaf() {
+        let rot = |s: usize| Quat::from_rotation_x(0.2 * s as f32);
+        let tri: Vec<[Vec3; 3]> = (0..16).map(|s| leaf(|p| rot(s) * p + sway(s))).collect();
+        let bb: Vec<[Vec3; 4]> = (0..16)
+            .map(|s| board(|p| rot(s) * (p - Vec3::Z * 0.1) + sway(s)))
+            .collect();
+        let image = image_trajectory(&tri, &bb);
+        assert_eq!(image.len(), 16);
+        for (s, p) in image.iter().enumerate() {
+            let c = (tri[s][0] + tri[s][1] + tri[s][2]) / 3.0;
+            // The image is the centroid pushed onto the billboard 0.1 behind it.
+            assert!((p.distance(c) - 0.1).abs() < 1e-5, "sample {s}");
+        }
+        // A leaf in its billboard's plane: the image is the centroid, and the animation
+        // metrics see nothing.
+        let flush: Vec<[Vec3; 4]> = (0..16).map(|s| board(|p| rot(s) * p + sway(s))).collect();
+        let image = image_trajectory(&tri, &flush);
+        let centres: Vec<Vec3> = tri.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
+        for (a, b) in image.iter().zip(&centres) {
+            assert!(a.distance(*b) < 1e-5);
+        }
+        let m = crate::animation::axis_metrics(&centres, &image, 4);
+        assert!(
+            m.dominating_axis < 1e-3 && m.dominating_axis_spectral < 1e-3,
+            "{m:?}"
+        );
     }
 
     #[test]
