@@ -1,6 +1,7 @@
 //! The `frond` pipeline: each CLI command's work as a library function, so tests can call it.
 
 pub mod cloud_cmd;
+pub mod eval_cmd;
 pub mod inspect;
 pub mod lod_cmd;
 pub mod output;

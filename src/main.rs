@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
 use frond::cloud_cmd::{CloudRequest, rest_diagonal, run_cloud};
+use frond::eval_cmd::{EvalRequest, evaluate};
 use frond::inspect::{SamplingSummary, inspect};
 use frond::lod_cmd::{AnimationMode, LodRequest, Method, run_lod};
 use frond::output::write_atomic;
@@ -225,6 +226,36 @@ enum Command {
         #[arg(long)]
         external_textures: bool,
         /// Print report.json to stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Compare a candidate (a LOD, any glTF) with the original: colour (coverage), colour
+    /// difference, distance, orientation and animation metrics, and cost.
+    Eval {
+        #[command(flatten)]
+        import: ImportArgs,
+        /// The candidate model (.glb/.gltf); a `frond lod` LOD's `.mapping.json` beside it
+        /// enables the per-triangle metrics.
+        candidate: PathBuf,
+        /// Ring views of the colour metric.
+        #[arg(long, default_value_t = 5)]
+        views: u32,
+        /// Frames of the animated colour metric, uniform over the loop.
+        #[arg(long, default_value_t = 5)]
+        frames: u32,
+        /// Image size of the colour metric (default 800x600).
+        #[arg(long, conflicts_with = "screen_height")]
+        size: Option<String>,
+        /// Size the images for a tree seen this many pixels high (the LOD's size), 4:3.
+        #[arg(long)]
+        screen_height: Option<u32>,
+        /// Samples over the loop for the trajectory metrics.
+        #[arg(long, default_value_t = 64)]
+        samples: usize,
+        /// Clip (default: the original's first; the candidate plays the clip of that name).
+        #[arg(long)]
+        clip: Option<String>,
+        /// Print the report as JSON.
         #[arg(long)]
         json: bool,
     },
@@ -465,6 +496,68 @@ fn run(cli: Cli) -> Result<()> {
                     report.combined,
                     report.lods.len(),
                     report.timings_s["total"].as_f64().unwrap_or(0.0)
+                );
+            }
+        }
+        Command::Eval {
+            import,
+            candidate,
+            views,
+            frames,
+            size,
+            screen_height,
+            samples,
+            clip,
+            json,
+        } => {
+            let original = import.load()?;
+            let cand = frond_scene::import(&candidate, &ImportOptions::default())?;
+            let same_file = std::fs::read(&import.input).ok() == std::fs::read(&candidate).ok();
+            let size = match (size, screen_height) {
+                (Some(s), _) => parse_size(&s)?,
+                (None, Some(h)) if h > 0 => (h.saturating_mul(4).div_ceil(3), h),
+                (None, Some(_)) => anyhow::bail!("--screen-height must be at least 1"),
+                (None, None) => (800, 600),
+            };
+            let renderer = Renderer::new()?;
+            let req = EvalRequest {
+                views,
+                frames,
+                size,
+                samples,
+                clip,
+            };
+            let bar = Spinner::new();
+            bar.say(&format!("evaluating {}", candidate.display()));
+            let result = evaluate(&renderer, &original, &cand, same_file, &req);
+            drop(bar);
+            let report = result?;
+            if json {
+                print_json(&report)?;
+            } else {
+                let show = |name: &str, m: &frond::eval_cmd::Metric| match (m.mean, m.max) {
+                    (Some(a), Some(b)) => println!("{name:26} mean {a:.5}  max {b:.5}"),
+                    _ => println!(
+                        "{name:26} skipped: {}",
+                        m.skipped_reason.as_deref().unwrap_or("-")
+                    ),
+                };
+                show("coverage (static)", &report.coverage.static_);
+                show("coverage (animated)", &report.coverage.animated);
+                show("colour difference", &report.colour_difference);
+                show("plane distance", &report.plane_distance);
+                show("projected distance", &report.projected_distance);
+                show("orientation", &report.orientation);
+                show("dominating axis", &report.dominating_axis);
+                show("dominating axis spectral", &report.dominating_axis_spectral);
+                println!(
+                    "cost: {} → {} triangles, {} → {} billboards, {} → {} texture bytes",
+                    report.cost.original.triangles,
+                    report.cost.candidate.triangles,
+                    report.cost.original.billboards,
+                    report.cost.candidate.billboards,
+                    report.cost.original.texture_bytes,
+                    report.cost.candidate.texture_bytes
                 );
             }
         }

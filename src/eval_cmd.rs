@@ -1,0 +1,416 @@
+//! `frond eval ORIGINAL CANDIDATE`: how well a candidate (a `frond lod` LOD, a decimated tree,
+//! an artist's LOD) reproduces an animated tree, by the metrics of spec
+//! animated-billboard-clouds §5 and App. A, each with its definition in the report.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use frond_export::mapping::Mapping;
+use frond_metrics::animation::{AxisMetrics, axis_metrics};
+use frond_metrics::cost::{Cost, cost};
+use frond_metrics::triangle_metrics::{TriangleMetrics, image_trajectory, triangle_metrics};
+use frond_metrics::{CoverageParams, CoverageReport, coverage_error};
+use frond_render::{DrawScene, Renderer, TreeParts, tree_scene};
+use frond_scene::sampling::pose_at;
+use frond_scene::{Part, SampleOptions, Sampled, Tree, sample};
+use glam::Vec3;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// What `frond eval` was asked for.
+#[derive(Clone, Debug)]
+pub struct EvalRequest {
+    /// Ring views of the colour metric (odd, thesis §8.3.1).
+    pub views: u32,
+    /// Frames of the animated colour metric.
+    pub frames: u32,
+    /// Image size of the colour metric.
+    pub size: (u32, u32),
+    /// Samples over the loop for the trajectory metrics.
+    pub samples: usize,
+    /// Clip (default: the original's first); the candidate plays the clip of the same name.
+    pub clip: Option<String>,
+}
+
+/// One metric: mean and max, or why it was not computed.
+#[derive(Clone, Debug, Serialize)]
+pub struct Metric {
+    pub mean: Option<f64>,
+    pub max: Option<f64>,
+    pub skipped_reason: Option<String>,
+    pub definition: &'static str,
+}
+
+impl Metric {
+    fn value(mean: f64, max: f64, definition: &'static str) -> Metric {
+        Metric {
+            mean: Some(mean),
+            max: Some(max),
+            skipped_reason: None,
+            definition,
+        }
+    }
+    fn skipped(reason: &str, definition: &'static str) -> Metric {
+        Metric {
+            mean: None,
+            max: None,
+            skipped_reason: Some(reason.to_string()),
+            definition,
+        }
+    }
+}
+
+/// The static and animated colour (coverage) metric.
+#[derive(Clone, Debug, Serialize)]
+pub struct CoverageMetrics {
+    #[serde(rename = "static")]
+    pub static_: Metric,
+    pub animated: Metric,
+}
+
+/// Both models' cost.
+#[derive(Clone, Debug, Serialize)]
+pub struct Costs {
+    pub original: Cost,
+    pub candidate: Cost,
+}
+
+/// The report (`--json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct EvalReport {
+    pub original: String,
+    pub candidate: String,
+    pub clip: Option<String>,
+    pub samples: usize,
+    pub views: u32,
+    pub frames: u32,
+    pub size: [u32; 2],
+    /// Distances below are in world units; this is the original's height for scale.
+    pub tree_height: f32,
+    pub coverage: CoverageMetrics,
+    pub colour_difference: Metric,
+    pub plane_distance: Metric,
+    pub projected_distance: Metric,
+    pub euclidean_distance: Metric,
+    pub orientation: Metric,
+    pub dominating_axis: Metric,
+    pub dominating_axis_spectral: Metric,
+    /// How each original foliage triangle was matched to the candidate.
+    pub matching: String,
+    pub cost: Costs,
+    pub timings_s: serde_json::Value,
+}
+
+const COVERAGE_DEF: &str = "spec §5.4: Σ|o−s|/P_f over binary foliage masks per (view, frame), \
+    views on a ring at elevation 0, pairs above 1 discarded; mean over pairs, max = worst pair";
+const COLOUR_DEF: &str = "mean |Δ linear RGB| over pixels both foliage renders cover, per \
+    (view, frame) of the animated colour metric; max = worst pair";
+const PLANE_DEF: &str = "spec §5.2: distance of each foliage triangle's centroid to its \
+    billboard's plane over the loop (world units); mean of per-triangle means, max of maxes";
+const PROJECTED_DEF: &str = "spec §5.2: distance of the centroid's projection to its fixed \
+    point on the billboard (least-squares over the loop), world units";
+const EUCLID_DEF: &str = "spec §5.2: sqrt(D_plane² + D_projected²), world units";
+const ORIENT_DEF: &str = "spec §5.3: 1 − (n·n_s + 1)(d·d_s + 1)/4 per sample, d = centroid → \
+    vertex 0, billboard normal signed toward the triangle (double-sided)";
+const AXIS_DEF: &str = "spec §5.5 with the §4.8 erratum fixed: NEP(1 − |a_t·a_b|, \
+    amplitudeDistance) of the centroid's and its image's trajectories, frequency bins = \
+    skeleton depth; per triangle, mean and max over triangles";
+const AXIS_SPEC_DEF: &str = "spec §5.5: NE(amplitudeDistance) of the dominating-axis spectra, \
+    frequency bins = skeleton depth";
+
+/// The candidate's clip to play at the original's clip `name`: the one of the same name, else
+/// its first.
+fn candidate_clip(candidate: &Tree, name: Option<&str>) -> Option<usize> {
+    name.and_then(|n| candidate.clip_index(Some(n)))
+        .or_else(|| candidate.clip_index(None))
+}
+
+fn coverage_metric(r: &CoverageReport) -> Metric {
+    let worst = r
+        .differing_pixels
+        .iter()
+        .zip(&r.original_pixels)
+        .filter(|(_, o)| **o > 0)
+        .map(|(d, o)| *d as f64 / *o as f64)
+        .filter(|s| *s <= 1.0)
+        .fold(f64::NAN, f64::max);
+    if r.mean.is_nan() {
+        return Metric::skipped(
+            "every (view, frame) pair was discarded (no original foliage, or error above 1)",
+            COVERAGE_DEF,
+        );
+    }
+    Metric::value(r.mean, worst, COVERAGE_DEF)
+}
+
+/// Evaluates `candidate` against `original`; `same_file` (the two files have the same bytes)
+/// matches every triangle to itself.
+pub fn evaluate(
+    renderer: &Renderer,
+    original: &Tree,
+    candidate: &Tree,
+    same_file: bool,
+    req: &EvalRequest,
+) -> Result<EvalReport> {
+    let t0 = Instant::now();
+    let path = original.source.display().to_string();
+    let sampled = sample(
+        original,
+        &SampleOptions {
+            clip: req.clip.clone(),
+            samples: req.samples,
+        },
+    )?;
+    let oc = original.clip_index(sampled.clip.as_deref());
+    let cc = candidate_clip(candidate, sampled.clip.as_deref());
+    let (lo, hi) = (
+        Vec3::from(original.bounds.min),
+        Vec3::from(original.bounds.max),
+    );
+    let start = sampled.times.first().copied().unwrap_or(0.0);
+    let frame_times: Vec<f32> = (0..req.frames.max(1))
+        .map(|f| start + sampled.period * f as f32 / req.frames.max(1) as f32)
+        .collect();
+    let scenes = |tree: &Tree, clip: Option<usize>, times: &[f32]| -> Vec<DrawScene> {
+        times
+            .iter()
+            .map(|&t| tree_scene(tree, clip, t, TreeParts::Foliage))
+            .collect()
+    };
+    let params = |frames: u32| CoverageParams {
+        views: req.views,
+        frames,
+        width: req.size.0,
+        height: req.size.1,
+        ..Default::default()
+    };
+    let stat = coverage_error(
+        renderer,
+        &scenes(original, oc, &frame_times[..1]),
+        &scenes(candidate, cc, &frame_times[..1]),
+        lo,
+        hi,
+        &params(1),
+    )
+    .with_context(|| format!("{path}: static colour metric"))?;
+    let anim = coverage_error(
+        renderer,
+        &scenes(original, oc, &frame_times),
+        &scenes(candidate, cc, &frame_times),
+        lo,
+        hi,
+        &params(frame_times.len() as u32),
+    )
+    .with_context(|| format!("{path}: animated colour metric"))?;
+    let t1 = Instant::now();
+    let colour = if anim.colour_difference.is_nan() {
+        Metric::skipped("the two renders share no foliage pixel", COLOUR_DEF)
+    } else {
+        Metric::value(anim.colour_difference, anim.colour_difference, COLOUR_DEF)
+    };
+
+    let (matching, per_triangle) = match_triangles(original, candidate, same_file, &sampled, cc);
+    let t2 = Instant::now();
+    let bins = original.skeleton_depth().max(1) as usize;
+    let metrics: Vec<_> = per_triangle
+        .par_iter()
+        .map(|(tri, board)| {
+            let m = triangle_metrics(tri, board);
+            let centres: Vec<Vec3> = tri.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
+            let a = axis_metrics(&centres, &image_trajectory(tri, board), bins);
+            (m, a)
+        })
+        .collect();
+    let agg = |f: &dyn Fn(&TriangleScores) -> (f32, f32), def: &'static str| -> Metric {
+        match &matching {
+            Err(reason) => Metric::skipped(reason, def),
+            Ok(_) if metrics.is_empty() => Metric::skipped("no foliage triangle to compare", def),
+            Ok(_) => {
+                let (mut sum, mut max) = (0.0f64, 0.0f64);
+                for m in &metrics {
+                    let (mean, mx) = f(m);
+                    sum += f64::from(mean);
+                    max = max.max(f64::from(mx));
+                }
+                Metric::value(sum / metrics.len() as f64, max, def)
+            }
+        }
+    };
+    let report = EvalReport {
+        original: path,
+        candidate: candidate.source.display().to_string(),
+        clip: sampled.clip.clone(),
+        samples: sampled.samples(),
+        views: req.views,
+        frames: frame_times.len() as u32,
+        size: [req.size.0, req.size.1],
+        tree_height: original.bounds.height(),
+        coverage: CoverageMetrics {
+            static_: coverage_metric(&stat),
+            animated: coverage_metric(&anim),
+        },
+        colour_difference: colour,
+        plane_distance: agg(
+            &|m| (m.0.plane_distance.mean, m.0.plane_distance.max),
+            PLANE_DEF,
+        ),
+        projected_distance: agg(
+            &|m| (m.0.projected_distance.mean, m.0.projected_distance.max),
+            PROJECTED_DEF,
+        ),
+        euclidean_distance: agg(
+            &|m| (m.0.euclidean_distance.mean, m.0.euclidean_distance.max),
+            EUCLID_DEF,
+        ),
+        orientation: agg(&|m| (m.0.orientation.mean, m.0.orientation.max), ORIENT_DEF),
+        dominating_axis: agg(&|m| (m.1.dominating_axis, m.1.dominating_axis), AXIS_DEF),
+        dominating_axis_spectral: agg(
+            &|m| (m.1.dominating_axis_spectral, m.1.dominating_axis_spectral),
+            AXIS_SPEC_DEF,
+        ),
+        matching: match &matching {
+            Ok(how) => how.clone(),
+            Err(reason) => reason.clone(),
+        },
+        cost: Costs {
+            original: cost(original, file_size(&original.source)),
+            candidate: cost(candidate, file_size(&candidate.source)),
+        },
+        timings_s: serde_json::json!({
+            "colour": (t1 - t0).as_secs_f64(),
+            "matching": (t2 - t1).as_secs_f64(),
+            "trajectories": t2.elapsed().as_secs_f64(),
+            "total": t0.elapsed().as_secs_f64(),
+        }),
+    };
+    Ok(report)
+}
+
+/// One triangle's distance/orientation metrics and animation metrics.
+type TriangleScores = (TriangleMetrics, AxisMetrics);
+
+fn file_size(p: &Path) -> u64 {
+    std::fs::metadata(p).map(|m| m.len()).unwrap_or(0)
+}
+
+/// Per original foliage triangle: its vertices and the corners of what replaces it, at every
+/// sample; or why no matching exists.
+type Matched = (
+    Result<String, String>,
+    Vec<(Vec<[Vec3; 3]>, Vec<[Vec3; 4]>)>,
+);
+
+fn match_triangles(
+    original: &Tree,
+    candidate: &Tree,
+    same_file: bool,
+    sampled: &Sampled,
+    cc: Option<usize>,
+) -> Matched {
+    let nv = sampled.vertices;
+    let n = sampled.samples();
+    let tri_track = |t: usize| -> Vec<[Vec3; 3]> {
+        let v = original.triangles[t].v;
+        (0..n)
+            .map(|s| v.map(|i| sampled.positions[s * nv + i as usize]))
+            .collect()
+    };
+    if same_file {
+        let tracks = sampled
+            .foliage
+            .par_iter()
+            .map(|&t| {
+                let tri = tri_track(t);
+                let board = tri.iter().map(|v| [v[0], v[1], v[2], v[2]]).collect();
+                (tri, board)
+            })
+            .collect();
+        return (
+            Ok("identity (the candidate is the original file)".into()),
+            tracks,
+        );
+    }
+    let sidecar = candidate.source.with_extension("mapping.json");
+    let mapping: Mapping = match std::fs::read(&sidecar)
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok())
+    {
+        Some(m) => m,
+        None => {
+            return (
+                Err(format!(
+                    "no triangle → billboard mapping ({} missing or unreadable); nearest-surface \
+                     matching of foreign candidates is not implemented yet",
+                    sidecar.display()
+                )),
+                Vec::new(),
+            );
+        }
+    };
+    // The billboard primitive: triangles of the material `frond lod` names "<lod>_billboards",
+    // 4 vertices per billboard in mapping order.
+    let mut board_vertices: Vec<u32> = candidate
+        .triangles
+        .iter()
+        .filter(|t| {
+            t.part == Part::Foliage
+                && candidate
+                    .materials
+                    .get(t.material as usize)
+                    .is_some_and(|m| m.name.ends_with("_billboards"))
+        })
+        .flat_map(|t| t.v)
+        .collect();
+    board_vertices.sort_unstable();
+    board_vertices.dedup();
+    let count = mapping.billboards.len();
+    let base = board_vertices.first().copied().unwrap_or(0) as usize;
+    if board_vertices.len() != 4 * count
+        || board_vertices
+            .last()
+            .is_some_and(|&l| l as usize != base + 4 * count - 1)
+    {
+        return (
+            Err(format!(
+                "{} lists {count} billboards but the candidate's billboard mesh has {} vertices",
+                sidecar.display(),
+                board_vertices.len()
+            )),
+            Vec::new(),
+        );
+    }
+    let poses: Vec<Vec<Vec3>> = sampled
+        .times
+        .par_iter()
+        .map(|&t| pose_at(candidate, cc, t))
+        .collect();
+    let foliage: std::collections::HashSet<usize> = sampled.foliage.iter().copied().collect();
+    let mut pairs = Vec::new();
+    for (k, b) in mapping.billboards.iter().enumerate() {
+        for &t in &b.triangles {
+            if foliage.contains(&t) {
+                pairs.push((k, t));
+            }
+        }
+    }
+    let tracks = pairs
+        .par_iter()
+        .map(|&(k, t)| {
+            let board = poses
+                .iter()
+                .map(|p| [0, 1, 2, 3].map(|c| p[base + 4 * k + c]))
+                .collect();
+            (tri_track(t), board)
+        })
+        .collect();
+    (
+        Ok(format!(
+            "{}: {} triangles on {count} billboards ({} unmapped)",
+            sidecar.display(),
+            pairs.len(),
+            mapping.unmapped_triangles.len()
+        )),
+        tracks,
+    )
+}

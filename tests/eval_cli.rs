@@ -1,0 +1,116 @@
+//! `frond eval` end to end: known answers (a file against itself scores 0 everywhere), a
+//! per-bone LOD stays within its ε, foreign candidates get the image metrics and a reason for
+//! the rest, bad input fails cleanly.
+
+mod common;
+
+use std::path::Path;
+
+use common::*;
+
+fn eval(original: &Path, candidate: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "eval",
+        original.to_str().expect("utf-8"),
+        candidate.to_str().expect("utf-8"),
+        "--json",
+        "--samples",
+        "16",
+        "--views",
+        "3",
+        "--frames",
+        "3",
+    ];
+    args.extend_from_slice(extra);
+    let out = frond_ok(&args);
+    serde_json::from_slice(&out.stdout).expect("JSON report")
+}
+
+const METRICS: [&str; 8] = [
+    "colour_difference",
+    "plane_distance",
+    "projected_distance",
+    "euclidean_distance",
+    "orientation",
+    "dominating_axis",
+    "dominating_axis_spectral",
+    "coverage",
+];
+
+#[test]
+fn a_file_against_itself_scores_zero_everywhere() {
+    let sapling = root().join("samples/sapling.glb");
+    let r = eval(&sapling, &sapling, &["--size", "160x120"]);
+    for key in ["static", "animated"] {
+        assert_eq!(r["coverage"][key]["mean"], 0.0, "coverage.{key}");
+        assert!(r["coverage"][key]["definition"].is_string());
+    }
+    // Distances are in world units (float noise scales with the tree), the rest in [0, 1].
+    let h = r["tree_height"].as_f64().expect("height");
+    for key in &METRICS[..7] {
+        let tol = if key.ends_with("distance") {
+            1e-6 * h
+        } else {
+            1e-5
+        };
+        for agg in ["mean", "max"] {
+            let v = r[key][agg].as_f64().unwrap_or(f64::NAN);
+            assert!(v.abs() <= tol, "{key}.{agg} = {v}");
+        }
+    }
+    assert_eq!(r["cost"]["original"], r["cost"]["candidate"]);
+    assert!(
+        r["matching"]
+            .as_str()
+            .expect("matching")
+            .starts_with("identity")
+    );
+}
+
+#[test]
+fn a_per_bone_lod_stays_within_its_epsilon_and_a_foreign_copy_is_skipped_with_a_reason() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("lods");
+    let sapling = root().join("samples/sapling.glb");
+    let lods = frond_lod(&sapling, &out, &["--lods", "300", "--method", "per-bone"]);
+    let lod1 = out.join("sapling_LOD1.glb");
+    let r = eval(&sapling, &lod1, &["--screen-height", "120"]);
+    let eps = lods["lods"][1]["epsilon"].as_f64().expect("epsilon");
+    let plane_max = r["plane_distance"]["max"].as_f64().expect("plane max");
+    assert!(plane_max <= eps * 1.001, "{plane_max} > ε {eps}");
+    // Billboards follow their bones exactly: the images do not drift.
+    assert!(r["projected_distance"]["max"].as_f64().expect("projected") < 1e-3 * eps.max(1.0));
+    let cov = r["coverage"]["animated"]["mean"]
+        .as_f64()
+        .expect("coverage");
+    assert!(cov > 0.0 && cov < 0.2, "coverage {cov}");
+    assert_eq!(
+        r["cost"]["candidate"]["billboards"], lods["lods"][1]["billboards"],
+        "cost counts the LOD's billboards"
+    );
+    assert_eq!(r["size"], serde_json::json!([160, 120]));
+    // The same file without its sidecar: image metrics only, a reason for the rest.
+    let foreign = dir.path().join("foreign.glb");
+    std::fs::copy(&lod1, &foreign).expect("copy");
+    let r = eval(&sapling, &foreign, &["--size", "160x120"]);
+    assert!(r["coverage"]["static"]["mean"].as_f64().is_some());
+    assert!(r["plane_distance"]["mean"].is_null());
+    assert!(
+        r["plane_distance"]["skipped_reason"]
+            .as_str()
+            .expect("reason")
+            .contains("mapping")
+    );
+}
+
+#[test]
+fn a_missing_candidate_fails_naming_it() {
+    let sapling = root().join("samples/sapling.glb");
+    let r = frond(&["eval", sapling.to_str().expect("utf-8"), "no/such/lod.glb"]);
+    assert!(!r.status.success());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("no/such/lod.glb") && !err.contains("panicked"),
+        "{err}"
+    );
+}
