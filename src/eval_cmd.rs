@@ -13,6 +13,7 @@ use frond_metrics::triangle_metrics::{TriangleMetrics, image_trajectory, triangl
 use frond_metrics::{CoverageParams, CoverageReport, coverage_error};
 use frond_render::{DrawScene, Renderer, TreeParts, tree_scene};
 use frond_scene::sampling::pose_at;
+use frond_scene::surface_distance::SurfaceBvh;
 use frond_scene::{Part, SampleOptions, Sampled, Tree, sample};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -114,8 +115,9 @@ const EUCLID_DEF: &str = "spec §5.2: sqrt(D_plane² + D_projected²), world uni
 const ORIENT_DEF: &str = "spec §5.3: 1 − (n·n_s + 1)(d·d_s + 1)/4 per sample, d = centroid → \
     vertex 0, billboard normal signed toward the triangle (double-sided)";
 const AXIS_DEF: &str = "spec §5.5 with the §4.8 erratum fixed: NEP(1 − |a_t·a_b|, \
-    amplitudeDistance) of the centroid's and its image's trajectories, frequency bins = \
-    skeleton depth; per triangle, mean and max over triangles";
+    amplitudeDistance) of the centroid's and its image's trajectories (image: the fixed point on \
+    its billboard, or for candidates without a mapping the nearest candidate foliage point in \
+    the rest pose), frequency bins = skeleton depth; mean and max over triangles";
 const AXIS_SPEC_DEF: &str = "spec §5.5: NE(amplitudeDistance) of the dominating-axis spectra, \
     frequency bins = skeleton depth";
 
@@ -222,6 +224,11 @@ pub fn evaluate(
             (m, a)
         })
         .collect();
+    // Foreign candidates: each original leaf matched to the nearest candidate foliage surface
+    // point in the rest pose; that point follows its triangle's skinning.
+    let foreign: Option<Result<Vec<AxisMetrics>, String>> = matching
+        .is_err()
+        .then(|| foreign_axis_metrics(original, candidate, &sampled, cc, bins));
     let agg = |f: &dyn Fn(&TriangleScores) -> (f32, f32), def: &'static str| -> Metric {
         match &matching {
             Err(reason) => Metric::skipped(reason, def),
@@ -264,11 +271,17 @@ pub fn evaluate(
             EUCLID_DEF,
         ),
         orientation: agg(&|m| (m.0.orientation.mean, m.0.orientation.max), ORIENT_DEF),
-        dominating_axis: agg(&|m| (m.1.dominating_axis, m.1.dominating_axis), AXIS_DEF),
-        dominating_axis_spectral: agg(
-            &|m| (m.1.dominating_axis_spectral, m.1.dominating_axis_spectral),
-            AXIS_SPEC_DEF,
-        ),
+        dominating_axis: match &foreign {
+            Some(f) => axis_aggregate(f, |a| a.dominating_axis, AXIS_DEF),
+            None => agg(&|m| (m.1.dominating_axis, m.1.dominating_axis), AXIS_DEF),
+        },
+        dominating_axis_spectral: match &foreign {
+            Some(f) => axis_aggregate(f, |a| a.dominating_axis_spectral, AXIS_SPEC_DEF),
+            None => agg(
+                &|m| (m.1.dominating_axis_spectral, m.1.dominating_axis_spectral),
+                AXIS_SPEC_DEF,
+            ),
+        },
         matching: match &matching {
             Ok(how) => how.clone(),
             Err(reason) => reason.clone(),
@@ -289,6 +302,83 @@ pub fn evaluate(
 
 /// One triangle's distance/orientation metrics and animation metrics.
 type TriangleScores = (TriangleMetrics, AxisMetrics);
+
+/// Mean and max of one animation metric over matched leaves.
+fn axis_aggregate(
+    found: &Result<Vec<AxisMetrics>, String>,
+    f: impl Fn(&AxisMetrics) -> f32,
+    def: &'static str,
+) -> Metric {
+    match found {
+        Err(reason) => Metric::skipped(reason, def),
+        Ok(v) if v.is_empty() => Metric::skipped("no foliage triangle to compare", def),
+        Ok(v) => {
+            let sum: f64 = v.iter().map(|a| f64::from(f(a))).sum();
+            let max = v.iter().map(|a| f64::from(f(a))).fold(0.0, f64::max);
+            Metric::value(sum / v.len() as f64, max, def)
+        }
+    }
+}
+
+/// The animation metrics of a candidate without a mapping: every original foliage triangle's
+/// rest centroid is matched to the nearest point of the candidate's foliage in its rest pose
+/// (spec §5.5 for foreign candidates); that point, as barycentric coordinates of its triangle,
+/// moves with the candidate's skinning.
+fn foreign_axis_metrics(
+    original: &Tree,
+    candidate: &Tree,
+    sampled: &Sampled,
+    cc: Option<usize>,
+    bins: usize,
+) -> Result<Vec<AxisMetrics>, String> {
+    let cand_tris: Vec<usize> = candidate.foliage();
+    if cand_tris.is_empty() {
+        return Err("the candidate has no foliage to match leaves to".into());
+    }
+    let rest_c = pose_at(candidate, None, 0.0);
+    let rest_o = pose_at(original, None, 0.0);
+    let corners = |pos: &[Vec3], t: usize| candidate.triangles[t].v.map(|i| pos[i as usize]);
+    let bvh = SurfaceBvh::new(cand_tris.iter().map(|&t| corners(&rest_c, t)).collect());
+    let poses: Vec<Vec<Vec3>> = sampled
+        .times
+        .par_iter()
+        .map(|&t| pose_at(candidate, cc, t))
+        .collect();
+    Ok(sampled
+        .foliage
+        .par_iter()
+        .enumerate()
+        .filter_map(|(k, &t)| {
+            let v = original.triangles[t].v;
+            let c = (rest_o[v[0] as usize] + rest_o[v[1] as usize] + rest_o[v[2] as usize]) / 3.0;
+            let (i, q, _) = bvh.nearest(c)?;
+            let tri = cand_tris[i];
+            let w = barycentric(q, corners(&rest_c, tri));
+            let image: Vec<Vec3> = poses
+                .iter()
+                .map(|p| {
+                    let [a, b, d] = corners(p, tri);
+                    a * w.x + b * w.y + d * w.z
+                })
+                .collect();
+            Some(axis_metrics(sampled.trajectory(k), &image, bins))
+        })
+        .collect())
+}
+
+/// Barycentric coordinates of `p` (on or near the triangle) with respect to `t`.
+fn barycentric(p: Vec3, t: [Vec3; 3]) -> Vec3 {
+    let (v0, v1, v2) = (t[1] - t[0], t[2] - t[0], p - t[0]);
+    let (d00, d01, d11) = (v0.dot(v0), v0.dot(v1), v1.dot(v1));
+    let (d20, d21) = (v2.dot(v0), v2.dot(v1));
+    let denom = d00 * d11 - d01 * d01;
+    if denom.abs() <= f32::EPSILON * d00 * d11 {
+        return Vec3::new(1.0, 0.0, 0.0);
+    }
+    let v = (d11 * d20 - d01 * d21) / denom;
+    let w = (d00 * d21 - d01 * d20) / denom;
+    Vec3::new(1.0 - v - w, v, w)
+}
 
 fn file_size(p: &Path) -> u64 {
     std::fs::metadata(p).map(|m| m.len()).unwrap_or(0)
@@ -340,8 +430,8 @@ fn match_triangles(
         None => {
             return (
                 Err(format!(
-                    "no triangle → billboard mapping ({} missing or unreadable); nearest-surface \
-                     matching of foreign candidates is not implemented yet",
+                    "no triangle → billboard mapping ({} missing or unreadable): the \
+                     per-billboard metrics need one",
                     sidecar.display()
                 )),
                 Vec::new(),

@@ -101,6 +101,38 @@ fn a_per_bone_lod_stays_within_its_epsilon_and_a_foreign_copy_is_skipped_with_a_
             .expect("reason")
             .contains("mapping")
     );
+    // The animation metrics match leaves to the nearest candidate surface instead.
+    let axis = r["dominating_axis"]["mean"].as_f64().expect("axis metric");
+    assert!((0.0..1.0).contains(&axis), "{axis}");
+}
+
+#[test]
+fn a_gltfpack_simplified_tree_is_evaluated_like_any_candidate() {
+    let tools = node_tools();
+    let dir = tempfile::tempdir().expect("tmp");
+    let sapling = root().join("samples/sapling.glb");
+    let packed = dir.path().join("sapling_si01.glb");
+    let status = std::process::Command::new("node")
+        .arg(tools.join("node_modules/gltfpack/cli.js"))
+        .args(["-si", "0.1", "-sa", "-i"])
+        .arg(&sapling)
+        .arg("-o")
+        .arg(&packed)
+        .status()
+        .expect("node runs gltfpack");
+    assert!(status.success(), "gltfpack failed");
+    let r = eval(&sapling, &packed, &["--size", "160x120"]);
+    let cov = r["coverage"]["animated"]["mean"]
+        .as_f64()
+        .expect("coverage");
+    assert!(cov > 0.0 && cov <= 1.0, "{cov}");
+    assert!(r["dominating_axis_spectral"]["mean"].as_f64().is_some());
+    assert!(r["plane_distance"]["mean"].is_null());
+    let (o, c) = (&r["cost"]["original"], &r["cost"]["candidate"]);
+    assert!(
+        c["triangles"].as_u64() < o["triangles"].as_u64(),
+        "gltfpack simplified it"
+    );
 }
 
 #[test]

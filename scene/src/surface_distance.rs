@@ -67,6 +67,8 @@ pub fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
 /// [`triangle_distance`] over all triangles. Immutable and `Sync`: queries may run in parallel.
 pub struct SurfaceBvh {
     triangles: Vec<[Vec3; 3]>,
+    /// Index in the input of each triangle, in the hierarchy's order.
+    ids: Vec<u32>,
     nodes: Vec<Node>,
 }
 
@@ -84,13 +86,58 @@ const LEAF: usize = 4;
 
 impl SurfaceBvh {
     /// The hierarchy over `triangles` (reordered, kept). No triangle makes an empty surface.
-    pub fn new(mut triangles: Vec<[Vec3; 3]>) -> SurfaceBvh {
-        let mut nodes = Vec::with_capacity(triangles.len() / 2 + 1);
-        if !triangles.is_empty() {
-            let n = triangles.len();
-            Self::build(&mut triangles, 0, n, &mut nodes);
+    pub fn new(triangles: Vec<[Vec3; 3]>) -> SurfaceBvh {
+        let mut items: Vec<([Vec3; 3], u32)> = triangles
+            .into_iter()
+            .enumerate()
+            .map(|(i, t)| (t, i as u32))
+            .collect();
+        let mut nodes = Vec::with_capacity(items.len() / 2 + 1);
+        if !items.is_empty() {
+            let n = items.len();
+            Self::build(&mut items, 0, n, &mut nodes);
         }
-        SurfaceBvh { triangles, nodes }
+        let (triangles, ids) = items.into_iter().unzip();
+        SurfaceBvh {
+            triangles,
+            ids,
+            nodes,
+        }
+    }
+
+    /// The nearest surface point to `p`: the input index of its triangle, the point and its
+    /// distance; None when there is no triangle.
+    pub fn nearest(&self, p: Vec3) -> Option<(usize, Vec3, f32)> {
+        let mut best: Option<(usize, Vec3, f32)> = None;
+        let mut stack = if self.nodes.is_empty() {
+            Vec::new()
+        } else {
+            vec![0usize]
+        };
+        let pd = p.as_dvec3();
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n];
+            let d = (node.lo - p).max(p - node.hi).max(Vec3::ZERO).length();
+            if best.is_some_and(|b| d >= b.2) {
+                continue;
+            }
+            if node.count > 0 {
+                for k in node.first..node.first + node.count {
+                    let [a, b, c] = self.triangles[k];
+                    let q = closest_on_triangle(pd, a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
+                    let dist = pd.distance(q) as f32;
+                    let id = self.ids[k] as usize;
+                    // Ties go to the lower input index, so the answer is deterministic.
+                    if best.is_none_or(|b| dist < b.2 || (dist == b.2 && id < b.0)) {
+                        best = Some((id, q.as_vec3(), dist));
+                    }
+                }
+            } else {
+                stack.push(node.right);
+                stack.push(n + 1);
+            }
+        }
+        best
     }
 
     /// Number of triangles.
@@ -134,12 +181,17 @@ impl SurfaceBvh {
     }
 
     /// Builds the node over `tris[first..first + count]` and its subtree; returns its index.
-    fn build(tris: &mut [[Vec3; 3]], first: usize, count: usize, nodes: &mut Vec<Node>) -> usize {
+    fn build(
+        tris: &mut [([Vec3; 3], u32)],
+        first: usize,
+        count: usize,
+        nodes: &mut Vec<Node>,
+    ) -> usize {
         let span = &mut tris[first..first + count];
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         // Centroids times 3: only their order matters.
         let (mut clo, mut chi) = (lo, hi);
-        for t in span.iter() {
+        for (t, _) in span.iter() {
             for p in t {
                 lo = lo.min(*p);
                 hi = hi.max(*p);
@@ -167,9 +219,9 @@ impl SurfaceBvh {
         } else {
             2
         };
-        let key = |t: &[Vec3; 3]| (t[0] + t[1] + t[2])[axis];
+        let key = |t: &([Vec3; 3], u32)| (t.0[0] + t.0[1] + t.0[2])[axis];
         let half = count / 2;
-        span.select_nth_unstable_by(half, |a, b| key(a).total_cmp(&key(b)));
+        span.select_nth_unstable_by(half, |a, b| key(a).total_cmp(&key(b)).then(a.1.cmp(&b.1)));
         nodes[me].count = 0;
         Self::build(tris, first, half, nodes);
         let right = Self::build(tris, first + half, count - half, nodes);
@@ -324,7 +376,20 @@ mod tests {
                 .map(|t| triangle_distance(p, t))
                 .fold(f32::INFINITY, f32::min);
             assert_eq!(bvh.distance(p), brute, "at {p}");
+            // The nearest triangle's input index and point agree with the brute force.
+            let (id, q, d) = bvh.nearest(p).expect("non-empty");
+            assert_eq!(d, brute, "at {p}");
+            assert_eq!(
+                triangle_distance(p, &triangles[id]),
+                brute,
+                "index of the nearest"
+            );
+            assert!(
+                (q.distance(p) - d).abs() <= 1e-5 * (1.0 + d),
+                "point at the distance"
+            );
         }
+        assert!(SurfaceBvh::new(Vec::new()).nearest(Vec3::ZERO).is_none());
         // The same triangles, reordered.
         let mut a: Vec<[u32; 9]> = triangles.iter().map(key).collect();
         let mut b: Vec<[u32; 9]> = bvh.triangles().iter().map(key).collect();
