@@ -51,6 +51,7 @@ impl ImportArgs {
         let options = ImportOptions {
             foliage_materials: self.foliage_material.clone(),
             wood_materials: self.wood_material.clone(),
+            ..Default::default()
         };
         Ok(import(&self.input, &options)?)
     }
@@ -511,7 +512,13 @@ fn run(cli: Cli) -> Result<()> {
             json,
         } => {
             let original = import.load()?;
-            let cand = frond_scene::import(&candidate, &ImportOptions::default())?;
+            let cand = frond_scene::import(
+                &candidate,
+                &ImportOptions {
+                    allow_empty: true,
+                    ..Default::default()
+                },
+            )?;
             let same_file = std::fs::read(&import.input).ok() == std::fs::read(&candidate).ok();
             let size = match (size, screen_height) {
                 (Some(s), _) => parse_size(&s)?,

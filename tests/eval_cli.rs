@@ -146,3 +146,32 @@ fn a_missing_candidate_fails_naming_it() {
         "{err}"
     );
 }
+
+#[test]
+fn an_empty_candidate_has_coverage_error_one() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let empty = dir.path().join("empty.gltf");
+    std::fs::write(
+        &empty,
+        r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[]}]}"#,
+    )
+    .expect("write");
+    let sapling = root().join("samples/sapling.glb");
+    let r = eval(&sapling, &empty, &["--size", "160x120"]);
+    for key in ["static", "animated"] {
+        assert_eq!(r["coverage"][key]["mean"], 1.0, "coverage.{key}");
+    }
+    assert!(r["colour_difference"]["mean"].is_null());
+    assert!(r["dominating_axis"]["skipped_reason"].is_string());
+    assert_eq!(r["cost"]["candidate"]["triangles"], 0);
+    // Every other command still refuses an empty file.
+    let out = dir.path().join("o");
+    let refused = frond(&[
+        "lod",
+        empty.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("no mesh"));
+}

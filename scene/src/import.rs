@@ -24,6 +24,9 @@ pub struct ImportOptions {
     pub foliage_materials: Vec<String>,
     /// Materials (by name) to treat as wood regardless of the heuristics.
     pub wood_materials: Vec<String>,
+    /// Accept a file without any triangle (an empty tree) instead of refusing it: an
+    /// evaluator compares such a candidate like any other.
+    pub allow_empty: bool,
 }
 
 /// Reads a `.glb` or `.gltf` tree from disk.
@@ -50,7 +53,7 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
     let materials = read_materials(src)?;
     let (vertices, prims) =
         read_meshes(src, &node_order, &mut bindings, &materials, &mut warnings)?;
-    if prims.is_empty() {
+    if prims.is_empty() && !options.allow_empty {
         return Err(src.invalid("the file has no mesh with triangles (nothing to simplify)"));
     }
     let (textures, texture_images) = read_textures(src, &materials.1)?;
