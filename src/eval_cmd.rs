@@ -209,7 +209,13 @@ pub fn evaluate(
     let colour = if anim.colour_difference.is_nan() {
         Metric::skipped("the two renders share no foliage pixel", COLOUR_DEF)
     } else {
-        Metric::value(anim.colour_difference, anim.colour_difference, COLOUR_DEF)
+        let worst = anim
+            .colour_per_pair
+            .iter()
+            .copied()
+            .filter(|c| c.is_finite())
+            .fold(0.0, f64::max);
+        Metric::value(anim.colour_difference, worst, COLOUR_DEF)
     };
 
     let (matching, per_triangle) = match_triangles(original, candidate, same_file, &sampled, cc);
@@ -252,7 +258,7 @@ pub fn evaluate(
         views: req.views,
         frames: frame_times.len() as u32,
         size: [req.size.0, req.size.1],
-        tree_height: original.bounds.height(),
+        tree_height: crate::screen_budget::tree_height(original),
         coverage: CoverageMetrics {
             static_: coverage_metric(&stat),
             animated: coverage_metric(&anim),

@@ -21,12 +21,11 @@ use frond_export::{GltfFile, LodInput};
 use frond_render::Renderer;
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{Part, Sampled, Tree};
-use glam::{Affine3A, Mat4};
 use serde::Serialize;
 
 use crate::cloud_cmd::{rest_diagonal, sample_foliage};
 use crate::output::write_files_and_report;
-use crate::screen_budget::{LodLevel, lod_levels};
+use crate::screen_budget::{LodLevel, lod_levels, tree_height};
 
 /// How the foliage of a LOD is clustered.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -226,15 +225,30 @@ fn used_nodes(m: &WoodMesh) -> Vec<usize> {
         .collect()
 }
 
+/// What a LOD draws its skeleton from: LOD0 keeps the input's rig, a billboard LOD its
+/// cloud's (which the screen budget pruned).
+enum LodContent {
+    Input(Rig),
+    Cloud(AnimatedBillboardCloud),
+}
+
 /// A LOD ready to write.
 struct BuiltLod {
     name: String,
-    rig: Rig,
+    content: LodContent,
     parts: Vec<WoodMesh>,
-    cloud: Option<AnimatedBillboardCloud>,
     clips: Vec<usize>,
     vat: Option<frond_export::vat::VatTextures>,
     entry: LodEntry,
+}
+
+impl BuiltLod {
+    fn cloud(&self) -> Option<&AnimatedBillboardCloud> {
+        match &self.content {
+            LodContent::Cloud(c) => Some(c),
+            LodContent::Input(_) => None,
+        }
+    }
 }
 
 /// Builds everything in memory, then writes the LOD files, the combined file, the sidecars and
@@ -249,10 +263,7 @@ pub fn run_lod(
     let path = tree.source.display().to_string();
     let t_start = Instant::now();
     let name = lod_name(tree);
-    let height = {
-        let h = tree.bounds.height();
-        if h > 0.0 { h } else { tree.bounds.size() }
-    };
+    let height = tree_height(tree);
     let diag = rest_diagonal(tree);
     let eps_override = match &req.epsilon {
         Some(e) => Some(parse_epsilon(e, diag).with_context(|| {
@@ -265,15 +276,7 @@ pub fn run_lod(
     progress("sampling the animation");
     let sampled = sample_foliage(tree, req.clip.as_deref(), req.samples)?;
     let t_sampled = Instant::now();
-    let clock = LoopClock {
-        clip: sampled
-            .clip
-            .as_ref()
-            .and_then(|c| tree.clips.iter().position(|x| &x.name == c)),
-        start: sampled.times.first().copied().unwrap_or(0.0),
-        period: sampled.period,
-        samples: sampled.samples(),
-    };
+    let clock = LoopClock::of(tree, &sampled);
 
     let mut built = Vec::new();
     built.push(build_lod0(tree, &name));
@@ -314,9 +317,12 @@ pub fn run_lod(
         .map(|b| LodInput {
             name: b.name.clone(),
             tree,
-            rig: &b.rig,
+            rig: match &b.content {
+                LodContent::Input(rig) => rig,
+                LodContent::Cloud(cloud) => &cloud.rig,
+            },
             parts: b.parts.iter().collect(),
-            cloud: b.cloud.as_ref(),
+            cloud: b.cloud(),
             clips: b.clips.clone(),
             vat_uvs: b.vat.as_ref().map(|v| {
                 vec![
@@ -348,7 +354,7 @@ pub fn run_lod(
             bones: file.joints.first().copied().unwrap_or(0),
             ..b.entry.clone()
         };
-        if let Some(cloud) = &b.cloud {
+        if let Some(cloud) = b.cloud() {
             let mapping = Mapping::of(cloud, k, &glb_name, &sampled.foliage);
             let mapping_name = format!("{}.mapping.json", prefix(k));
             files.push((
@@ -481,9 +487,8 @@ fn build_lod0(tree: &Tree, name: &str) -> BuiltLod {
             vat: None,
             timings_s: LodTimings::default(),
         },
-        rig,
+        content: LodContent::Input(rig),
         parts: vec![wood, foliage],
-        cloud: None,
         clips,
         vat: None,
     }
@@ -605,9 +610,8 @@ fn build_lod(
     };
     Ok(BuiltLod {
         name: format!("{name}_LOD{}", k + 1),
-        rig: cloud.rig.clone(),
+        content: LodContent::Cloud(cloud),
         parts: vec![wood_lod],
-        cloud: Some(cloud),
         clips,
         vat,
         entry,
@@ -622,20 +626,17 @@ pub fn vat_textures(
     stem: &str,
 ) -> Result<frond_export::vat::VatTextures> {
     let worlds = sampled_worlds(&cloud.rig, &cloud.clock);
-    let rest_inv: Vec<Mat4> = cloud.rig.rest_world().iter().map(|m| m.inverse()).collect();
+    let rest_inv = cloud.rest_inverse();
     let n = worlds.len();
     let pieces: Vec<RigidPiece> = cloud
         .billboards
         .iter()
-        .map(|b| {
+        .enumerate()
+        .map(|(i, b)| {
             let pivot = b.quad.center;
             let frames = (0..n)
                 .map(|s| {
-                    let m = b.motion.as_ref().map_or(Affine3A::IDENTITY, |m| m.at(s, n));
-                    let carry = match b.follows {
-                        Some(f) => worlds[s][f] * rest_inv[f],
-                        None => Mat4::IDENTITY,
-                    } * Mat4::from(m);
+                    let carry = cloud.transform_at(i, &worlds[s], &rest_inv, s, n);
                     let (_, r, _) = carry.to_scale_rotation_translation();
                     RigidFrame {
                         position: carry.transform_point3(pivot),

@@ -12,7 +12,7 @@ use frond::inspect::{SamplingSummary, inspect};
 use frond::lod_cmd::{AnimationMode, LodRequest, Method, run_lod};
 use frond::output::write_atomic;
 use frond::render_cmd::{RenderRequest, frame_png, parse_size, render_tree};
-use frond::screen_budget::screen_height_at;
+use frond::screen_budget::{screen_height_at, tree_height};
 use frond_billboard::cloud::CloudParams;
 use frond_billboard::plane_search::SearchParams;
 use frond_export::vat::VatFormat;
@@ -446,7 +446,7 @@ fn run(cli: Cli) -> Result<()> {
             let renderer = Renderer::new()?;
             let screen_heights = match distances {
                 Some(d) => {
-                    let h = tree.bounds.height().max(tree.bounds.size() * 1e-3);
+                    let h = tree_height(&tree);
                     d.iter()
                         .map(|&z| {
                             if !(z.is_finite() && z > 0.0) {

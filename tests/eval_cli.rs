@@ -130,7 +130,7 @@ fn a_gltfpack_simplified_tree_is_evaluated_like_any_candidate() {
     assert!(r["plane_distance"]["mean"].is_null());
     let (o, c) = (&r["cost"]["original"], &r["cost"]["candidate"]);
     assert!(
-        c["triangles"].as_u64() < o["triangles"].as_u64(),
+        c["triangles"].as_u64().expect("triangles") < o["triangles"].as_u64().expect("triangles"),
         "gltfpack simplified it"
     );
 }

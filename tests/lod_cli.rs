@@ -19,10 +19,6 @@ use frond_export::vat::{VatFormat, decode_rigid};
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, SampleOptions, Sampled, Tree, import, import_bytes, sample};
 
-fn lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
-    frond_lod(input, out, extra)
-}
-
 fn sapling() -> PathBuf {
     root().join("samples/sapling.glb")
 }
@@ -47,7 +43,7 @@ fn assert_valid(file: &Path) {
 fn skin_lods_are_valid_and_reported() {
     let dir = tempfile::tempdir().expect("tmp");
     let out = dir.path().join("o");
-    let report = lod(&sapling(), &out, &["--lods", "300,60"]);
+    let report = frond_lod(&sapling(), &out, &["--lods", "300,60"]);
     let lods = report["lods"].as_array().expect("lods");
     assert_eq!(lods.len(), 3, "LOD0 plus one per --lods entry");
     for (k, l) in lods.iter().enumerate() {
@@ -73,8 +69,9 @@ fn skin_lods_are_valid_and_reported() {
     assert_eq!(lods[1]["method"], "per-bone");
     assert_eq!(lods[2]["method"], "static");
     // Nearer LODs cost more: ε grows and billboards shrink in number with distance.
-    assert!(lods[2]["epsilon"].as_f64() > lods[1]["epsilon"].as_f64());
-    assert!(lods[2]["triangles"].as_u64() < lods[0]["triangles"].as_u64());
+    let num = |k: usize, key: &str| lods[k][key].as_f64().expect(key);
+    assert!(num(2, "epsilon") > num(1, "epsilon"));
+    assert!(num(2, "triangles") < num(0, "triangles"));
     assert!(out.join("sapling_lods.glb").exists());
     for f in glbs(&out) {
         assert_valid(&f);
@@ -112,7 +109,7 @@ fn skin_lods_are_valid_and_reported() {
 fn msft_lod_external_textures_and_vat_are_valid() {
     let dir = tempfile::tempdir().expect("tmp");
     let out = dir.path().join("o");
-    let report = lod(
+    let report = frond_lod(
         &sapling(),
         &out,
         &[
@@ -230,12 +227,7 @@ fn build(path: &Path, per_bone: bool, screen: f32) -> Built {
         },
     )
     .expect("sample");
-    let clock = LoopClock {
-        clip: tree.clip_index(None),
-        start: sampled.times[0],
-        period: sampled.period,
-        samples: sampled.samples(),
-    };
+    let clock = LoopClock::of(&tree, &sampled);
     let pixel = tree.bounds.height() / screen;
     let mut params = CloudParams::default();
     params.search.epsilon = pixel;
@@ -306,7 +298,7 @@ fn round_trip(b: &Built) {
         .map(|c| b.cloud.rig.clips[c].name.clone());
     let clip_back = clip.as_ref().and_then(|n| back.clip_index(Some(n)));
     let worlds = sampled_worlds(&b.cloud.rig, &b.cloud.clock);
-    let rest = b.cloud.rig.rest_world();
+    let rest = b.cloud.rest_inverse();
     let n = worlds.len();
     let h = b.tree.bounds.height();
     let mut worst = 0.0f32;
@@ -331,7 +323,7 @@ fn per_bone_round_trip_and_epsilon_in_every_sample() {
     round_trip(&b);
     // Every foliage triangle's centre stays within ε of its billboard's plane in every sample.
     let worlds = sampled_worlds(&b.cloud.rig, &b.cloud.clock);
-    let rest = b.cloud.rig.rest_world();
+    let rest = b.cloud.rest_inverse();
     let n = worlds.len();
     let k_of: std::collections::HashMap<usize, usize> = b
         .sampled
@@ -373,7 +365,7 @@ fn vat_textures_decode_back_to_the_motion() {
         let frames =
             decode_rigid(&vat.position.bytes, &vat.rotation.bytes, &vat.sidecar).expect("decode");
         let worlds = sampled_worlds(&b.cloud.rig, &b.cloud.clock);
-        let rest = b.cloud.rig.rest_world();
+        let rest = b.cloud.rest_inverse();
         let n = worlds.len();
         let size = b.tree.bounds.size();
         // Half floats keep 11 bits; PNG16 maps the bounds onto 65535 steps.
@@ -423,7 +415,7 @@ fn shared_trees_every_method_and_mode_validate() {
         .enumerate()
         {
             let out = dir.path().join(format!("{i}_{k}"));
-            let report = lod(&input, &out, extra);
+            let report = frond_lod(&input, &out, extra);
             let lods = report["lods"].as_array().expect("lods");
             // LOD0 is the input: every non-degenerate triangle, wood and foliage.
             let kept = tree.triangles.iter().filter(|t| !t.degenerate).count();
@@ -435,7 +427,8 @@ fn shared_trees_every_method_and_mode_validate() {
             for l in &lods[1..] {
                 assert!(l["billboards"].as_u64().expect("billboards") > 0, "{name}");
                 assert!(
-                    l["triangles"].as_u64() < lods[0]["triangles"].as_u64(),
+                    l["triangles"].as_u64().expect("triangles")
+                        < lods[0]["triangles"].as_u64().expect("triangles"),
                     "{name}: a LOD is smaller than the input"
                 );
             }
@@ -450,7 +443,7 @@ fn shared_trees_every_method_and_mode_validate() {
 fn distances_give_screen_heights_by_holst_eq_3() {
     let dir = tempfile::tempdir().expect("tmp");
     let out = dir.path().join("o");
-    let report = lod(
+    let report = frond_lod(
         &sapling(),
         &out,
         &["--distances", "40", "--fov", "90", "--resolution", "1000"],
@@ -493,7 +486,7 @@ fn bone_bound_lods_keep_every_clip_and_rigid_fit_lods_say_what_they_drop() {
     let dir = tempfile::tempdir().expect("tmp");
     let input = two_clip_sapling(dir.path());
     let out = dir.path().join("o");
-    let report = lod(&input, &out, &["--lods", "300,60"]);
+    let report = frond_lod(&input, &out, &["--lods", "300,60"]);
     let clips = |k: usize| -> Vec<String> {
         report["lods"][k]["clips"]
             .as_array()

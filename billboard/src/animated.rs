@@ -115,6 +115,19 @@ pub struct LoopClock {
 }
 
 impl LoopClock {
+    /// The clock of a sampled loop of `tree` (its clip, first time, period and sample count).
+    pub fn of(tree: &Tree, sampled: &frond_scene::Sampled) -> LoopClock {
+        LoopClock {
+            clip: sampled
+                .clip
+                .as_deref()
+                .and_then(|c| tree.clip_index(Some(c))),
+            start: sampled.times.first().copied().unwrap_or(0.0),
+            period: sampled.period,
+            samples: sampled.samples(),
+        }
+    }
+
     /// Time of sample `s`.
     pub fn time(&self, s: usize) -> f32 {
         if self.samples == 0 {
@@ -205,23 +218,44 @@ pub struct AnimatedBillboardCloud {
 }
 
 impl AnimatedBillboardCloud {
-    /// World corners of billboard `i` given the rig's world and rest world matrices and the
-    /// motion sample `s` of `n`.
+    /// The transform carrying billboard `i` from its reference pose to the world at motion
+    /// sample `s` of `n`, given the rig's world matrices and inverse rest world matrices (see
+    /// the module docs).
+    pub fn transform_at(
+        &self,
+        i: usize,
+        world: &[Mat4],
+        rest_inv: &[Mat4],
+        s: usize,
+        n: usize,
+    ) -> Mat4 {
+        let b = &self.billboards[i];
+        let m = Mat4::from(b.motion.as_ref().map_or(Affine3A::IDENTITY, |m| m.at(s, n)));
+        match b.follows {
+            Some(node) => world[node] * rest_inv[node] * m,
+            None => m,
+        }
+    }
+
+    /// World corners of billboard `i` at motion sample `s` of `n` ([`Self::transform_at`]).
     pub fn corners_at(
         &self,
         i: usize,
         world: &[Mat4],
-        rest: &[Mat4],
+        rest_inv: &[Mat4],
         s: usize,
         n: usize,
     ) -> [Vec3; 4] {
-        let b = &self.billboards[i];
-        let m = b.motion.as_ref().map_or(Affine3A::IDENTITY, |m| m.at(s, n));
-        let to_world = match b.follows {
-            Some(node) => world[node] * rest[node].inverse() * Mat4::from(m),
-            None => Mat4::from(m),
-        };
-        b.quad.corners().map(|c| to_world.transform_point3(c))
+        let t = self.transform_at(i, world, rest_inv, s, n);
+        self.billboards[i]
+            .quad
+            .corners()
+            .map(|c| t.transform_point3(c))
+    }
+
+    /// Inverse rest world matrices of the rig's nodes (for [`Self::transform_at`]).
+    pub fn rest_inverse(&self) -> Vec<Mat4> {
+        self.rig.rest_world().iter().map(|m| m.inverse()).collect()
     }
 
     /// Recomputes which clips are playable from the billboards' motions.

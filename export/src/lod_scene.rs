@@ -172,10 +172,12 @@ pub fn add_lod(
                                 }
                             })
                             .collect();
+                        // Exactly equal motions share a joint (the screen budget already made
+                        // motions within half a pixel of each other equal).
                         let key: Vec<u32> = local
                             .iter()
                             .flat_map(|m| m.to_cols_array())
-                            .map(|x| ((x * 1e5).round() as i64) as u32)
+                            .map(f32::to_bits)
                             .collect();
                         match motion_joints.get(&(b.follows, key.clone())) {
                             Some(&j) => j,

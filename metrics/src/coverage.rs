@@ -100,6 +100,8 @@ pub struct CoverageReport {
     /// both renders, the mean absolute difference of linear RGB (mean of the three channels,
     /// 0..1), averaged over the (view, frame) pairs that share any pixel; NaN when none do.
     pub colour_difference: f64,
+    /// That difference per (view, frame) pair; NaN for a pair sharing no pixel.
+    pub colour_per_pair: Vec<f64>,
 }
 
 /// Why the coverage metric could not be computed.
@@ -259,6 +261,7 @@ pub fn coverage_error(
     let mut per_view = Vec::with_capacity(cameras.len());
     let (mut total, mut kept_total, mut discarded) = (0.0f64, 0usize, 0usize);
     let (mut colour_sum, mut colour_pairs) = (0.0f64, 0usize);
+    let mut colour_per_pair = Vec::with_capacity(pairs);
     for camera in &cameras {
         let (mut view_sum, mut view_kept) = (0.0f64, 0usize);
         for (o_scene, s_scene) in original.iter().zip(simplified) {
@@ -275,6 +278,9 @@ pub fn coverage_error(
             if shared > 0 {
                 colour_sum += diff / shared as f64;
                 colour_pairs += 1;
+                colour_per_pair.push(diff / shared as f64);
+            } else {
+                colour_per_pair.push(f64::NAN);
             }
             for len in [o.len(), s.len()] {
                 if len != expected {
@@ -304,6 +310,7 @@ pub fn coverage_error(
         original_pixels,
         differing_pixels,
         colour_difference: mean_or_nan(colour_sum, colour_pairs),
+        colour_per_pair,
     })
 }
 

@@ -486,4 +486,8 @@ fn colour_difference_is_zero_for_equal_renders_and_known_for_recoloured_ones() {
         "{}",
         r.colour_difference
     );
+    assert_eq!(r.colour_per_pair.len(), 3, "one per (view, frame)");
+    for c in &r.colour_per_pair {
+        assert!((c - 2.0 / 3.0).abs() < 1e-3, "{c}");
+    }
 }
