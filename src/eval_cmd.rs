@@ -10,7 +10,7 @@ use frond_export::mapping::Mapping;
 use frond_metrics::animation::{AxisMetrics, axis_metrics};
 use frond_metrics::cost::{Cost, cost};
 use frond_metrics::triangle_metrics::{TriangleMetrics, image_trajectory, triangle_metrics};
-use frond_metrics::{CoverageParams, CoverageReport, coverage_error};
+use frond_metrics::{CoverageMasks, CoverageParams, CoverageReport, compare_masks, coverage_masks};
 use frond_render::{DrawScene, Renderer, TreeParts, tree_scene};
 use frond_scene::sampling::pose_at;
 use frond_scene::surface_distance::SurfaceBvh;
@@ -32,6 +32,11 @@ pub struct EvalRequest {
     pub samples: usize,
     /// Clip (default: the original's first); the candidate plays the clip of the same name.
     pub clip: Option<String>,
+}
+
+/// The colour metric's image for a tree seen `screen_height` pixels high: that height, 4:3.
+pub fn image_for_screen_height(screen_height: u32) -> (u32, u32) {
+    (screen_height.saturating_mul(4).div_ceil(3), screen_height)
 }
 
 /// One metric: mean and max, or why it was not computed.
@@ -68,6 +73,11 @@ pub struct CoverageMetrics {
     #[serde(rename = "static")]
     pub static_: Metric,
     pub animated: Metric,
+    /// (view, frame) pairs of the animated metric discarded because they scored above 1 (the
+    /// thesis: no fidelity from that view) or the original covered no pixel.
+    pub discarded_pairs: usize,
+    /// (view, frame) pairs of the animated metric.
+    pub pairs: usize,
 }
 
 /// Both models' cost.
@@ -146,6 +156,138 @@ fn coverage_metric(r: &CoverageReport) -> Metric {
     Metric::value(r.mean, worst, COVERAGE_DEF)
 }
 
+/// The original's half of an evaluation, computed once and reused for every candidate: its
+/// sampled loop, the frame times, and its coverage masks per image size (a sweep scores many
+/// candidates against one original).
+pub struct EvalContext<'a> {
+    renderer: &'a Renderer,
+    original: &'a Tree,
+    sampled: Sampled,
+    frame_times: Vec<f32>,
+    masks: std::collections::HashMap<(u32, u32), CoverageMasks>,
+    views: u32,
+}
+
+impl<'a> EvalContext<'a> {
+    /// Samples `original`'s loop for `req` (views, frames, samples, clip; the size is per
+    /// evaluation).
+    pub fn new(renderer: &'a Renderer, original: &'a Tree, req: &EvalRequest) -> Result<Self> {
+        let sampled = sample(
+            original,
+            &SampleOptions {
+                clip: req.clip.clone(),
+                samples: req.samples,
+            },
+        )?;
+        let start = sampled.times.first().copied().unwrap_or(0.0);
+        let frames = req.frames.max(1);
+        let frame_times: Vec<f32> = (0..frames)
+            .map(|f| start + sampled.period * f as f32 / frames as f32)
+            .collect();
+        Ok(EvalContext {
+            renderer,
+            original,
+            sampled,
+            frame_times,
+            masks: Default::default(),
+            views: req.views,
+        })
+    }
+
+    /// The original's file.
+    pub fn original_path(&self) -> &Path {
+        &self.original.source
+    }
+
+    fn params(&self, size: (u32, u32)) -> CoverageParams {
+        CoverageParams {
+            views: self.views,
+            frames: self.frame_times.len() as u32,
+            width: size.0,
+            height: size.1,
+            ..Default::default()
+        }
+    }
+
+    fn scenes(&self, tree: &Tree, clip: Option<usize>) -> Vec<DrawScene> {
+        self.frame_times
+            .iter()
+            .map(|&t| tree_scene(tree, clip, t, TreeParts::Foliage))
+            .collect()
+    }
+
+    fn bounds(&self) -> (Vec3, Vec3) {
+        (
+            Vec3::from(self.original.bounds.min),
+            Vec3::from(self.original.bounds.max),
+        )
+    }
+
+    /// The original's coverage masks at `size`, rendered on first use.
+    fn original_masks(&mut self, size: (u32, u32)) -> Result<&CoverageMasks> {
+        if !self.masks.contains_key(&size) {
+            let oc = self.original.clip_index(self.sampled.clip.as_deref());
+            let (lo, hi) = self.bounds();
+            let m = coverage_masks(
+                self.renderer,
+                &self.scenes(self.original, oc),
+                lo,
+                hi,
+                &self.params(size),
+            )
+            .with_context(|| format!("{}: colour metric", self.original.source.display()))?;
+            self.masks.insert(size, m);
+        }
+        Ok(&self.masks[&size])
+    }
+
+    /// Evaluates `candidate` with images of `size`; `same_file` (the two files have the same
+    /// bytes) matches every triangle to itself.
+    pub fn evaluate(
+        &mut self,
+        candidate: &Tree,
+        same_file: bool,
+        size: (u32, u32),
+    ) -> Result<EvalReport> {
+        let t0 = Instant::now();
+        let path = self.original.source.display().to_string();
+        let cc = candidate_clip(candidate, self.sampled.clip.as_deref());
+        let (lo, hi) = self.bounds();
+        let cand_masks = coverage_masks(
+            self.renderer,
+            &self.scenes(candidate, cc),
+            lo,
+            hi,
+            &self.params(size),
+        )
+        .with_context(|| format!("{}: colour metric", candidate.source.display()))?;
+        let all: Vec<usize> = (0..self.frame_times.len()).collect();
+        let orig_masks = self.original_masks(size)?;
+        // The static metric (F = 1) is the animated one's first frame: the same renders.
+        let stat = compare_masks(orig_masks, &cand_masks, &[0])
+            .with_context(|| format!("{path}: static colour metric"))?;
+        let anim = compare_masks(orig_masks, &cand_masks, &all)
+            .with_context(|| format!("{path}: animated colour metric"))?;
+        drop(cand_masks);
+        let t1 = Instant::now();
+        let mut report = score(
+            self.original,
+            candidate,
+            same_file,
+            &self.sampled,
+            cc,
+            &stat,
+            &anim,
+        );
+        report.views = self.views;
+        report.frames = self.frame_times.len() as u32;
+        report.size = [size.0, size.1];
+        report.timings_s["colour"] = serde_json::json!((t1 - t0).as_secs_f64());
+        report.timings_s["total"] = serde_json::json!(t0.elapsed().as_secs_f64());
+        Ok(report)
+    }
+}
+
 /// Evaluates `candidate` against `original`; `same_file` (the two files have the same bytes)
 /// matches every triangle to itself.
 pub fn evaluate(
@@ -155,56 +297,21 @@ pub fn evaluate(
     same_file: bool,
     req: &EvalRequest,
 ) -> Result<EvalReport> {
-    let t0 = Instant::now();
+    EvalContext::new(renderer, original, req)?.evaluate(candidate, same_file, req.size)
+}
+
+/// Everything of a report but the colour renders: the per-triangle and animation metrics and
+/// the cost, given the two colour reports.
+fn score(
+    original: &Tree,
+    candidate: &Tree,
+    same_file: bool,
+    sampled: &Sampled,
+    cc: Option<usize>,
+    stat: &CoverageReport,
+    anim: &CoverageReport,
+) -> EvalReport {
     let path = original.source.display().to_string();
-    let sampled = sample(
-        original,
-        &SampleOptions {
-            clip: req.clip.clone(),
-            samples: req.samples,
-        },
-    )?;
-    let oc = original.clip_index(sampled.clip.as_deref());
-    let cc = candidate_clip(candidate, sampled.clip.as_deref());
-    let (lo, hi) = (
-        Vec3::from(original.bounds.min),
-        Vec3::from(original.bounds.max),
-    );
-    let start = sampled.times.first().copied().unwrap_or(0.0);
-    let frame_times: Vec<f32> = (0..req.frames.max(1))
-        .map(|f| start + sampled.period * f as f32 / req.frames.max(1) as f32)
-        .collect();
-    let scenes = |tree: &Tree, clip: Option<usize>, times: &[f32]| -> Vec<DrawScene> {
-        times
-            .iter()
-            .map(|&t| tree_scene(tree, clip, t, TreeParts::Foliage))
-            .collect()
-    };
-    let params = |frames: u32| CoverageParams {
-        views: req.views,
-        frames,
-        width: req.size.0,
-        height: req.size.1,
-        ..Default::default()
-    };
-    let stat = coverage_error(
-        renderer,
-        &scenes(original, oc, &frame_times[..1]),
-        &scenes(candidate, cc, &frame_times[..1]),
-        lo,
-        hi,
-        &params(1),
-    )
-    .with_context(|| format!("{path}: static colour metric"))?;
-    let anim = coverage_error(
-        renderer,
-        &scenes(original, oc, &frame_times),
-        &scenes(candidate, cc, &frame_times),
-        lo,
-        hi,
-        &params(frame_times.len() as u32),
-    )
-    .with_context(|| format!("{path}: animated colour metric"))?;
     let t1 = Instant::now();
     let colour = if anim.colour_difference.is_nan() {
         Metric::skipped("the two renders share no foliage pixel", COLOUR_DEF)
@@ -218,7 +325,7 @@ pub fn evaluate(
         Metric::value(anim.colour_difference, worst, COLOUR_DEF)
     };
 
-    let (matching, per_triangle) = match_triangles(original, candidate, same_file, &sampled, cc);
+    let (matching, per_triangle) = match_triangles(original, candidate, same_file, sampled, cc);
     let t2 = Instant::now();
     let bins = original.skeleton_depth().max(1) as usize;
     let metrics: Vec<_> = per_triangle
@@ -234,7 +341,7 @@ pub fn evaluate(
     // point in the rest pose; that point follows its triangle's skinning.
     let foreign: Option<Result<Vec<AxisMetrics>, String>> = matching
         .is_err()
-        .then(|| foreign_axis_metrics(original, candidate, &sampled, cc, bins));
+        .then(|| foreign_axis_metrics(original, candidate, sampled, cc, bins));
     let agg = |f: &dyn Fn(&TriangleScores) -> (f32, f32), def: &'static str| -> Metric {
         match &matching {
             Err(reason) => Metric::skipped(reason, def),
@@ -250,18 +357,21 @@ pub fn evaluate(
             }
         }
     };
-    let report = EvalReport {
+    EvalReport {
         original: path,
         candidate: candidate.source.display().to_string(),
         clip: sampled.clip.clone(),
         samples: sampled.samples(),
-        views: req.views,
-        frames: frame_times.len() as u32,
-        size: [req.size.0, req.size.1],
+        // Set by the caller, which knows the colour metric's setup.
+        views: 0,
+        frames: 0,
+        size: [0, 0],
         tree_height: crate::screen_budget::tree_height(original),
         coverage: CoverageMetrics {
-            static_: coverage_metric(&stat),
-            animated: coverage_metric(&anim),
+            static_: coverage_metric(stat),
+            animated: coverage_metric(anim),
+            discarded_pairs: anim.discarded,
+            pairs: anim.original_pixels.len(),
         },
         colour_difference: colour,
         plane_distance: agg(
@@ -297,13 +407,10 @@ pub fn evaluate(
             candidate: cost(candidate, file_size(&candidate.source)),
         },
         timings_s: serde_json::json!({
-            "colour": (t1 - t0).as_secs_f64(),
             "matching": (t2 - t1).as_secs_f64(),
             "trajectories": t2.elapsed().as_secs_f64(),
-            "total": t0.elapsed().as_secs_f64(),
         }),
-    };
-    Ok(report)
+    }
 }
 
 /// One triangle's distance/orientation metrics and animation metrics.

@@ -7,3 +7,4 @@ pub mod lod_cmd;
 pub mod output;
 pub mod render_cmd;
 pub mod screen_budget;
+pub mod sweep;

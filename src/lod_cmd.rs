@@ -47,7 +47,8 @@ impl Method {
             _ => None,
         }
     }
-    fn name(self) -> &'static str {
+    /// The name `--method` takes.
+    pub fn name(self) -> &'static str {
         match self {
             Method::Auto => "auto",
             Method::PerBone => "per-bone",
@@ -99,6 +100,10 @@ pub struct LodRequest {
     pub clip: Option<String>,
     /// Candidate planes per iteration.
     pub planes: usize,
+    /// Lacewell's view penalty (radians of the favoured elevation), thesis §8.4.1.
+    pub view_penalty: Option<f32>,
+    /// Bake every triangle valid for a plane, not only its own (thesis §8.4.1).
+    pub increased_density: bool,
     pub max_atlas: u32,
     /// Supersamples per texel side when baking (4 = the spec's 4×4; 2 bakes ~2.5× faster).
     pub supersample: u32,
@@ -519,8 +524,10 @@ fn build_lod(
             epsilon: level.epsilon,
             candidates: req.planes,
             seed: req.seed.wrapping_add(k as u64),
+            view_penalty: req.view_penalty,
             ..Default::default()
         },
+        increased_density: req.increased_density,
         ..Default::default()
     };
     params.bake.texels_per_unit = level.texels_per_unit;

@@ -7,12 +7,14 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
 use frond::cloud_cmd::{CloudRequest, rest_diagonal, run_cloud};
-use frond::eval_cmd::{EvalRequest, evaluate};
+use frond::eval_cmd::{EvalRequest, evaluate, image_for_screen_height};
 use frond::inspect::{SamplingSummary, inspect};
 use frond::lod_cmd::{AnimationMode, LodRequest, Method, run_lod};
 use frond::output::write_atomic;
 use frond::render_cmd::{RenderRequest, frame_png, parse_size, render_tree};
 use frond::screen_budget::{screen_height_at, tree_height};
+use frond::sweep::grid::{Grid, parse_epsilons};
+use frond::sweep::{SweepRequest, run_sweep};
 use frond_billboard::cloud::CloudParams;
 use frond_billboard::plane_search::SearchParams;
 use frond_export::vat::VatFormat;
@@ -210,6 +212,12 @@ enum Command {
         /// Candidate planes per iteration of the plane search.
         #[arg(long, default_value_t = 100)]
         planes: usize,
+        /// Favour billboards seen from this elevation in degrees (0 = vertical billboards).
+        #[arg(long, value_name = "DEG")]
+        view_penalty: Option<f32>,
+        /// Bake every triangle valid for a plane, not only its own.
+        #[arg(long)]
+        increased_density: bool,
         /// Largest atlas side per LOD.
         #[arg(long, default_value_t = 4096)]
         max_atlas: u32,
@@ -257,6 +265,73 @@ enum Command {
         #[arg(long)]
         clip: Option<String>,
         /// Print the report as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Run `frond lod` over a grid of screen heights (or fixed ε) × methods × seeds, evaluate
+    /// every LOD (and external candidates) with `frond eval`, and write results.csv, the
+    /// stability table, failures and charts (SVG + PNG).
+    Sweep {
+        #[command(flatten)]
+        import: ImportArgs,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Methods to compare.
+        #[arg(long, value_delimiter = ',', default_value = "per-bone,static",
+              value_parser = ["auto", "per-bone", "static"])]
+        method: Vec<String>,
+        /// Screen heights (pixels), one LOD each; ε follows the screen-space rule.
+        #[arg(long, value_delimiter = ',', default_value = "600,200,60")]
+        lods: Vec<f32>,
+        /// Fixed ε instead of screen heights: a range "A..B" (with --steps) or a list "A,B,C";
+        /// each a length or a percentage of the bounding-box diagonal.
+        #[arg(long)]
+        epsilon: Option<String>,
+        /// Values of an --epsilon range, both ends included.
+        #[arg(long, default_value_t = 6)]
+        steps: usize,
+        /// Screen height (pixels) the fixed-ε LODs are textured and evaluated at.
+        #[arg(long, default_value_t = 600.0)]
+        screen_height: f32,
+        /// Seeds per configuration (1..=N).
+        #[arg(long, default_value_t = 3)]
+        seeds: u64,
+        /// External candidate (any glTF) evaluated at every screen height (repeatable).
+        #[arg(long = "candidate", value_name = "FILE")]
+        candidates: Vec<PathBuf>,
+        /// Ring views of the colour metric.
+        #[arg(long, default_value_t = 5)]
+        views: u32,
+        /// Frames of the animated colour metric.
+        #[arg(long, default_value_t = 5)]
+        frames: u32,
+        /// Animation samples over the loop (build and trajectory metrics).
+        #[arg(long, default_value_t = 64)]
+        samples: usize,
+        /// Clip to sample (default: the first).
+        #[arg(long)]
+        clip: Option<String>,
+        /// Candidate planes per iteration of the plane search.
+        #[arg(long, default_value_t = 100)]
+        planes: usize,
+        /// View penalty: favour billboards seen from this elevation in degrees.
+        #[arg(long, value_name = "DEG")]
+        view_penalty: Option<f32>,
+        /// Bake every triangle valid for a plane, not only its own.
+        #[arg(long)]
+        increased_density: bool,
+        /// Supersamples per texel side when baking.
+        #[arg(long, default_value_t = 4)]
+        supersample: u32,
+        /// Seconds one run's build (or evaluation) may take before it is stopped and recorded
+        /// as a timeout.
+        #[arg(long, default_value_t = 900)]
+        timeout: u64,
+        /// Keep every run's LOD files under runs/ (default: only their reports).
+        #[arg(long)]
+        keep: bool,
+        /// Print summary.json to stdout.
         #[arg(long)]
         json: bool,
     },
@@ -435,6 +510,8 @@ fn run(cli: Cli) -> Result<()> {
                     clip,
                 },
             planes,
+            view_penalty,
+            increased_density,
             max_atlas,
             supersample,
             padding,
@@ -472,6 +549,8 @@ fn run(cli: Cli) -> Result<()> {
                 samples,
                 clip,
                 planes,
+                view_penalty: view_penalty.map(f32::to_radians),
+                increased_density,
                 max_atlas,
                 supersample,
                 padding,
@@ -522,7 +601,7 @@ fn run(cli: Cli) -> Result<()> {
             let same_file = std::fs::read(&import.input).ok() == std::fs::read(&candidate).ok();
             let size = match (size, screen_height) {
                 (Some(s), _) => parse_size(&s)?,
-                (None, Some(h)) if h > 0 => (h.saturating_mul(4).div_ceil(3), h),
+                (None, Some(h)) if h > 0 => image_for_screen_height(h),
                 (None, Some(_)) => anyhow::bail!("--screen-height must be at least 1"),
                 (None, None) => (800, 600),
             };
@@ -568,6 +647,117 @@ fn run(cli: Cli) -> Result<()> {
                 );
             }
         }
+        Command::Sweep {
+            import,
+            output,
+            method,
+            lods,
+            epsilon,
+            steps,
+            screen_height,
+            seeds,
+            candidates,
+            views,
+            frames,
+            samples,
+            clip,
+            planes,
+            view_penalty,
+            increased_density,
+            supersample,
+            timeout,
+            keep,
+            json,
+        } => {
+            let tree = import.load()?;
+            let diagonal = rest_diagonal(&tree);
+            let grid = match &epsilon {
+                Some(text) => {
+                    if !(screen_height.is_finite() && screen_height >= 1.0) {
+                        anyhow::bail!("--screen-height must be at least 1 pixel");
+                    }
+                    Grid::Epsilons {
+                        values: parse_epsilons(text, steps, diagonal)?,
+                        screen_height,
+                    }
+                }
+                None => {
+                    if let Some(h) = lods.iter().find(|h| !(h.is_finite() && **h >= 1.0)) {
+                        anyhow::bail!("--lods: {h} is not a screen height of at least 1 pixel");
+                    }
+                    Grid::ScreenHeights(lods)
+                }
+            };
+            let mut import_args = vec![import.input.display().to_string()];
+            for m in &import.foliage_material {
+                import_args.extend(["--foliage-material".to_string(), m.clone()]);
+            }
+            for m in &import.wood_material {
+                import_args.extend(["--wood-material".to_string(), m.clone()]);
+            }
+            let mut lod_args = vec![
+                "--samples".to_string(),
+                samples.to_string(),
+                "--planes".to_string(),
+                planes.to_string(),
+                "--supersample".to_string(),
+                supersample.to_string(),
+            ];
+            if let Some(c) = &clip {
+                lod_args.extend(["--clip".to_string(), c.clone()]);
+            }
+            if let Some(v) = view_penalty {
+                lod_args.extend(["--view-penalty".to_string(), v.to_string()]);
+            }
+            if increased_density {
+                lod_args.push("--increased-density".to_string());
+            }
+            let eval = EvalRequest {
+                views,
+                frames,
+                size: (800, 600),
+                samples,
+                clip,
+            };
+            let req = SweepRequest {
+                exe: std::env::current_exe().context("locating the frond executable")?,
+                import_args,
+                methods: method,
+                grid,
+                seeds: (1..=seeds).collect(),
+                lod_args,
+                candidates,
+                timeout: std::time::Duration::from_secs(timeout.max(1)),
+                keep,
+                diagonal,
+            };
+            let renderer = Renderer::new()?;
+            let bar = Progress::new();
+            let result = run_sweep(&renderer, &tree, &req, &eval, &output, &|d, t, m| {
+                bar.step(d, t, m)
+            });
+            drop(bar);
+            let summary = result?;
+            if json {
+                print_json(&summary)?;
+            } else {
+                println!(
+                    "{}: {} runs ({} failed); results.csv, stability.md, charts; {:.1} s",
+                    output.display(),
+                    summary.runs,
+                    summary.failed,
+                    summary.timings_s["total"].as_f64().unwrap_or(0.0)
+                );
+            }
+            if summary.failed > 0 {
+                eprintln!(
+                    "{} of {} runs failed (listed in {})",
+                    summary.failed,
+                    summary.runs,
+                    output.join("stability.md").display()
+                );
+            }
+        }
         Command::Sample {
             preset,
             seed,
@@ -605,6 +795,42 @@ impl Spinner {
 }
 
 impl Drop for Spinner {
+    fn drop(&mut self) {
+        if let Some(b) = &self.0 {
+            b.finish_and_clear();
+        }
+    }
+}
+
+/// A progress bar over a known number of steps on a terminal; log lines otherwise.
+struct Progress(Option<indicatif::ProgressBar>);
+
+impl Progress {
+    fn new() -> Self {
+        Progress(
+            std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
+                let b = indicatif::ProgressBar::new(0);
+                if let Ok(style) = indicatif::ProgressStyle::with_template(
+                    "{bar:30} {pos}/{len} {elapsed_precise} (eta {eta}) {msg}",
+                ) {
+                    b.set_style(style);
+                }
+                b.enable_steady_tick(std::time::Duration::from_millis(250));
+                b
+            }),
+        )
+    }
+    fn step(&self, done: usize, total: usize, msg: &str) {
+        tracing::info!("[{done}/{total}] {msg}");
+        if let Some(b) = &self.0 {
+            b.set_length(total as u64);
+            b.set_position(done as u64);
+            b.set_message(msg.to_string());
+        }
+    }
+}
+
+impl Drop for Progress {
     fn drop(&mut self) {
         if let Some(b) = &self.0 {
             b.finish_and_clear();

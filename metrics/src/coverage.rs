@@ -32,6 +32,7 @@
 
 use frond_render::{Camera, DrawScene, Projection, RenderError, Renderer};
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -249,24 +250,98 @@ pub fn coverage_error(
     params: &CoverageParams,
 ) -> Result<CoverageReport, MetricError> {
     validate(original.len(), simplified.len(), params)?;
+    let o = coverage_masks(renderer, original, bounds_min, bounds_max, params)?;
+    let s = coverage_masks(renderer, simplified, bounds_min, bounds_max, params)?;
+    let frames: Vec<usize> = (0..original.len()).collect();
+    compare_masks(&o, &s, &frames)
+}
+
+/// One model's binary coverage masks and covered colours for every (view, frame) pair of the
+/// metric, so one model's renders can be compared with many others (a sweep renders the
+/// original once).
+#[derive(Clone, Debug)]
+pub struct CoverageMasks {
+    /// Pixels per mask.
+    pub pixels: usize,
+    /// Views of the ring.
+    pub views: usize,
+    /// Frames per view.
+    pub frames: usize,
+    /// View-major (`d · frames + f`): whether each pixel is covered.
+    covered: Vec<Vec<bool>>,
+    /// The same pairs: mean linear RGB of each pixel's covered samples.
+    colour: Vec<Vec<[f32; 3]>>,
+}
+
+/// Renders the masks of `scenes` (one per frame) from every view of `params` (see
+/// [`coverage_error`]).
+pub fn coverage_masks(
+    renderer: &Renderer,
+    scenes: &[DrawScene],
+    bounds_min: Vec3,
+    bounds_max: Vec3,
+    params: &CoverageParams,
+) -> Result<CoverageMasks, MetricError> {
+    validate(scenes.len(), scenes.len(), params)?;
     // Every camera is checked before the first (slow) render.
     let cameras = (0..params.views)
         .map(|d| view_camera(bounds_min, bounds_max, d, params))
         .collect::<Result<Vec<_>, _>>()?;
     let expected = params.width as usize * params.height as usize;
+    let (mut covered, mut colour) = (Vec::new(), Vec::new());
+    for camera in &cameras {
+        for scene in scenes {
+            let (m, rgb) = coverage_mask(renderer, scene, camera, params)?;
+            if m.len() != expected {
+                return Err(MetricError::MaskSize {
+                    len: m.len(),
+                    expected,
+                });
+            }
+            covered.push(m);
+            colour.push(rgb);
+        }
+    }
+    Ok(CoverageMasks {
+        pixels: expected,
+        views: cameras.len(),
+        frames: scenes.len(),
+        covered,
+        colour,
+    })
+}
 
-    let pairs = cameras.len() * original.len();
+/// Scores `simplified` against `original` over the frames `frames` of each view (all of them
+/// for the animated metric, `[0]` for the static one); the report's per-pair vectors hold
+/// `views · frames.len()` entries, view-major.
+pub fn compare_masks(
+    original: &CoverageMasks,
+    simplified: &CoverageMasks,
+    frames: &[usize],
+) -> Result<CoverageReport, MetricError> {
+    if (original.views, original.frames, original.pixels)
+        != (simplified.views, simplified.frames, simplified.pixels)
+        || frames.iter().any(|&f| f >= original.frames)
+    {
+        return Err(MetricError::FrameCountMismatch {
+            expected: original.frames as u32,
+            original: original.frames,
+            simplified: simplified.frames,
+        });
+    }
+    let pairs = original.views * frames.len();
     let mut original_pixels = Vec::with_capacity(pairs);
     let mut differing_pixels = Vec::with_capacity(pairs);
-    let mut per_view = Vec::with_capacity(cameras.len());
+    let mut per_view = Vec::with_capacity(original.views);
     let (mut total, mut kept_total, mut discarded) = (0.0f64, 0usize, 0usize);
     let (mut colour_sum, mut colour_pairs) = (0.0f64, 0usize);
     let mut colour_per_pair = Vec::with_capacity(pairs);
-    for camera in &cameras {
+    for d in 0..original.views {
         let (mut view_sum, mut view_kept) = (0.0f64, 0usize);
-        for (o_scene, s_scene) in original.iter().zip(simplified) {
-            let (o, o_rgb) = coverage_mask(renderer, o_scene, camera, params)?;
-            let (s, s_rgb) = coverage_mask(renderer, s_scene, camera, params)?;
+        for &f in frames {
+            let i = d * original.frames + f;
+            let (o, s) = (&original.covered[i], &simplified.covered[i]);
+            let (o_rgb, s_rgb) = (&original.colour[i], &simplified.colour[i]);
             let (mut diff, mut shared) = (0.0f64, 0usize);
             for p in 0..o.len().min(s.len()) {
                 if o[p] && s[p] {
@@ -282,13 +357,8 @@ pub fn coverage_error(
             } else {
                 colour_per_pair.push(f64::NAN);
             }
-            for len in [o.len(), s.len()] {
-                if len != expected {
-                    return Err(MetricError::MaskSize { len, expected });
-                }
-            }
             let covered = o.iter().filter(|&&c| c).count() as u64;
-            let differing = o.iter().zip(&s).filter(|(a, b)| a != b).count() as u64;
+            let differing = o.iter().zip(s).filter(|(a, b)| a != b).count() as u64;
             original_pixels.push(covered);
             differing_pixels.push(differing);
             match pair_score(differing, covered) {
@@ -351,28 +421,34 @@ fn coverage_mask(
         BACKGROUND,
     )?;
     let big_w = w * ss;
+    let linear: Vec<f32> = (0..=255u8).map(srgb_to_linear).collect();
     let mut mask = vec![false; w * h];
     let mut colour = vec![[0.0f32; 3]; w * h];
-    for y in 0..h {
-        for x in 0..w {
-            let (mut covered, mut sum) = (0usize, [0.0f32; 3]);
-            for dy in 0..ss {
-                let row = (y * ss + dy) * big_w + x * ss;
-                for i in row..row + ss {
-                    if frame.coverage.get(i).copied().unwrap_or(false) {
-                        covered += 1;
-                        for (c, v) in sum.iter_mut().enumerate() {
-                            *v += srgb_to_linear(frame.rgba.get(i * 4 + c).copied().unwrap_or(0));
+    // Rows are independent: downsample them in parallel (each pixel's sum is in a fixed order).
+    mask.par_chunks_mut(w)
+        .zip(colour.par_chunks_mut(w))
+        .enumerate()
+        .for_each(|(y, (mask_row, colour_row))| {
+            for x in 0..w {
+                let (mut covered, mut sum) = (0usize, [0.0f32; 3]);
+                for dy in 0..ss {
+                    let row = (y * ss + dy) * big_w + x * ss;
+                    for i in row..row + ss {
+                        if frame.coverage.get(i).copied().unwrap_or(false) {
+                            covered += 1;
+                            for (c, v) in sum.iter_mut().enumerate() {
+                                *v += linear
+                                    [usize::from(frame.rgba.get(i * 4 + c).copied().unwrap_or(0))];
+                            }
                         }
                     }
                 }
+                mask_row[x] = 2 * covered >= ss * ss;
+                if covered > 0 {
+                    colour_row[x] = sum.map(|v| v / covered as f32);
+                }
             }
-            mask[y * w + x] = 2 * covered >= ss * ss;
-            if covered > 0 {
-                colour[y * w + x] = sum.map(|v| v / covered as f32);
-            }
-        }
-    }
+        });
     Ok((mask, colour))
 }
 

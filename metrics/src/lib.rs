@@ -4,7 +4,8 @@
 //! and the checklist rules of §11 item 7, in [`coverage`]; App. A's normalisation in
 //! [`normalise`]; the dominating-axis animation metrics of §5.5 in [`animation`]; plane, projected,
 //! Euclidean distance and orientation metrics of §5.2–5.3 in [`triangle_metrics`]; the
-//! cost of a model (§5.7) in [`cost`].
+//! cost of a model (§5.7) in [`cost`]; run statistics (§5.8) and Pareto fronts in
+//! [`statistics`].
 
 #![warn(missing_docs)]
 
@@ -12,8 +13,10 @@ pub mod animation;
 pub mod cost;
 pub mod coverage;
 pub mod normalise;
+pub mod statistics;
 pub mod triangle_metrics;
 
 pub use coverage::{
-    CoverageParams, CoverageReport, MetricError, coverage_error, ring_azimuth_deg, view_camera,
+    CoverageMasks, CoverageParams, CoverageReport, MetricError, compare_masks, coverage_error,
+    coverage_masks, ring_azimuth_deg, view_camera,
 };

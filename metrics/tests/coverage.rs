@@ -491,3 +491,43 @@ fn colour_difference_is_zero_for_equal_renders_and_known_for_recoloured_ones() {
         assert!((c - 2.0 / 3.0).abs() < 1e-3, "{c}");
     }
 }
+
+#[test]
+fn masks_rendered_once_compare_like_the_metric() {
+    // Two frames: the tree, then the tree shifted right. Comparing stored masks gives the
+    // metric's numbers; frame 0 alone is the static metric on frame 0's scenes.
+    let (lo, hi) = (Vec3::splat(-1.5), Vec3::splat(1.5));
+    let a = tree();
+    let mut moved = a.clone();
+    for m in &mut moved.meshes {
+        for p in &mut m.positions {
+            p[0] += 0.2;
+        }
+    }
+    let cut = {
+        let mut c = a.clone();
+        c.meshes.truncate(6);
+        c
+    };
+    let original = [a.clone(), moved.clone()];
+    let simplified = [cut.clone(), moved];
+    let p = params(3, 2);
+    let full = run(&original, &simplified, lo, hi, &p);
+    let o = frond_metrics::coverage_masks(renderer(), &original, lo, hi, &p).expect("masks");
+    let s = frond_metrics::coverage_masks(renderer(), &simplified, lo, hi, &p).expect("masks");
+    assert_eq!((o.views, o.frames, o.pixels), (3, 2, (W * H) as usize));
+    let again = frond_metrics::compare_masks(&o, &s, &[0, 1]).expect("compare");
+    assert_eq!(again, full);
+    let stat = frond_metrics::compare_masks(&o, &s, &[0]).expect("compare");
+    let direct = run(
+        std::slice::from_ref(&a),
+        std::slice::from_ref(&cut),
+        lo,
+        hi,
+        &params(3, 1),
+    );
+    assert_eq!(stat, direct);
+    assert!(stat.mean > 0.0 && stat.mean > full.mean, "frame 1 is exact");
+    // A frame outside the masks is refused, not read out of bounds.
+    assert!(frond_metrics::compare_masks(&o, &s, &[2]).is_err());
+}

@@ -1,0 +1,508 @@
+//! Charts of a sweep, drawn with plotters as SVG and rasterised to PNG with resvg: accuracy
+//! against cost and against build time (Pareto front marked), and every metric against ε; one
+//! line per method, external candidates as their own markers.
+
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result, anyhow};
+use frond_metrics::statistics::pareto_front;
+use plotters::prelude::*;
+use resvg::{tiny_skia, usvg};
+
+use super::results::{Row, sig};
+
+/// A configuration's mean (x, y) with the (min, max) of y over its seeds when it has several.
+pub type MeanPoint = (f64, f64, Option<(f64, f64)>);
+
+/// One line or point set of a panel.
+#[derive(Clone, Debug)]
+pub struct Series {
+    pub name: String,
+    pub color: RGBColor,
+    /// Points joined by a line (x sorted), each with an optional (min, max) bar.
+    pub line: Vec<MeanPoint>,
+    /// Loose points (every run).
+    pub points: Vec<(f64, f64)>,
+    /// A horizontal reference line (a candidate with no x).
+    pub level: Option<f64>,
+}
+
+/// One chart panel.
+#[derive(Clone, Debug)]
+pub struct Panel {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub x_log: bool,
+    pub series: Vec<Series>,
+    /// The Pareto front, drawn as a step line with ringed points.
+    pub front: Vec<(f64, f64)>,
+}
+
+/// A chart file: panels on a grid of `columns`.
+#[derive(Clone, Debug)]
+pub struct Chart {
+    pub file_stem: String,
+    pub columns: usize,
+    pub panels: Vec<Panel>,
+}
+
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+];
+
+/// The accuracy the cost and time charts put on their y axis.
+pub const ACCURACY: &str = "coverage_animated";
+const ACCURACY_LABEL: &str = "animated colour error (lower is better)";
+
+/// The metrics charted against ε, with their axis labels.
+pub const METRICS: &[(&str, &str)] = &[
+    ("coverage_static", "static colour error"),
+    ("coverage_animated", "animated colour error"),
+    ("colour_difference", "foreground colour difference"),
+    ("plane_distance", "plane distance (world)"),
+    ("projected_distance", "projected distance (world)"),
+    ("orientation", "orientation metric"),
+    ("dominating_axis", "dominating-axis metric"),
+    (
+        "dominating_axis_spectral",
+        "dominating-axis spectral metric",
+    ),
+];
+
+/// Rows of each method in first-seen order, candidates apart.
+fn by_method(rows: &[Row]) -> Vec<(String, Vec<&Row>)> {
+    let mut out: Vec<(String, Vec<&Row>)> = Vec::new();
+    for r in rows {
+        match out.iter_mut().find(|(m, _)| *m == r.method) {
+            Some((_, v)) => v.push(r),
+            None => out.push((r.method.clone(), vec![r])),
+        }
+    }
+    out
+}
+
+/// Per grid point of one method: mean x, mean y and the y range over seeds (finite values only).
+fn config_means(rows: &[&Row], x: &str, y: &str) -> Vec<MeanPoint> {
+    let mut groups: BTreeMap<&str, Vec<&Row>> = BTreeMap::new();
+    for r in rows {
+        groups.entry(r.point.as_str()).or_default().push(r);
+    }
+    let mut pts: Vec<MeanPoint> = groups
+        .values()
+        .filter_map(|g| {
+            let pairs: Vec<(f64, f64)> = g
+                .iter()
+                .map(|r| (r.get(x), r.get(y)))
+                .filter(|(a, b)| a.is_finite() && b.is_finite())
+                .collect();
+            if pairs.is_empty() {
+                return None;
+            }
+            let n = pairs.len() as f64;
+            let mx = pairs.iter().map(|p| p.0).sum::<f64>() / n;
+            let my = pairs.iter().map(|p| p.1).sum::<f64>() / n;
+            let lo = pairs.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+            let hi = pairs.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+            Some((mx, my, (pairs.len() > 1).then_some((lo, hi))))
+        })
+        .collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    pts
+}
+
+fn series_for(rows: &[Row], x: &str, y: &str, x_missing_is_level: bool) -> Vec<Series> {
+    by_method(rows)
+        .into_iter()
+        .enumerate()
+        .map(|(i, (name, rs))| {
+            let candidate = rs[0].is_candidate();
+            let points: Vec<(f64, f64)> = rs
+                .iter()
+                .map(|r| (r.get(x), r.get(y)))
+                .filter(|(a, b)| a.is_finite() && b.is_finite())
+                .collect();
+            let level = (candidate && x_missing_is_level)
+                .then(|| {
+                    let ys: Vec<f64> = rs
+                        .iter()
+                        .map(|r| r.get(y))
+                        .filter(|v| v.is_finite())
+                        .collect();
+                    (!ys.is_empty()).then(|| ys.iter().sum::<f64>() / ys.len() as f64)
+                })
+                .flatten();
+            Series {
+                name,
+                color: PALETTE[i % PALETTE.len()],
+                line: if candidate {
+                    Vec::new()
+                } else {
+                    config_means(&rs, x, y)
+                },
+                points: if candidate && x_missing_is_level {
+                    Vec::new()
+                } else {
+                    points
+                },
+                level,
+            }
+        })
+        .collect()
+}
+
+/// Whether a positive range is wide enough for a log axis.
+fn wants_log(xs: impl Iterator<Item = f64>) -> bool {
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for x in xs.filter(|x| x.is_finite()) {
+        if x <= 0.0 {
+            return false;
+        }
+        lo = lo.min(x);
+        hi = hi.max(x);
+    }
+    hi > 0.0 && hi / lo > 20.0
+}
+
+/// The charts of a sweep: accuracy vs billboards, vs texture bytes, vs build time (with the
+/// Pareto front over every run), and each metric vs ε.
+pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
+    let cost = |stem: &str, x: &str, label: &str| Chart {
+        file_stem: stem.into(),
+        columns: 1,
+        panels: vec![Panel {
+            title: format!("accuracy vs {label}"),
+            x_label: label.into(),
+            y_label: ACCURACY_LABEL.into(),
+            x_log: wants_log(rows.iter().map(|r| r.get(x))),
+            series: series_for(rows, x, ACCURACY, false),
+            front: Vec::new(),
+        }],
+    };
+    let mut charts = vec![
+        cost("accuracy_vs_billboards", "billboards", "billboards"),
+        cost(
+            "accuracy_vs_texture_bytes",
+            "texture_bytes",
+            "texture bytes",
+        ),
+    ];
+    // Build time: every run a point; the front over all of them.
+    let timed: Vec<&Row> = rows.iter().filter(|r| !r.is_candidate()).collect();
+    let pts: Vec<(f64, f64)> = timed
+        .iter()
+        .map(|r| (r.get("t_lod"), r.get(ACCURACY)))
+        .collect();
+    let front = pareto_front(&pts).into_iter().map(|i| pts[i]).collect();
+    // Candidates were not built here: their accuracy is a dashed level.
+    let mut series = series_for(rows, "t_lod", ACCURACY, true);
+    for s in &mut series {
+        s.line.clear();
+    }
+    charts.push(Chart {
+        file_stem: "accuracy_vs_time".into(),
+        columns: 1,
+        panels: vec![Panel {
+            title: "speed vs accuracy (Pareto front: no run both faster and more accurate)".into(),
+            x_label: "build time of the LOD (s)".into(),
+            y_label: ACCURACY_LABEL.into(),
+            x_log: wants_log(pts.iter().map(|p| p.0)),
+            series,
+            front,
+        }],
+    });
+    let eps_log = wants_log(rows.iter().map(|r| r.epsilon_pct.unwrap_or(f64::NAN)));
+    charts.push(Chart {
+        file_stem: "metrics_vs_epsilon".into(),
+        columns: 2,
+        panels: METRICS
+            .iter()
+            .map(|(m, label)| Panel {
+                title: format!("{label} vs ε"),
+                x_label: "ε (% of the bounding-box diagonal)".into(),
+                y_label: (*label).into(),
+                x_log: eps_log,
+                series: series_for(&with_eps_column(rows), "epsilon_pct", m, true),
+                front: Vec::new(),
+            })
+            .collect(),
+    });
+    charts
+}
+
+/// Rows with ε% as a column, so it can be charted like any value.
+fn with_eps_column(rows: &[Row]) -> Vec<Row> {
+    rows.iter()
+        .map(|r| {
+            let mut r = r.clone();
+            if let Some(e) = r.epsilon_pct.filter(|_| !r.is_candidate()) {
+                r.values.insert("epsilon_pct".into(), e);
+            }
+            r
+        })
+        .collect()
+}
+
+/// Draws a chart as SVG.
+pub fn chart_svg(chart: &Chart) -> Result<String> {
+    let cols = chart.columns.max(1);
+    let rows = chart.panels.len().div_ceil(cols).max(1);
+    let (pw, ph) = (760u32, 480u32);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (pw * cols as u32, ph * rows as u32))
+            .into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        let areas = root.split_evenly((rows, cols));
+        for (panel, area) in chart.panels.iter().zip(areas.iter()) {
+            draw_panel(panel, area)?;
+        }
+        root.present().map_err(plot_err)?;
+    }
+    Ok(svg)
+}
+
+fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+    anyhow!("drawing a chart: {e:?}")
+}
+
+fn draw_panel<DB: DrawingBackend>(
+    p: &Panel,
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let tx = |x: f64| if p.x_log { x.log10() } else { x };
+    let mut xs: Vec<f64> = Vec::new();
+    let mut ys: Vec<f64> = Vec::new();
+    for s in &p.series {
+        for &(x, y, bar) in &s.line {
+            xs.push(tx(x));
+            ys.push(y);
+            if let Some((lo, hi)) = bar {
+                ys.extend([lo, hi]);
+            }
+        }
+        for &(x, y) in &s.points {
+            xs.push(tx(x));
+            ys.push(y);
+        }
+        ys.extend(s.level);
+    }
+    let finite = |v: &[f64]| {
+        let f: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+        let lo = f.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = f.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if lo.is_finite() { (lo, hi) } else { (0.0, 1.0) }
+    };
+    let pad = |(lo, hi): (f64, f64)| {
+        let w = if hi > lo { hi - lo } else { lo.abs().max(1.0) };
+        (lo - 0.06 * w, hi + 0.06 * w)
+    };
+    let (x0, x1) = pad(finite(&xs));
+    let (y0, y1) = pad(finite(&ys));
+    let y0 = if finite(&ys).0 >= 0.0 {
+        y0.max(0.0)
+    } else {
+        y0
+    };
+    let mut chart = ChartBuilder::on(area)
+        .caption(&p.title, ("sans-serif", 17))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(plot_err)?;
+    let log = p.x_log;
+    let fmt_x = move |v: &f64| if log { tick(10f64.powf(*v)) } else { tick(*v) };
+    chart
+        .configure_mesh()
+        .x_desc(if log {
+            format!("{} (log scale)", p.x_label)
+        } else {
+            p.x_label.clone()
+        })
+        .y_desc(&p.y_label)
+        .x_label_formatter(&fmt_x)
+        .y_label_formatter(&|v: &f64| tick(*v))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(plot_err)?;
+    for s in &p.series {
+        let c = s.color;
+        let mut labelled = false;
+        if !s.line.is_empty() {
+            chart
+                .draw_series(LineSeries::new(
+                    s.line.iter().map(|&(x, y, _)| (tx(x), y)),
+                    c.stroke_width(2),
+                ))
+                .map_err(plot_err)?
+                .label(&s.name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2))
+                });
+            labelled = true;
+            chart
+                .draw_series(s.line.iter().filter_map(|&(x, y, bar)| {
+                    bar.map(|(lo, hi)| {
+                        ErrorBar::new_vertical(tx(x), lo, y, hi, c.stroke_width(1), 6)
+                    })
+                }))
+                .map_err(plot_err)?;
+        }
+        if !s.points.is_empty() {
+            let filled = s.line.is_empty();
+            let ann = chart
+                .draw_series(s.points.iter().map(|&(x, y)| {
+                    let style = if filled {
+                        c.filled()
+                    } else {
+                        c.mix(0.45).stroke_width(1)
+                    };
+                    Circle::new((tx(x), y), if filled { 4 } else { 3 }, style)
+                }))
+                .map_err(plot_err)?;
+            if !labelled {
+                ann.label(&s.name)
+                    .legend(move |(x, y)| Circle::new((x + 9, y), 4, c.filled()));
+                labelled = true;
+            }
+        }
+        if let Some(level) = s.level {
+            let ann = chart
+                .draw_series(DashedLineSeries::new(
+                    vec![(x0, level), (x1, level)],
+                    8,
+                    5,
+                    c.stroke_width(2),
+                ))
+                .map_err(plot_err)?;
+            if !labelled {
+                ann.label(&s.name).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2))
+                });
+            }
+        }
+    }
+    if !p.front.is_empty() {
+        let mut steps = Vec::new();
+        for (i, &(x, y)) in p.front.iter().enumerate() {
+            if i > 0 {
+                steps.push((tx(x), p.front[i - 1].1));
+            }
+            steps.push((tx(x), y));
+        }
+        chart
+            .draw_series(LineSeries::new(steps, BLACK.stroke_width(1)))
+            .map_err(plot_err)?
+            .label("Pareto front")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(1)));
+        chart
+            .draw_series(
+                p.front
+                    .iter()
+                    .map(|&(x, y)| Circle::new((tx(x), y), 7, BLACK.stroke_width(2))),
+            )
+            .map_err(plot_err)?;
+    }
+    chart
+        .configure_series_labels()
+        .position(legend_corner(p, (x0, x1), (y0, y1), tx))
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(160, 160, 160))
+        .draw()
+        .map_err(plot_err)?;
+    Ok(())
+}
+
+/// An axis tick: 4 significant digits, trailing zeros dropped.
+fn tick(x: f64) -> String {
+    let s = sig(x);
+    if s.contains('.') && !s.contains('e') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+/// The corner of the plot holding the fewest data points, for the legend.
+fn legend_corner(
+    p: &Panel,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+    tx: impl Fn(f64) -> f64,
+) -> SeriesLabelPosition {
+    let mut pts: Vec<(f64, f64)> = Vec::new();
+    for s in &p.series {
+        pts.extend(s.line.iter().map(|&(x, y, _)| (tx(x), y)));
+        pts.extend(s.points.iter().map(|&(x, y)| (tx(x), y)));
+    }
+    pts.extend(p.front.iter().map(|&(x, y)| (tx(x), y)));
+    let norm = |(x, y): (f64, f64)| ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0));
+    let count = |right: bool, upper: bool| {
+        pts.iter()
+            .map(|&q| norm(q))
+            .filter(|&(nx, ny)| {
+                (if right { nx > 0.55 } else { nx < 0.45 })
+                    && (if upper { ny > 0.65 } else { ny < 0.35 })
+            })
+            .count()
+    };
+    [
+        (SeriesLabelPosition::UpperRight, count(true, true)),
+        (SeriesLabelPosition::UpperLeft, count(false, true)),
+        (SeriesLabelPosition::LowerRight, count(true, false)),
+        (SeriesLabelPosition::LowerLeft, count(false, false)),
+    ]
+    .into_iter()
+    .min_by_key(|&(_, n)| n)
+    .map_or(SeriesLabelPosition::UpperRight, |(c, _)| c)
+}
+
+/// Fonts for rasterising the charts' text: the system's, with a sans-serif family that exists.
+pub fn chart_fonts() -> usvg::Options<'static> {
+    let mut opt = usvg::Options::default();
+    let db = opt.fontdb_mut();
+    db.load_system_fonts();
+    let family = [
+        "DejaVu Sans",
+        "Liberation Sans",
+        "Noto Sans",
+        "Arial",
+        "Helvetica",
+    ]
+    .into_iter()
+    .find(|f| {
+        db.faces()
+            .any(|face| face.families.iter().any(|(name, _)| name == f))
+    })
+    .map(str::to_string)
+    .or_else(|| {
+        db.faces()
+            .next()
+            .and_then(|f| f.families.first().map(|(n, _)| n.clone()))
+    });
+    if let Some(f) = family {
+        db.set_sans_serif_family(f);
+    }
+    opt
+}
+
+/// Rasterises an SVG to PNG bytes at its own size.
+pub fn svg_to_png(svg: &str, options: &usvg::Options) -> Result<Vec<u8>> {
+    let tree = usvg::Tree::from_str(svg, options).context("reading a chart's SVG")?;
+    let size = tree.size().to_int_size();
+    let mut pixmap =
+        tiny_skia::Pixmap::new(size.width(), size.height()).context("allocating a chart image")?;
+    resvg::render(&tree, tiny_skia::Transform::default(), &mut pixmap.as_mut());
+    pixmap.encode_png().context("encoding a chart PNG")
+}

@@ -1,0 +1,384 @@
+//! `frond sweep`: `frond lod` over a parameter grid (screen heights, or fixed ε) × methods ×
+//! seeds, every result scored by `frond eval`, external candidates scored beside them; writes
+//! `results.csv`, the stability table, the failures and the charts (issue 5).
+//!
+//! Each build is a child process of the same `frond` binary with a wall-clock limit, so a run
+//! that fails, panics or hangs is recorded with its reason and the sweep goes on. Evaluation
+//! runs in the sweep's own process: the original's loop is sampled and its colour-metric
+//! images rendered once, not once per run.
+
+pub mod charts;
+pub mod grid;
+pub mod job;
+pub mod results;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, bail};
+use serde::Serialize;
+use serde_json::Value;
+
+use crate::eval_cmd::{EvalContext, EvalRequest, image_for_screen_height};
+use crate::lod_cmd::{Method, auto_method, lod_name};
+use crate::output::write_atomic;
+use frond_render::Renderer;
+use frond_scene::{ImportOptions, Tree};
+use grid::{Grid, GridPoint};
+use job::{JobEnd, run_job};
+use results::{Row, Stability};
+
+/// What `frond sweep` was asked for.
+#[derive(Clone, Debug)]
+pub struct SweepRequest {
+    /// The `frond` executable each run starts.
+    pub exe: PathBuf,
+    /// Arguments naming the input and its import options, passed to `lod` and `eval`.
+    pub import_args: Vec<String>,
+    /// Methods of `frond lod --method`.
+    pub methods: Vec<String>,
+    pub grid: Grid,
+    pub seeds: Vec<u64>,
+    /// Further `frond lod` arguments (planes, samples, view penalty, …), the same for every run.
+    pub lod_args: Vec<String>,
+    /// External candidates (any glTF), evaluated at every grid point's screen height.
+    pub candidates: Vec<PathBuf>,
+    /// Wall-clock limit of one `lod` child (the evaluation runs in the sweep's process, which
+    /// renders the original once per image size for every run).
+    pub timeout: Duration,
+    /// Keep every run's LOD files (otherwise only report.json, eval.json and the logs stay).
+    pub keep: bool,
+    /// Rest-pose bounding-box diagonal of the input, for ε in %.
+    pub diagonal: f32,
+}
+
+/// `summary.json`.
+#[derive(Debug, Serialize)]
+pub struct SweepSummary {
+    pub input: String,
+    pub methods: Vec<String>,
+    pub seeds: Vec<u64>,
+    pub grid: Vec<String>,
+    pub candidates: Vec<String>,
+    pub runs: usize,
+    pub failed: usize,
+    pub rows: Vec<Row>,
+    pub stability: Vec<Stability>,
+    /// Runs on the Pareto front of build time vs animated colour error.
+    pub pareto_front: Vec<String>,
+    pub files: Vec<String>,
+    pub timings_s: Value,
+}
+
+impl GridPoint {
+    /// The point's label in run ids and tables.
+    fn label(&self) -> String {
+        match self.epsilon {
+            Some(e) => format!("eps{}", trim(e)),
+            None => format!("{}px", trim(self.screen_height)),
+        }
+    }
+}
+
+fn trim(x: f32) -> String {
+    let s = format!("{x:.6}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+/// Runs the sweep of `tree` into `out_dir` (runs under `out_dir/runs/`), evaluating with
+/// `eval`'s views, frames, samples and clip; `progress(done, total, what)`.
+pub fn run_sweep(
+    renderer: &Renderer,
+    tree: &Tree,
+    req: &SweepRequest,
+    eval: &EvalRequest,
+    out_dir: &Path,
+    progress: &dyn Fn(usize, usize, &str),
+) -> Result<SweepSummary> {
+    let t0 = Instant::now();
+    let input = tree.source.as_path();
+    let tree_name = lod_name(tree);
+    if req.methods.is_empty() {
+        bail!("--method: no method to sweep");
+    }
+    if req.seeds.is_empty() {
+        bail!("--seeds must be at least 1");
+    }
+    for c in &req.candidates {
+        if !c.is_file() {
+            bail!("--candidate {}: no such file", c.display());
+        }
+    }
+    let mut ctx = EvalContext::new(renderer, tree, eval)?;
+    let points = req.grid.points();
+    let runs_dir = out_dir.join("runs");
+    let total = req.methods.len() * points.len() * req.seeds.len()
+        + req.candidates.len() * distinct_heights(&points).len();
+    let mut done = 0;
+    let mut rows = Vec::new();
+    for method in &req.methods {
+        for p in &points {
+            for &seed in &req.seeds {
+                let id = format!("{method}_{}_s{seed}", p.label());
+                progress(done, total, &id);
+                let dir = runs_dir.join(&id);
+                rows.push(lod_run(
+                    &mut ctx, &tree_name, req, method, p, seed, &dir, &id,
+                )?);
+                done += 1;
+            }
+        }
+    }
+    for cand in &req.candidates {
+        let file = cand
+            .file_name()
+            .map(|f| f.to_string_lossy().into_owned())
+            .unwrap_or_else(|| cand.display().to_string());
+        for h in distinct_heights(&points) {
+            let id = format!(
+                "candidate_{}_{}px",
+                frond_export::textures::sanitize(&file),
+                trim(h)
+            );
+            progress(done, total, &id);
+            rows.push(candidate_run(
+                &mut ctx,
+                cand,
+                &file,
+                h,
+                &runs_dir.join(&id),
+                &id,
+            )?);
+            done += 1;
+        }
+    }
+    progress(done, total, "writing tables and charts");
+    let stability = results::stability(&rows);
+    let charts = charts::sweep_charts(&rows);
+    let fonts = charts::chart_fonts();
+    let mut files: Vec<(PathBuf, Vec<u8>)> = vec![
+        (out_dir.join("results.csv"), results::results_csv(&rows)?),
+        (
+            out_dir.join("stability.csv"),
+            results::stability_csv(&stability)?,
+        ),
+        (
+            out_dir.join("stability.md"),
+            results::stability_markdown(&stability, &rows).into_bytes(),
+        ),
+    ];
+    for c in &charts {
+        let svg = charts::chart_svg(c)?;
+        let png = charts::svg_to_png(&svg, &fonts)?;
+        files.push((
+            out_dir.join(format!("{}.svg", c.file_stem)),
+            svg.into_bytes(),
+        ));
+        files.push((out_dir.join(format!("{}.png", c.file_stem)), png));
+    }
+    let timed: Vec<&Row> = rows.iter().filter(|r| !r.is_candidate()).collect();
+    let pts: Vec<(f64, f64)> = timed
+        .iter()
+        .map(|r| (r.get("t_lod"), r.get(charts::ACCURACY)))
+        .collect();
+    let pareto = frond_metrics::statistics::pareto_front(&pts)
+        .into_iter()
+        .map(|i| timed[i].run.clone())
+        .collect();
+    let summary_path = out_dir.join("summary.json");
+    let mut names: Vec<String> = files.iter().map(|(p, _)| p.display().to_string()).collect();
+    names.push(summary_path.display().to_string());
+    let summary = SweepSummary {
+        input: input.display().to_string(),
+        methods: req.methods.clone(),
+        seeds: req.seeds.clone(),
+        grid: points.iter().map(GridPoint::label).collect(),
+        candidates: req
+            .candidates
+            .iter()
+            .map(|c| c.display().to_string())
+            .collect(),
+        runs: rows.len(),
+        failed: rows.iter().filter(|r| r.failure.is_some()).count(),
+        rows,
+        stability,
+        pareto_front: pareto,
+        files: names,
+        timings_s: serde_json::json!({ "total": t0.elapsed().as_secs_f64() }),
+    };
+    crate::output::write_files_and_report(&files, &summary_path, &summary)?;
+    Ok(summary)
+}
+
+/// Screen heights of the grid, each once, in order.
+fn distinct_heights(points: &[GridPoint]) -> Vec<f32> {
+    let mut h: Vec<f32> = Vec::new();
+    for p in points {
+        if !h.contains(&p.screen_height) {
+            h.push(p.screen_height);
+        }
+    }
+    h
+}
+
+fn new_row(id: &str, method: &str, point: &str, screen_height: f32, seed: Option<u64>) -> Row {
+    Row {
+        run: id.into(),
+        method: method.into(),
+        lod_method: None,
+        point: point.into(),
+        screen_height,
+        epsilon: None,
+        epsilon_pct: None,
+        seed,
+        failure: None,
+        values: BTreeMap::new(),
+    }
+}
+
+fn describe(end: &JobEnd, what: &str) -> String {
+    match end {
+        JobEnd::TimedOut(d) => format!("timeout: {what} ran past {} s", d.as_secs_f64()),
+        JobEnd::Failed(why) => format!("error: {what}: {why}"),
+        JobEnd::Done(_) => String::new(),
+    }
+}
+
+/// Evaluates the file `candidate` into `row` at the row's screen height; the report is also
+/// kept as `dir/eval.json`. A candidate that cannot be read fails the row, not the sweep.
+fn evaluate_into(ctx: &mut EvalContext, row: &mut Row, candidate: &Path, dir: &Path) -> Result<()> {
+    let imported = frond_scene::import(
+        candidate,
+        &ImportOptions {
+            allow_empty: true,
+            ..Default::default()
+        },
+    );
+    let cand = match imported {
+        Ok(t) => t,
+        Err(e) => {
+            row.failure = Some(format!("error: eval: {e}"));
+            return Ok(());
+        }
+    };
+    let size = image_for_screen_height(row.screen_height.round().max(1.0) as u32);
+    let same_file = std::fs::read(ctx.original_path()).ok() == std::fs::read(candidate).ok();
+    let report = match ctx.evaluate(&cand, same_file, size) {
+        Ok(r) => r,
+        Err(e) => {
+            row.failure = Some(format!("error: eval: {e:#}"));
+            return Ok(());
+        }
+    };
+    let json = serde_json::to_vec_pretty(&report).context("serialising an eval report")?;
+    write_atomic(&dir.join("eval.json"), &json)?;
+    let eval: Value = serde_json::to_value(&report).context("serialising an eval report")?;
+    results::add_eval_report(row, &eval);
+    row.failure = results::judge(row, &eval);
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn lod_run(
+    ctx: &mut EvalContext,
+    tree_name: &str,
+    req: &SweepRequest,
+    method: &str,
+    p: &GridPoint,
+    seed: u64,
+    dir: &Path,
+    id: &str,
+) -> Result<Row> {
+    let mut row = new_row(id, method, &p.label(), p.screen_height, Some(seed));
+    if dir.exists() {
+        std::fs::remove_dir_all(dir)
+            .with_context(|| format!("{}: cannot clear an old run", dir.display()))?;
+    }
+    // `auto` picks by LOD rank: each run builds one LOD, so resolve the rule for this grid
+    // point's rank among the grid's screen heights (nearest first), as `frond lod` would.
+    let resolved = match Method::parse(method) {
+        Some(Method::Auto) => {
+            let heights = distinct_heights(&req.grid.points());
+            let rank = heights.iter().filter(|&&h| h > p.screen_height).count();
+            auto_method(rank).0.name().to_string()
+        }
+        _ => method.to_string(),
+    };
+    let mut args = vec!["lod".to_string()];
+    args.extend(req.import_args.iter().cloned());
+    args.extend([
+        "-o".into(),
+        dir.join("lod").display().to_string(),
+        "--method".into(),
+        resolved,
+        "--lods".into(),
+        format!("{}", p.screen_height),
+        "--seed".into(),
+        seed.to_string(),
+        "--json".into(),
+    ]);
+    if let Some(e) = p.epsilon {
+        args.extend(["--epsilon".into(), format!("{e}")]);
+    }
+    args.extend(req.lod_args.iter().cloned());
+    let (end, _) = run_job(&req.exe, &args, dir, "lod", req.timeout)?;
+    row.epsilon = p.epsilon.map(f64::from);
+    let JobEnd::Done(_) = end else {
+        row.failure = Some(describe(&end, "lod"));
+        row.epsilon_pct = row.epsilon.map(|e| 100.0 * e / f64::from(req.diagonal));
+        return Ok(row);
+    };
+    let report_path = dir.join("lod").join("report.json");
+    let report: Value = std::fs::read(&report_path)
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok())
+        .with_context(|| format!("{}: unreadable report", report_path.display()))?;
+    results::add_lod_report(&mut row, &report);
+    row.epsilon_pct = row.epsilon.map(|e| 100.0 * e / f64::from(req.diagonal));
+    let lod1 = dir.join("lod").join(format!("{tree_name}_LOD1.glb"));
+    evaluate_into(ctx, &mut row, &lod1, dir)?;
+    if !req.keep {
+        prune_run(&dir.join("lod"))?;
+    }
+    Ok(row)
+}
+
+/// Removes a run's LOD files, keeping its report.
+fn prune_run(lod_dir: &Path) -> Result<()> {
+    let entries = std::fs::read_dir(lod_dir)
+        .with_context(|| format!("{}: cannot list", lod_dir.display()))?;
+    for e in entries.flatten() {
+        let path = e.path();
+        if path.file_name().is_some_and(|n| n == "report.json") {
+            continue;
+        }
+        let r = if path.is_dir() {
+            std::fs::remove_dir_all(&path)
+        } else {
+            std::fs::remove_file(&path)
+        };
+        r.with_context(|| format!("{}: cannot remove", path.display()))?;
+    }
+    Ok(())
+}
+
+fn candidate_run(
+    ctx: &mut EvalContext,
+    candidate: &Path,
+    file: &str,
+    screen_height: f32,
+    dir: &Path,
+    id: &str,
+) -> Result<Row> {
+    let mut row = new_row(
+        id,
+        &format!("candidate:{file}"),
+        &format!("{}px", trim(screen_height)),
+        screen_height,
+        None,
+    );
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+    evaluate_into(ctx, &mut row, candidate, dir)?;
+    Ok(row)
+}

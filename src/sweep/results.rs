@@ -1,0 +1,541 @@
+//! The rows of a sweep (one per run: parameters, seed, cost, every metric, time per stage), how a
+//! run failed, and the per-configuration stability table (thesis §8.3, spec §5.8).
+
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result};
+use frond_metrics::statistics::Spread;
+use serde::Serialize;
+use serde_json::Value;
+
+/// Numeric columns of `results.csv`, in order; a row lacks those that do not apply (empty cell).
+pub const COLUMNS: &[&str] = &[
+    "billboards",
+    "triangles",
+    "wood_triangles",
+    "bones",
+    "texture_bytes",
+    "billboard_area",
+    "draw_calls",
+    "file_bytes",
+    "coverage_static",
+    "coverage_animated",
+    "coverage_static_max",
+    "coverage_animated_max",
+    "discarded_pairs",
+    "colour_difference",
+    "colour_difference_max",
+    "plane_distance",
+    "plane_distance_max",
+    "projected_distance",
+    "projected_distance_max",
+    "euclidean_distance",
+    "euclidean_distance_max",
+    "orientation",
+    "orientation_max",
+    "dominating_axis",
+    "dominating_axis_max",
+    "dominating_axis_spectral",
+    "dominating_axis_spectral_max",
+    "t_sample",
+    "t_reference_pose",
+    "t_plane_search",
+    "t_bake",
+    "t_motion_fit",
+    "t_budget",
+    "t_wood",
+    "t_export",
+    "t_lod",
+    "t_eval",
+];
+
+/// Columns measured in seconds: they differ between otherwise identical runs.
+pub fn is_timing(column: &str) -> bool {
+    column.starts_with("t_")
+}
+
+/// The quantities of the stability table.
+pub const STABILITY: &[&str] = &[
+    "billboards",
+    "billboard_area",
+    "texture_bytes",
+    "bones",
+    "coverage_static",
+    "coverage_animated",
+    "colour_difference",
+    "plane_distance",
+    "projected_distance",
+    "orientation",
+    "dominating_axis",
+    "dominating_axis_spectral",
+    "t_lod",
+];
+
+/// One run of the sweep (or one evaluation of an external candidate).
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    /// Run id, also the folder under `runs/`.
+    pub run: String,
+    /// `per-bone`, `static`, … or `candidate:<file name>`.
+    pub method: String,
+    /// The method the LOD was built with (`auto` resolves per LOD size), from its report.
+    pub lod_method: Option<String>,
+    /// The grid point (`600px`, or `eps0.25` for a fixed ε), shared by the seeds of one
+    /// configuration.
+    pub point: String,
+    /// Screen height the LOD was built and evaluated at (pixels).
+    pub screen_height: f32,
+    /// Plane tolerance in world units (the LOD's, from its report), when known.
+    pub epsilon: Option<f64>,
+    /// ε as a percentage of the rest-pose bounding-box diagonal.
+    pub epsilon_pct: Option<f64>,
+    pub seed: Option<u64>,
+    /// Why the run failed (`timeout`, `error`, `empty output`, `error > 1`, `NaN`, with
+    /// details); None when it did not.
+    pub failure: Option<String>,
+    /// The numeric columns ([`COLUMNS`]) it has.
+    pub values: BTreeMap<String, f64>,
+}
+
+impl Row {
+    /// A value, NaN when absent.
+    pub fn get(&self, column: &str) -> f64 {
+        self.values.get(column).copied().unwrap_or(f64::NAN)
+    }
+    /// Whether this row is an external candidate rather than a `frond lod` run.
+    pub fn is_candidate(&self) -> bool {
+        self.method.starts_with("candidate:")
+    }
+}
+
+fn num(v: &Value, path: &[&str]) -> Option<f64> {
+    let mut cur = v;
+    for p in path {
+        cur = cur.get(p)?;
+    }
+    cur.as_f64()
+}
+
+/// Fills a row's cost and LOD timings from `frond lod`'s report.json (its LOD1 entry).
+pub fn add_lod_report(row: &mut Row, report: &Value) {
+    let lod = &report["lods"][1];
+    row.lod_method = lod["method"].as_str().map(String::from);
+    for (col, key) in [
+        ("billboards", "billboards"),
+        ("triangles", "triangles"),
+        ("wood_triangles", "wood_triangles"),
+        ("bones", "bones"),
+        ("texture_bytes", "texture_bytes"),
+    ] {
+        if let Some(x) = num(lod, &[key]) {
+            row.values.insert(col.into(), x);
+        }
+    }
+    row.epsilon = num(lod, &["epsilon"]);
+    for stage in [
+        "reference_pose",
+        "plane_search",
+        "bake",
+        "motion_fit",
+        "budget",
+        "wood",
+        "export",
+    ] {
+        if let Some(x) = num(lod, &["timings_s", stage]) {
+            row.values.insert(format!("t_{stage}"), x);
+        }
+    }
+    if let Some(x) = num(report, &["timings_s", "sample"]) {
+        row.values.insert("t_sample".into(), x);
+    }
+    if let Some(x) = num(report, &["timings_s", "total"]) {
+        row.values.insert("t_lod".into(), x);
+    }
+}
+
+/// Fills a row's metrics (and, for candidates, cost) from `frond eval --json`.
+pub fn add_eval_report(row: &mut Row, eval: &Value) {
+    let metric = |row: &mut Row, col: &str, path: &[&str]| {
+        let m = path.iter().fold(eval, |v, p| &v[p]);
+        if let Some(x) = m["mean"].as_f64() {
+            row.values.insert(col.into(), x);
+        }
+        if let Some(x) = m["max"].as_f64() {
+            row.values.insert(format!("{col}_max"), x);
+        }
+    };
+    metric(row, "coverage_static", &["coverage", "static"]);
+    metric(row, "coverage_animated", &["coverage", "animated"]);
+    for m in [
+        "colour_difference",
+        "plane_distance",
+        "projected_distance",
+        "euclidean_distance",
+        "orientation",
+        "dominating_axis",
+        "dominating_axis_spectral",
+    ] {
+        metric(row, m, &[m]);
+    }
+    if let Some(x) = num(eval, &["coverage", "discarded_pairs"]) {
+        row.values.insert("discarded_pairs".into(), x);
+    }
+    let c = &eval["cost"]["candidate"];
+    for (col, key) in [
+        ("billboard_area", "billboard_area"),
+        ("draw_calls", "draw_calls"),
+        ("file_bytes", "file_bytes"),
+    ] {
+        if let Some(x) = num(c, &[key]) {
+            row.values.insert(col.into(), x);
+        }
+    }
+    if row.is_candidate() {
+        for key in ["billboards", "triangles", "bones", "texture_bytes"] {
+            if let Some(x) = num(c, &[key]) {
+                row.values.insert(key.into(), x);
+            }
+        }
+    }
+    if let Some(x) = num(eval, &["timings_s", "total"]) {
+        row.values.insert("t_eval".into(), x);
+    }
+}
+
+/// Why an evaluated run counts as failed (spec §5.4: a colour error above 1 means no fidelity),
+/// or None.
+pub fn judge(row: &Row, eval: &Value) -> Option<String> {
+    if !row.is_candidate() && row.get("billboards") == 0.0 {
+        return Some("empty output: the LOD has no billboard".into());
+    }
+    let discarded = row.get("discarded_pairs");
+    if discarded > 0.0 {
+        let pairs = num(eval, &["coverage", "pairs"]).unwrap_or(f64::NAN);
+        return Some(format!(
+            "error > 1: the colour metric scored above 1 (or the original covered nothing) in \
+             {discarded} of {pairs} (view, frame) pairs"
+        ));
+    }
+    for (col, path) in [
+        ("coverage_static", ["coverage", "static"]),
+        ("coverage_animated", ["coverage", "animated"]),
+    ] {
+        if !row.get(col).is_finite() {
+            let why = eval[path[0]][path[1]]["skipped_reason"]
+                .as_str()
+                .unwrap_or("no value");
+            return Some(format!("NaN: {col}: {why}"));
+        }
+    }
+    if let Some((k, _)) = row.values.iter().find(|(_, v)| !v.is_finite()) {
+        return Some(format!("NaN: {k}"));
+    }
+    None
+}
+
+/// `results.csv`: key columns, then [`COLUMNS`].
+pub fn results_csv(rows: &[Row]) -> Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut header: Vec<&str> = vec![
+        "run",
+        "method",
+        "lod_method",
+        "screen_height",
+        "epsilon",
+        "epsilon_pct",
+        "seed",
+        "status",
+        "reason",
+    ];
+    header.extend_from_slice(COLUMNS);
+    w.write_record(&header).context("writing results.csv")?;
+    for r in rows {
+        let mut rec = vec![
+            r.run.clone(),
+            r.method.clone(),
+            r.lod_method.clone().unwrap_or_default(),
+            format!("{}", r.screen_height),
+            opt(r.epsilon),
+            opt(r.epsilon_pct),
+            r.seed.map(|s| s.to_string()).unwrap_or_default(),
+            if r.failure.is_some() { "failed" } else { "ok" }.to_string(),
+            r.failure.clone().unwrap_or_default(),
+        ];
+        rec.extend(COLUMNS.iter().map(|c| opt(r.values.get(*c).copied())));
+        w.write_record(&rec).context("writing results.csv")?;
+    }
+    w.into_inner().context("writing results.csv")
+}
+
+fn opt(x: Option<f64>) -> String {
+    match x {
+        Some(v) if v.is_finite() => format!("{v}"),
+        Some(_) => "NaN".into(),
+        None => String::new(),
+    }
+}
+
+/// One configuration (method and grid point) over its seeds.
+#[derive(Clone, Debug, Serialize)]
+pub struct Stability {
+    pub method: String,
+    pub screen_height: f32,
+    /// ε of the configuration (world units): the fixed one, or the rule's.
+    pub epsilon: Option<f64>,
+    pub epsilon_pct: Option<f64>,
+    pub runs: usize,
+    pub failed: usize,
+    /// Spread of each [`STABILITY`] quantity over the runs that have it.
+    pub spread: BTreeMap<String, Spread>,
+}
+
+/// The stability table: one entry per configuration, in the rows' order.
+pub fn stability(rows: &[Row]) -> Vec<Stability> {
+    let mut order: Vec<(String, String)> = Vec::new();
+    let mut groups: BTreeMap<(String, String), Vec<&Row>> = BTreeMap::new();
+    for r in rows.iter().filter(|r| !r.is_candidate()) {
+        let key = (r.method.clone(), r.point.clone());
+        if !groups.contains_key(&key) {
+            order.push(key.clone());
+        }
+        groups.entry(key).or_default().push(r);
+    }
+    order
+        .into_iter()
+        .map(|key| {
+            let g = &groups[&key];
+            let first = g[0];
+            let spread = STABILITY
+                .iter()
+                .filter_map(|q| {
+                    let xs: Vec<f64> = g.iter().map(|r| r.get(q)).collect();
+                    Spread::of(&xs).map(|s| (q.to_string(), s))
+                })
+                .collect();
+            let eps: Vec<f64> = g.iter().filter_map(|r| r.epsilon).collect();
+            let pct: Vec<f64> = g.iter().filter_map(|r| r.epsilon_pct).collect();
+            let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
+            Stability {
+                method: first.method.clone(),
+                screen_height: first.screen_height,
+                epsilon: mean(&eps),
+                epsilon_pct: mean(&pct),
+                runs: g.len(),
+                failed: g.iter().filter(|r| r.failure.is_some()).count(),
+                spread,
+            }
+        })
+        .collect()
+}
+
+/// `stability.csv`: one line per configuration and quantity.
+pub fn stability_csv(table: &[Stability]) -> Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record([
+        "method",
+        "screen_height",
+        "epsilon",
+        "epsilon_pct",
+        "runs",
+        "failed",
+        "quantity",
+        "n",
+        "mean",
+        "min",
+        "max",
+        "avg_abs_dev",
+        "relative",
+    ])
+    .context("writing stability.csv")?;
+    for s in table {
+        for (q, sp) in &s.spread {
+            w.write_record([
+                s.method.clone(),
+                format!("{}", s.screen_height),
+                opt(s.epsilon),
+                opt(s.epsilon_pct),
+                s.runs.to_string(),
+                s.failed.to_string(),
+                q.clone(),
+                sp.n.to_string(),
+                format!("{}", sp.mean),
+                format!("{}", sp.min),
+                format!("{}", sp.max),
+                format!("{}", sp.avg_abs_dev),
+                format!("{}", sp.relative),
+            ])
+            .context("writing stability.csv")?;
+        }
+    }
+    w.into_inner().context("writing stability.csv")
+}
+
+/// `stability.md`: a Markdown table per configuration row, "mean (average absolute deviation,
+/// relative)" per quantity, then the failed runs with their reasons.
+pub fn stability_markdown(table: &[Stability], rows: &[Row]) -> String {
+    let cols = [
+        ("billboards", "billboards"),
+        ("billboard_area", "area"),
+        ("coverage_static", "static colour"),
+        ("coverage_animated", "animated colour"),
+        ("colour_difference", "colour diff"),
+        ("dominating_axis", "dom. axis"),
+        ("dominating_axis_spectral", "dom. axis spectral"),
+        ("t_lod", "build s"),
+    ];
+    let mut s = String::from("| method | screen px | ε | ε % diag | runs | failed |");
+    for (_, h) in cols {
+        s.push_str(&format!(" {h} |"));
+    }
+    s.push_str("\n|---|---|---|---|---|---|");
+    s.push_str(&"---|".repeat(cols.len()));
+    s.push('\n');
+    for t in table {
+        s.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} |",
+            t.method,
+            t.screen_height,
+            t.epsilon.map(|e| format!("{e:.4}")).unwrap_or_default(),
+            t.epsilon_pct.map(|e| format!("{e:.2}")).unwrap_or_default(),
+            t.runs,
+            t.failed
+        ));
+        for (q, _) in cols {
+            match t.spread.get(q) {
+                Some(sp) => s.push_str(&format!(
+                    " {} ({}, {:.1} %) |",
+                    sig(sp.mean),
+                    sig(sp.avg_abs_dev),
+                    100.0 * sp.relative
+                )),
+                None => s.push_str(" – |"),
+            }
+        }
+        s.push('\n');
+    }
+    s.push_str(
+        "\nEach cell: mean (average absolute deviation, relative deviation) over the seeds.\n",
+    );
+    let failed: Vec<&Row> = rows.iter().filter(|r| r.failure.is_some()).collect();
+    if failed.is_empty() {
+        s.push_str("\nNo run failed.\n");
+    } else {
+        s.push_str("\nFailed runs:\n\n");
+        for r in failed {
+            s.push_str(&format!(
+                "- `{}` ({}, {} px, seed {}): {}\n",
+                r.run,
+                r.method,
+                r.screen_height,
+                r.seed.map(|x| x.to_string()).unwrap_or("-".into()),
+                r.failure.as_deref().unwrap_or("")
+            ));
+        }
+    }
+    s
+}
+
+/// A number with 4 significant digits, without exponent for ordinary magnitudes.
+pub fn sig(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let mag = x.abs().log10().floor() as i32;
+    if !(-4..6).contains(&mag) {
+        return format!("{x:.3e}");
+    }
+    let decimals = (3 - mag).max(0) as usize;
+    format!("{x:.decimals$}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(method: &str, seed: u64, billboards: f64, colour: f64) -> Row {
+        let mut values = BTreeMap::new();
+        values.insert("billboards".into(), billboards);
+        values.insert("coverage_animated".into(), colour);
+        Row {
+            run: format!("{method}_600px_s{seed}"),
+            method: method.into(),
+            lod_method: None,
+            point: "600px".into(),
+            screen_height: 600.0,
+            epsilon: Some(0.1),
+            epsilon_pct: Some(1.0),
+            seed: Some(seed),
+            failure: None,
+            values,
+        }
+    }
+
+    #[test]
+    fn stability_groups_seeds_of_one_configuration() {
+        let mut rows = vec![
+            row("static", 1, 10.0, 0.2),
+            row("static", 2, 12.0, 0.4),
+            row("per-bone", 1, 100.0, 0.1),
+        ];
+        rows[1].failure = Some("timeout".into());
+        let t = stability(&rows);
+        assert_eq!(t.len(), 2);
+        assert_eq!(
+            (t[0].method.as_str(), t[0].runs, t[0].failed),
+            ("static", 2, 1)
+        );
+        let b = t[0].spread["billboards"];
+        assert_eq!(
+            (b.mean, b.min, b.max, b.avg_abs_dev),
+            (11.0, 10.0, 12.0, 1.0)
+        );
+        assert!((t[0].spread["coverage_animated"].mean - 0.3).abs() < 1e-12);
+        assert_eq!(t[1].spread["billboards"].n, 1);
+        let md = stability_markdown(&t, &rows);
+        assert!(md.contains("| static | 600 |"), "{md}");
+        assert!(md.contains("timeout"), "{md}");
+        let csv = String::from_utf8(stability_csv(&t).unwrap()).unwrap();
+        assert!(
+            csv.lines()
+                .any(|l| l.starts_with("static,600,0.1,1,2,1,billboards,2,11,10,12,1,"))
+        );
+    }
+
+    #[test]
+    fn judging_runs() {
+        let ok = serde_json::json!({"coverage": {"pairs": 25}});
+        let mut r = row("static", 1, 10.0, 0.2);
+        r.values.insert("coverage_static".into(), 0.2);
+        assert_eq!(judge(&r, &ok), None);
+        r.values.insert("discarded_pairs".into(), 2.0);
+        assert!(judge(&r, &ok).unwrap().starts_with("error > 1"));
+        r.values.insert("discarded_pairs".into(), 0.0);
+        r.values.remove("coverage_static");
+        assert!(judge(&r, &ok).unwrap().starts_with("NaN: coverage_static"));
+        r.values.insert("billboards".into(), 0.0);
+        assert!(judge(&r, &ok).unwrap().starts_with("empty output"));
+    }
+
+    #[test]
+    fn csv_has_every_column() {
+        let csv = String::from_utf8(results_csv(&[row("static", 1, 10.0, 0.25)]).unwrap()).unwrap();
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        assert_eq!(header.len(), 9 + COLUMNS.len());
+        let line: Vec<&str> = lines.next().unwrap().split(',').collect();
+        assert_eq!(line.len(), header.len());
+        let at = |c: &str| line[header.iter().position(|h| *h == c).unwrap()];
+        assert_eq!(at("billboards"), "10");
+        assert_eq!(at("coverage_animated"), "0.25");
+        assert_eq!(at("status"), "ok");
+        assert_eq!(at("t_bake"), "");
+    }
+
+    #[test]
+    fn significant_digits() {
+        assert_eq!(sig(0.123456), "0.1235");
+        assert_eq!(sig(1234.5), "1234");
+        assert_eq!(sig(12.0), "12.00");
+        assert_eq!(sig(3.2e7), "3.200e7");
+    }
+}

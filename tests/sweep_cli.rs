@@ -1,0 +1,338 @@
+//! `frond sweep` end to end: one row per run with every column, the stability table over seeds,
+//! charts that decode, an external candidate beside the runs (the original itself scores 0),
+//! the Pareto front, identical numbers whatever the thread count, and a run that outlives its
+//! limit recorded as a failure while the sweep goes on.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use common::*;
+
+/// Small, fast evaluation settings for the tests.
+const FAST: [&str; 10] = [
+    "--samples",
+    "12",
+    "--views",
+    "3",
+    "--frames",
+    "2",
+    "--planes",
+    "40",
+    "--screen-height",
+    "90",
+];
+
+fn sweep(out: &Path, extra: &[&str], threads: &str) -> serde_json::Value {
+    let sapling = root().join("samples/sapling.glb");
+    let mut args = vec![
+        "sweep",
+        sapling.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+        "--json",
+    ];
+    args.extend_from_slice(&FAST);
+    args.extend_from_slice(extra);
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_frond"))
+        .args(&args)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .env("RAYON_NUM_THREADS", threads)
+        .output()
+        .expect("frond runs");
+    assert!(
+        output.status.success(),
+        "frond {args:?}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    serde_json::from_slice(&output.stdout).expect("summary JSON")
+}
+
+/// results.csv as a list of column → cell maps.
+fn csv_rows(path: &Path) -> Vec<BTreeMap<String, String>> {
+    let text = std::fs::read_to_string(path).expect("results.csv");
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .expect("header")
+        .split(',')
+        .map(String::from)
+        .collect();
+    lines
+        .map(|l| {
+            let cells: Vec<&str> = l.split(',').collect();
+            assert_eq!(cells.len(), header.len(), "row {l}");
+            header
+                .iter()
+                .cloned()
+                .zip(cells.iter().map(|c| c.to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+fn num(row: &BTreeMap<String, String>, key: &str) -> f64 {
+    row[key]
+        .parse()
+        .unwrap_or_else(|_| panic!("{key} = '{}' is not a number", row[key]))
+}
+
+#[test]
+fn sweep_writes_rows_stability_and_charts() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("sweep");
+    let sapling = root().join("samples/sapling.glb");
+    let summary = sweep(
+        &out,
+        &[
+            "--method",
+            "per-bone,static",
+            "--epsilon",
+            "2%..6%",
+            "--steps",
+            "2",
+            "--seeds",
+            "2",
+            "--candidate",
+            sapling.to_str().expect("utf-8"),
+        ],
+        "2",
+    );
+    // 2 methods × 2 ε × 2 seeds + the candidate at the one screen height.
+    assert_eq!(summary["runs"], 9);
+    assert_eq!(summary["failed"], 0, "{:#}", summary["rows"]);
+    let rows = csv_rows(&out.join("results.csv"));
+    assert_eq!(rows.len(), 9);
+    let runs: Vec<_> = rows
+        .iter()
+        .filter(|r| !r["method"].starts_with("candidate"))
+        .collect();
+    let diag_pct = |r: &BTreeMap<String, String>| num(r, "epsilon_pct");
+    for r in &runs {
+        assert_eq!(r["status"], "ok");
+        assert!(num(r, "billboards") > 0.0);
+        let pct = diag_pct(r);
+        assert!(
+            (pct - 2.0).abs() < 1e-3 || (pct - 6.0).abs() < 1e-3,
+            "ε% {pct}"
+        );
+        for k in [
+            "coverage_static",
+            "coverage_animated",
+            "colour_difference",
+            "plane_distance",
+            "orientation",
+            "dominating_axis",
+            "dominating_axis_spectral",
+            "t_plane_search",
+            "t_bake",
+            "t_lod",
+            "t_eval",
+        ] {
+            let v = num(r, k);
+            assert!(v.is_finite() && v >= 0.0, "{k} = {v}");
+        }
+        // Per-bone billboards carry their triangles exactly: every one stays within ε of its
+        // plane over the whole loop (static ones follow a rigid fit, so they may not).
+        if r["method"] == "per-bone" {
+            assert!(num(r, "plane_distance_max") <= num(r, "epsilon") * 1.001 + 1e-6);
+        }
+        assert!(num(r, "coverage_animated") < 1.0);
+    }
+    // Fewer billboards at the larger ε, for both methods.
+    for m in ["per-bone", "static"] {
+        let mean = |pct: f64| {
+            let v: Vec<f64> = runs
+                .iter()
+                .filter(|r| r["method"] == m && (diag_pct(r) - pct).abs() < 1e-3)
+                .map(|r| num(r, "billboards"))
+                .collect();
+            assert_eq!(v.len(), 2, "{m} at {pct}%");
+            v.iter().sum::<f64>() / 2.0
+        };
+        assert!(mean(6.0) < mean(2.0), "{m}: {} vs {}", mean(6.0), mean(2.0));
+    }
+    // The original as a candidate: colour and distance errors 0.
+    let cand = rows
+        .iter()
+        .find(|r| r["method"] == "candidate:sapling.glb")
+        .expect("candidate row");
+    assert_eq!(num(cand, "coverage_animated"), 0.0);
+    assert_eq!(num(cand, "coverage_static"), 0.0);
+    assert!(num(cand, "plane_distance_max") < 1e-4);
+
+    // Stability: 4 configurations of 2 seeds each, spreads consistent with the rows.
+    let st = summary["stability"].as_array().expect("stability");
+    assert_eq!(st.len(), 4);
+    for s in st {
+        assert_eq!(s["runs"], 2);
+        let b = &s["spread"]["billboards"];
+        let vals: Vec<f64> = runs
+            .iter()
+            .filter(|r| {
+                r["method"] == s["method"].as_str().unwrap_or("")
+                    && (diag_pct(r) - s["epsilon_pct"].as_f64().unwrap_or(-1.0)).abs() < 1e-6
+            })
+            .map(|r| num(r, "billboards"))
+            .collect();
+        assert_eq!(vals.len(), 2);
+        let mean = (vals[0] + vals[1]) / 2.0;
+        assert!((b["mean"].as_f64().expect("mean") - mean).abs() < 1e-9);
+        assert!((b["avg_abs_dev"].as_f64().expect("aad") - (vals[0] - mean).abs()).abs() < 1e-9);
+        assert_eq!(b["min"].as_f64(), Some(vals[0].min(vals[1])));
+    }
+    let md = std::fs::read_to_string(out.join("stability.md")).expect("stability.md");
+    assert!(md.contains("| per-bone |") && md.contains("| static |"));
+    assert!(md.contains("No run failed."));
+
+    // The Pareto front: no run is both faster and more accurate than one on it.
+    let front: Vec<&str> = summary["pareto_front"]
+        .as_array()
+        .expect("front")
+        .iter()
+        .filter_map(|v| v.as_str())
+        .collect();
+    assert!(!front.is_empty());
+    for f in &front {
+        let fr = runs.iter().find(|r| r["run"] == *f).expect("front run");
+        let (t, e) = (num(fr, "t_lod"), num(fr, "coverage_animated"));
+        assert!(!runs.iter().any(|r| {
+            let (t2, e2) = (num(r, "t_lod"), num(r, "coverage_animated"));
+            t2 <= t && e2 <= e && (t2 < t || e2 < e)
+        }));
+    }
+
+    // Charts: SVG with one line per method, PNG that decodes at the SVG's size.
+    for stem in [
+        "accuracy_vs_billboards",
+        "accuracy_vs_texture_bytes",
+        "accuracy_vs_time",
+        "metrics_vs_epsilon",
+    ] {
+        let svg = std::fs::read_to_string(out.join(format!("{stem}.svg"))).expect("svg");
+        assert!(svg.starts_with("<svg"), "{stem}");
+        for label in ["per-bone", "static", "candidate:sapling.glb"] {
+            assert!(svg.contains(label), "{stem} lacks {label}");
+        }
+        let png = image::open(out.join(format!("{stem}.png"))).expect("png decodes");
+        assert!(png.width() >= 700 && png.height() >= 400, "{stem}");
+        // Not blank: some pixels are neither white nor transparent.
+        let rgba = png.to_rgba8();
+        let inked = rgba
+            .pixels()
+            .filter(|p| p.0[3] > 0 && p.0[..3] != [255, 255, 255])
+            .count();
+        assert!(inked > 2000, "{stem}: {inked} inked pixels");
+    }
+    let time_svg = std::fs::read_to_string(out.join("accuracy_vs_time.svg")).expect("svg");
+    assert!(time_svg.contains("Pareto front"));
+
+    // The same sweep on one thread: every number but the timings is the same.
+    let again = dir.path().join("again");
+    sweep(
+        &again,
+        &[
+            "--method",
+            "per-bone,static",
+            "--epsilon",
+            "2%..6%",
+            "--steps",
+            "2",
+            "--seeds",
+            "2",
+            "--candidate",
+            sapling.to_str().expect("utf-8"),
+        ],
+        "1",
+    );
+    let a = csv_rows(&out.join("results.csv"));
+    let b = csv_rows(&again.join("results.csv"));
+    for (x, y) in a.iter().zip(&b) {
+        for (k, v) in x {
+            if !k.starts_with("t_") {
+                assert_eq!(v, &y[k], "{} {k}", x["run"]);
+            }
+        }
+    }
+}
+
+#[test]
+fn screen_height_grid_and_a_run_past_its_limit() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("sweep");
+    // Two LOD sizes: ε follows the screen-space rule (ε = height / screen height).
+    let summary = sweep(
+        &out,
+        &["--method", "static", "--lods", "120,40", "--seeds", "1"],
+        "2",
+    );
+    let rows = csv_rows(&out.join("results.csv"));
+    assert_eq!(rows.len(), 2);
+    let (near, far) = (&rows[0], &rows[1]);
+    assert_eq!(num(near, "screen_height"), 120.0);
+    assert!((num(far, "epsilon") / num(near, "epsilon") - 3.0).abs() < 1e-4);
+    assert!(num(far, "billboards") < num(near, "billboards"));
+    assert_eq!(summary["failed"], 0);
+
+    // A build that cannot finish in a second is stopped and listed with its reason.
+    let slow = dir.path().join("slow");
+    let summary = sweep(
+        &slow,
+        &[
+            "--method",
+            "per-bone",
+            "--epsilon",
+            "0",
+            "--supersample",
+            "16",
+            "--seeds",
+            "1",
+            "--timeout",
+            "1",
+        ],
+        "2",
+    );
+    assert_eq!(summary["failed"], 1);
+    let rows = csv_rows(&slow.join("results.csv"));
+    assert_eq!(rows[0]["status"], "failed");
+    assert!(
+        rows[0]["reason"].starts_with("timeout: lod ran past 1 s"),
+        "{}",
+        rows[0]["reason"]
+    );
+    let md = std::fs::read_to_string(slow.join("stability.md")).expect("stability.md");
+    assert!(
+        md.contains("Failed runs:") && md.contains("timeout"),
+        "{md}"
+    );
+    // The killed run left no LOD behind.
+    let run = slow.join("runs").join(&rows[0]["run"]);
+    assert!(run.join("lod.stderr").exists());
+    assert!(!run.join("lod/report.json").exists());
+}
+
+#[test]
+fn bad_sweep_arguments_fail_cleanly() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("sweep");
+    let sapling = root().join("samples/sapling.glb");
+    let s = sapling.to_str().expect("utf-8");
+    let o = out.to_str().expect("utf-8");
+    for (args, says) in [
+        (vec!["sweep", s, "-o", o, "--epsilon", "5%..1%"], "range"),
+        (vec!["sweep", s, "-o", o, "--lods", "0"], "--lods"),
+        (vec!["sweep", s, "-o", o, "--seeds", "0"], "--seeds"),
+        (
+            vec!["sweep", s, "-o", o, "--candidate", "/nonexistent/x.glb"],
+            "no such file",
+        ),
+        (vec!["sweep", "/nonexistent/tree.glb", "-o", o], "tree.glb"),
+    ] {
+        let r = frond(&args);
+        assert!(!r.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(!out.join("results.csv").exists());
+    }
+}
