@@ -59,6 +59,42 @@ impl ImportArgs {
     }
 }
 
+/// Plane search and bake options of `frond lod`, which `frond sweep` passes to every build.
+#[derive(clap::Args, Clone, Debug)]
+struct BuildArgs {
+    /// Candidate planes per iteration of the plane search.
+    #[arg(long, default_value_t = 100)]
+    planes: usize,
+    /// Favour billboards seen from this elevation in degrees (0 = vertical billboards).
+    #[arg(long, value_name = "DEG")]
+    view_penalty: Option<f32>,
+    /// Bake every triangle valid for a plane, not only its own.
+    #[arg(long)]
+    increased_density: bool,
+    /// Supersamples per texel side when baking (1-16; 4 = 4×4, 2 is ~2.5× faster).
+    #[arg(long, default_value_t = 4)]
+    supersample: u32,
+}
+
+impl BuildArgs {
+    /// The same options as `frond lod` arguments.
+    fn to_args(&self) -> Vec<String> {
+        let mut a = vec![
+            "--planes".to_string(),
+            self.planes.to_string(),
+            "--supersample".to_string(),
+            self.supersample.to_string(),
+        ];
+        if let Some(v) = self.view_penalty {
+            a.extend(["--view-penalty".to_string(), v.to_string()]);
+        }
+        if self.increased_density {
+            a.push("--increased-density".to_string());
+        }
+        a
+    }
+}
+
 /// Seed and loop sampling, shared by the commands that build billboards.
 #[derive(clap::Args, Clone, Debug)]
 struct RunArgs {
@@ -209,21 +245,11 @@ enum Command {
         animation: String,
         #[command(flatten)]
         run: RunArgs,
-        /// Candidate planes per iteration of the plane search.
-        #[arg(long, default_value_t = 100)]
-        planes: usize,
-        /// Favour billboards seen from this elevation in degrees (0 = vertical billboards).
-        #[arg(long, value_name = "DEG")]
-        view_penalty: Option<f32>,
-        /// Bake every triangle valid for a plane, not only its own.
-        #[arg(long)]
-        increased_density: bool,
+        #[command(flatten)]
+        build: BuildArgs,
         /// Largest atlas side per LOD.
         #[arg(long, default_value_t = 4096)]
         max_atlas: u32,
-        /// Supersamples per texel side when baking (1-16; 4 = 4×4, 2 is ~2.5× faster).
-        #[arg(long, default_value_t = 4)]
-        supersample: u32,
         /// Dilated texels around each billboard texture: 2 covers bilinear filtering and the
         /// first mip level, which is all a LOD shown near its own size uses.
         #[arg(long, default_value_t = 2)]
@@ -312,18 +338,8 @@ enum Command {
         /// Clip to sample (default: the first).
         #[arg(long)]
         clip: Option<String>,
-        /// Candidate planes per iteration of the plane search.
-        #[arg(long, default_value_t = 100)]
-        planes: usize,
-        /// View penalty: favour billboards seen from this elevation in degrees.
-        #[arg(long, value_name = "DEG")]
-        view_penalty: Option<f32>,
-        /// Bake every triangle valid for a plane, not only its own.
-        #[arg(long)]
-        increased_density: bool,
-        /// Supersamples per texel side when baking.
-        #[arg(long, default_value_t = 4)]
-        supersample: u32,
+        #[command(flatten)]
+        build: BuildArgs,
         /// Seconds one run's build (or evaluation) may take before it is stopped and recorded
         /// as a timeout.
         #[arg(long, default_value_t = 900)]
@@ -509,11 +525,8 @@ fn run(cli: Cli) -> Result<()> {
                     samples,
                     clip,
                 },
-            planes,
-            view_penalty,
-            increased_density,
+            build,
             max_atlas,
-            supersample,
             padding,
             msft_lod,
             external_textures,
@@ -548,11 +561,11 @@ fn run(cli: Cli) -> Result<()> {
                 seed,
                 samples,
                 clip,
-                planes,
-                view_penalty: view_penalty.map(f32::to_radians),
-                increased_density,
+                planes: build.planes,
+                view_penalty: build.view_penalty.map(f32::to_radians),
+                increased_density: build.increased_density,
                 max_atlas,
-                supersample,
+                supersample: build.supersample,
                 padding,
                 msft_lod,
                 resolution,
@@ -661,10 +674,7 @@ fn run(cli: Cli) -> Result<()> {
             frames,
             samples,
             clip,
-            planes,
-            view_penalty,
-            increased_density,
-            supersample,
+            build,
             timeout,
             keep,
             json,
@@ -695,23 +705,11 @@ fn run(cli: Cli) -> Result<()> {
             for m in &import.wood_material {
                 import_args.extend(["--wood-material".to_string(), m.clone()]);
             }
-            let mut lod_args = vec![
-                "--samples".to_string(),
-                samples.to_string(),
-                "--planes".to_string(),
-                planes.to_string(),
-                "--supersample".to_string(),
-                supersample.to_string(),
-            ];
+            let mut lod_args = vec!["--samples".to_string(), samples.to_string()];
             if let Some(c) = &clip {
                 lod_args.extend(["--clip".to_string(), c.clone()]);
             }
-            if let Some(v) = view_penalty {
-                lod_args.extend(["--view-penalty".to_string(), v.to_string()]);
-            }
-            if increased_density {
-                lod_args.push("--increased-density".to_string());
-            }
+            lod_args.extend(build.to_args());
             let eval = EvalRequest {
                 views,
                 frames,

@@ -24,6 +24,22 @@ const FAST: [&str; 10] = [
     "90",
 ];
 
+/// Both methods × 2 ε × 2 seeds, with the original as an external candidate.
+fn grid_with_candidate(candidate: &Path) -> Vec<&str> {
+    vec![
+        "--method",
+        "per-bone,static",
+        "--epsilon",
+        "2%..6%",
+        "--steps",
+        "2",
+        "--seeds",
+        "2",
+        "--candidate",
+        candidate.to_str().expect("utf-8"),
+    ]
+}
+
 fn sweep(out: &Path, extra: &[&str], threads: &str) -> serde_json::Value {
     let sapling = root().join("samples/sapling.glb");
     let mut args = vec![
@@ -83,22 +99,7 @@ fn sweep_writes_rows_stability_and_charts() {
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("sweep");
     let sapling = root().join("samples/sapling.glb");
-    let summary = sweep(
-        &out,
-        &[
-            "--method",
-            "per-bone,static",
-            "--epsilon",
-            "2%..6%",
-            "--steps",
-            "2",
-            "--seeds",
-            "2",
-            "--candidate",
-            sapling.to_str().expect("utf-8"),
-        ],
-        "2",
-    );
+    let summary = sweep(&out, &grid_with_candidate(&sapling), "2");
     // 2 methods × 2 ε × 2 seeds + the candidate at the one screen height.
     assert_eq!(summary["runs"], 9);
     assert_eq!(summary["failed"], 0, "{:#}", summary["rows"]);
@@ -230,22 +231,7 @@ fn sweep_writes_rows_stability_and_charts() {
 
     // The same sweep on one thread: every number but the timings is the same.
     let again = dir.path().join("again");
-    sweep(
-        &again,
-        &[
-            "--method",
-            "per-bone,static",
-            "--epsilon",
-            "2%..6%",
-            "--steps",
-            "2",
-            "--seeds",
-            "2",
-            "--candidate",
-            sapling.to_str().expect("utf-8"),
-        ],
-        "1",
-    );
+    sweep(&again, &grid_with_candidate(&sapling), "1");
     let a = csv_rows(&out.join("results.csv"));
     let b = csv_rows(&again.join("results.csv"));
     for (x, y) in a.iter().zip(&b) {

@@ -158,17 +158,18 @@ fn series_for(rows: &[Row], x: &str, y: &str, x_missing_is_level: bool) -> Vec<S
         .collect()
 }
 
-/// Whether a positive range is wide enough for a log axis.
+/// Whether positive values want a log axis: they span more than 20× and crowd the low end (the
+/// median below a quarter of the way up), as billboard counts over a range of ε do. An even
+/// grid from 0 (ε = 0 is stored as a tiny positive value) stays linear.
 fn wants_log(xs: impl Iterator<Item = f64>) -> bool {
-    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
-    for x in xs.filter(|x| x.is_finite()) {
-        if x <= 0.0 {
-            return false;
-        }
-        lo = lo.min(x);
-        hi = hi.max(x);
+    let mut v: Vec<f64> = xs.filter(|x| x.is_finite()).collect();
+    if v.is_empty() || v.iter().any(|&x| x <= 0.0) {
+        return false;
     }
-    hi > 0.0 && hi / lo > 20.0
+    v.sort_by(f64::total_cmp);
+    let (lo, hi) = (v[0], v[v.len() - 1]);
+    let median = v[v.len() / 2];
+    hi / lo > 20.0 && median < lo + 0.25 * (hi - lo)
 }
 
 /// The charts of a sweep: accuracy vs billboards, vs texture bytes, vs build time (with the
@@ -505,4 +506,32 @@ pub fn svg_to_png(svg: &str, options: &usvg::Options) -> Result<Vec<u8>> {
         tiny_skia::Pixmap::new(size.width(), size.height()).context("allocating a chart image")?;
     resvg::render(&tree, tiny_skia::Transform::default(), &mut pixmap.as_mut());
     pixmap.encode_png().context("encoding a chart PNG")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_axes_only_for_wide_low_crowded_values() {
+        // Billboard counts over a range of ε: wide and crowded low.
+        assert!(wants_log(
+            [12.0, 20.0, 40.0, 150.0, 1000.0, 2800.0].into_iter()
+        ));
+        // An even ε grid from (nearly) 0: linear, like the thesis's figures.
+        assert!(!wants_log(
+            [0.001, 1.5, 3.0, 4.5, 7.5, 11.25, 15.0, 18.75, 22.5].into_iter()
+        ));
+        // Narrow, zero or negative values: linear.
+        assert!(!wants_log([1.0, 2.0, 6.0].into_iter()));
+        assert!(!wants_log([0.0, 1.0, 100.0].into_iter()));
+        assert!(!wants_log(std::iter::empty()));
+    }
+
+    #[test]
+    fn ticks_drop_trailing_zeros() {
+        assert_eq!(tick(0.25), "0.25");
+        assert_eq!(tick(600.0), "600");
+        assert_eq!(tick(3.2e7), "3.200e7");
+    }
 }
