@@ -12,7 +12,8 @@
 pub mod animation;
 pub mod cost;
 pub mod coverage;
-pub mod normalise;
+/// App. A's normalisation, shared with the spectral descriptions (which sit upstream).
+pub use frond_spectral::normalise;
 pub mod statistics;
 pub mod triangle_metrics;
 
