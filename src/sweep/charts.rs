@@ -77,6 +77,17 @@ pub const METRICS: &[(&str, &str)] = &[
     ),
 ];
 
+/// The runs on the Pareto front of build time against accuracy (both minimised), cheapest
+/// first; candidates (not built here) take no part.
+pub fn front(rows: &[Row]) -> Vec<&Row> {
+    let timed: Vec<&Row> = rows.iter().filter(|r| !r.is_candidate()).collect();
+    let pts: Vec<(f64, f64)> = timed
+        .iter()
+        .map(|r| (r.get("t_lod"), r.get(ACCURACY)))
+        .collect();
+    pareto_front(&pts).into_iter().map(|i| timed[i]).collect()
+}
+
 /// Rows of each method in first-seen order, candidates apart.
 fn by_method(rows: &[Row]) -> Vec<(String, Vec<&Row>)> {
     let mut out: Vec<(String, Vec<&Row>)> = Vec::new();
@@ -196,12 +207,16 @@ pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
         ),
     ];
     // Build time: every run a point; the front over all of them.
-    let timed: Vec<&Row> = rows.iter().filter(|r| !r.is_candidate()).collect();
-    let pts: Vec<(f64, f64)> = timed
+    let front_rows = front(rows);
+    let pts: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| !r.is_candidate())
+        .map(|r| (r.get("t_lod"), r.get(ACCURACY)))
+        .collect();
+    let front = front_rows
         .iter()
         .map(|r| (r.get("t_lod"), r.get(ACCURACY)))
         .collect();
-    let front = pareto_front(&pts).into_iter().map(|i| pts[i]).collect();
     // Candidates were not built here: their accuracy is a dashed level.
     let mut series = series_for(rows, "t_lod", ACCURACY, true);
     for s in &mut series {

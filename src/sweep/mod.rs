@@ -177,15 +177,7 @@ pub fn run_sweep(
         ));
         files.push((out_dir.join(format!("{}.png", c.file_stem)), png));
     }
-    let timed: Vec<&Row> = rows.iter().filter(|r| !r.is_candidate()).collect();
-    let pts: Vec<(f64, f64)> = timed
-        .iter()
-        .map(|r| (r.get("t_lod"), r.get(charts::ACCURACY)))
-        .collect();
-    let pareto = frond_metrics::statistics::pareto_front(&pts)
-        .into_iter()
-        .map(|i| timed[i].run.clone())
-        .collect();
+    let pareto = charts::front(&rows).iter().map(|r| r.run.clone()).collect();
     let summary_path = out_dir.join("summary.json");
     let mut names: Vec<String> = files.iter().map(|(p, _)| p.display().to_string()).collect();
     names.push(summary_path.display().to_string());
