@@ -11,9 +11,44 @@
 use glam::{Mat3, Vec3};
 
 use crate::dominating_axis::dominating_axis;
-use crate::frequency_bins::{amplitude_distance, frequency_bins};
+use std::sync::Arc;
+
+use crate::frequency_bins::{FrequencyBins, amplitude_distance, frequency_bins};
 use crate::normalise::{angle_average, angle_difference, nep};
 use crate::spectrum::Spectrum;
+
+/// How deviations bin frequencies (spec §4.10).
+#[derive(Clone, Debug)]
+pub enum Bins {
+    /// Each comparison bins its two spectra together into this many bins, as §4.10 describes
+    /// (a small k-means over frequencies per pair: exact to the text, ~3 µs a comparison).
+    PerPair(usize),
+    /// One partition for every comparison, made once from all leaves' spectra (the tree's
+    /// inherent frequencies): the deviation becomes a fixed L1 distance over bins, ~100× faster
+    /// and the same for every pair, which k-means over 100k leaves needs.
+    Shared(Arc<FrequencyBins>),
+}
+
+impl Bins {
+    /// A shared partition of `spectra`'s frequencies into at most `k` bins.
+    pub fn shared(spectra: &[&[f32]], k: usize) -> Bins {
+        Bins::Shared(Arc::new(frequency_bins(spectra, k)))
+    }
+    /// The number of bins averages use.
+    pub fn count(&self) -> usize {
+        match self {
+            Bins::PerPair(k) => *k,
+            Bins::Shared(p) => p.bins.len().max(1),
+        }
+    }
+    /// Amplitude distance of two spectra.
+    pub fn distance(&self, a: &[f32], b: &[f32]) -> f32 {
+        match self {
+            Bins::PerPair(k) => amplitude_distance(a, b, *k),
+            Bins::Shared(p) => p.distance(a, b),
+        }
+    }
+}
 
 /// The interface of spec §4.1: description, deviation, average, apply.
 pub trait DescriptionType: Sync {
@@ -181,10 +216,10 @@ fn weighted_phase_difference(a: (&[f32], &[f32]), b: (&[f32], &[f32])) -> f32 {
 /// amplitude-weighted phase difference summed over axes. Average: binned mean amplitudes and
 /// amplitude-weighted cyclic mean phases per axis. Lossless, but time offsets count as
 /// differences and opposite lines average to a circle (the thesis's flaws, kept on purpose).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Naive {
     /// Frequency bins of deviation and average.
-    pub bins: usize,
+    pub bins: Bins,
 }
 
 /// A naive description: per axis the amplitude and phase of every frequency.
@@ -215,7 +250,7 @@ impl DescriptionType for Naive {
     fn deviation(&self, a: &NaiveDesc, b: &NaiveDesc) -> f32 {
         let (mut amp, mut phase) = (0.0, 0.0);
         for c in 0..3 {
-            amp += amplitude_distance(&a.amplitudes[c], &b.amplitudes[c], self.bins);
+            amp += self.bins.distance(&a.amplitudes[c], &b.amplitudes[c]);
             phase += weighted_phase_difference(
                 (&a.amplitudes[c], &a.phases[c]),
                 (&b.amplitudes[c], &b.phases[c]),
@@ -231,7 +266,7 @@ impl DescriptionType for Naive {
                 .iter()
                 .map(|d| (d.amplitudes[c].as_slice(), d.phases[c].as_slice()))
                 .collect();
-            binned_average(&spectra, weights, self.bins, &[])
+            binned_average(&spectra, weights, self.bins.count(), &[])
         });
         let len = ds.iter().map(|d| d.amplitudes[0].len()).min().unwrap_or(0);
         NaiveDesc {
@@ -269,9 +304,9 @@ impl DescriptionType for Naive {
 /// `Σ w a aᵀ` as the axis, binned amplitudes and cyclic phases (members whose axis points
 /// against it have their phase turned by π). Circular motion has no dominating axis: the
 /// brute-force pair search still returns one (the first farthest pair), never NaN.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct DominatingAxisType {
-    pub bins: usize,
+    pub bins: Bins,
 }
 
 /// A dominating-axis description.
@@ -330,10 +365,7 @@ impl DescriptionType for DominatingAxisType {
         } else {
             (1.0 - a.axis.dot(b.axis).abs()).max(0.0)
         };
-        nep(
-            axis,
-            amplitude_distance(&a.amplitudes, &b.amplitudes, self.bins),
-        )
+        nep(axis, self.bins.distance(&a.amplitudes, &b.amplitudes))
     }
 
     fn average(&self, ds: &[&AxisDesc], weights: &[f32]) -> AxisDesc {
@@ -377,7 +409,7 @@ impl DescriptionType for DominatingAxisType {
             .zip(&scaled)
             .map(|(d, a)| (a.as_slice(), d.phases.as_slice()))
             .collect();
-        let comps = binned_average(&spectra, weights, self.bins, &flip);
+        let comps = binned_average(&spectra, weights, self.bins.count(), &flip);
         let len = ds.iter().map(|d| d.amplitudes.len()).min().unwrap_or(0);
         let mut phases = vec![0.0; len];
         for (&f, &p) in comps.frequencies.iter().zip(&comps.phases) {
@@ -419,9 +451,9 @@ impl DescriptionType for DominatingAxisType {
 /// amplitude-weighted mean `φ_x`, so billboards whose leaves swing together keep their timing;
 /// where the members disagree the mean is as arbitrary as a random pick. Lossy: inter-frequency
 /// phase offsets are not kept (the thesis's counterexample; see the tests).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct AxisPhase {
-    pub bins: usize,
+    pub bins: Bins,
 }
 
 /// An axis-phase description.
@@ -462,7 +494,7 @@ impl DescriptionType for AxisPhase {
 
     fn deviation(&self, a: &AxisPhaseDesc, b: &AxisPhaseDesc) -> f32 {
         let amp: f32 = (0..3)
-            .map(|c| amplitude_distance(&a.amplitudes[c], &b.amplitudes[c], self.bins))
+            .map(|c| self.bins.distance(&a.amplitudes[c], &b.amplitudes[c]))
             .sum();
         let len = a.phase_xy.len().min(b.phase_xy.len());
         let mut phase = 0.0f32;

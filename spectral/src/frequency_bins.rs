@@ -16,6 +16,22 @@ pub struct FrequencyBins {
 }
 
 impl FrequencyBins {
+    /// Σ over bins of |a's total amplitude in the bin − b's|: the amplitude distance of two
+    /// spectra under this one partition (no re-binning, no allocation).
+    pub fn distance(&self, a: &[f32], b: &[f32]) -> f32 {
+        self.bins
+            .iter()
+            .map(|bin| {
+                let (mut sa, mut sb) = (0.0f32, 0.0f32);
+                for &i in bin {
+                    sa += a.get(i).copied().unwrap_or(0.0);
+                    sb += b.get(i).copied().unwrap_or(0.0);
+                }
+                (sa - sb).abs()
+            })
+            .sum()
+    }
+
     /// Per bin, the DFT frequency nearest the centroid (what an averaged spectrum uses).
     pub fn rounded_frequencies(&self) -> Vec<usize> {
         self.centroids

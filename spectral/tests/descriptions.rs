@@ -4,7 +4,7 @@
 
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_3, TAU};
 
-use frond_spectral::description::{AxisPhase, DescriptionType, DominatingAxisType, Naive};
+use frond_spectral::description::{AxisPhase, Bins, DescriptionType, DominatingAxisType, Naive};
 use glam::Vec3;
 
 const N: usize = 64;
@@ -49,14 +49,20 @@ fn time_offset_equal_trajectories_do_not_differ_under_axis_types() {
     // A whole number of samples, so both loops hold the same points and the farthest pair (the
     // dominating axis) is the same.
     let (a, b) = (leaf(0.0), leaf(11.0 * TAU / N as f32));
-    let ax = DominatingAxisType { bins: 4 };
-    let ap = AxisPhase { bins: 4 };
+    let ax = DominatingAxisType {
+        bins: Bins::PerPair(4),
+    };
+    let ap = AxisPhase {
+        bins: Bins::PerPair(4),
+    };
     let d_ax = ax.deviation(&ax.describe(&a), &ax.describe(&b));
     let d_ap = ap.deviation(&ap.describe(&a), &ap.describe(&b));
     assert!(d_ax < 1e-3, "dominating axis {d_ax}");
     assert!(d_ap < 1e-3, "axis-phase {d_ap}");
     // The naive type sees the offset (the thesis's flaw).
-    let nv = Naive { bins: 4 };
+    let nv = Naive {
+        bins: Bins::PerPair(4),
+    };
     assert!(nv.deviation(&nv.describe(&a), &nv.describe(&b)) > 0.1);
     // And a different motion is far under all three.
     let c = path(|t| Vec3::new(0.0, 0.9 * (2.0 * t).cos(), 0.0));
@@ -69,9 +75,13 @@ fn described_trajectories_apply_back_to_themselves() {
     let a = leaf(0.3);
     let mean = a.iter().copied().sum::<Vec3>() / N as f32;
     let motion: Vec<Vec3> = a.iter().map(|p| *p - mean).collect();
-    let nv = Naive { bins: 4 };
+    let nv = Naive {
+        bins: Bins::PerPair(4),
+    };
     assert!(max_gap(&nv.apply(&nv.describe(&a), N), &motion) < 1e-4);
-    let ap = AxisPhase { bins: 4 };
+    let ap = AxisPhase {
+        bins: Bins::PerPair(4),
+    };
     assert!(max_gap(&ap.apply(&ap.describe(&a), N), &motion) < 1e-4);
     // A one-member average is (up to binning of its own frequencies) itself.
     let d = ap.describe(&a);
@@ -79,7 +89,9 @@ fn described_trajectories_apply_back_to_themselves() {
     assert!(max_gap(&ap.apply(&avg, N), &motion) < 1e-4);
     // A line stays a line along its own axis.
     let line = path(|t| Vec3::new(1.0, 2.0, 0.0).normalize() * 0.7 * (2.0 * t + 0.5).cos());
-    let ax = DominatingAxisType { bins: 4 };
+    let ax = DominatingAxisType {
+        bins: Bins::PerPair(4),
+    };
     assert!(max_gap(&ax.apply(&ax.describe(&line), N), &line) < 1e-4);
 }
 
@@ -97,7 +109,9 @@ fn opposite_lines_average_to_a_circle_naively_but_not_under_axis_phase() {
         let hi = r.iter().copied().fold(0.0, f32::max);
         lo / hi
     };
-    let nv = Naive { bins: 1 };
+    let nv = Naive {
+        bins: Bins::PerPair(1),
+    };
     let avg = nv.average(&[&nv.describe(&a), &nv.describe(&b)], &[1.0, 1.0]);
     let naive = nv.apply(&avg, N);
     assert!(
@@ -107,7 +121,9 @@ fn opposite_lines_average_to_a_circle_naively_but_not_under_axis_phase() {
     );
     // Slightly unequal weights: with equal ones the two relationships cancel exactly and the
     // average falls back to phase 0, also a line.
-    let ap = AxisPhase { bins: 1 };
+    let ap = AxisPhase {
+        bins: Bins::PerPair(1),
+    };
     for w in [[1.0, 1.0], [1.0, 0.9], [0.9, 1.0]] {
         let avg = ap.average(&[&ap.describe(&a), &ap.describe(&b)], &w);
         let m = ap.apply(&avg, N);
@@ -137,7 +153,9 @@ fn axis_phase_misses_inter_frequency_offsets() {
         })
     };
     let (a, b) = (shape(0.0), shape(FRAC_PI_2));
-    let ap = AxisPhase { bins: 2 };
+    let ap = AxisPhase {
+        bins: Bins::PerPair(2),
+    };
     let d = ap.deviation(&ap.describe(&a), &ap.describe(&b));
     assert!(d < 1e-4, "same axis-phase map: {d}");
     assert!(
@@ -150,7 +168,9 @@ fn axis_phase_misses_inter_frequency_offsets() {
 #[test]
 fn circular_motion_gets_a_defined_axis() {
     let circle = path(|t| Vec3::new(t.cos(), 0.0, t.sin()));
-    let ax = DominatingAxisType { bins: 4 };
+    let ax = DominatingAxisType {
+        bins: Bins::PerPair(4),
+    };
     let d = ax.describe(&circle);
     assert!(
         (d.axis.length() - 1.0).abs() < 1e-5,
@@ -178,17 +198,23 @@ fn no_motion_is_described_averaged_and_applied_without_nan() {
             "{m:?}"
         );
     };
-    let ax = DominatingAxisType { bins: 4 };
+    let ax = DominatingAxisType {
+        bins: Bins::PerPair(4),
+    };
     let d = ax.describe(&still);
     assert_eq!(d.axis, Vec3::ZERO);
     assert_eq!(ax.deviation(&d, &d), 0.0);
     assert!(ax.deviation(&d, &ax.describe(&moving)) > 0.0);
     check(ax.apply(&ax.average(&[&d, &d], &[1.0, 1.0]), N));
-    let nv = Naive { bins: 4 };
+    let nv = Naive {
+        bins: Bins::PerPair(4),
+    };
     let dn = nv.describe(&still);
     assert_eq!(nv.deviation(&dn, &dn), 0.0);
     check(nv.apply(&nv.average(&[&dn], &[1.0]), N));
-    let ap = AxisPhase { bins: 4 };
+    let ap = AxisPhase {
+        bins: Bins::PerPair(4),
+    };
     let da = ap.describe(&still);
     assert_eq!(ap.deviation(&da, &da), 0.0);
     check(ap.apply(&ap.average(&[&da, &da], &[1.0, 2.0]), N));
@@ -201,7 +227,9 @@ fn frequency_bins_merge_neighbouring_frequencies() {
     // sin 4t and sin 5t along the same axis: close under binned deviation, and their average is
     // one component near 4.5 cycles (rounded to a DFT frequency) of amplitude ≈ 1 (§4.10).
     let f = |k: f32| path(move |t| Vec3::new((k * t).sin(), 0.0, 0.0));
-    let ax = DominatingAxisType { bins: 1 };
+    let ax = DominatingAxisType {
+        bins: Bins::PerPair(1),
+    };
     let (a, b, z) = (
         ax.describe(&f(4.0)),
         ax.describe(&f(5.0)),
@@ -218,7 +246,9 @@ fn frequency_bins_merge_neighbouring_frequencies() {
     assert!((comps.amplitudes[0] - 1.0).abs() < 1e-3);
     // Binned: 4 vs 5 is as close as 4 vs 4; per frequency (bins = 32) it is not.
     assert!(ax.deviation(&a, &b) < 1e-3);
-    let fine = DominatingAxisType { bins: 32 };
+    let fine = DominatingAxisType {
+        bins: Bins::PerPair(32),
+    };
     assert!(fine.deviation(&a, &b) > 0.5);
     assert!(fine.deviation(&a, &z) > 0.5);
     // Antiphase members keep their amplitude (phases average cyclically, amplitudes apart): the
@@ -227,4 +257,30 @@ fn frequency_bins_merge_neighbouring_frequencies() {
     let m = ax.apply(&ax.average(&[&a, &neg], &[1.0, 1.0]), N);
     let swing = m.iter().map(|p| p.length()).fold(0.0, f32::max);
     assert!(swing > 0.9, "{swing}");
+}
+
+#[test]
+fn shared_bins_agree_with_per_pair_bins_on_binned_spectra() {
+    // One partition made from every leaf's spectrum: sin 4t and sin 5t share a bin, sin 20t has
+    // its own; deviations match the per-pair binning of the same spectra.
+    let f = |k: f32| path(move |t| Vec3::new((k * t).sin(), 0.0, 0.0));
+    let per_pair = DominatingAxisType {
+        bins: Bins::PerPair(2),
+    };
+    let descs: Vec<_> = [4.0, 5.0, 20.0]
+        .iter()
+        .map(|&k| per_pair.describe(&f(k)))
+        .collect();
+    let spectra: Vec<&[f32]> = descs.iter().map(|d| d.amplitudes.as_slice()).collect();
+    let shared = DominatingAxisType {
+        bins: Bins::shared(&spectra, 2),
+    };
+    assert_eq!(shared.bins.count(), 2);
+    assert!(shared.deviation(&descs[0], &descs[1]) < 1e-4);
+    let far = shared.deviation(&descs[0], &descs[2]);
+    assert!(
+        (far - per_pair.deviation(&descs[0], &descs[2])).abs() < 1e-6,
+        "{far}"
+    );
+    assert!(far > 0.5);
 }

@@ -4,7 +4,7 @@
 
 use std::f32::consts::TAU;
 
-use frond_spectral::description::{DescriptionType, DominatingAxisType};
+use frond_spectral::description::{Bins, DescriptionType, DominatingAxisType};
 use frond_spectral::kmeans::{cluster_descriptions, skeleton_start};
 use glam::Vec3;
 
@@ -33,7 +33,9 @@ fn two_groups() -> Vec<Vec<Vec3>> {
 
 #[test]
 fn separable_motions_separate_and_seeds_repeat() {
-    let ty = DominatingAxisType { bins: 4 };
+    let ty = DominatingAxisType {
+        bins: Bins::PerPair(4),
+    };
     let descs: Vec<_> = two_groups().iter().map(|t| ty.describe(t)).collect();
     let w = vec![1.0; descs.len()];
     let c = cluster_descriptions(&ty, &descs, &w, 2, None, 4, 7, 50);
@@ -65,7 +67,9 @@ fn separable_motions_separate_and_seeds_repeat() {
 
 #[test]
 fn skeleton_start_keeps_merges_and_splits_bone_clusters() {
-    let ty = DominatingAxisType { bins: 4 };
+    let ty = DominatingAxisType {
+        bins: Bins::PerPair(4),
+    };
     // Bones 0 and 1 move alike (x, slow); bone 2 differs (y, fast). Two leaves per bone, one
     // near the bone's start joint and one far.
     let tracks = [
