@@ -34,6 +34,16 @@ pub struct EvalRequest {
     pub clip: Option<String>,
 }
 
+/// Whether two files hold the same bytes (the candidate is the original itself): sizes first,
+/// so a sweep does not read both files whole for every run.
+pub fn same_bytes(a: &Path, b: &Path) -> bool {
+    let len = |p: &Path| std::fs::metadata(p).map(|m| m.len()).ok();
+    match (len(a), len(b)) {
+        (Some(x), Some(y)) if x == y => std::fs::read(a).ok() == std::fs::read(b).ok(),
+        _ => false,
+    }
+}
+
 /// The colour metric's image for a tree seen `screen_height` pixels high: that height, 4:3.
 pub fn image_for_screen_height(screen_height: u32) -> (u32, u32) {
     (screen_height.saturating_mul(4).div_ceil(3), screen_height)

@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
 use frond::cloud_cmd::{CloudRequest, rest_diagonal, run_cloud};
-use frond::eval_cmd::{EvalRequest, evaluate, image_for_screen_height};
+use frond::eval_cmd::{EvalRequest, evaluate, image_for_screen_height, same_bytes};
 use frond::inspect::{SamplingSummary, inspect};
 use frond::lod_cmd::{AnimationMode, LodRequest, Method, run_lod};
 use frond::output::write_atomic;
@@ -611,7 +611,7 @@ fn run(cli: Cli) -> Result<()> {
                     ..Default::default()
                 },
             )?;
-            let same_file = std::fs::read(&import.input).ok() == std::fs::read(&candidate).ok();
+            let same_file = same_bytes(&import.input, &candidate);
             let size = match (size, screen_height) {
                 (Some(s), _) => parse_size(&s)?,
                 (None, Some(h)) if h > 0 => image_for_screen_height(h),

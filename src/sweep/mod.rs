@@ -20,7 +20,7 @@ use anyhow::{Context, Result, bail};
 use serde::Serialize;
 use serde_json::Value;
 
-use crate::eval_cmd::{EvalContext, EvalRequest, image_for_screen_height};
+use crate::eval_cmd::{EvalContext, EvalRequest, image_for_screen_height, same_bytes};
 use crate::lod_cmd::{Method, auto_method, lod_name};
 use crate::output::write_atomic;
 use frond_render::Renderer;
@@ -255,7 +255,7 @@ fn evaluate_into(ctx: &mut EvalContext, row: &mut Row, candidate: &Path, dir: &P
         }
     };
     let size = image_for_screen_height(row.screen_height.round().max(1.0) as u32);
-    let same_file = std::fs::read(ctx.original_path()).ok() == std::fs::read(candidate).ok();
+    let same_file = same_bytes(ctx.original_path(), candidate);
     let report = match ctx.evaluate(&cand, same_file, size) {
         Ok(r) => r,
         Err(e) => {
