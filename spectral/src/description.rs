@@ -90,10 +90,10 @@ impl Components {
         }
     }
 
-    /// Every non-zero bin of a spectrum as it is.
-    pub fn of(s: &Spectrum) -> Self {
+    /// The non-zero bins of dense per-frequency arrays (index i = frequency i + 1), as they are.
+    pub fn from_dense(amplitudes: &[f32], phases: &[f32]) -> Self {
         let mut c = Components::none();
-        for (i, (&a, &p)) in s.amplitudes.iter().zip(&s.phases).enumerate() {
+        for (i, (&a, &p)) in amplitudes.iter().zip(phases).enumerate() {
             if a > 0.0 {
                 c.frequencies.push(Spectrum::frequency(i));
                 c.amplitudes.push(a);
@@ -287,11 +287,7 @@ impl DescriptionType for Naive {
 
     fn apply(&self, d: &NaiveDesc, n: usize) -> Vec<Vec3> {
         let comps = d.components.clone().unwrap_or_else(|| {
-            [0, 1, 2].map(|c| Components {
-                frequencies: (1..=d.amplitudes[c].len()).collect(),
-                amplitudes: d.amplitudes[c].clone(),
-                phases: d.phases[c].clone(),
-            })
+            [0, 1, 2].map(|c| Components::from_dense(&d.amplitudes[c], &d.phases[c]))
         });
         sample_axes(&comps, d.samples, n)
     }
@@ -431,11 +427,10 @@ impl DescriptionType for DominatingAxisType {
     }
 
     fn apply(&self, d: &AxisDesc, n: usize) -> Vec<Vec3> {
-        let comps = d.components.clone().unwrap_or_else(|| Components {
-            frequencies: (1..=d.amplitudes.len()).collect(),
-            amplitudes: d.amplitudes.clone(),
-            phases: d.phases.clone(),
-        });
+        let comps = d
+            .components
+            .clone()
+            .unwrap_or_else(|| Components::from_dense(&d.amplitudes, &d.phases));
         let scale = d.samples.max(1) as f32 / n.max(1) as f32;
         (0..n)
             .map(|s| d.axis * comps.value_at(s as f32 * scale, d.samples))

@@ -207,13 +207,7 @@ pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
         ),
     ];
     // Build time: every run a point; the front over all of them.
-    let front_rows = front(rows);
-    let pts: Vec<(f64, f64)> = rows
-        .iter()
-        .filter(|r| !r.is_candidate())
-        .map(|r| (r.get("t_lod"), r.get(ACCURACY)))
-        .collect();
-    let front = front_rows
+    let front = front(rows)
         .iter()
         .map(|r| (r.get("t_lod"), r.get(ACCURACY)))
         .collect();
@@ -229,12 +223,17 @@ pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
             title: "speed vs accuracy (Pareto front: no run both faster and more accurate)".into(),
             x_label: "build time of the LOD (s)".into(),
             y_label: ACCURACY_LABEL.into(),
-            x_log: wants_log(pts.iter().map(|p| p.0)),
+            x_log: wants_log(
+                rows.iter()
+                    .filter(|r| !r.is_candidate())
+                    .map(|r| r.get("t_lod")),
+            ),
             series,
             front,
         }],
     });
     let eps_log = wants_log(rows.iter().map(|r| r.epsilon_pct.unwrap_or(f64::NAN)));
+    let eps_rows = with_eps_column(rows);
     charts.push(Chart {
         file_stem: "metrics_vs_epsilon".into(),
         columns: 2,
@@ -245,7 +244,7 @@ pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
                 x_label: "ε (% of the bounding-box diagonal)".into(),
                 y_label: (*label).into(),
                 x_log: eps_log,
-                series: series_for(&with_eps_column(rows), "epsilon_pct", m, true),
+                series: series_for(&eps_rows, "epsilon_pct", m, true),
                 front: Vec::new(),
             })
             .collect(),

@@ -10,8 +10,8 @@ use anyhow::{Context, Result};
 /// How a child ended.
 #[derive(Clone, Debug, PartialEq)]
 pub enum JobEnd {
-    /// Exit code 0; its standard output.
-    Done(Vec<u8>),
+    /// Exit code 0 (its standard output is in `<tag>.stdout`).
+    Done,
     /// A non-zero exit or a signal; the last line of its standard error.
     Failed(String),
     /// Killed at the limit.
@@ -19,15 +19,14 @@ pub enum JobEnd {
 }
 
 /// Runs `exe args…` with stdout and stderr in files under `log_dir` (named `<tag>.stdout`,
-/// `<tag>.stderr`), killing it once `limit` has passed. Err only when it could not be started
-/// or its logs not read.
+/// `<tag>.stderr`), killing it once `limit` has passed. Err only when it could not be started.
 pub fn run_job(
     exe: &Path,
     args: &[String],
     log_dir: &Path,
     tag: &str,
     limit: Duration,
-) -> Result<(JobEnd, f64)> {
+) -> Result<JobEnd> {
     std::fs::create_dir_all(log_dir)
         .with_context(|| format!("{}: cannot create folder", log_dir.display()))?;
     let out_path: PathBuf = log_dir.join(format!("{tag}.stdout"));
@@ -56,13 +55,9 @@ pub fn run_job(
         }
         std::thread::sleep(Duration::from_millis(20));
     };
-    let secs = start.elapsed().as_secs_f64();
     let end = match status {
         None => JobEnd::TimedOut(limit),
-        Some(s) if s.success() => JobEnd::Done(
-            std::fs::read(&out_path)
-                .with_context(|| format!("{}: cannot read", out_path.display()))?,
-        ),
+        Some(s) if s.success() => JobEnd::Done,
         Some(s) => {
             let text = std::fs::read_to_string(&err_path).unwrap_or_default();
             let last = text
@@ -81,35 +76,36 @@ pub fn run_job(
             })
         }
     };
-    Ok((end, secs))
+    Ok(end)
 }
 
 #[cfg(all(test, unix))]
 mod tests {
     use super::*;
 
-    fn sh(script: &str, limit_ms: u64) -> JobEnd {
+    fn sh(script: &str, limit_ms: u64) -> (JobEnd, String) {
         let dir = tempfile::tempdir().unwrap();
-        run_job(
+        let end = run_job(
             Path::new("/bin/sh"),
             &["-c".into(), script.into()],
             dir.path(),
             "t",
             Duration::from_millis(limit_ms),
         )
-        .unwrap()
-        .0
+        .unwrap();
+        let out = std::fs::read_to_string(dir.path().join("t.stdout")).unwrap();
+        (end, out)
     }
 
     #[test]
     fn output_failure_and_timeout() {
-        assert_eq!(sh("echo hi", 5000), JobEnd::Done(b"hi\n".to_vec()));
+        assert_eq!(sh("echo hi", 5000), (JobEnd::Done, "hi\n".to_string()));
         assert_eq!(
-            sh("echo first >&2; echo 'error: bad tree' >&2; exit 3", 5000),
+            sh("echo first >&2; echo 'error: bad tree' >&2; exit 3", 5000).0,
             JobEnd::Failed("exit 3: error: bad tree".into())
         );
         assert_eq!(
-            sh("sleep 5", 200),
+            sh("sleep 5", 200).0,
             JobEnd::TimedOut(Duration::from_millis(200))
         );
     }

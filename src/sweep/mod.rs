@@ -229,14 +229,6 @@ fn new_row(id: &str, method: &str, point: &str, screen_height: f32, seed: Option
     }
 }
 
-fn describe(end: &JobEnd, what: &str) -> String {
-    match end {
-        JobEnd::TimedOut(d) => format!("timeout: {what} ran past {} s", d.as_secs_f64()),
-        JobEnd::Failed(why) => format!("error: {what}: {why}"),
-        JobEnd::Done(_) => String::new(),
-    }
-}
-
 /// Evaluates the file `candidate` into `row` at the row's screen height; the report is also
 /// kept as `dir/eval.json`. A candidate that cannot be read fails the row, not the sweep.
 fn evaluate_into(ctx: &mut EvalContext, row: &mut Row, candidate: &Path, dir: &Path) -> Result<()> {
@@ -308,26 +300,30 @@ fn lod_run(
         format!("{}", p.screen_height),
         "--seed".into(),
         seed.to_string(),
-        "--json".into(),
     ]);
     if let Some(e) = p.epsilon {
         args.extend(["--epsilon".into(), format!("{e}")]);
     }
     args.extend(req.lod_args.iter().cloned());
-    let (end, _) = run_job(&req.exe, &args, dir, "lod", req.timeout)?;
-    row.epsilon = p.epsilon.map(f64::from);
-    let JobEnd::Done(_) = end else {
-        row.failure = Some(describe(&end, "lod"));
-        row.epsilon_pct = row.epsilon.map(|e| 100.0 * e / f64::from(req.diagonal));
-        return Ok(row);
-    };
+    let end = run_job(&req.exe, &args, dir, "lod", req.timeout)?;
     let report_path = dir.join("lod").join("report.json");
-    let report: Value = std::fs::read(&report_path)
-        .ok()
-        .and_then(|b| serde_json::from_slice(&b).ok())
-        .with_context(|| format!("{}: unreadable report", report_path.display()))?;
-    results::add_lod_report(&mut row, &report);
+    let report: Result<Value, String> = match end {
+        JobEnd::Done => std::fs::read(&report_path)
+            .ok()
+            .and_then(|b| serde_json::from_slice(&b).ok())
+            .ok_or_else(|| format!("error: lod: {}: unreadable report", report_path.display())),
+        JobEnd::TimedOut(d) => Err(format!("timeout: lod ran past {} s", d.as_secs_f64())),
+        JobEnd::Failed(why) => Err(format!("error: lod: {why}")),
+    };
+    row.epsilon = p.epsilon.map(f64::from);
+    match report {
+        Ok(r) => results::add_lod_report(&mut row, &r),
+        Err(why) => row.failure = Some(why),
+    }
     row.epsilon_pct = row.epsilon.map(|e| 100.0 * e / f64::from(req.diagonal));
+    if row.failure.is_some() {
+        return Ok(row);
+    }
     let lod1 = dir.join("lod").join(format!("{tree_name}_LOD1.glb"));
     evaluate_into(ctx, &mut row, &lod1, dir)?;
     if !req.keep {
