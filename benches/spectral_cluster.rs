@@ -1,88 +1,89 @@
-//! Descriptions + clustering of every foliage triangle of `oak_dense.glb` (116k triangles, 64
-//! samples; issue 6 target ≤ 2 s on 2 cores): describe with each type, then k-means (k = 20,
-//! skeleton start + 2 k-means++ restarts) with the dominating-axis type over one shared
-//! frequency partition. Prints seconds per stage. Without animation zones, every triangle is
-//! clustered on its own.
+//! SCA step 1 on `oak_dense.glb` (116k foliage triangles, 64 samples; issue 6 target ≤ 2 s on
+//! 2 cores): animation zones, a description per zone, shared frequency bins and k-means, for
+//! each description type, as `frond lod --method spectral-*` runs them. Prints seconds, zone
+//! count and the RMS motion residual of the clustering.
+//!
+//! `FROND_TREE` (a path), `FROND_ZONE` (% of the diagonal, default 2) and `FROND_K` (default
+//! 16) change the case.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use frond_billboard::animated::Rig;
+use frond_billboard::spectral_build::{SpectralParams, cluster_zones};
 use frond_scene::{ImportOptions, SampleOptions, import, sample};
-use frond_spectral::description::{AxisPhase, Bins, DescriptionType, DominatingAxisType, Naive};
-use frond_spectral::kmeans::cluster_descriptions;
-use rayon::prelude::*;
+use frond_spectral::description::{
+    AxisPhase, DescriptionType, DominatingAxisType, Naive, SpectralKind,
+};
 
-fn describe_all<T: DescriptionType>(ty: &T, s: &frond_scene::Sampled) -> (Vec<T::Desc>, f64) {
+fn env_f32(name: &str, default: f32) -> f32 {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+fn run<T: DescriptionType>(
+    tree: &frond_scene::Tree,
+    s: &frond_scene::Sampled,
+    rest: &[glam::Mat4],
+    sp: &SpectralParams,
+) {
     let t0 = Instant::now();
-    let d: Vec<T::Desc> = (0..s.foliage.len())
-        .into_par_iter()
-        .map(|k| ty.describe(s.trajectory(k)))
-        .collect();
-    (d, t0.elapsed().as_secs_f64())
+    let zc = cluster_zones::<T>(tree, s, rest, sp);
+    let r = &zc.report;
+    println!(
+        "{:>16}: {:.3} s (zones + describe {:.3} s, k-means {:.3} s): {} zones, k = {}, {} bins, {} rounds, start {}, RMS residual {:.4} (no motion: {:.4})",
+        r.kind,
+        t0.elapsed().as_secs_f64(),
+        r.t_describe,
+        r.t_cluster,
+        r.zones,
+        r.clusters,
+        r.bins,
+        r.iterations,
+        r.start,
+        r.residual,
+        r.motion_rms
+    );
 }
 
 fn main() {
-    let dense = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/trees/oak_dense.glb");
-    let tree = import(&dense, &ImportOptions::default()).expect("imports");
+    let path = std::env::var("FROND_TREE")
+        .map(PathBuf::from)
+        .unwrap_or_else(|_| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/trees/oak_dense.glb")
+        });
+    let tree = import(&path, &ImportOptions::default()).expect("imports");
     let s = sample(&tree, &SampleOptions::default()).expect("samples");
-    let bins = tree.skeleton_depth().max(1) as usize;
+    let b = tree.bounds;
+    let diag = (glam::Vec3::from(b.max) - glam::Vec3::from(b.min)).length();
+    let zone = env_f32("FROND_ZONE", 2.0) / 100.0 * diag;
+    let k = env_f32("FROND_K", 16.0) as usize;
     println!(
-        "oak_dense: {} foliage triangles, {} samples, {bins} bins, {} threads",
+        "{}: {} foliage triangles, {} samples, zone {zone:.3} ({}% of the diagonal), {} threads",
+        path.display(),
         s.foliage.len(),
         s.samples(),
+        env_f32("FROND_ZONE", 2.0),
         rayon::current_num_threads()
     );
-    let (_, t) = describe_all(
-        &Naive {
-            bins: Bins::PerPair(bins),
-        },
-        &s,
-    );
-    println!("describe naive: {t:.3} s");
-    let (_, t) = describe_all(
-        &AxisPhase {
-            bins: Bins::PerPair(bins),
-        },
-        &s,
-    );
-    println!("describe axis-phase: {t:.3} s");
-    let (descs, t) = describe_all(
-        &DominatingAxisType {
-            bins: Bins::PerPair(bins),
-        },
-        &s,
-    );
-    println!("describe dominating axis: {t:.3} s");
-    // One frequency partition for every comparison (per-pair binning costs ~3 µs a deviation).
-    let t0 = Instant::now();
-    let spectra: Vec<&[f32]> = descs.iter().map(|d| d.amplitudes.as_slice()).collect();
-    let ty = DominatingAxisType {
-        bins: Bins::shared(&spectra, bins),
-    };
-    println!("shared frequency bins: {:.3} s", t0.elapsed().as_secs_f64());
-    let bone: Vec<usize> = s
-        .foliage
-        .iter()
-        .map(|&f| tree.triangles[f].bone.map_or(0, |b| b as usize))
-        .collect();
-    let dist: Vec<f32> = s
-        .foliage
-        .iter()
-        .enumerate()
-        .map(|(k, &f)| {
-            let b = tree.triangles[f].bone.map_or(0, |b| b as usize);
-            let joint = tree.bones[b].rest_world.w_axis.truncate();
-            s.trajectory(k)[0].distance(joint)
-        })
-        .collect();
-    let w = vec![1.0f32; descs.len()];
-    let t0 = Instant::now();
-    let c = cluster_descriptions(&ty, &descs, &w, 20, Some((&bone, &dist)), 2, 1, 20);
-    println!(
-        "k-means (k = 20, skeleton + 2 restarts, ≤ 20 rounds): {:.3} s, error {:.1}, start {}, {} rounds",
-        t0.elapsed().as_secs_f64(),
-        c.error,
-        c.start,
-        c.iterations
-    );
+    let rest = Rig::from_tree(&tree).rest_world();
+    for kind in SpectralKind::ALL {
+        let sp = SpectralParams {
+            kind,
+            clusters: k,
+            zone_size: zone,
+            bins: tree.skeleton_depth().max(1) as usize,
+            restarts: 2,
+            seed: 1,
+            max_iterations: 20,
+            shared_bone: true,
+        };
+        match kind {
+            SpectralKind::Naive => run::<Naive>(&tree, &s, &rest, &sp),
+            SpectralKind::DominatingAxis => run::<DominatingAxisType>(&tree, &s, &rest, &sp),
+            SpectralKind::AxisPhase => run::<AxisPhase>(&tree, &s, &rest, &sp),
+        }
+    }
 }

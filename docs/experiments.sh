@@ -38,3 +38,12 @@ for t in bush_1 oak_medium oak_medium_blendedleaves oak_large pine_medium pine_m
   $F sweep $TREES/$t.glb -o "$OUT/side_by_side_$t" --method auto --lods 600,200,60 --seeds 1 \
     --candidate "$OUT/${t}_gltfpack.glb"
 done
+
+# Issue 6: spectral clustering against static and per-bone at a far LOD (150 px), read at
+# matched billboard counts.
+for t in oak_medium bush_1 pine_medium; do
+  $F sweep $TREES/$t.glb -o "$OUT/spectral_$t" --screen-height 150 --seeds 1 \
+    --method per-bone,static,spectral-axis-phase,spectral-dominating-axis,spectral-naive \
+    --epsilon 1.5%..9% --steps 4
+done
+python3 docs/matched_counts.py "$OUT"/spectral_*/results.csv

@@ -6,21 +6,26 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use frond_billboard::animated::{AnimatedBillboardCloud, LoopClock, Rig};
+use frond_billboard::animated::{
+    AnimatedBillboardCloud, LoopClock, Rig, RigidMotion, SpectralMotion,
+};
 use frond_billboard::animated_build::{
     BuildTimings, build_animated_cloud, per_bone_clusters, sampled_worlds, static_clusters,
 };
 use frond_billboard::cloud::{CloudParams, parse_epsilon};
 use frond_billboard::motion_budget::{Dropped, ScreenBudget, apply_budget};
 use frond_billboard::plane_search::SearchParams;
+use frond_billboard::spectral_build::{SpectralParams, SpectralReport, build_spectral_cloud};
 use frond_export::lod_file::{FileOptions, write_glb};
 use frond_export::mapping::Mapping;
+use frond_export::spectral::{SpectralTerm, SpectralTextures, encode_spectral};
 use frond_export::textures::sanitize;
 use frond_export::vat::{RigidFrame, RigidPiece, VatFormat, VatOptions, encode_rigid_with};
 use frond_export::{GltfFile, LodInput};
 use frond_render::Renderer;
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{Part, Sampled, Tree};
+use frond_spectral::description::SpectralKind;
 use serde::Serialize;
 
 use crate::cloud_cmd::{rest_diagonal, sample_foliage};
@@ -28,51 +33,93 @@ use crate::output::write_files_and_report;
 use crate::screen_budget::{LodLevel, lod_levels, tree_height};
 
 /// How the foliage of a LOD is clustered.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
     /// The documented rule of [`auto_method`].
     Auto,
     PerBone,
     Static,
+    /// Spectral clustering (SCA) with one description type.
+    Spectral(SpectralKind),
 }
 
+/// The description type `--method spectral` uses.
+pub const DEFAULT_SPECTRAL: SpectralKind = SpectralKind::AxisPhase;
+
+/// Default animation zone size as a fraction of the bounding-box diagonal (or the LOD's ε when
+/// larger): oak_dense's 116k triangles become ~4,400 zones, which k-means clusters in ~1 s.
+pub const DEFAULT_ZONE_FRACTION: f32 = 0.02;
+
+/// Every name `--method` takes.
+pub const METHOD_NAMES: &[&str] = &[
+    "auto",
+    "per-bone",
+    "static",
+    "spectral",
+    "spectral-naive",
+    "spectral-dominating-axis",
+    "spectral-axis-phase",
+];
+
 impl Method {
-    /// Parses `auto`, `per-bone` or `static`.
+    /// Parses a name of [`METHOD_NAMES`] (`spectral` alone is [`DEFAULT_SPECTRAL`]).
     pub fn parse(s: &str) -> Option<Method> {
         match s {
             "auto" => Some(Method::Auto),
             "per-bone" => Some(Method::PerBone),
             "static" => Some(Method::Static),
-            _ => None,
+            "spectral" => Some(Method::Spectral(DEFAULT_SPECTRAL)),
+            _ => s
+                .strip_prefix("spectral-")
+                .and_then(SpectralKind::parse)
+                .map(Method::Spectral),
         }
     }
-    /// The name `--method` takes.
+    /// The name `--method` takes (spectral methods with their type).
     pub fn name(self) -> &'static str {
         match self {
             Method::Auto => "auto",
             Method::PerBone => "per-bone",
             Method::Static => "static",
+            Method::Spectral(SpectralKind::Naive) => "spectral-naive",
+            Method::Spectral(SpectralKind::DominatingAxis) => "spectral-dominating-axis",
+            Method::Spectral(SpectralKind::AxisPhase) => "spectral-axis-phase",
         }
     }
 }
 
-/// The fixed rule of `--method auto`: the nearest LOD gets `per-bone` (exact animation, most
-/// billboards: what a close view needs), every farther LOD `static` (one cloud, fewest
-/// billboards; its rigid-fit motion errors shrink with the pixel size). Returns the method and
-/// the reason written to the report.
-pub fn auto_method(lod_index: usize) -> (Method, &'static str) {
+/// The fixed rule of `--method auto`, from the issue-5 and issue-6 sweeps (docs/experiments.md
+/// §6–7): the nearest LOD gets `per-bone` (exact animation, most billboards: what a close view
+/// needs); every farther LOD `static` (one cloud, fewest billboards: at matched billboard counts
+/// its animated colour error beat every spectral type on the shared trees), except under
+/// `--animation spectral`, whose compact coefficient texture only spectral motion has: there
+/// farther LODs get `spectral-axis-phase` (of the three types, the lowest colour and motion
+/// errors). Returns the method and the reason written to the report.
+pub fn auto_method(lod_index: usize, spectral_animation: bool) -> (Method, &'static str) {
     if lod_index == 0 {
         (
             Method::PerBone,
             "auto: nearest LOD -> per-bone (exact bone motion, most billboards)",
         )
+    } else if spectral_animation {
+        (
+            Method::Spectral(SpectralKind::AxisPhase),
+            "auto: farther LOD with --animation spectral -> spectral-axis-phase (motion as a few \
+             cosines per billboard)",
+        )
     } else {
         (
             Method::Static,
-            "auto: farther LOD -> static (one cloud, fewest billboards, rigid-fit motion)",
+            "auto: farther LOD -> static (one cloud, fewest billboards, best colour at matched \
+             billboard counts)",
         )
     }
+}
+
+/// The spectral k rule: one animation cluster per 10 pixels of tree height (6 at 60 px, 20 at
+/// 200 px), at least 1.
+pub fn spectral_k(screen_height: f32) -> usize {
+    ((screen_height / 10.0).round() as usize).max(1)
 }
 
 /// How billboards are animated in the files.
@@ -82,6 +129,9 @@ pub enum AnimationMode {
     Skin,
     /// Vertex animation textures (Houdini VAT 3.0 rigid layout) plus a skinned wood.
     Vat(VatFormat),
+    /// Skinned billboards plus each one's own motion as a few cosines in a float texture
+    /// (spectral methods, spec §4.11 "runtime"); per-bone LODs need no texture.
+    Spectral,
 }
 
 /// What `frond lod` was asked for.
@@ -111,6 +161,12 @@ pub struct LodRequest {
     pub padding: u32,
     /// Add MSFT_lod to the combined file, with coverages for this image height.
     pub msft_lod: bool,
+    /// Spectral clusters per LOD (None: the k rule, see [`SpectralParams::clusters`]).
+    pub clusters: Option<usize>,
+    /// Animation zone size ("0.5" or "1%"; None: the LOD's ε).
+    pub zone_size: Option<String>,
+    /// Bind spectral billboards to their triangles' deepest shared bone (spec §4.12).
+    pub shared_bone: bool,
     pub resolution: f32,
     pub external_textures: bool,
 }
@@ -139,6 +195,12 @@ pub struct LodEntry {
     pub clips: Vec<String>,
     pub dropped: DroppedReport,
     pub vat: Option<Vec<String>>,
+    /// `--animation spectral`: the coefficient texture and its sidecar.
+    pub spectral_files: Option<Vec<String>>,
+    /// Bytes of the coefficient texture (`--animation spectral`), or of the VAT textures.
+    pub animation_bytes: usize,
+    /// What spectral clustering did (spectral LODs only).
+    pub spectral: Option<SpectralReport>,
     pub timings_s: LodTimings,
 }
 
@@ -244,6 +306,7 @@ struct BuiltLod {
     parts: Vec<WoodMesh>,
     clips: Vec<usize>,
     vat: Option<frond_export::vat::VatTextures>,
+    spectral: Option<SpectralTextures>,
     entry: LodEntry,
 }
 
@@ -336,6 +399,7 @@ pub fn run_lod(
                     v.pivot_uv.iter().map(|p| p[1]).collect(),
                 ]
             }),
+            spectral_uvs: b.spectral.as_ref().map(|t| t.row_uv.clone()),
         })
         .collect();
     for (k, (b, input)) in built.iter().zip(&inputs).enumerate() {
@@ -379,6 +443,15 @@ pub fn run_lod(
                 serde_json::to_vec_pretty(&v.sidecar).context("serialising a VAT sidecar")?,
             ));
             entry.vat = Some(vec![pos, rot, json]);
+        }
+        if let Some(t) = &b.spectral {
+            let json = format!("{}_spectral.json", prefix(k));
+            files.push((out_dir.join(&t.sidecar.texture), t.image.bytes.clone()));
+            files.push((
+                out_dir.join(&json),
+                serde_json::to_vec_pretty(&t.sidecar).context("serialising a spectral sidecar")?,
+            ));
+            entry.spectral_files = Some(vec![t.sidecar.texture.clone(), json]);
         }
         entry.timings_s.export = t0.elapsed().as_secs_f64();
         entries.push(entry);
@@ -424,6 +497,7 @@ pub fn run_lod(
         animation: match req.animation {
             AnimationMode::Skin => "skin".into(),
             AnimationMode::Vat(f) => format!("vat-{}", f.extension()),
+            AnimationMode::Spectral => "spectral".into(),
         },
         tree_height: height,
         lods: entries,
@@ -445,11 +519,12 @@ pub fn run_lod(
 
 /// The reference shaders, copied next to VAT output.
 fn shader_files(req: &LodRequest, out_dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    if !matches!(req.animation, AnimationMode::Vat(_)) {
-        return Vec::new();
-    }
-    frond_export::shaders::SHADERS
-        .iter()
+    let set = match req.animation {
+        AnimationMode::Skin => return Vec::new(),
+        AnimationMode::Vat(_) => frond_export::shaders::SHADERS,
+        AnimationMode::Spectral => frond_export::shaders::SPECTRAL_SHADERS,
+    };
+    set.iter()
         .map(|(file, text)| (out_dir.join("shaders").join(file), text.as_bytes().to_vec()))
         .collect()
 }
@@ -490,12 +565,16 @@ fn build_lod0(tree: &Tree, name: &str) -> BuiltLod {
             clips: rig.clips.iter().map(|c| c.name.clone()).collect(),
             dropped: DroppedReport::default(),
             vat: None,
+            spectral_files: None,
+            animation_bytes: 0,
+            spectral: None,
             timings_s: LodTimings::default(),
         },
         content: LodContent::Input(rig),
         parts: vec![wood, foliage],
         clips,
         vat: None,
+        spectral: None,
     }
 }
 
@@ -512,12 +591,8 @@ fn build_lod(
     name: &str,
 ) -> Result<BuiltLod> {
     let (method, reason) = match req.method {
-        Method::Auto => auto_method(k),
+        Method::Auto => auto_method(k, req.animation == AnimationMode::Spectral),
         m => (m, "given with --method"),
-    };
-    let clusters = match method {
-        Method::PerBone | Method::Auto => per_bone_clusters(tree, sampled),
-        Method::Static => static_clusters(sampled),
     };
     let mut params = CloudParams {
         search: SearchParams {
@@ -537,17 +612,58 @@ fn build_lod(
     params.bake.supersample = req.supersample;
     params.bake.padding = req.padding;
     let diag = rest_diagonal(tree);
-    let (mut cloud, build_t) = build_animated_cloud(
-        renderer,
-        tree,
-        sampled,
-        Rig::from_tree(tree),
-        clock.clone(),
-        &clusters,
-        &params,
-        diag,
-        method.name(),
-    )?;
+    let mut spectral = None;
+    let (mut cloud, build_t) = match method {
+        Method::Spectral(kind) => {
+            let zone_size = match &req.zone_size {
+                Some(z) => parse_epsilon(z, diag).with_context(|| {
+                    format!("--zone-size '{z}': expected a length or a percentage like 1%")
+                })?,
+                None => level.epsilon.max(DEFAULT_ZONE_FRACTION * diag),
+            };
+            let sp = SpectralParams {
+                kind,
+                clusters: req
+                    .clusters
+                    .unwrap_or_else(|| spectral_k(level.screen_height)),
+                zone_size,
+                bins: tree.skeleton_depth().max(1) as usize,
+                restarts: 2,
+                seed: req.seed.wrapping_add(k as u64),
+                max_iterations: 20,
+                shared_bone: req.shared_bone,
+            };
+            let (cloud, t, report) = build_spectral_cloud(
+                renderer,
+                tree,
+                sampled,
+                Rig::from_tree(tree),
+                clock.clone(),
+                &params,
+                &sp,
+                diag,
+            )?;
+            spectral = Some(report);
+            (cloud, t)
+        }
+        _ => {
+            let clusters = match method {
+                Method::Static => static_clusters(sampled),
+                _ => per_bone_clusters(tree, sampled),
+            };
+            build_animated_cloud(
+                renderer,
+                tree,
+                sampled,
+                Rig::from_tree(tree),
+                clock.clone(),
+                &clusters,
+                &params,
+                diag,
+                method.name(),
+            )?
+        }
+    };
     let t0 = Instant::now();
     let (mut wood_lod, _achieved) = wood.simplify(level.wood_error);
     let t1 = Instant::now();
@@ -573,12 +689,18 @@ fn build_lod(
         })
         .collect();
     let vat = match req.animation {
-        AnimationMode::Skin => None,
         AnimationMode::Vat(format) => Some(vat_textures(
             &cloud,
             format,
             &format!("{name}_LOD{}_vat", k + 1),
         )?),
+        _ => None,
+    };
+    let spectral_tex = match req.animation {
+        AnimationMode::Spectral => {
+            spectral_textures(&cloud, tree, &format!("{name}_LOD{}_spectral.exr", k + 1))?
+        }
+        _ => None,
     };
     let atlas = &cloud.atlas;
     let entry = LodEntry {
@@ -608,6 +730,13 @@ fn build_lod(
             clips: dropped_clips,
         },
         vat: None,
+        spectral_files: None,
+        animation_bytes: vat
+            .as_ref()
+            .map(|v| v.position.bytes.len() + v.rotation.bytes.len())
+            .or(spectral_tex.as_ref().map(|t| t.image.bytes.len()))
+            .unwrap_or(0),
+        spectral,
         timings_s: LodTimings {
             build: build_t,
             budget: (t2 - t1).as_secs_f64(),
@@ -621,8 +750,70 @@ fn build_lod(
         parts: vec![wood_lod],
         clips,
         vat,
+        spectral: spectral_tex,
         entry,
     })
+}
+
+/// The spectral coefficient texture of a cloud (None when no billboard has own motion); an
+/// error when a billboard's motion is sampled rather than spectral (the `static` method).
+pub fn spectral_textures(
+    cloud: &AnimatedBillboardCloud,
+    tree: &Tree,
+    file: &str,
+) -> Result<Option<SpectralTextures>> {
+    let mut rows = Vec::with_capacity(cloud.billboards.len());
+    for b in &cloud.billboards {
+        rows.push(match &b.motion {
+            None => Vec::new(),
+            Some(RigidMotion::Spectral(m)) => spectral_terms(m),
+            Some(RigidMotion::Sampled(_)) => anyhow::bail!(
+                "--animation spectral: method '{}' gives billboards sampled rigid motion, which \
+                 has no spectral form; use a spectral method (or per-bone), or --animation \
+                 skin/vat",
+                cloud.method
+            ),
+        });
+    }
+    if rows.iter().all(Vec::is_empty) {
+        return Ok(None);
+    }
+    let clip = cloud.clock.clip.map(|c| tree.clips[c].name.clone());
+    Ok(Some(encode_spectral(
+        &rows,
+        cloud.clock.period,
+        cloud.clock.start,
+        clip,
+        file,
+    )?))
+}
+
+/// A spectral motion's terms merged by frequency over the three axes (phases in loop
+/// fractions: `cos(2π f s/N + φ)` at sample `s` is `cos(2π f u + φ)` at `u = s/N`).
+pub fn spectral_terms(m: &SpectralMotion) -> Vec<SpectralTerm> {
+    let mut by_freq: std::collections::BTreeMap<usize, SpectralTerm> = Default::default();
+    for (c, axis) in m.axes.iter().enumerate() {
+        for ((&f, &a), &p) in axis
+            .frequencies
+            .iter()
+            .zip(&axis.amplitudes)
+            .zip(&axis.phases)
+        {
+            let t = by_freq.entry(f).or_insert(SpectralTerm {
+                frequency: f as f32,
+                amplitude: [0.0; 3],
+                phase: [0.0; 3],
+            });
+            // Two terms of one frequency on one axis add as phasors.
+            let (x, y) = (
+                t.amplitude[c] * t.phase[c].cos() + a * p.cos(),
+                t.amplitude[c] * t.phase[c].sin() + a * p.sin(),
+            );
+            t.amplitude[c] = x.hypot(y);
+            t.phase[c] = y.atan2(x);
+        }
+    }
+    by_freq.into_values().collect()
 }
 
 /// Vertex animation textures of every billboard over the clock's samples; textures are named

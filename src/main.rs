@@ -9,7 +9,7 @@ use clap::{Parser, Subcommand};
 use frond::cloud_cmd::{CloudRequest, rest_diagonal, run_cloud};
 use frond::eval_cmd::{EvalRequest, evaluate, image_for_screen_height, same_bytes};
 use frond::inspect::{SamplingSummary, inspect};
-use frond::lod_cmd::{AnimationMode, LodRequest, Method, run_lod};
+use frond::lod_cmd::{AnimationMode, LodRequest, METHOD_NAMES, Method, run_lod};
 use frond::output::write_atomic;
 use frond::render_cmd::{RenderRequest, frame_png, parse_size, render_tree};
 use frond::screen_budget::{screen_height_at, tree_height};
@@ -74,6 +74,17 @@ struct BuildArgs {
     /// Supersamples per texel side when baking (1-16; 4 = 4×4, 2 is ~2.5× faster).
     #[arg(long, default_value_t = 4)]
     supersample: u32,
+    /// Spectral methods: animation clusters per LOD (default: the smallest power of two whose
+    /// RMS motion residual is under the LOD's pixel, at most 256).
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..))]
+    clusters: Option<u64>,
+    /// Spectral methods: animation zone size, a length or % of the diagonal (default: 2% or
+    /// the LOD's ε, the larger; 0 describes every triangle).
+    #[arg(long, value_name = "SIZE")]
+    zone_size: Option<String>,
+    /// Spectral methods: no shared-bone binding; billboards translate in world space only.
+    #[arg(long)]
+    no_shared_bone: bool,
 }
 
 impl BuildArgs {
@@ -90,6 +101,15 @@ impl BuildArgs {
         }
         if self.increased_density {
             a.push("--increased-density".to_string());
+        }
+        if let Some(k) = self.clusters {
+            a.extend(["--clusters".to_string(), k.to_string()]);
+        }
+        if let Some(z) = &self.zone_size {
+            a.extend(["--zone-size".to_string(), z.clone()]);
+        }
+        if self.no_shared_bone {
+            a.push("--no-shared-bone".to_string());
         }
         a
     }
@@ -218,9 +238,10 @@ enum Command {
         /// Output folder.
         #[arg(short, long)]
         output: PathBuf,
-        /// Clustering: auto (per-bone for the nearest LOD, static for the others), per-bone,
-        /// static.
-        #[arg(long, default_value = "auto", value_parser = ["auto", "per-bone", "static"])]
+        /// Clustering: auto (see the README's rule), per-bone, static, or spectral (SCA with
+        /// the dominating-axis type; spectral-naive, spectral-dominating-axis and
+        /// spectral-axis-phase name the type).
+        #[arg(long, default_value = "auto", value_parser = clap::builder::PossibleValuesParser::new(METHOD_NAMES))]
         method: String,
         /// Screen heights in pixels the whole tree covers, one LOD each, nearest first.
         #[arg(long, value_delimiter = ',', default_value = "600,200,60")]
@@ -240,8 +261,10 @@ enum Command {
         /// Override the derived ε: a length, or a percentage of the bounding-box diagonal.
         #[arg(long)]
         epsilon: Option<String>,
-        /// skin (glTF skin and channels), vat (vertex animation textures, EXR half) or vat-png16.
-        #[arg(long, default_value = "skin", value_parser = ["skin", "vat", "vat-png16"])]
+        /// skin (glTF skin and channels), vat (vertex animation textures, EXR half), vat-png16,
+        /// or spectral (skinned billboards + a small float texture of each billboard's cosine
+        /// terms, with reference shaders; spectral and per-bone methods).
+        #[arg(long, default_value = "skin", value_parser = ["skin", "vat", "vat-png16", "spectral"])]
         animation: String,
         #[command(flatten)]
         run: RunArgs,
@@ -305,7 +328,7 @@ enum Command {
         output: PathBuf,
         /// Methods to compare.
         #[arg(long, value_delimiter = ',', default_value = "per-bone,static",
-              value_parser = ["auto", "per-bone", "static"])]
+              value_parser = clap::builder::PossibleValuesParser::new(METHOD_NAMES))]
         method: Vec<String>,
         /// Screen heights (pixels), one LOD each; ε follows the screen-space rule.
         #[arg(long, value_delimiter = ',', default_value = "600,200,60")]
@@ -556,6 +579,7 @@ fn run(cli: Cli) -> Result<()> {
                 animation: match animation.as_str() {
                     "vat" => AnimationMode::Vat(VatFormat::ExrHalf),
                     "vat-png16" => AnimationMode::Vat(VatFormat::Png16),
+                    "spectral" => AnimationMode::Spectral,
                     _ => AnimationMode::Skin,
                 },
                 seed,
@@ -570,6 +594,9 @@ fn run(cli: Cli) -> Result<()> {
                 msft_lod,
                 resolution,
                 external_textures,
+                clusters: build.clusters.map(|k| k as usize),
+                zone_size: build.zone_size.clone(),
+                shared_bone: !build.no_shared_bone,
             };
             let bar = Spinner::new();
             let result = run_lod(&renderer, &tree, &req, &output, &|m: &str| bar.say(m));

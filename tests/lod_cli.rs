@@ -7,17 +7,19 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::*;
-use frond_billboard::animated::{AnimatedBillboardCloud, LoopClock, Rig};
+use frond_billboard::animated::{AnimatedBillboardCloud, LoopClock, Rig, RigidMotion};
 use frond_billboard::animated_build::{
     build_animated_cloud, per_bone_clusters, sampled_worlds, static_clusters,
 };
 use frond_billboard::cloud::CloudParams;
 use frond_billboard::motion_budget::{ScreenBudget, apply_budget};
+use frond_billboard::spectral_build::{SpectralParams, build_spectral_cloud};
 use frond_export::LodInput;
 use frond_export::lod_file::{FileOptions, write_glb};
 use frond_export::vat::{VatFormat, decode_rigid};
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, SampleOptions, Sampled, Tree, import, import_bytes, sample};
+use frond_spectral::description::SpectralKind;
 
 fn sapling() -> PathBuf {
     root().join("samples/sapling.glb")
@@ -143,8 +145,9 @@ fn msft_lod_external_textures_and_vat_are_valid() {
     );
 }
 
-#[test]
-fn same_seed_same_bytes_whatever_the_threads() {
+/// Runs `frond lod` on the sapling with `extra` at 1 and 2 threads; every file but the report
+/// must be byte-identical.
+fn same_bytes_at_1_and_2_threads(extra: &[&str]) {
     let dir = tempfile::tempdir().expect("tmp");
     let run = |threads: &str, name: &str| {
         let out = dir.path().join(name);
@@ -152,6 +155,7 @@ fn same_seed_same_bytes_whatever_the_threads() {
             .args(["lod", sapling().to_str().expect("utf-8"), "-o"])
             .arg(&out)
             .args(["--lods", "150,40", "--samples", "12", "--planes", "40"])
+            .args(extra)
             .env("RAYON_NUM_THREADS", threads)
             .env("XDG_RUNTIME_DIR", std::env::temp_dir())
             .status()
@@ -163,7 +167,7 @@ fn same_seed_same_bytes_whatever_the_threads() {
     let b = run("2", "b");
     for f in std::fs::read_dir(&a).expect("dir") {
         let p = f.expect("entry").path();
-        if p.file_name().is_some_and(|n| n == "report.json") {
+        if p.file_name().is_some_and(|n| n == "report.json") || p.is_dir() {
             continue;
         }
         let q = b.join(p.file_name().expect("name"));
@@ -174,6 +178,148 @@ fn same_seed_same_bytes_whatever_the_threads() {
             p.display()
         );
     }
+}
+
+#[test]
+fn same_seed_same_bytes_whatever_the_threads() {
+    same_bytes_at_1_and_2_threads(&[]);
+}
+
+#[test]
+fn spectral_same_bytes_whatever_the_threads() {
+    same_bytes_at_1_and_2_threads(&["--method", "spectral", "--animation", "spectral"]);
+}
+
+#[test]
+fn spectral_lods_validate_and_carry_their_coefficients() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("o");
+    let report = frond_lod(
+        &sapling(),
+        &out,
+        &[
+            "--lods",
+            "150,40",
+            "--method",
+            "spectral",
+            "--animation",
+            "spectral",
+        ],
+    );
+    assert_eq!(report["animation"], "spectral");
+    let lods = report["lods"].as_array().expect("lods");
+    for (l, k) in lods[1..].iter().zip([15u64, 4]) {
+        assert_eq!(l["method"], "spectral-axis-phase");
+        let sp = &l["spectral"];
+        assert_eq!(sp["clusters"].as_u64(), Some(k), "the k rule: height / 10");
+        assert!(
+            sp["residual"].as_f64().expect("residual") < sp["motion_rms"].as_f64().expect("rms")
+        );
+        let files = l["spectral_files"].as_array().expect("spectral files");
+        let sidecar: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(out.join(files[1].as_str().expect("json"))).expect("sidecar"),
+        )
+        .expect("sidecar JSON");
+        assert_eq!(sidecar["billboards"], l["billboards"]);
+        assert_eq!(sidecar["clip"], "Wind");
+        let tex = std::fs::read(out.join(files[0].as_str().expect("exr"))).expect("texture");
+        assert_eq!(sidecar["bytes"].as_u64(), Some(tex.len() as u64));
+        assert_eq!(l["animation_bytes"].as_u64(), Some(tex.len() as u64));
+        let img = image::load_from_memory_with_format(&tex, image::ImageFormat::OpenExr)
+            .expect("EXR decodes");
+        assert_eq!(
+            u64::from(img.height()),
+            l["billboards"].as_u64().expect("n")
+        );
+        // Billboards need no motion joints: only the rig's own nodes are joints.
+        assert!(l["bones"].as_u64().expect("bones") <= 193);
+    }
+    assert!(out.join("shaders/frond_spectral.wgsl").exists());
+    for f in glbs(&out) {
+        assert_valid(&f);
+    }
+    // A method whose motion has no spectral form is refused, with no output.
+    let bad = dir.path().join("bad");
+    let o = frond(&[
+        "lod",
+        sapling().to_str().expect("utf-8"),
+        "-o",
+        bad.to_str().expect("utf-8"),
+        "--method",
+        "static",
+        "--animation",
+        "spectral",
+        "--lods",
+        "60",
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("sampled rigid motion"), "{err}");
+    assert!(!bad.exists(), "no partial output");
+}
+
+#[test]
+fn spectral_skin_round_trip() {
+    let tree = import(&sapling(), &ImportOptions::default()).expect("import");
+    let sampled = sample(
+        &tree,
+        &SampleOptions {
+            clip: None,
+            samples: 16,
+        },
+    )
+    .expect("sample");
+    let pixel = tree.bounds.height() / 150.0;
+    let mut params = CloudParams::default();
+    params.search.epsilon = pixel;
+    params.search.candidates = 60;
+    params.bake.texels_per_unit = 1.0 / pixel;
+    let renderer = Renderer::new().expect("renderer");
+    let sp = SpectralParams {
+        kind: SpectralKind::AxisPhase,
+        clusters: 5,
+        zone_size: 0.02 * tree.bounds.size(),
+        bins: 4,
+        restarts: 1,
+        seed: 1,
+        max_iterations: 10,
+        shared_bone: true,
+    };
+    let clock = LoopClock::of(&tree, &sampled);
+    let (mut cloud, _, _) = build_spectral_cloud(
+        &renderer,
+        &tree,
+        &sampled,
+        Rig::from_tree(&tree),
+        clock,
+        &params,
+        &sp,
+        tree.bounds.size(),
+    )
+    .expect("spectral cloud");
+    apply_budget(
+        &mut cloud,
+        &tree,
+        &sampled,
+        &ScreenBudget {
+            pixel,
+            epsilon: pixel,
+        },
+        &[],
+    );
+    assert!(
+        cloud
+            .billboards
+            .iter()
+            .any(|b| matches!(b.motion, Some(RigidMotion::Spectral(_)))),
+        "some billboards keep spectral motion"
+    );
+    round_trip(&Built {
+        tree,
+        sampled,
+        cloud,
+        epsilon: pixel,
+    });
 }
 
 #[test]
@@ -281,6 +427,7 @@ fn round_trip(b: &Built) {
             cloud: Some(&b.cloud),
             clips: b.cloud.playable_clips.clone(),
             vat_uvs: None,
+            spectral_uvs: None,
         }],
         &FileOptions::default(),
     )

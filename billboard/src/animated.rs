@@ -10,6 +10,7 @@
 
 use frond_scene::animation::{Clip, local_pose, world_matrices};
 use frond_scene::{Node, Tree};
+use frond_spectral::description::Components;
 use glam::{Affine3A, Mat4, Vec2, Vec3};
 
 use crate::bake::Atlas;
@@ -142,6 +143,73 @@ impl LoopClock {
 pub enum RigidMotion {
     /// One transform per [`LoopClock`] sample.
     Sampled(Vec<Affine3A>),
+    /// A fixed placement followed by a translation given as a few cosines per axis (spectral
+    /// clustering, spec §4.11: the inverse DFT of the billboard's average description).
+    Spectral(SpectralMotion),
+}
+
+/// `M(t) = translate(Σ_j a_j cos(2π f_j t/N + φ_j) per axis)`, t in loop samples of `N`: the
+/// quad never turns, as spec §4.11 [ENG] asks (the apply of a centre trajectory is a rigid
+/// translation of all four corners).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpectralMotion {
+    /// Cosine series of the x, y and z translation.
+    pub axes: [Components; 3],
+    /// Loop samples `N` the frequencies and phases refer to (also the motion's sample count).
+    pub samples: usize,
+}
+
+impl SpectralMotion {
+    /// The translation at fractional loop sample `t` of [`Self::samples`].
+    pub fn offset(&self, t: f32) -> Vec3 {
+        Vec3::new(
+            self.axes[0].value_at(t, self.samples),
+            self.axes[1].value_at(t, self.samples),
+            self.axes[2].value_at(t, self.samples),
+        )
+    }
+
+    /// Number of cosine terms over all axes.
+    pub fn terms(&self) -> usize {
+        self.axes.iter().map(|a| a.amplitudes.len()).sum()
+    }
+
+    /// Drops the weakest terms while their amplitudes sum to less than `tolerance` (world
+    /// units): `|Σ a cos(…)| ≤ Σ a`, so no point moves more than that from where the full
+    /// series puts it. Returns the number dropped.
+    pub fn prune(&mut self, tolerance: f32) -> usize {
+        let mut terms: Vec<(f32, usize, usize)> = Vec::new();
+        for (c, axis) in self.axes.iter().enumerate() {
+            for (j, &a) in axis.amplitudes.iter().enumerate() {
+                terms.push((a.abs(), c, j));
+            }
+        }
+        terms.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+        let mut budget = 0.0f32;
+        let mut drop = vec![Vec::new(); 3];
+        for (a, c, j) in terms {
+            if budget + a >= tolerance {
+                break;
+            }
+            budget += a;
+            drop[c].push(j);
+        }
+        let mut dropped = 0;
+        for (axis, d) in self.axes.iter_mut().zip(drop) {
+            let mut keep = Components::none();
+            for j in 0..axis.amplitudes.len() {
+                if d.contains(&j) {
+                    dropped += 1;
+                    continue;
+                }
+                keep.frequencies.push(axis.frequencies[j]);
+                keep.amplitudes.push(axis.amplitudes[j]);
+                keep.phases.push(axis.phases[j]);
+            }
+            *axis = keep;
+        }
+        dropped
+    }
 }
 
 impl RigidMotion {
@@ -161,6 +229,14 @@ impl RigidMotion {
                 let u = x - x.floor();
                 interpolate(frames[k], frames[(k + 1) % frames.len()], u)
             }
+            RigidMotion::Spectral(m) => {
+                let t = if n == 0 {
+                    0.0
+                } else {
+                    (s % n) as f32 * m.samples as f32 / n as f32
+                };
+                Affine3A::from_translation(m.offset(t))
+            }
         }
     }
 
@@ -168,6 +244,7 @@ impl RigidMotion {
     pub fn len(&self) -> usize {
         match self {
             RigidMotion::Sampled(f) => f.len(),
+            RigidMotion::Spectral(m) => m.samples,
         }
     }
 

@@ -27,6 +27,9 @@ pub enum Driver {
     /// Each billboard gets the best rigid fit of its triangles' sampled motion; the cloud is
     /// built in the average pose.
     RigidFit,
+    /// Built in the average pose with no motion yet: the caller gives each billboard its
+    /// own (spectral clustering, [`crate::spectral_build`]).
+    Assigned,
 }
 
 /// A set of foliage triangles that share one billboard cloud.
@@ -82,7 +85,7 @@ pub fn build_animated_cloud(
     let mut reference: Vec<[Vec3; 3]> = vec![[Vec3::ZERO; 3]; sampled.foliage.len()];
     for cluster in clusters {
         match cluster.driver {
-            Driver::RigidFit => {
+            Driver::RigidFit | Driver::Assigned => {
                 for &k in &cluster.members {
                     let tri = &tree.triangles[sampled.foliage[k]];
                     reference[k] = tri.v.map(|v| sampled.average[v as usize]);
@@ -210,6 +213,7 @@ pub fn build_animated_cloud(
         .map(|(((quad, own), driver), uv)| {
             let (follows, motion) = match *driver {
                 Driver::Node(node) => (Some(node), None),
+                Driver::Assigned => (None, None),
                 Driver::RigidFit => {
                     let from: Vec<Vec3> = own.iter().flat_map(|&k| soup.positions[k]).collect();
                     let frames = (0..n)

@@ -14,6 +14,7 @@ pub mod quad;
 pub mod rectangle;
 pub mod rigid_fit;
 pub mod soup;
+pub mod spectral_build;
 
 pub use atlas::{Packing, pack};
 pub use bake::{Atlas, BakeError, BakeParams, BakedCloud, Cell, bake_cloud};

@@ -9,7 +9,7 @@ use glam::{Affine3A, Mat4, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::animated::AnimatedBillboardCloud;
+use crate::animated::{AnimatedBillboardCloud, RigidMotion};
 use crate::animated_build::sampled_worlds;
 use crate::rigid_fit::rigid_fit;
 
@@ -43,6 +43,9 @@ pub struct Dropped {
     pub billboards_under_half_pixel: usize,
     /// Rig nodes (bones or their parents) removed because nothing they move is left.
     pub nodes_pruned: usize,
+    /// Cosine terms of spectral motions whose amplitudes sum to under a quarter pixel per
+    /// billboard (so, with the half-pixel rules above, no corner strays a pixel).
+    pub frequencies_under_quarter_pixel: usize,
 }
 
 /// Covered fraction of a billboard's texture (texels passing the alpha test).
@@ -117,6 +120,17 @@ pub fn apply_budget(
     let mut it = keep.iter();
     cloud.billboards.retain(|_| *it.next().unwrap_or(&true));
     dropped.billboards_under_half_pixel = before - cloud.billboards.len();
+
+    // 1b. Spectral terms too small to see.
+    for b in &mut cloud.billboards {
+        if let Some(RigidMotion::Spectral(m)) = &mut b.motion {
+            dropped.frequencies_under_quarter_pixel += m.prune(0.5 * half);
+            if m.terms() == 0 {
+                b.motion = None;
+                dropped.motion_under_half_pixel += 1;
+            }
+        }
+    }
 
     // 2. Own motion under half a pixel.
     for b in &mut cloud.billboards {

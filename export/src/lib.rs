@@ -6,6 +6,7 @@ pub mod lod_file;
 pub mod lod_scene;
 pub mod mapping;
 pub mod shaders;
+pub mod spectral;
 pub mod textures;
 pub mod vat;
 

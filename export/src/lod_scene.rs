@@ -39,6 +39,10 @@ pub struct LodInput<'a> {
     /// whose `TEXCOORD_{1+k}` holds `vat_uvs[k][billboard]` on all four corners (vertex
     /// animation textures play them: piece coordinate, pivot).
     pub vat_uvs: Option<Vec<Vec<[f32; 2]>>>,
+    /// Spectral animation (`--animation spectral`): billboards stay skinned, each to the node it
+    /// follows (own motion comes from the spectral texture, not from joints), with
+    /// `spectral_uvs[billboard]` in `TEXCOORD_1` on all four corners.
+    pub spectral_uvs: Option<Vec<[f32; 2]>>,
 }
 
 /// Channels of one clip written for one LOD (merged by clip name across LODs).
@@ -157,6 +161,8 @@ pub fn add_lod(
         for (bi, b) in cloud.billboards.iter().enumerate() {
             let joint = if lod.vat_uvs.is_some() {
                 0
+            } else if lod.spectral_uvs.is_some() {
+                joint_for_node(doc, &mut joints, &mut ibms, b.follows)?
             } else {
                 match &b.motion {
                     None => joint_for_node(doc, &mut joints, &mut ibms, b.follows)?,
@@ -254,6 +260,9 @@ pub fn add_lod(
                 .collect();
             vat_prim = Some(p);
         } else if !p.positions.is_empty() {
+            if let Some(rows) = &lod.spectral_uvs {
+                p.extra_uvs = vec![rows.iter().flat_map(|uv| [*uv; 4]).collect()];
+            }
             p.weights = Some(vec![[1.0, 0.0, 0.0, 0.0]; js.len()]);
             p.joints = Some(js);
             prims.push(p);

@@ -616,7 +616,7 @@ fn exr_attribute(out: &mut Vec<u8>, name: &str, kind: &str, value: &[u8]) {
 
 /// Writes RGBA texels as an uncompressed single-part scanline OpenEXR of half floats
 /// (channels A, B, G, R as the format requires them sorted; top row first).
-fn write_exr_half(width: u32, height: u32, texels: &[[f32; 4]]) -> Vec<u8> {
+pub(crate) fn write_exr_half(width: u32, height: u32, texels: &[[f32; 4]]) -> Vec<u8> {
     let mut out = Vec::new();
     out.extend_from_slice(&20000630u32.to_le_bytes());
     out.extend_from_slice(&2u32.to_le_bytes()); // version 2, single-part scanline

@@ -54,6 +54,12 @@ impl Bins {
 pub trait DescriptionType: Sync {
     /// One trajectory's description.
     type Desc: Clone + Send + Sync;
+    /// The type with frequency bins `bins`.
+    fn with_bins(bins: Bins) -> Self
+    where
+        Self: Sized;
+    /// The amplitude spectra of a description (one per axis it keeps), for shared bins.
+    fn amplitude_spectra<'a>(&self, d: &'a Self::Desc) -> Vec<&'a [f32]>;
     /// The description of a trajectory (one loop, uniform samples; the last sample does not
     /// repeat the first).
     fn describe(&self, trajectory: &[Vec3]) -> Self::Desc;
@@ -62,8 +68,15 @@ pub trait DescriptionType: Sync {
     /// Weighted average (weights ≥ 0, not all 0); the centroid of k-means and a billboard's
     /// motion. An empty input gives the description of no motion.
     fn average(&self, ds: &[&Self::Desc], weights: &[f32]) -> Self::Desc;
+    /// The motion the description stands for as one cosine series per world axis (what the
+    /// runtime shader evaluates, spec §4.11 "runtime").
+    fn components(&self, d: &Self::Desc) -> [Components; 3];
+    /// The loop samples the description was made from (its components' time unit).
+    fn samples(&self, d: &Self::Desc) -> usize;
     /// The zero-mean motion the description stands for, at `n` uniform samples of the loop.
-    fn apply(&self, d: &Self::Desc, n: usize) -> Vec<Vec3>;
+    fn apply(&self, d: &Self::Desc, n: usize) -> Vec<Vec3> {
+        sample_axes(&self.components(d), self.samples(d), n)
+    }
 }
 
 /// The DFT of each coordinate of a trajectory.
@@ -129,6 +142,13 @@ impl Components {
         }
         d
     }
+}
+
+/// An angle wrapped into (−π, π].
+fn wrap(a: f32) -> f32 {
+    let t = std::f32::consts::TAU;
+    let w = a - t * (a / t).round();
+    if w <= -std::f32::consts::PI { w + t } else { w }
 }
 
 /// The motion of three per-axis component sets at `n` uniform samples of a loop the
@@ -198,17 +218,27 @@ pub fn binned_average(
 /// frequency, both phases' distance to their amplitude-weighted mean, weighted by amplitude,
 /// over the total amplitude.
 fn weighted_phase_difference(a: (&[f32], &[f32]), b: (&[f32], &[f32])) -> f32 {
-    let (mut sum, mut total) = (0.0f32, 0.0f32);
-    for i in 0..a.0.len().min(b.0.len()) {
+    let len = a.0.len().min(b.0.len());
+    let total: f32 = (0..len).map(|i| a.0[i] + b.0[i]).sum();
+    if total <= 0.0 {
+        return 0.0;
+    }
+    // Frequencies with under 0.1 % of the energy change the result by under 0.1 % · π: skip
+    // their trigonometry (most of a leaf's spectrum is such noise).
+    let floor = 1e-3 * total;
+    let mut sum = 0.0f32;
+    for i in 0..len {
         let (wa, wb) = (a.0[i], b.0[i]);
-        if wa + wb <= 0.0 {
+        if wa + wb <= floor {
             continue;
         }
-        let mean = angle_average(&[a.1[i], b.1[i]], &[wa, wb]).unwrap_or(a.1[i]);
-        sum += wa * angle_difference(a.1[i], mean) + wb * angle_difference(b.1[i], mean);
-        total += wa + wb;
+        // The weighted circular mean of two angles in closed form: it lies θ from a towards
+        // b, θ = atan2(w_b sin d, w_a + w_b cos d) with d the wrapped b − a.
+        let d = wrap(b.1[i] - a.1[i]);
+        let theta = (wb * d.sin()).atan2(wa + wb * d.cos());
+        sum += wa * theta.abs() + wb * wrap(d - theta).abs();
     }
-    if total > 0.0 { sum / total } else { 0.0 }
+    sum / total
 }
 
 /// The naive spectral type (§4.7): the three coordinate spectra, amplitude and phase.
@@ -236,6 +266,14 @@ pub struct NaiveDesc {
 
 impl DescriptionType for Naive {
     type Desc = NaiveDesc;
+
+    fn with_bins(bins: Bins) -> Self {
+        Naive { bins }
+    }
+
+    fn amplitude_spectra<'a>(&self, d: &'a NaiveDesc) -> Vec<&'a [f32]> {
+        d.amplitudes.iter().map(|a| a.as_slice()).collect()
+    }
 
     fn describe(&self, trajectory: &[Vec3]) -> NaiveDesc {
         let s = axis_spectra(trajectory);
@@ -285,11 +323,14 @@ impl DescriptionType for Naive {
         }
     }
 
-    fn apply(&self, d: &NaiveDesc, n: usize) -> Vec<Vec3> {
-        let comps = d.components.clone().unwrap_or_else(|| {
+    fn components(&self, d: &NaiveDesc) -> [Components; 3] {
+        d.components.clone().unwrap_or_else(|| {
             [0, 1, 2].map(|c| Components::from_dense(&d.amplitudes[c], &d.phases[c]))
-        });
-        sample_axes(&comps, d.samples, n)
+        })
+    }
+
+    fn samples(&self, d: &NaiveDesc) -> usize {
+        d.samples
     }
 }
 
@@ -341,6 +382,14 @@ fn principal_axis(m: Mat3) -> Vec3 {
 
 impl DescriptionType for DominatingAxisType {
     type Desc = AxisDesc;
+
+    fn with_bins(bins: Bins) -> Self {
+        DominatingAxisType { bins }
+    }
+
+    fn amplitude_spectra<'a>(&self, d: &'a AxisDesc) -> Vec<&'a [f32]> {
+        vec![d.amplitudes.as_slice()]
+    }
 
     fn describe(&self, trajectory: &[Vec3]) -> AxisDesc {
         let d = dominating_axis(trajectory);
@@ -426,15 +475,39 @@ impl DescriptionType for DominatingAxisType {
         }
     }
 
-    fn apply(&self, d: &AxisDesc, n: usize) -> Vec<Vec3> {
+    fn components(&self, d: &AxisDesc) -> [Components; 3] {
         let comps = d
             .components
             .clone()
             .unwrap_or_else(|| Components::from_dense(&d.amplitudes, &d.phases));
-        let scale = d.samples.max(1) as f32 / n.max(1) as f32;
-        (0..n)
-            .map(|s| d.axis * comps.value_at(s as f32 * scale, d.samples))
-            .collect()
+        // The motion along the axis, projected on each world axis: a negative component is
+        // the same cosine turned by π.
+        [0, 1, 2].map(|c| {
+            let k = d.axis[c];
+            let mut out = Components::none();
+            if k == 0.0 {
+                return out;
+            }
+            for ((&f, &a), &p) in comps
+                .frequencies
+                .iter()
+                .zip(&comps.amplitudes)
+                .zip(&comps.phases)
+            {
+                out.frequencies.push(f);
+                out.amplitudes.push(a * k.abs());
+                out.phases.push(if k < 0.0 {
+                    wrap(p + std::f32::consts::PI)
+                } else {
+                    p
+                });
+            }
+            out
+        })
+    }
+
+    fn samples(&self, d: &AxisDesc) -> usize {
+        d.samples
     }
 }
 
@@ -475,6 +548,14 @@ fn relation_weight(d: &AxisPhaseDesc, c: usize, i: usize) -> f32 {
 impl DescriptionType for AxisPhase {
     type Desc = AxisPhaseDesc;
 
+    fn with_bins(bins: Bins) -> Self {
+        AxisPhase { bins }
+    }
+
+    fn amplitude_spectra<'a>(&self, d: &'a AxisPhaseDesc) -> Vec<&'a [f32]> {
+        d.amplitudes.iter().map(|a| a.as_slice()).collect()
+    }
+
     fn describe(&self, trajectory: &[Vec3]) -> AxisPhaseDesc {
         let s = axis_spectra(trajectory);
         let len = s[0].amplitudes.len();
@@ -493,10 +574,21 @@ impl DescriptionType for AxisPhase {
             .sum();
         let len = a.phase_xy.len().min(b.phase_xy.len());
         let mut phase = 0.0f32;
-        for i in 0..len {
-            let w = |d: &AxisPhaseDesc, c: usize| relation_weight(d, c, i);
-            phase += 0.5 * (w(a, 1) + w(b, 1)) * angle_difference(a.phase_xy[i], b.phase_xy[i]);
-            phase += 0.5 * (w(a, 2) + w(b, 2)) * angle_difference(a.phase_xz[i], b.phase_xz[i]);
+        let weights: Vec<[f32; 2]> = (0..len)
+            .map(|i| {
+                let w = |d: &AxisPhaseDesc, c: usize| relation_weight(d, c, i);
+                [0.5 * (w(a, 1) + w(b, 1)), 0.5 * (w(a, 2) + w(b, 2))]
+            })
+            .collect();
+        // As in the naive deviation: relations with under 0.1 % of the weight are skipped.
+        let floor = 1e-3 * weights.iter().map(|w| w[0] + w[1]).sum::<f32>();
+        for (i, w) in weights.iter().enumerate() {
+            if w[0] > floor {
+                phase += w[0] * angle_difference(a.phase_xy[i], b.phase_xy[i]);
+            }
+            if w[1] > floor {
+                phase += w[1] * angle_difference(a.phase_xz[i], b.phase_xz[i]);
+            }
         }
         nep(amp, phase)
     }
@@ -535,19 +627,50 @@ impl DescriptionType for AxisPhase {
         }
     }
 
-    fn apply(&self, d: &AxisPhaseDesc, n: usize) -> Vec<Vec3> {
-        let len = d.phase_xy.len();
-        let axis = |c: usize| Components {
-            frequencies: (1..=len).collect(),
-            amplitudes: d.amplitudes[c].clone(),
-            phases: (0..len)
+    fn components(&self, d: &AxisPhaseDesc) -> [Components; 3] {
+        let phases: [Vec<f32>; 3] = [0, 1, 2].map(|c| {
+            (0..d.phase_xy.len())
                 .map(|i| match c {
                     0 => d.phase_x[i],
-                    1 => d.phase_x[i] - d.phase_xy[i],
-                    _ => d.phase_x[i] - d.phase_xz[i],
+                    1 => wrap(d.phase_x[i] - d.phase_xy[i]),
+                    _ => wrap(d.phase_x[i] - d.phase_xz[i]),
                 })
-                .collect(),
-        };
-        sample_axes(&[axis(0), axis(1), axis(2)], d.samples, n)
+                .collect()
+        });
+        [0, 1, 2].map(|c| Components::from_dense(&d.amplitudes[c], &phases[c]))
+    }
+
+    fn samples(&self, d: &AxisPhaseDesc) -> usize {
+        d.samples
+    }
+}
+
+/// The three description types by name, for command lines and reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SpectralKind {
+    Naive,
+    DominatingAxis,
+    AxisPhase,
+}
+
+impl SpectralKind {
+    /// Every kind, in the spec's order.
+    pub const ALL: [SpectralKind; 3] = [
+        SpectralKind::Naive,
+        SpectralKind::DominatingAxis,
+        SpectralKind::AxisPhase,
+    ];
+    /// `naive`, `dominating-axis` or `axis-phase`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SpectralKind::Naive => "naive",
+            SpectralKind::DominatingAxis => "dominating-axis",
+            SpectralKind::AxisPhase => "axis-phase",
+        }
+    }
+    /// The kind named `s` ([`Self::name`]).
+    pub fn parse(s: &str) -> Option<SpectralKind> {
+        Self::ALL.into_iter().find(|k| k.name() == s)
     }
 }

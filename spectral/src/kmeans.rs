@@ -272,20 +272,26 @@ pub fn skeleton_start<T: DescriptionType>(
             .collect();
     }
     let mut unsplittable = vec![false; clusters.len()];
+    let variance = |m: &[usize]| -> f64 {
+        let a = average(m);
+        m.par_iter()
+            .map(|&i| {
+                let d = f64::from(ty.deviation(&descs[i], &a));
+                d * d
+            })
+            .sum::<f64>()
+            / m.len().max(1) as f64
+    };
+    // Variances change only for the two halves of a split: kept per cluster.
+    let mut variances: Vec<f64> = if clusters.len() < k {
+        clusters.iter().map(|m| variance(m)).collect()
+    } else {
+        Vec::new()
+    };
     while clusters.len() < k {
-        let variance = |m: &[usize]| -> f64 {
-            let a = average(m);
-            m.iter()
-                .map(|&i| {
-                    let d = f64::from(ty.deviation(&descs[i], &a));
-                    d * d
-                })
-                .sum::<f64>()
-                / m.len().max(1) as f64
-        };
         let pick = (0..clusters.len())
             .filter(|&c| !unsplittable[c])
-            .map(|c| (variance(&clusters[c]), c))
+            .map(|c| (variances[c], c))
             .max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
         let Some((_, c)) = pick else { break };
         let m = &clusters[c];
@@ -297,6 +303,8 @@ pub fn skeleton_start<T: DescriptionType>(
             unsplittable[c] = true;
             continue;
         }
+        variances[c] = variance(&near);
+        variances.push(variance(&far));
         clusters[c] = near;
         clusters.push(far);
         unsplittable.push(false);

@@ -9,6 +9,7 @@ pub mod frequency_bins;
 pub mod kmeans;
 pub mod normalise;
 pub mod spectrum;
+pub mod zones;
 
 pub use dominating_axis::{DominatingAxis, dominating_axis};
 pub use frequency_bins::{FrequencyBins, amplitude_distance, frequency_bins};

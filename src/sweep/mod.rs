@@ -285,7 +285,7 @@ fn lod_run(
         Some(Method::Auto) => {
             let heights = distinct_heights(&req.grid.points());
             let rank = heights.iter().filter(|&&h| h > p.screen_height).count();
-            auto_method(rank).0.name().to_string()
+            auto_method(rank, false).0.name().to_string()
         }
         _ => method.to_string(),
     };

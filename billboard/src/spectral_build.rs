@@ -1,0 +1,468 @@
+//! Spectral clustering of foliage, SCA (spec animated-billboard-clouds §4.11–4.14): animation
+//! zones → one description per zone → k-means over the descriptions → a stochastic billboard
+//! cloud per cluster in the average pose → each billboard moves by the inverse DFT of the
+//! average description of its triangles, as a pure translation. With the shared-bone
+//! improvement (§4.12) a billboard whose triangles share ancestor bones follows the deepest
+//! one and carries only the motion relative to it.
+
+use std::collections::{BTreeMap, HashMap};
+use std::time::Instant;
+
+use frond_render::Renderer;
+use frond_scene::{Sampled, Tree};
+use frond_spectral::description::{
+    AxisPhase, Bins, DescriptionType, DominatingAxisType, Naive, SpectralKind,
+};
+use frond_spectral::kmeans::cluster_descriptions;
+use frond_spectral::zones::{animation_zones, mean_trajectory};
+use glam::{Mat4, Vec3};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::animated::{AnimatedBillboardCloud, LoopClock, Rig, RigidMotion, SpectralMotion};
+use crate::animated_build::{
+    BuildTimings, Driver, FoliageCluster, build_animated_cloud, sampled_worlds,
+};
+use crate::cloud::{CloudError, CloudParams};
+use crate::rigid_fit::rigid_fit;
+
+/// What SCA is asked for.
+#[derive(Clone, Debug)]
+pub struct SpectralParams {
+    pub kind: SpectralKind,
+    /// Animation clusters k (capped at the number of zones).
+    pub clusters: usize,
+    /// Animation zone size ε_z in world units (App. C.2); 0 describes every triangle.
+    pub zone_size: f32,
+    /// Frequency bins (§4.10); the skeleton depth by default, capped at N/2.
+    pub bins: usize,
+    /// k-means++ restarts beside the skeleton start (App. C.1).
+    pub restarts: usize,
+    pub seed: u64,
+    pub max_iterations: usize,
+    /// Bind billboards to their triangles' deepest shared bone (§4.12).
+    pub shared_bone: bool,
+}
+
+/// What SCA did, for `report.json`.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct SpectralReport {
+    pub kind: String,
+    /// Clusters k after capping.
+    pub clusters: usize,
+    pub zones: usize,
+    pub bins: usize,
+    pub iterations: usize,
+    /// k-means error Σ w·deviation² of the kept run.
+    pub error: f64,
+    /// Which start won ("skeleton" or "random i").
+    pub start: String,
+    /// Weighted RMS distance (world units) of the zones' motion from their cluster's applied
+    /// average, over every sample.
+    pub residual: f32,
+    /// Weighted RMS distance of the zones from their mean positions (the residual of no motion).
+    pub motion_rms: f32,
+    /// False when the clip's last pose differs from its first: the DFT treats the sampled
+    /// window as one period, so the jump at the seam leaks into every frequency (the kept
+    /// bins still hold the bulk of the motion; the billboards' motion loops, the clip did not).
+    pub loops: bool,
+    /// Billboards bound to a shared bone.
+    pub shared_bone_billboards: usize,
+    /// Cosine terms over all billboards and axes.
+    pub terms: usize,
+    /// Seconds: zones + descriptions, k-means.
+    pub t_describe: f64,
+    pub t_cluster: f64,
+}
+
+/// The bone node each foliage triangle follows.
+fn bone_nodes(tree: &Tree, sampled: &Sampled) -> Vec<Option<usize>> {
+    sampled
+        .foliage
+        .iter()
+        .map(|&t| tree.triangles[t].bone.map(|b| tree.bones[b as usize].node))
+        .collect()
+}
+
+/// The deepest node that is `nodes`' own or an ancestor of every one of them, or None when a
+/// node is None or they share none.
+pub fn deepest_shared(rig_nodes: &[frond_scene::Node], nodes: &[Option<usize>]) -> Option<usize> {
+    let first = (*nodes.first()?)?;
+    let mut chain = Vec::new();
+    let mut cur = Some(first);
+    while let Some(c) = cur {
+        chain.push(c);
+        cur = rig_nodes.get(c).and_then(|n| n.parent);
+    }
+    let mut deepest = 0usize; // index into chain: 0 = first itself
+    for n in &nodes[1..] {
+        let mut cur = Some((*n)?);
+        let mut found = None;
+        while let Some(c) = cur {
+            if let Some(p) = chain.iter().position(|&x| x == c) {
+                found = Some(p);
+                break;
+            }
+            cur = rig_nodes.get(c).and_then(|n| n.parent);
+        }
+        deepest = deepest.max(found?);
+    }
+    chain.get(deepest).copied()
+}
+
+/// Builds the spectral animated cloud of the foliage (SCA). `scale` sizes the plane search's
+/// tolerances, as in [`build_animated_cloud`].
+#[allow(clippy::too_many_arguments)]
+pub fn build_spectral_cloud(
+    renderer: &Renderer,
+    tree: &Tree,
+    sampled: &Sampled,
+    rig: Rig,
+    clock: LoopClock,
+    params: &CloudParams,
+    sp: &SpectralParams,
+    scale: f32,
+) -> Result<(AnimatedBillboardCloud, BuildTimings, SpectralReport), CloudError> {
+    let run = Run {
+        renderer,
+        tree,
+        sampled,
+        params,
+        sp,
+        scale,
+    };
+    match sp.kind {
+        SpectralKind::Naive => run.go::<Naive>(rig, clock),
+        SpectralKind::DominatingAxis => run.go::<DominatingAxisType>(rig, clock),
+        SpectralKind::AxisPhase => run.go::<AxisPhase>(rig, clock),
+    }
+}
+
+/// Zones, their trajectories and descriptions, and the k-means over them.
+pub struct ZoneClustering<T: DescriptionType> {
+    pub ty: T,
+    pub zones: Vec<frond_spectral::zones::Zone>,
+    pub trajectories: Vec<Vec<Vec3>>,
+    pub descriptions: Vec<T::Desc>,
+    pub weights: Vec<f32>,
+    /// Cluster of each zone.
+    pub assignment: Vec<usize>,
+    pub report: SpectralReport,
+}
+
+/// Steps 1 of SCA on animation zones: describe every zone, cluster the descriptions.
+pub fn cluster_zones<T: DescriptionType>(
+    tree: &Tree,
+    sampled: &Sampled,
+    rest: &[Mat4],
+    sp: &SpectralParams,
+) -> ZoneClustering<T> {
+    let t0 = Instant::now();
+    let n = sampled.samples();
+    let bones = bone_nodes(tree, sampled);
+    let first: Vec<Vec3> = (0..sampled.foliage.len())
+        .map(|k| sampled.trajectory(k).first().copied().unwrap_or(Vec3::ZERO))
+        .collect();
+    let zones = animation_zones(&bones, &first, sp.zone_size);
+    let trajectories: Vec<Vec<Vec3>> = zones
+        .par_iter()
+        .map(|z| mean_trajectory(z.members.iter().map(|&k| sampled.trajectory(k))))
+        .collect();
+    let weights: Vec<f32> = zones.iter().map(|z| z.members.len() as f32).collect();
+    let bins = sp.bins.clamp(1, (n / 2).max(1));
+    let probe = T::with_bins(Bins::PerPair(bins));
+    let descriptions: Vec<T::Desc> = trajectories.par_iter().map(|t| probe.describe(t)).collect();
+    let spectra: Vec<&[f32]> = descriptions
+        .iter()
+        .flat_map(|d| probe.amplitude_spectra(d))
+        .collect();
+    let shared = Bins::shared(&spectra, bins);
+    let bin_count = shared.count();
+    let ty = T::with_bins(shared);
+    let t1 = Instant::now();
+    let label: Vec<usize> = zones.iter().map(|z| z.bone.unwrap_or(usize::MAX)).collect();
+    let dist: Vec<f32> = zones
+        .iter()
+        .zip(&trajectories)
+        .map(|(z, t)| match (z.bone, t.first()) {
+            (Some(b), Some(p)) => rest.get(b).map_or(0.0, |m| p.distance(m.w_axis.truncate())),
+            _ => 0.0,
+        })
+        .collect();
+    let run = |k: usize| {
+        let c = cluster_descriptions(
+            &ty,
+            &descriptions,
+            &weights,
+            k,
+            Some((&label, &dist)),
+            sp.restarts,
+            sp.seed,
+            sp.max_iterations,
+        );
+        let r = residual(&ty, &c, &trajectories, &weights);
+        (c, r)
+    };
+    let (c, res) = run(sp.clusters);
+    let report = SpectralReport {
+        kind: sp.kind.name().into(),
+        clusters: c.centroids.len(),
+        zones: zones.len(),
+        bins: bin_count,
+        iterations: c.iterations,
+        error: c.error,
+        start: c.start.clone(),
+        residual: res,
+        motion_rms: motion_rms(&trajectories, &weights),
+        loops: sampled.motion.loops || !sampled.motion.moves,
+        t_describe: (t1 - t0).as_secs_f64(),
+        t_cluster: t1.elapsed().as_secs_f64(),
+        ..Default::default()
+    };
+    ZoneClustering {
+        ty,
+        zones,
+        trajectories,
+        descriptions,
+        weights,
+        assignment: c.assignment,
+        report,
+    }
+}
+
+/// Weighted RMS over zones and samples of the distance from the mean position.
+fn motion_rms(trajectories: &[Vec<Vec3>], weights: &[f32]) -> f32 {
+    let (mut sum, mut total) = (0.0f64, 0.0f64);
+    for (t, &w) in trajectories.iter().zip(weights) {
+        let n = t.len().max(1) as f32;
+        let mean = t.iter().copied().sum::<Vec3>() / n;
+        let sq: f32 = t.iter().map(|p| (*p - mean).length_squared()).sum();
+        sum += f64::from(w * sq / n);
+        total += f64::from(w);
+    }
+    if total > 0.0 {
+        (sum / total).sqrt() as f32
+    } else {
+        0.0
+    }
+}
+
+/// Weighted RMS over zones and samples of `|own motion − applied centroid|` (world units).
+pub fn residual<T: DescriptionType>(
+    ty: &T,
+    c: &frond_spectral::kmeans::Clustering<T::Desc>,
+    trajectories: &[Vec<Vec3>],
+    weights: &[f32],
+) -> f32 {
+    let applied: Vec<Vec<Vec3>> = c
+        .centroids
+        .par_iter()
+        .map(|d| ty.apply(d, trajectories.first().map_or(0, |t| t.len())))
+        .collect();
+    let (sum, total) = trajectories
+        .par_iter()
+        .zip(&c.assignment)
+        .zip(weights)
+        .map(|((t, &k), &w)| {
+            let n = t.len().max(1) as f32;
+            let mean = t.iter().copied().sum::<Vec3>() / n;
+            let sq: f32 = t
+                .iter()
+                .zip(&applied[k])
+                .map(|(p, a)| (*p - mean - *a).length_squared())
+                .sum();
+            (f64::from(w * sq / n), f64::from(w))
+        })
+        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+    if total > 0.0 {
+        (sum / total).sqrt() as f32
+    } else {
+        0.0
+    }
+}
+
+struct Run<'a> {
+    renderer: &'a Renderer,
+    tree: &'a Tree,
+    sampled: &'a Sampled,
+    params: &'a CloudParams,
+    sp: &'a SpectralParams,
+    scale: f32,
+}
+
+impl Run<'_> {
+    fn go<T: DescriptionType>(
+        &self,
+        rig: Rig,
+        clock: LoopClock,
+    ) -> Result<(AnimatedBillboardCloud, BuildTimings, SpectralReport), CloudError> {
+        let (tree, sampled, sp) = (self.tree, self.sampled, self.sp);
+        let rest = rig.rest_world();
+        let zc = cluster_zones::<T>(tree, sampled, &rest, sp);
+        if !zc.report.loops {
+            tracing::warn!(
+                "{}: clip does not loop (gap {:.4}): spectral motion treats the sampled window \
+                 as one period, its seam jump leaks into every frequency",
+                tree.source.display(),
+                sampled.motion.loop_gap
+            );
+        }
+        let k = zc.report.clusters;
+        let mut members: Vec<Vec<usize>> = vec![Vec::new(); k];
+        for (z, &c) in zc.zones.iter().zip(&zc.assignment) {
+            members[c].extend(&z.members);
+        }
+        let clusters: Vec<FoliageCluster> = members
+            .into_iter()
+            .filter(|m| !m.is_empty())
+            .map(|mut m| {
+                m.sort_unstable();
+                FoliageCluster {
+                    members: m,
+                    driver: Driver::Assigned,
+                }
+            })
+            .collect();
+        let (mut cloud, mut timings) = build_animated_cloud(
+            self.renderer,
+            tree,
+            sampled,
+            rig,
+            clock,
+            &clusters,
+            self.params,
+            self.scale,
+            &format!("spectral-{}", sp.kind.name()),
+        )?;
+        let t0 = Instant::now();
+        let mut report = zc.report.clone();
+        report.shared_bone_billboards = assign_motions(&mut cloud, tree, sampled, &zc, sp);
+        report.terms = cloud
+            .billboards
+            .iter()
+            .map(|b| match &b.motion {
+                Some(RigidMotion::Spectral(m)) => m.terms(),
+                _ => 0,
+            })
+            .sum();
+        cloud.update_playable_clips();
+        timings.motion_fit = t0.elapsed().as_secs_f64();
+        Ok((cloud, timings, report))
+    }
+}
+
+/// SCA step 4 (and §4.12): every billboard's motion from the average description of its
+/// triangles (each zone weighted by its triangles on the billboard). Returns how many
+/// billboards follow a shared bone.
+fn assign_motions<T: DescriptionType>(
+    cloud: &mut AnimatedBillboardCloud,
+    tree: &Tree,
+    sampled: &Sampled,
+    zc: &ZoneClustering<T>,
+    sp: &SpectralParams,
+) -> usize {
+    let n = sampled.samples();
+    let nv = sampled.vertices;
+    let mut foliage_index: HashMap<usize, usize> = HashMap::new();
+    for (k, &t) in sampled.foliage.iter().enumerate() {
+        foliage_index.insert(t, k);
+    }
+    let mut zone_of = vec![0usize; sampled.foliage.len()];
+    for (z, zone) in zc.zones.iter().enumerate() {
+        for &k in &zone.members {
+            zone_of[k] = z;
+        }
+    }
+    let bones = bone_nodes(tree, sampled);
+    let worlds = if sp.shared_bone {
+        sampled_worlds(&cloud.rig, &cloud.clock)
+    } else {
+        Vec::new()
+    };
+    let rest = cloud.rig.rest_world();
+    let nodes = cloud.rig.nodes.clone();
+    let ty = &zc.ty;
+    let results: Vec<(Option<usize>, Option<crate::Quad>, Option<RigidMotion>)> = cloud
+        .billboards
+        .par_iter()
+        .map(|b| {
+            let ks: Vec<usize> = b
+                .triangles
+                .iter()
+                .filter_map(|t| foliage_index.get(t).copied())
+                .collect();
+            let mut counts: BTreeMap<usize, f32> = BTreeMap::new();
+            for &k in &ks {
+                *counts.entry(zone_of[k]).or_default() += 1.0;
+            }
+            let weights: Vec<f32> = counts.values().copied().collect();
+            let shared = if sp.shared_bone && !worlds.is_empty() {
+                let bs: Vec<Option<usize>> = ks.iter().map(|&k| bones[k]).collect();
+                deepest_shared(&nodes, &bs)
+            } else {
+                None
+            };
+            let (follows, quad, desc) = match shared {
+                Some(bone) => {
+                    // The motion in the shared bone's rest frame: Rest_b · W_b(s)⁻¹ · p(s).
+                    let to_rest: Vec<Mat4> = worlds
+                        .iter()
+                        .map(|w| rest[bone] * w[bone].inverse())
+                        .collect();
+                    let local = |s: usize, p: Vec3| to_rest[s % to_rest.len()].transform_point3(p);
+                    let descs: Vec<T::Desc> = counts
+                        .keys()
+                        .map(|&z| {
+                            let r: Vec<Vec3> = zc.trajectories[z]
+                                .iter()
+                                .enumerate()
+                                .map(|(s, &p)| local(s, p))
+                                .collect();
+                            ty.describe(&r)
+                        })
+                        .collect();
+                    let refs: Vec<&T::Desc> = descs.iter().collect();
+                    let d = ty.average(&refs, &weights);
+                    // The quad was built in the average world pose: carry it rigidly to the
+                    // mean pose of its triangles in the bone's rest frame.
+                    let (mut from, mut to) = (Vec::new(), Vec::new());
+                    for &k in &ks {
+                        for &v in &tree.triangles[sampled.foliage[k]].v {
+                            from.push(sampled.average[v as usize]);
+                            let sum: Vec3 = (0..n)
+                                .map(|s| local(s, sampled.positions[s * nv + v as usize]))
+                                .sum();
+                            to.push(sum / n.max(1) as f32);
+                        }
+                    }
+                    let fit = rigid_fit(&from, &to);
+                    (Some(bone), Some(b.quad.transformed(fit)), d)
+                }
+                None => {
+                    let refs: Vec<&T::Desc> = counts.keys().map(|&z| &zc.descriptions[z]).collect();
+                    (None, None, ty.average(&refs, &weights))
+                }
+            };
+            let axes = ty.components(&desc);
+            let motion = axes.iter().any(|a| !a.amplitudes.is_empty()).then(|| {
+                RigidMotion::Spectral(SpectralMotion {
+                    axes,
+                    samples: ty.samples(&desc).max(1),
+                })
+            });
+            (follows, quad, motion)
+        })
+        .collect();
+    let mut shared = 0;
+    for (b, (follows, quad, motion)) in cloud.billboards.iter_mut().zip(results) {
+        if follows.is_some() {
+            shared += 1;
+        }
+        b.follows = follows;
+        if let Some(q) = quad {
+            b.quad = q;
+        }
+        b.motion = motion;
+    }
+    shared
+}
