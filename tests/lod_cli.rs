@@ -260,20 +260,7 @@ fn spectral_lods_validate_and_carry_their_coefficients() {
 
 #[test]
 fn spectral_skin_round_trip() {
-    let tree = import(&sapling(), &ImportOptions::default()).expect("import");
-    let sampled = sample(
-        &tree,
-        &SampleOptions {
-            clip: None,
-            samples: 16,
-        },
-    )
-    .expect("sample");
-    let pixel = tree.bounds.height() / 150.0;
-    let mut params = CloudParams::default();
-    params.search.epsilon = pixel;
-    params.search.candidates = 60;
-    params.bake.texels_per_unit = 1.0 / pixel;
+    let (tree, sampled, params, pixel) = setup(&sapling(), 150.0);
     let renderer = Renderer::new().expect("renderer");
     let sp = SpectralParams {
         kind: SpectralKind::AxisPhase,
@@ -363,7 +350,9 @@ struct Built {
     epsilon: f32,
 }
 
-fn build(path: &Path, per_bone: bool, screen: f32) -> Built {
+/// The tree at `path` sampled 16 times, cloud parameters for a LOD `screen` pixels tall, and
+/// that LOD's pixel size.
+fn setup(path: &Path, screen: f32) -> (Tree, Sampled, CloudParams, f32) {
     let tree = import(path, &ImportOptions::default()).expect("import");
     let sampled = sample(
         &tree,
@@ -373,12 +362,17 @@ fn build(path: &Path, per_bone: bool, screen: f32) -> Built {
         },
     )
     .expect("sample");
-    let clock = LoopClock::of(&tree, &sampled);
     let pixel = tree.bounds.height() / screen;
     let mut params = CloudParams::default();
     params.search.epsilon = pixel;
     params.search.candidates = 60;
     params.bake.texels_per_unit = 1.0 / pixel;
+    (tree, sampled, params, pixel)
+}
+
+fn build(path: &Path, per_bone: bool, screen: f32) -> Built {
+    let (tree, sampled, params, pixel) = setup(path, screen);
+    let clock = LoopClock::of(&tree, &sampled);
     let clusters = if per_bone {
         per_bone_clusters(&tree, &sampled)
     } else {

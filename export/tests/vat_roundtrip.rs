@@ -1,6 +1,8 @@
 //! Rigid vertex animation textures: encode → decode within each format's precision, the sidecar
 //! through JSON, the WGSL reference shader evaluated on a real adapter, and errors on bad input.
 
+mod common;
+
 use frond_export::vat::{
     RigidFrame, RigidPiece, VatError, VatFormat, VatOptions, VatSidecar, VatTextures, decode_rigid,
     decode_turns_per_frame, encode_rigid, encode_rigid_with, sample_frame,
@@ -427,48 +429,15 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 "#;
 
 struct Gpu {
-    device: wgpu::Device,
-    queue: wgpu::Queue,
+    compute: common::Compute,
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
 }
 
 /// Any adapter with compute shaders (llvmpipe and lavapipe qualify), or `None` with a message.
 fn open_gpu() -> Option<Gpu> {
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = match pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-        power_preference: wgpu::PowerPreference::default(),
-        force_fallback_adapter: false,
-        compatible_surface: None,
-        ..Default::default()
-    })) {
-        Ok(adapter) => adapter,
-        Err(e) => {
-            println!("SKIPPED: no graphics adapter to run the WGSL reference shader on ({e})");
-            return None;
-        }
-    };
-    let info = adapter.get_info();
-    if !adapter
-        .get_downlevel_capabilities()
-        .flags
-        .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
-    {
-        println!("SKIPPED: adapter {} has no compute shaders", info.name);
-        return None;
-    }
-    println!(
-        "running the WGSL reference on {} ({:?})",
-        info.name, info.backend
-    );
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some("vat test"),
-        required_limits: adapter.limits(),
-        ..Default::default()
-    }))
-    .expect("the adapter opens a device");
-
+    let compute = common::open_compute("the WGSL VAT reference")?;
+    let device = &compute.device;
     let source = format!(
         "{}\n{HARNESS}",
         include_str!("../shaders/frond_vat_rigid.wgsl")
@@ -521,8 +490,7 @@ fn open_gpu() -> Option<Gpu> {
         cache: None,
     });
     Some(Gpu {
-        device,
-        queue,
+        compute,
         pipeline,
         layout,
     })
@@ -590,7 +558,7 @@ fn upload(
         height: image.height,
         depth_or_array_layers: 1,
     };
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+    let texture = gpu.compute.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("vat texture"),
         size,
         mip_level_count: 1,
@@ -600,7 +568,7 @@ fn upload(
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    gpu.queue.write_texture(
+    gpu.compute.queue.write_texture(
         wgpu::TexelCopyTextureInfo {
             texture: &texture,
             mip_level: 0,
@@ -663,7 +631,7 @@ fn run_shader(
             0.0, 0.0, pivot.x, pivot.y, pivot.z, 0.0,
         ]);
     }
-    let device = &gpu.device;
+    let device = &gpu.compute.device;
     let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("params"),
         contents: bytemuck::cast_slice(&params),
@@ -675,18 +643,7 @@ fn run_shader(
         usage: wgpu::BufferUsages::STORAGE,
     });
     let answer_size = (queries.len() * 8 * 4) as u64;
-    let answers = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("answers"),
-        size: answer_size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size: answer_size,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
+    let (answers, readback) = common::answer_buffers(device, answer_size);
     let position_view = position.create_view(&Default::default());
     let rotation_view = rotation.create_view(&Default::default());
     let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -715,34 +672,15 @@ fn run_shader(
             },
         ],
     });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("vat test"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&gpu.pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups((queries.len() as u32).div_ceil(64), 1, 1);
-    }
-    encoder.copy_buffer_to_buffer(&answers, 0, &readback, 0, answer_size);
-    gpu.queue.submit([encoder.finish()]);
-
-    let (sender, receiver) = std::sync::mpsc::channel();
-    readback.map_async(wgpu::MapMode::Read, .., move |result| {
-        let _ = sender.send(result);
-    });
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .expect("the GPU finishes");
-    receiver
-        .recv()
-        .expect("map callback ran")
-        .expect("readback maps");
-    let view = readback.get_mapped_range(..).expect("mapped");
-    let floats: Vec<f32> = bytemuck::cast_slice(&view).to_vec();
-    drop(view);
-    readback.unmap();
+    let bytes = common::dispatch_and_read(
+        &gpu.compute,
+        &gpu.pipeline,
+        &bind_group,
+        queries.len() as u32,
+        &answers,
+        &readback,
+    );
+    let floats: &[f32] = bytemuck::cast_slice(&bytes);
     floats
         .chunks_exact(8)
         .map(|a| (Vec3::new(a[0], a[1], a[2]), Vec3::new(a[4], a[5], a[6])))

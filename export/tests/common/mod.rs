@@ -2,6 +2,9 @@
 //! buffer of queries in, one of answers out. Any adapter with compute shaders will do
 //! (llvmpipe and lavapipe qualify); without one the caller skips with a message.
 
+// Each test binary that includes this module uses only part of it.
+#![allow(dead_code)]
+
 use wgpu::util::DeviceExt;
 
 /// A device and queue that can run compute shaders.
@@ -96,18 +99,7 @@ pub fn run_compute(
         contents: queries,
         usage: wgpu::BufferUsages::STORAGE,
     });
-    let answers = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("answers"),
-        size: answer_bytes,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size: answer_bytes,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
+    let (answers, readback) = answer_buffers(device, answer_bytes);
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("reference"),
         layout: None,
@@ -135,20 +127,50 @@ pub fn run_compute(
             },
         ],
     });
-    let mut encoder = device.create_command_encoder(&Default::default());
+    dispatch_and_read(gpu, &pipeline, &bind_group, count, &answers, &readback)
+}
+
+/// A storage buffer for `bytes` of answers and a mappable one to read them back into.
+pub fn answer_buffers(device: &wgpu::Device, bytes: u64) -> (wgpu::Buffer, wgpu::Buffer) {
+    let answers = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("answers"),
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: bytes,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    (answers, readback)
+}
+
+/// Dispatches `count` invocations (64 a workgroup) of `pipeline` with `bind_group`, copies
+/// `answers` into `readback` and returns its bytes.
+pub fn dispatch_and_read(
+    gpu: &Compute,
+    pipeline: &wgpu::ComputePipeline,
+    bind_group: &wgpu::BindGroup,
+    count: u32,
+    answers: &wgpu::Buffer,
+    readback: &wgpu::Buffer,
+) -> Vec<u8> {
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
     {
         let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(count.div_ceil(64), 1, 1);
     }
-    encoder.copy_buffer_to_buffer(&answers, 0, &readback, 0, answer_bytes);
+    encoder.copy_buffer_to_buffer(answers, 0, readback, 0, answers.size());
     gpu.queue.submit([encoder.finish()]);
     let (sender, receiver) = std::sync::mpsc::channel();
     readback.map_async(wgpu::MapMode::Read, .., move |result| {
         let _ = sender.send(result);
     });
-    device
+    gpu.device
         .poll(wgpu::PollType::wait_indefinitely())
         .expect("the device finishes");
     receiver
