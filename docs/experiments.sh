@@ -47,3 +47,10 @@ for t in oak_medium bush_1 pine_medium; do
     --epsilon 1.5%..9% --steps 4
 done
 python3 docs/matched_counts.py "$OUT"/spectral_*/results.csv
+# The number of spectral clusters.
+for k in 2 6 15 40 120; do
+  $F sweep $TREES/oak_medium.glb -o "$OUT/spectral_k$k" --method spectral-axis-phase \
+    --epsilon 2%,5% --screen-height 150 --seeds 1 --clusters $k
+done
+# linfa's Euclidean k-means on the zones' motion against frond's k-means (outside the workspace).
+cargo run --release --manifest-path tools/linfa-compare/Cargo.toml
