@@ -860,3 +860,54 @@ pub fn vat_textures(
         },
     )?)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use frond_spectral::description::Components;
+
+    #[test]
+    fn spectral_terms_evaluate_like_the_motion() {
+        let axis = |f: Vec<usize>, a: Vec<f32>, p: Vec<f32>| Components {
+            frequencies: f,
+            amplitudes: a,
+            phases: p,
+        };
+        // Two terms of frequency 2 on x (they add as phasors), one shared with y, one z only.
+        let m = SpectralMotion {
+            axes: [
+                axis(vec![2, 2, 5], vec![0.3, 0.2, 0.1], vec![0.5, -1.0, 2.0]),
+                axis(vec![5], vec![0.4], vec![-2.5]),
+                axis(vec![1], vec![0.7], vec![0.0]),
+            ],
+            samples: 24,
+        };
+        let terms = spectral_terms(&m);
+        let freqs: Vec<f32> = terms.iter().map(|t| t.frequency).collect();
+        assert_eq!(freqs, vec![1.0, 2.0, 5.0]);
+        for s in 0..24 {
+            let want = m.offset(s as f32);
+            let got = frond_export::spectral::evaluate(&terms, s as f32 / 24.0);
+            for c in 0..3 {
+                assert!((want[c] - got[c]).abs() < 1e-5, "sample {s} axis {c}");
+            }
+        }
+    }
+
+    #[test]
+    fn method_names_round_trip() {
+        for name in METHOD_NAMES {
+            let m = Method::parse(name).expect("parses");
+            if *name != "spectral" {
+                assert_eq!(m.name(), *name);
+            }
+        }
+        assert_eq!(
+            Method::parse("spectral"),
+            Some(Method::Spectral(DEFAULT_SPECTRAL))
+        );
+        assert_eq!(Method::parse("spectral-fourier"), None);
+        assert_eq!(spectral_k(60.0), 6);
+        assert_eq!(spectral_k(3.0), 1);
+    }
+}
