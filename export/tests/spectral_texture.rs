@@ -30,6 +30,34 @@ fn terms() -> Vec<Vec<SpectralTerm>> {
     ]
 }
 
+/// Many billboards with up to 3 terms each, so the blocks wrap onto further rows.
+fn many(n: usize) -> Vec<Vec<SpectralTerm>> {
+    (0..n)
+        .map(|i| {
+            (0..i % 4)
+                .map(|j| SpectralTerm {
+                    frequency: (1 + (i + j) % 9) as f32,
+                    amplitude: [0.01 * (i % 13) as f32, 0.2, 0.05 * j as f32],
+                    phase: [0.1 * (i % 31) as f32 - 1.5, 0.3 * j as f32, -0.7],
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Billboard `i`'s term `j` as the texture holds it.
+fn held(texels: &[f32], width: u32, per_row: u32, terms: u32, i: usize, j: usize) -> SpectralTerm {
+    let (w, per_row, block) = (width as usize, per_row as usize, 2 * terms as usize);
+    let start = (i / per_row) * w + block * (i % per_row) + 2 * j;
+    let fa = &texels[start * 4..start * 4 + 4];
+    let ph = &texels[(start + 1) * 4..(start + 1) * 4 + 4];
+    SpectralTerm {
+        frequency: fa[0],
+        amplitude: [fa[1], fa[2], fa[3]],
+        phase: [ph[0], ph[1], ph[2]],
+    }
+}
+
 fn decode(bytes: &[u8]) -> (u32, u32, Vec<f32>) {
     let img = image::load_from_memory_with_format(bytes, image::ImageFormat::OpenExr)
         .expect("own EXR")
@@ -42,25 +70,40 @@ fn texture_holds_the_terms_and_evaluates_like_the_dft() {
     let t = terms();
     let tex = encode_spectral(&t, 4.0, 0.5, Some("Wind".into()), "x.exr").expect("encodes");
     assert_eq!(tex.sidecar.layout, SPECTRAL_LAYOUT);
-    assert_eq!((tex.sidecar.width, tex.sidecar.height), (4, 3));
+    assert_eq!(tex.sidecar.per_row, 3, "three billboards fit one row");
+    assert_eq!((tex.sidecar.width, tex.sidecar.height), (12, 1));
     assert_eq!(tex.sidecar.terms, 2);
     assert_eq!(tex.sidecar.terms_used, 3);
     assert_eq!(tex.sidecar.bytes, tex.image.bytes.len());
-    let (w, h, texels) = decode(&tex.image.bytes);
-    assert_eq!((w, h), (4, 3));
-    for (r, row) in t.iter().enumerate() {
-        for (j, term) in row.iter().enumerate() {
-            let at = |x: usize| &texels[(r * 4 + x) * 4..(r * 4 + x) * 4 + 4];
-            let (fa, ph) = (at(2 * j), at(2 * j + 1));
-            assert_eq!(fa[0], term.frequency);
-            for c in 0..3 {
-                assert!((fa[1 + c] - term.amplitude[c]).abs() <= 1e-3 * term.amplitude[c].abs());
-                assert!((ph[c] - term.phase[c]).abs() <= 2e-3);
+    let check = |t: &[Vec<SpectralTerm>], tex: &frond_export::spectral::SpectralTextures| {
+        let (w, h, texels) = decode(&tex.image.bytes);
+        assert_eq!((w, h), (tex.sidecar.width, tex.sidecar.height));
+        for (i, row) in t.iter().enumerate() {
+            for j in 0..tex.sidecar.terms as usize {
+                let got = held(&texels, w, tex.sidecar.per_row, tex.sidecar.terms, i, j);
+                let Some(want) = row.get(j) else {
+                    assert_eq!(got.amplitude, [0.0; 3], "unused terms are zero");
+                    continue;
+                };
+                assert_eq!(got.frequency, want.frequency);
+                for c in 0..3 {
+                    assert!(
+                        (got.amplitude[c] - want.amplitude[c]).abs()
+                            <= 1e-3 * want.amplitude[c].abs() + 1e-7
+                    );
+                    assert!((got.phase[c] - want.phase[c]).abs() <= 2e-3);
+                }
             }
+            assert_eq!(tex.row_uv[i], [i as f32 + 0.5, 0.0]);
         }
-        // Rows hold (r + 0.5) / height.
-        assert_eq!(tex.row_uv[r], [(r as f32 + 0.5) / 3.0, 0.0]);
-    }
+    };
+    check(&t, &tex);
+    // 5,000 billboards of up to 3 terms: blocks of 6 texels, 1,365 a row, 4 rows.
+    let big = many(5000);
+    let tex_big = encode_spectral(&big, 4.0, 0.0, None, "y.exr").expect("encodes");
+    assert_eq!(tex_big.sidecar.per_row, 1365);
+    assert_eq!((tex_big.sidecar.width, tex_big.sidecar.height), (8190, 4));
+    check(&big, &tex_big);
     // The CPU evaluation is the cosine sum: at u = 0 the x of billboard 0 is Σ a cos φ.
     let x0 = evaluate(&t[0], 0.0)[0];
     assert!((x0 - (0.5 * 0.3f32.cos() + 0.1 * (-2.0f32).cos())).abs() < 1e-6);
@@ -84,7 +127,7 @@ fn texture_holds_the_terms_and_evaluates_like_the_dft() {
 
 /// The WGSL reference behind a compute entry point: one (row, u) query per invocation.
 const HARNESS: &str = r#"
-struct Query { row_uv: f32, height: f32, terms: f32, time: f32 }
+struct Query { index_uv: f32, per_row: f32, terms: f32, time: f32 }
 
 @group(0) @binding(0) var coefficients: texture_2d<f32>;
 @group(0) @binding(1) var<storage, read> queries: array<Query>;
@@ -96,9 +139,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let q = queries[id.x];
-    let row = frond_spectral_row(q.row_uv, q.height);
+    let i = frond_spectral_index(q.index_uv);
     let u = frond_spectral_phase(q.time, 0.5, 4.0);
-    answers[id.x] = vec4<f32>(frond_spectral_offset(coefficients, row, i32(q.terms), u), 0.0);
+    answers[id.x] = vec4<f32>(frond_spectral_offset(coefficients, i, i32(q.terms), i32(q.per_row), u), 0.0);
 }
 "#;
 
@@ -107,31 +150,24 @@ fn wgsl_reference_shader_evaluates_the_texture() {
     let Some(gpu) = common::open_compute("frond_spectral.wgsl") else {
         return;
     };
-    let t = terms();
+    // Enough billboards to wrap onto four rows.
+    let t = many(5000);
     let tex = encode_spectral(&t, 4.0, 0.5, None, "x.exr").expect("encodes");
     let (w, h, texels) = decode(&tex.image.bytes);
-    // Queries: every billboard at several times, including before the start and past a loop.
+    let sc = &tex.sidecar;
+    // Queries: billboards on every row at several times, before the start and past a loop.
     let times = [0.5f32, 0.9, 1.7, 3.3, 4.49, 6.1, -0.4];
     let mut queries = Vec::new();
     let mut want = Vec::new();
-    for (r, row) in t.iter().enumerate() {
-        // The terms as the texture holds them (half floats).
-        let held: Vec<SpectralTerm> = (0..row.len())
-            .map(|j| {
-                let at = |x: usize| &texels[(r * w as usize + x) * 4..(r * w as usize + x) * 4 + 4];
-                let (fa, ph) = (at(2 * j), at(2 * j + 1));
-                SpectralTerm {
-                    frequency: fa[0],
-                    amplitude: [fa[1], fa[2], fa[3]],
-                    phase: [ph[0], ph[1], ph[2]],
-                }
-            })
+    for i in [0usize, 1, 2, 3, 1364, 1365, 2731, 4095, 4999] {
+        let held: Vec<SpectralTerm> = (0..t[i].len())
+            .map(|j| held(&texels, w, sc.per_row, sc.terms, i, j))
             .collect();
         for &time in &times {
             queries.extend_from_slice(&[
-                tex.row_uv[r][0],
-                h as f32,
-                tex.sidecar.terms as f32,
+                tex.row_uv[i][0],
+                sc.per_row as f32,
+                sc.terms as f32,
                 time,
             ]);
             let u = ((time - 0.5) / 4.0).rem_euclid(1.0);
