@@ -227,10 +227,12 @@ fn spectral_lods_validate_and_carry_their_coefficients() {
         assert_eq!(l["animation_bytes"].as_u64(), Some(tex.len() as u64));
         let img = image::load_from_memory_with_format(&tex, image::ImageFormat::OpenExr)
             .expect("EXR decodes");
-        assert_eq!(
-            u64::from(img.height()),
-            l["billboards"].as_u64().expect("n")
-        );
+        // Blocks of 2·terms texels per billboard, `per_row` to a row.
+        let n = l["billboards"].as_u64().expect("n");
+        let per_row = sidecar["per_row"].as_u64().expect("per_row");
+        let terms = sidecar["terms"].as_u64().expect("terms");
+        assert_eq!(u64::from(img.height()), n.div_ceil(per_row));
+        assert_eq!(u64::from(img.width()), 2 * terms * per_row);
         // Billboards need no motion joints: only the rig's own nodes are joints.
         assert!(l["bones"].as_u64().expect("bones") <= 193);
     }
