@@ -41,7 +41,7 @@ done
 
 # Issue 6: spectral clustering against static and per-bone at a far LOD (150 px), read at
 # matched billboard counts.
-for t in oak_medium bush_1 pine_medium; do
+for t in oak_medium bush_1 pine_medium pine_medium_blender oak_large; do
   $F sweep $TREES/$t.glb -o "$OUT/spectral_$t" --screen-height 150 --seeds 1 \
     --method per-bone,static,spectral-axis-phase,spectral-dominating-axis,spectral-naive \
     --epsilon 1.5%..9% --steps 4
