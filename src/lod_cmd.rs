@@ -339,6 +339,16 @@ pub fn run_lod(
         })?),
         None => None,
     };
+    let spectral_options = req.clusters.is_some() || req.zone_size.is_some() || !req.shared_bone;
+    let may_be_spectral = matches!(req.method, Method::Spectral(_))
+        || (req.method == Method::Auto && req.animation == AnimationMode::Spectral);
+    if spectral_options && !may_be_spectral {
+        tracing::warn!(
+            "--clusters, --zone-size and --no-shared-bone act on spectral methods only; \
+             method '{}' ignores them",
+            req.method.name()
+        );
+    }
     let levels = lod_levels(height, &req.screen_heights, req.pixel_error, eps_override)
         .with_context(|| format!("{path}: sizing the LODs"))?;
     progress("sampling the animation");
