@@ -68,7 +68,7 @@ pub struct SpectralReport {
     pub loops: bool,
     /// Billboards bound to a shared bone.
     pub shared_bone_billboards: usize,
-    /// Cosine terms over all billboards and axes.
+    /// Cosine terms over all billboards and axes, before the screen budget prunes them.
     pub terms: usize,
     /// Seconds: zones + descriptions, k-means.
     pub t_describe: f64,
@@ -84,7 +84,7 @@ fn bone_nodes(tree: &Tree, sampled: &Sampled) -> Vec<Option<usize>> {
         .collect()
 }
 
-/// The deepest node that is `nodes`' own or an ancestor of every one of them, or None when a
+/// The deepest rig node that is each of `nodes` or an ancestor of it, or None when a
 /// node is None or they share none.
 pub fn deepest_shared(rig_nodes: &[frond_scene::Node], nodes: &[Option<usize>]) -> Option<usize> {
     let first = (*nodes.first()?)?;
@@ -150,7 +150,8 @@ pub struct ZoneClustering<T: DescriptionType> {
     pub report: SpectralReport,
 }
 
-/// Steps 1 of SCA on animation zones: describe every zone, cluster the descriptions.
+/// SCA step 1 on animation zones (§4.11, App. C.1–C.2): describe every zone, cluster the
+/// descriptions with k-means (skeleton start + restarts).
 pub fn cluster_zones<T: DescriptionType>(
     tree: &Tree,
     sampled: &Sampled,
