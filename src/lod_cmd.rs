@@ -199,6 +199,9 @@ pub struct LodEntry {
     pub spectral_files: Option<Vec<String>>,
     /// Bytes of the coefficient texture (`--animation spectral`), or of the VAT textures.
     pub animation_bytes: usize,
+    /// `--animation spectral`: what EXR VAT textures of the same LOD would take (encoded, not
+    /// written), for comparison.
+    pub vat_equivalent_bytes: Option<usize>,
     /// What spectral clustering did (spectral LODs only).
     pub spectral: Option<SpectralReport>,
     pub timings_s: LodTimings,
@@ -577,6 +580,7 @@ fn build_lod0(tree: &Tree, name: &str) -> BuiltLod {
             vat: None,
             spectral_files: None,
             animation_bytes: 0,
+            vat_equivalent_bytes: None,
             spectral: None,
             timings_s: LodTimings::default(),
         },
@@ -746,6 +750,13 @@ fn build_lod(
             .map(|v| v.position.bytes.len() + v.rotation.bytes.len())
             .or(spectral_tex.as_ref().map(|t| t.image.bytes.len()))
             .unwrap_or(0),
+        vat_equivalent_bytes: match &spectral_tex {
+            Some(_) => {
+                let v = vat_textures(&cloud, VatFormat::ExrHalf, "vat")?;
+                Some(v.position.bytes.len() + v.rotation.bytes.len())
+            }
+            None => None,
+        },
         spectral,
         timings_s: LodTimings {
             build: build_t,

@@ -225,6 +225,13 @@ fn spectral_lods_validate_and_carry_their_coefficients() {
         let tex = std::fs::read(out.join(files[0].as_str().expect("exr"))).expect("texture");
         assert_eq!(sidecar["bytes"].as_u64(), Some(tex.len() as u64));
         assert_eq!(l["animation_bytes"].as_u64(), Some(tex.len() as u64));
+        assert!(
+            l["vat_equivalent_bytes"]
+                .as_u64()
+                .expect("VAT size beside it")
+                > tex.len() as u64,
+            "the coefficients are smaller than VAT"
+        );
         let img = image::load_from_memory_with_format(&tex, image::ImageFormat::OpenExr)
             .expect("EXR decodes");
         // Blocks of 2·terms texels per billboard, `per_row` to a row.
