@@ -163,7 +163,8 @@ pub struct LodRequest {
     pub msft_lod: bool,
     /// Spectral clusters per LOD (None: the k rule, see [`SpectralParams::clusters`]).
     pub clusters: Option<usize>,
-    /// Animation zone size ("0.5" or "1%"; None: the LOD's ε).
+    /// Animation zone size ("0.5" or "1%"; None: [`DEFAULT_ZONE_FRACTION`] of the diagonal or
+    /// the LOD's ε, the larger).
     pub zone_size: Option<String>,
     /// Bind spectral billboards to their triangles' deepest shared bone (spec §4.12).
     pub shared_bone: bool,
@@ -496,7 +497,8 @@ pub fn run_lod(
     for (f, bytes) in combined.external {
         files.push((out_dir.join(f), bytes));
     }
-    files.extend(shader_files(req, out_dir));
+    let spectral_written = built.iter().any(|b| b.spectral.is_some());
+    files.extend(shader_files(req, spectral_written, out_dir));
     let t_written = Instant::now();
 
     let mut report = LodReport {
@@ -530,12 +532,17 @@ pub fn run_lod(
     Ok(report)
 }
 
-/// The reference shaders, copied next to VAT output.
-fn shader_files(req: &LodRequest, out_dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+/// The reference shaders, copied next to VAT output and next to spectral textures (when a LOD
+/// wrote one).
+fn shader_files(
+    req: &LodRequest,
+    spectral_written: bool,
+    out_dir: &Path,
+) -> Vec<(PathBuf, Vec<u8>)> {
     let set = match req.animation {
-        AnimationMode::Skin => return Vec::new(),
         AnimationMode::Vat(_) => frond_export::shaders::SHADERS,
-        AnimationMode::Spectral => frond_export::shaders::SPECTRAL_SHADERS,
+        AnimationMode::Spectral if spectral_written => frond_export::shaders::SPECTRAL_SHADERS,
+        _ => return Vec::new(),
     };
     set.iter()
         .map(|(file, text)| (out_dir.join("shaders").join(file), text.as_bytes().to_vec()))
@@ -751,10 +758,10 @@ fn build_lod(
             .or(spectral_tex.as_ref().map(|t| t.image.bytes.len()))
             .unwrap_or(0),
         vat_equivalent_bytes: match &spectral_tex {
-            Some(_) => {
-                let v = vat_textures(&cloud, VatFormat::ExrHalf, "vat")?;
-                Some(v.position.bytes.len() + v.rotation.bytes.len())
-            }
+            // For comparison only: a LOD VAT cannot hold (too large) just has no figure.
+            Some(_) => vat_textures(&cloud, VatFormat::ExrHalf, "vat")
+                .ok()
+                .map(|v| v.position.bytes.len() + v.rotation.bytes.len()),
             None => None,
         },
         spectral,

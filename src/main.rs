@@ -74,12 +74,12 @@ struct BuildArgs {
     /// Supersamples per texel side when baking (1-16; 4 = 4×4, 2 is ~2.5× faster).
     #[arg(long, default_value_t = 4)]
     supersample: u32,
-    /// Spectral methods: animation clusters per LOD (default: the smallest power of two whose
-    /// RMS motion residual is under the LOD's pixel, at most 256).
+    /// Spectral methods: animation clusters per LOD (default: one per 10 pixels of screen
+    /// height, at least 1).
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..))]
     clusters: Option<u64>,
     /// Spectral methods: animation zone size, a length or % of the diagonal (default: 2% or
-    /// the LOD's ε, the larger; 0 describes every triangle).
+    /// the LOD's ε, the larger; 0: a zone per triangle, triangles with one centre sharing one).
     #[arg(long, value_name = "SIZE")]
     zone_size: Option<String>,
     /// Spectral methods: no shared-bone binding; billboards translate in world space only.
@@ -239,7 +239,7 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
         /// Clustering: auto (see the README's rule), per-bone, static, or spectral (SCA with
-        /// the dominating-axis type; spectral-naive, spectral-dominating-axis and
+        /// the axis-phase type; spectral-naive, spectral-dominating-axis and
         /// spectral-axis-phase name the type).
         #[arg(long, default_value = "auto", value_parser = clap::builder::PossibleValuesParser::new(METHOD_NAMES))]
         method: String,

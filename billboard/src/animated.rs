@@ -186,19 +186,23 @@ impl SpectralMotion {
         }
         terms.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
         let mut budget = 0.0f32;
-        let mut drop = vec![Vec::new(); 3];
+        let mut drop: Vec<Vec<bool>> = self
+            .axes
+            .iter()
+            .map(|a| vec![false; a.amplitudes.len()])
+            .collect();
         for (a, c, j) in terms {
             if budget + a >= tolerance {
                 break;
             }
             budget += a;
-            drop[c].push(j);
+            drop[c][j] = true;
         }
         let mut dropped = 0;
         for (axis, d) in self.axes.iter_mut().zip(drop) {
             let mut keep = Components::none();
-            for j in 0..axis.amplitudes.len() {
-                if d.contains(&j) {
+            for (j, &gone) in d.iter().enumerate() {
+                if gone {
                     dropped += 1;
                     continue;
                 }

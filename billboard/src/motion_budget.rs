@@ -44,7 +44,7 @@ pub struct Dropped {
     /// Rig nodes (bones or their parents) removed because nothing they move is left.
     pub nodes_pruned: usize,
     /// Cosine terms of spectral motions whose amplitudes sum to under a quarter pixel per
-    /// billboard (so, with the half-pixel rules above, no corner strays a pixel).
+    /// billboard (applied first, so with the half-pixel rules no corner strays a pixel).
     pub frequencies_under_quarter_pixel: usize,
 }
 

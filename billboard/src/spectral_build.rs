@@ -190,21 +190,17 @@ pub fn cluster_zones<T: DescriptionType>(
             _ => 0.0,
         })
         .collect();
-    let run = |k: usize| {
-        let c = cluster_descriptions(
-            &ty,
-            &descriptions,
-            &weights,
-            k,
-            Some((&label, &dist)),
-            sp.restarts,
-            sp.seed,
-            sp.max_iterations,
-        );
-        let r = residual(&ty, &c, &trajectories, &weights);
-        (c, r)
-    };
-    let (c, res) = run(sp.clusters);
+    let c = cluster_descriptions(
+        &ty,
+        &descriptions,
+        &weights,
+        sp.clusters,
+        Some((&label, &dist)),
+        sp.restarts,
+        sp.seed,
+        sp.max_iterations,
+    );
+    let res = residual(&ty, &c, &trajectories, &weights);
     let report = SpectralReport {
         kind: sp.kind.name().into(),
         clusters: c.centroids.len(),
@@ -260,7 +256,8 @@ pub fn residual<T: DescriptionType>(
         .par_iter()
         .map(|d| ty.apply(d, trajectories.first().map_or(0, |t| t.len())))
         .collect();
-    let (sum, total) = trajectories
+    // Per zone in parallel, summed in order: the same value whatever the threads.
+    let parts: Vec<(f64, f64)> = trajectories
         .par_iter()
         .zip(&c.assignment)
         .zip(weights)
@@ -274,7 +271,8 @@ pub fn residual<T: DescriptionType>(
                 .sum();
             (f64::from(w * sq / n), f64::from(w))
         })
-        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+        .collect();
+    let (sum, total) = parts.iter().fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
     if total > 0.0 {
         (sum / total).sqrt() as f32
     } else {

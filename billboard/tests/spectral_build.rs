@@ -232,6 +232,17 @@ fn deepest_shared_bone_and_pruning() {
     assert_eq!(deepest_shared(nodes, &[Some(child)]), Some(child));
     assert_eq!(deepest_shared(nodes, &[Some(child), None]), None);
     assert_eq!(deepest_shared(nodes, &[]), None);
+    // Two siblings share their parent, which is neither of them; with a grandchild of one of
+    // them, still that parent.
+    let parent = (0..nodes.len())
+        .find(|&i| nodes[i].children.len() >= 2)
+        .expect("a node with two children");
+    let (a, b) = (nodes[parent].children[0], nodes[parent].children[1]);
+    assert_eq!(deepest_shared(nodes, &[Some(a), Some(b)]), Some(parent));
+    if let Some(&g) = nodes[a].children.first() {
+        assert_eq!(deepest_shared(nodes, &[Some(g), Some(b)]), Some(parent));
+        assert_eq!(deepest_shared(nodes, &[Some(g), Some(a)]), Some(a));
+    }
 
     let axis = |f: Vec<usize>, a: Vec<f32>| Components {
         phases: vec![0.0; f.len()],

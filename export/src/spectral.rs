@@ -95,6 +95,12 @@ pub fn encode_spectral(
     for (i, list) in billboards.iter().enumerate() {
         let start = (i / per_row) * width as usize + block * (i % per_row);
         for (j, t) in list.iter().enumerate() {
+            if t.frequency > 2048.0 {
+                return Err(VatError::FrequencyTooHigh {
+                    piece: i,
+                    frequency: t.frequency,
+                });
+            }
             let values = [
                 t.frequency,
                 t.amplitude[0],

@@ -203,6 +203,11 @@ pub enum VatError {
         height: u64,
         max: u32,
     },
+    #[error(
+        "billboard {piece}: frequency {frequency} is above 2048 cycles per loop, which half \
+         floats cannot hold exactly (sample the loop with at most 4096 samples)"
+    )]
+    FrequencyTooHigh { piece: usize, frequency: f32 },
     #[error("the positions span more than f32 can hold")]
     RangeOverflow,
     #[error("invalid maximum texture size {0}")]

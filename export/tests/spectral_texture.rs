@@ -123,6 +123,16 @@ fn texture_holds_the_terms_and_evaluates_like_the_dft() {
         phase: [0.0; 3],
     }]];
     assert!(encode_spectral(&bad, 1.0, 0.0, None, "x.exr").is_err());
+    // Half floats hold whole numbers exactly only up to 2048.
+    let high = vec![vec![SpectralTerm {
+        frequency: 2049.0,
+        amplitude: [0.1, 0.0, 0.0],
+        phase: [0.0; 3],
+    }]];
+    assert!(matches!(
+        encode_spectral(&high, 1.0, 0.0, None, "x.exr"),
+        Err(VatError::FrequencyTooHigh { piece: 0, .. })
+    ));
 }
 
 /// The WGSL reference behind a compute entry point: one (row, u) query per invocation.

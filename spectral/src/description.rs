@@ -223,8 +223,8 @@ fn weighted_phase_difference(a: (&[f32], &[f32]), b: (&[f32], &[f32])) -> f32 {
     if total <= 0.0 {
         return 0.0;
     }
-    // Frequencies with under 0.1 % of the energy change the result by under 0.1 % · π: skip
-    // their trigonometry (most of a leaf's spectrum is such noise).
+    // Skip the trigonometry of frequencies that each carry under 0.1 % of the weight (most of
+    // a leaf's spectrum is such noise); each would add under 0.1 % · π.
     let floor = 1e-3 * total;
     let mut sum = 0.0f32;
     for i in 0..len {
@@ -580,7 +580,8 @@ impl DescriptionType for AxisPhase {
                 [0.5 * (w(a, 1) + w(b, 1)), 0.5 * (w(a, 2) + w(b, 2))]
             })
             .collect();
-        // As in the naive deviation: relations with under 0.1 % of the weight are skipped.
+        // As in the naive deviation: relations that each carry under 0.1 % of the weight are
+        // skipped.
         let floor = 1e-3 * weights.iter().map(|w| w[0] + w[1]).sum::<f32>();
         for (i, w) in weights.iter().enumerate() {
             if w[0] > floor {

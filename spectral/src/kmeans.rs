@@ -274,13 +274,15 @@ pub fn skeleton_start<T: DescriptionType>(
     let mut unsplittable = vec![false; clusters.len()];
     let variance = |m: &[usize]| -> f64 {
         let a = average(m);
-        m.par_iter()
+        // Deviations in parallel, summed in order: the same variance whatever the threads.
+        let squares: Vec<f64> = m
+            .par_iter()
             .map(|&i| {
                 let d = f64::from(ty.deviation(&descs[i], &a));
                 d * d
             })
-            .sum::<f64>()
-            / m.len().max(1) as f64
+            .collect();
+        squares.iter().sum::<f64>() / m.len().max(1) as f64
     };
     // Variances change only for the two halves of a split: kept per cluster.
     let mut variances: Vec<f64> = if clusters.len() < k {
