@@ -15,6 +15,7 @@ use frond_billboard::animated_build::{
 use frond_billboard::cloud::{CloudParams, parse_epsilon};
 use frond_billboard::motion_budget::{Dropped, ScreenBudget, apply_budget};
 use frond_billboard::plane_search::SearchParams;
+use frond_billboard::skeleton_build::build_skeleton_cloud;
 use frond_billboard::spectral_build::{SpectralParams, SpectralReport, build_spectral_cloud};
 use frond_export::lod_file::{FileOptions, write_glb};
 use frond_export::mapping::Mapping;
@@ -25,6 +26,7 @@ use frond_export::{GltfFile, LodInput};
 use frond_render::Renderer;
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{Part, Sampled, Tree};
+use frond_skeleton::{BoneDescriptionKind, SkeletonParams, SkeletonReport};
 use frond_spectral::description::SpectralKind;
 use serde::Serialize;
 
@@ -41,10 +43,15 @@ pub enum Method {
     Static,
     /// Spectral clustering (SCA) with one description type.
     Spectral(SpectralKind),
+    /// Skeleton simplification (SBCS) with one bone description type.
+    Skeleton(BoneDescriptionKind),
 }
 
 /// The description type `--method spectral` uses.
 pub const DEFAULT_SPECTRAL: SpectralKind = SpectralKind::AxisPhase;
+
+/// The bone description type `--method skeleton` uses.
+pub const DEFAULT_SKELETON: BoneDescriptionKind = BoneDescriptionKind::RotationSpectral;
 
 /// Default animation zone size as a fraction of the bounding-box diagonal (or the LOD's ε when
 /// larger): oak_dense's 116k triangles become ~4,400 zones, which k-means clusters in ~1 s.
@@ -59,6 +66,9 @@ pub const METHOD_NAMES: &[&str] = &[
     "spectral-naive",
     "spectral-dominating-axis",
     "spectral-axis-phase",
+    "skeleton",
+    "skeleton-axis-angle",
+    "skeleton-rotation-spectral",
 ];
 
 impl Method {
@@ -69,10 +79,16 @@ impl Method {
             "per-bone" => Some(Method::PerBone),
             "static" => Some(Method::Static),
             "spectral" => Some(Method::Spectral(DEFAULT_SPECTRAL)),
+            "skeleton" => Some(Method::Skeleton(DEFAULT_SKELETON)),
             _ => s
                 .strip_prefix("spectral-")
                 .and_then(SpectralKind::parse)
-                .map(Method::Spectral),
+                .map(Method::Spectral)
+                .or_else(|| {
+                    s.strip_prefix("skeleton-")
+                        .and_then(BoneDescriptionKind::parse)
+                        .map(Method::Skeleton)
+                }),
         }
     }
     /// The name `--method` takes (spectral methods with their type).
@@ -84,6 +100,8 @@ impl Method {
             Method::Spectral(SpectralKind::Naive) => "spectral-naive",
             Method::Spectral(SpectralKind::DominatingAxis) => "spectral-dominating-axis",
             Method::Spectral(SpectralKind::AxisPhase) => "spectral-axis-phase",
+            Method::Skeleton(BoneDescriptionKind::AxisAngle) => "skeleton-axis-angle",
+            Method::Skeleton(BoneDescriptionKind::RotationSpectral) => "skeleton-rotation-spectral",
         }
     }
 }
@@ -120,6 +138,13 @@ pub fn auto_method(lod_index: usize, spectral_animation: bool) -> (Method, &'sta
 /// 200 px), at least 1.
 pub fn spectral_k(screen_height: f32) -> usize {
     ((screen_height / 10.0).round() as usize).max(1)
+}
+
+/// The skeleton cloud budget rule: one billboard cloud per 5 pixels of tree height (120 at
+/// 600 px, 40 at 200 px, 12 at 60 px), at least 1. A cloud needs 2–3 billboards to look solid
+/// from every side (spec §6.6) and a billboard a few pixels, so finer clouds cannot be seen.
+pub fn skeleton_clouds(screen_height: f32) -> usize {
+    ((screen_height / 5.0).round() as usize).max(1)
 }
 
 /// How billboards are animated in the files.
@@ -168,6 +193,10 @@ pub struct LodRequest {
     pub zone_size: Option<String>,
     /// Bind spectral billboards to their triangles' deepest shared bone (spec §4.12).
     pub shared_bone: bool,
+    /// Skeleton billboard clouds per LOD (None: [`skeleton_clouds`]).
+    pub clouds: Option<usize>,
+    /// Skeleton method: the average-animation-bone improvement (spec §6.1, thesis §7.1.2).
+    pub average_bone: bool,
     pub resolution: f32,
     pub external_textures: bool,
 }
@@ -205,6 +234,8 @@ pub struct LodEntry {
     pub vat_equivalent_bytes: Option<usize>,
     /// What spectral clustering did (spectral LODs only).
     pub spectral: Option<SpectralReport>,
+    /// What skeleton simplification did (skeleton LODs only).
+    pub skeleton: Option<SkeletonReport>,
     pub timings_s: LodTimings,
 }
 
@@ -350,6 +381,13 @@ pub fn run_lod(
         tracing::warn!(
             "--clusters, --zone-size and --no-shared-bone act on spectral methods only; \
              method '{}' ignores them",
+            req.method.name()
+        );
+    }
+    let skeleton_options = req.clouds.is_some() || req.average_bone;
+    if skeleton_options && !matches!(req.method, Method::Skeleton(_)) {
+        tracing::warn!(
+            "--clouds and --average-bone act on skeleton methods only; method '{}' ignores them",
             req.method.name()
         );
     }
@@ -589,6 +627,7 @@ fn build_lod0(tree: &Tree, name: &str) -> BuiltLod {
             animation_bytes: 0,
             vat_equivalent_bytes: None,
             spectral: None,
+            skeleton: None,
             timings_s: LodTimings::default(),
         },
         content: LodContent::Input(rig),
@@ -634,7 +673,25 @@ fn build_lod(
     params.bake.padding = req.padding;
     let diag = rest_diagonal(tree);
     let mut spectral = None;
+    let mut skeleton = None;
     let (mut cloud, build_t) = match method {
+        Method::Skeleton(kind) => {
+            let sk = SkeletonParams {
+                kind,
+                clouds: req.clouds,
+                average_bone: req.average_bone,
+                bins: tree.skeleton_depth().max(1) as usize,
+                attach_tolerance: 0.5 * level.pixel,
+                displacement_tolerance: level.pixel,
+            };
+            let (cloud, t, report) =
+                build_skeleton_cloud(renderer, tree, sampled, clock.clone(), &params, &sk, diag)?;
+            if let Some(why) = &report.stopped_by {
+                tracing::warn!("LOD{}: {why}", k + 1);
+            }
+            skeleton = Some(report);
+            (cloud, t)
+        }
         Method::Spectral(kind) => {
             let zone_size = match &req.zone_size {
                 Some(z) => parse_epsilon(z, diag).with_context(|| {
@@ -765,6 +822,7 @@ fn build_lod(
             None => None,
         },
         spectral,
+        skeleton,
         timings_s: LodTimings {
             build: build_t,
             budget: (t2 - t1).as_secs_f64(),

@@ -85,6 +85,14 @@ struct BuildArgs {
     /// Spectral methods: no shared-bone binding; billboards translate in world space only.
     #[arg(long)]
     no_shared_bone: bool,
+    /// Skeleton methods: billboard clouds per LOD (default: one per 5 pixels of screen
+    /// height, at least 1).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    clouds: Option<u64>,
+    /// Skeleton methods: merged bones keep their own animation and only their foliage turns
+    /// by the common rotation (thesis §7.1.2; the foliage then drifts off its branch).
+    #[arg(long)]
+    average_bone: bool,
 }
 
 impl BuildArgs {
@@ -110,6 +118,12 @@ impl BuildArgs {
         }
         if self.no_shared_bone {
             a.push("--no-shared-bone".to_string());
+        }
+        if let Some(c) = self.clouds {
+            a.extend(["--clouds".to_string(), c.to_string()]);
+        }
+        if self.average_bone {
+            a.push("--average-bone".to_string());
         }
         a
     }
@@ -238,9 +252,10 @@ enum Command {
         /// Output folder.
         #[arg(short, long)]
         output: PathBuf,
-        /// Clustering: auto (see the README's rule), per-bone, static, or spectral (SCA with
+        /// Clustering: auto (see the README's rule), per-bone, static, spectral (SCA with
         /// the axis-phase type; spectral-naive, spectral-dominating-axis and
-        /// spectral-axis-phase name the type).
+        /// spectral-axis-phase name the type) or skeleton (SBCS with the rotation-spectral
+        /// bone type; skeleton-axis-angle and skeleton-rotation-spectral name the type).
         #[arg(long, default_value = "auto", value_parser = clap::builder::PossibleValuesParser::new(METHOD_NAMES))]
         method: String,
         /// Screen heights in pixels the whole tree covers, one LOD each, nearest first.
@@ -597,6 +612,8 @@ fn run(cli: Cli) -> Result<()> {
                 clusters: build.clusters.map(|k| k as usize),
                 zone_size: build.zone_size.clone(),
                 shared_bone: !build.no_shared_bone,
+                clouds: build.clouds.map(|c| c as usize),
+                average_bone: build.average_bone,
             };
             let bar = Spinner::new();
             let result = run_lod(&renderer, &tree, &req, &output, &|m: &str| bar.say(m));

@@ -26,6 +26,9 @@ pub struct Rig {
     pub order: Vec<usize>,
     /// Clips over these nodes; each keeps the input's name, start and end.
     pub clips: Vec<Clip>,
+    /// Some nodes' channels were resampled from the loop clock's clip alone (skeleton
+    /// simplification): only that clip plays correctly.
+    pub resampled: bool,
 }
 
 impl Rig {
@@ -35,6 +38,7 @@ impl Rig {
             nodes: tree.nodes.clone(),
             order: tree.node_order.clone(),
             clips: tree.clips.clone(),
+            resampled: false,
         }
     }
 
@@ -294,7 +298,8 @@ pub struct AnimatedBillboardCloud {
     /// The samples [`RigidMotion`] refers to.
     pub clock: LoopClock,
     /// Clips the cloud can play correctly (indices into `rig.clips`): every clip when no
-    /// billboard has its own motion, only the clock's clip otherwise.
+    /// billboard has its own motion and the rig was not resampled, only the clock's clip
+    /// otherwise.
     pub playable_clips: Vec<usize>,
 }
 
@@ -342,7 +347,7 @@ impl AnimatedBillboardCloud {
     /// Recomputes which clips are playable from the billboards' motions.
     pub fn update_playable_clips(&mut self) {
         let own_motion = self.billboards.iter().any(|b| b.motion.is_some());
-        self.playable_clips = if own_motion {
+        self.playable_clips = if own_motion || self.rig.resampled {
             self.clock.clip.into_iter().collect()
         } else {
             (0..self.rig.clips.len()).collect()

@@ -12,7 +12,7 @@ pub mod plane;
 pub mod plane_search;
 pub mod quad;
 pub mod rectangle;
-pub mod rigid_fit;
+pub mod skeleton_build;
 pub mod soup;
 pub mod spectral_build;
 

@@ -11,7 +11,7 @@ use serde::Serialize;
 
 use crate::animated::{AnimatedBillboardCloud, RigidMotion};
 use crate::animated_build::sampled_worlds;
-use crate::rigid_fit::rigid_fit;
+use frond_scene::rigid_fit::rigid_fit;
 
 /// What one LOD can show.
 #[derive(Clone, Copy, Debug)]

@@ -24,7 +24,7 @@ use crate::animated_build::{
     BuildTimings, Driver, FoliageCluster, build_animated_cloud, sampled_worlds,
 };
 use crate::cloud::{CloudError, CloudParams};
-use crate::rigid_fit::rigid_fit;
+use frond_scene::rigid_fit::rigid_fit;
 
 /// What SCA is asked for.
 #[derive(Clone, Debug)]

@@ -11,6 +11,7 @@ pub mod gltf_source;
 pub mod gltf_writer;
 pub mod import;
 pub mod model;
+pub mod rigid_fit;
 pub mod sampling;
 pub mod skinning;
 pub mod surface_distance;

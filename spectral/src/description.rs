@@ -359,7 +359,7 @@ pub struct AxisDesc {
 
 /// Principal eigenvector of a symmetric 3×3 matrix by power iteration from the largest column
 /// (deterministic; the matrices here are sums of outer products, positive semi-definite).
-fn principal_axis(m: Mat3) -> Vec3 {
+pub fn principal_axis(m: Mat3) -> Vec3 {
     let cols = [m.x_axis, m.y_axis, m.z_axis];
     let mut v = cols
         .iter()

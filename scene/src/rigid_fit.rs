@@ -4,7 +4,7 @@
 //! spec animated-billboard-clouds §1.4: billboards move rigidly). Written here rather than
 //! pulling in a linear-algebra crate for one 4×4 eigenproblem.
 
-use glam::{Affine3A, DQuat, DVec3, Vec3};
+use glam::{Affine3A, DQuat, DVec3, Quat, Vec3};
 
 /// The rotation and translation that move `from` onto `to` with the least summed squared
 /// distance. Returns the identity for empty input; collinear input gives one of the optimal
@@ -17,17 +17,48 @@ pub fn rigid_fit(from: &[Vec3], to: &[Vec3]) -> Affine3A {
     let inv = 1.0 / n as f64;
     let ca = from[..n].iter().map(|p| p.as_dvec3()).sum::<DVec3>() * inv;
     let cb = to[..n].iter().map(|p| p.as_dvec3()).sum::<DVec3>() * inv;
+    let s = cross_covariance(
+        from[..n]
+            .iter()
+            .zip(&to[..n])
+            .map(|(a, b)| (a.as_dvec3() - ca, b.as_dvec3() - cb, 1.0)),
+    );
+    let rot = horn_rotation(s);
+    let t = cb - rot * ca;
+    Affine3A::from_rotation_translation(rot.as_quat(), t.as_vec3())
+}
+
+/// The rotation `R` about the fixed point `pivot` that moves `from` onto `to` with the least
+/// weighted summed squared distance, `Σ w |pivot + R(a − pivot) − b|²`: Horn's method without
+/// the centroid step (a joint turning about its pivot, spec animated-billboard-clouds §6.3
+/// "joint animation"). Identity for empty or all-zero-weight input.
+pub fn pivot_rotation_fit(pivot: Vec3, from: &[Vec3], to: &[Vec3], weights: &[f32]) -> Quat {
+    let p = pivot.as_dvec3();
+    let s = cross_covariance(
+        from.iter()
+            .zip(to)
+            .zip(weights)
+            .map(|((a, b), &w)| (a.as_dvec3() - p, b.as_dvec3() - p, f64::from(w))),
+    );
+    horn_rotation(s).as_quat()
+}
+
+/// `Σ w a bᵀ` over centred pairs.
+fn cross_covariance(pairs: impl Iterator<Item = (DVec3, DVec3, f64)>) -> [[f64; 3]; 3] {
     let mut s = [[0.0f64; 3]; 3];
-    for (a, b) in from[..n].iter().zip(&to[..n]) {
-        let a = a.as_dvec3() - ca;
-        let b = b.as_dvec3() - cb;
-        let (a, b) = (a.to_array(), b.to_array());
+    for (a, b, w) in pairs {
+        let (a, b) = ((a * w).to_array(), b.to_array());
         for i in 0..3 {
             for j in 0..3 {
                 s[i][j] += a[i] * b[j];
             }
         }
     }
+    s
+}
+
+/// The rotation maximising `Σ b·R a` from the cross-covariance (Horn's symmetric 4×4 matrix).
+fn horn_rotation(s: [[f64; 3]; 3]) -> DQuat {
     let [[sxx, sxy, sxz], [syx, syy, syz], [szx, szy, szz]] = s;
     let m = [
         [sxx + syy + szz, syz - szy, szx - sxz, sxy - syx],
@@ -37,13 +68,7 @@ pub fn rigid_fit(from: &[Vec3], to: &[Vec3]) -> Affine3A {
     ];
     let q = largest_eigenvector(m);
     let rot = DQuat::from_xyzw(q[1], q[2], q[3], q[0]).normalize();
-    let rot = if rot.is_finite() {
-        rot
-    } else {
-        DQuat::IDENTITY
-    };
-    let t = cb - rot * ca;
-    Affine3A::from_rotation_translation(rot.as_quat(), t.as_vec3())
+    if rot.is_finite() { rot } else { DQuat::IDENTITY }
 }
 
 /// Eigenvector of the largest eigenvalue of a symmetric 4×4 matrix (cyclic Jacobi rotations).
