@@ -50,8 +50,10 @@ pub enum Method {
 /// The description type `--method spectral` uses.
 pub const DEFAULT_SPECTRAL: SpectralKind = SpectralKind::AxisPhase;
 
-/// The bone description type `--method skeleton` uses.
-pub const DEFAULT_SKELETON: BoneDescriptionKind = BoneDescriptionKind::RotationSpectral;
+/// The bone description type `--method skeleton` uses: axis-angle reached fewer clouds at the
+/// same screen tolerance with less foliage error than rotation-spectral on oak_medium and
+/// oak_dense (docs/experiments.md §8).
+pub const DEFAULT_SKELETON: BoneDescriptionKind = BoneDescriptionKind::AxisAngle;
 
 /// Default animation zone size as a fraction of the bounding-box diagonal (or the LOD's ε when
 /// larger): oak_dense's 116k triangles become ~4,400 zones, which k-means clusters in ~1 s.
@@ -106,9 +108,11 @@ impl Method {
     }
 }
 
-/// The fixed rule of `--method auto`, from the issue-5 and issue-6 sweeps (docs/experiments.md
-/// §6–7): the nearest LOD gets `per-bone` (exact animation, most billboards: what a close view
-/// needs); every farther LOD `static` (one cloud, fewest billboards: at matched billboard counts
+/// The fixed rule of `--method auto`, from the issue-5, -6 and -7 sweeps (docs/experiments.md
+/// §6–8): the nearest LOD gets `skeleton` (per-bone clouds, sibling bones merged only where
+/// no leaf moves a pixel and none leaves its branch by half a pixel: per-bone's exact-looking
+/// motion with fewer clouds, and the same LOD as per-bone where nothing merges unseen);
+/// every farther LOD `static` (one cloud, fewest billboards: at matched billboard counts
 /// its animated colour error beat every spectral type on the shared trees), except under
 /// `--animation spectral`, whose compact coefficient texture only spectral motion has: there
 /// farther LODs get `spectral-axis-phase` (of the three types, the lowest colour and motion
@@ -116,8 +120,9 @@ impl Method {
 pub fn auto_method(lod_index: usize, spectral_animation: bool) -> (Method, &'static str) {
     if lod_index == 0 {
         (
-            Method::PerBone,
-            "auto: nearest LOD -> per-bone (exact bone motion, most billboards)",
+            Method::Skeleton(DEFAULT_SKELETON),
+            "auto: nearest LOD -> skeleton (per-bone clouds; sibling bones share a rotation only \
+             where no leaf would move a pixel)",
         )
     } else if spectral_animation {
         (
@@ -138,13 +143,6 @@ pub fn auto_method(lod_index: usize, spectral_animation: bool) -> (Method, &'sta
 /// 200 px), at least 1.
 pub fn spectral_k(screen_height: f32) -> usize {
     ((screen_height / 10.0).round() as usize).max(1)
-}
-
-/// The skeleton cloud budget rule: one billboard cloud per 5 pixels of tree height (120 at
-/// 600 px, 40 at 200 px, 12 at 60 px), at least 1. A cloud needs 2–3 billboards to look solid
-/// from every side (spec §6.6) and a billboard a few pixels, so finer clouds cannot be seen.
-pub fn skeleton_clouds(screen_height: f32) -> usize {
-    ((screen_height / 5.0).round() as usize).max(1)
 }
 
 /// How billboards are animated in the files.
@@ -193,7 +191,8 @@ pub struct LodRequest {
     pub zone_size: Option<String>,
     /// Bind spectral billboards to their triangles' deepest shared bone (spec §4.12).
     pub shared_bone: bool,
-    /// Skeleton billboard clouds per LOD (None: [`skeleton_clouds`]).
+    /// Skeleton billboard clouds per LOD (None: the LOD's own rule, merges no eye can see at
+    /// its pixel size: at most a pixel of foliage motion, half a pixel off a branch).
     pub clouds: Option<usize>,
     /// Skeleton method: the average-animation-bone improvement (spec §6.1, thesis §7.1.2).
     pub average_bone: bool,

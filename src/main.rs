@@ -85,8 +85,8 @@ struct BuildArgs {
     /// Spectral methods: no shared-bone binding; billboards translate in world space only.
     #[arg(long)]
     no_shared_bone: bool,
-    /// Skeleton methods: billboard clouds per LOD (default: one per 5 pixels of screen
-    /// height, at least 1).
+    /// Skeleton methods: billboard clouds per LOD (default: as few as merges that cannot be
+    /// seen at the LOD's size allow; a budget CJR cannot reach collapses sibling bones).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     clouds: Option<u64>,
     /// Skeleton methods: merged bones keep their own animation and only their foliage turns

@@ -1,6 +1,7 @@
 //! `frond lod` end to end: the files, report.json, the Khronos validator on every output, a
 //! round trip through our own importer (billboard corners where the pipeline meant them), the
-//! per-bone ε property, VAT decoding back to motion, determinism and bad arguments.
+//! per-bone ε property, VAT decoding back to motion, skeleton LODs whose foliage stays on its
+//! branches, determinism and bad arguments.
 
 mod common;
 
@@ -13,12 +14,14 @@ use frond_billboard::animated_build::{
 };
 use frond_billboard::cloud::CloudParams;
 use frond_billboard::motion_budget::{ScreenBudget, apply_budget};
+use frond_billboard::skeleton_build::build_skeleton_cloud;
 use frond_billboard::spectral_build::{SpectralParams, build_spectral_cloud};
 use frond_export::LodInput;
 use frond_export::lod_file::{FileOptions, write_glb};
 use frond_export::vat::{VatFormat, decode_rigid};
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, SampleOptions, Sampled, Tree, import, import_bytes, sample};
+use frond_skeleton::{BoneDescriptionKind, SkeletonParams};
 use frond_spectral::description::SpectralKind;
 
 fn sapling() -> PathBuf {
@@ -68,7 +71,7 @@ fn skin_lods_are_valid_and_reported() {
         }
     }
     // The rule of --method auto.
-    assert_eq!(lods[1]["method"], "per-bone");
+    assert_eq!(lods[1]["method"], "skeleton-axis-angle");
     assert_eq!(lods[2]["method"], "static");
     // Nearer LODs cost more: ε grows and billboards shrink in number with distance.
     let num = |k: usize, key: &str| lods[k][key].as_f64().expect(key);
@@ -666,4 +669,164 @@ fn bone_bound_lods_keep_every_clip_and_rigid_fit_lods_say_what_they_drop() {
     let tree = import(&out.join("two_clips_lods.glb"), &ImportOptions::default()).expect("import");
     let names: Vec<&str> = tree.clips.iter().map(|c| c.name.as_str()).collect();
     assert_eq!(names, ["Wind", "Gust"]);
+}
+
+#[test]
+fn skeleton_lods_validate_and_report_what_they_did() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("sk");
+    let report = frond_lod(
+        &sapling(),
+        &out,
+        &["--method", "skeleton", "--lods", "150,30"],
+    );
+    for f in glbs(&out) {
+        assert_valid(&f);
+    }
+    let lods = report["lods"].as_array().expect("lods");
+    for l in &lods[1..] {
+        let sk = &l["skeleton"];
+        assert_eq!(l["method"], "skeleton-axis-angle");
+        assert!(
+            sk["budget"].is_null(),
+            "no --clouds: merges that cannot be seen"
+        );
+        assert_eq!(sk["trunk_on_original_skeleton"], false);
+        assert!(sk["collapses"].as_array().expect("collapses").is_empty());
+        // Attached: no leaf moves more than half a pixel off its branch.
+        let tol = sk["attach_tolerance"].as_f64().expect("tol");
+        assert!(sk["detachment_max"].as_f64().expect("detach") <= tol * 1.01 + 1e-5);
+        assert!(
+            sk["foliage_error_rms"].as_f64().expect("rms")
+                <= sk["displacement_tolerance"].as_f64().expect("disp") * 1.5
+        );
+    }
+    let clouds = |k: usize| lods[k]["skeleton"]["clouds"].as_u64().expect("clouds");
+    assert!(
+        clouds(2)
+            < lods[2]["skeleton"]["foliage_bones"]
+                .as_u64()
+                .expect("bones")
+    );
+    assert!(clouds(2) <= clouds(1), "farther LODs merge more");
+    // A budget CJR alone cannot reach: collapses, the trunk on the input's skeleton.
+    let out1 = dir.path().join("sk1");
+    let report = frond_lod(
+        &sapling(),
+        &out1,
+        &[
+            "--method",
+            "skeleton-axis-angle",
+            "--lods",
+            "60",
+            "--clouds",
+            "2",
+        ],
+    );
+    for f in glbs(&out1) {
+        assert_valid(&f);
+    }
+    let sk = &report["lods"][1]["skeleton"];
+    assert_eq!(sk["trunk_on_original_skeleton"], true);
+    assert!(!sk["collapses"].as_array().expect("collapses").is_empty());
+    assert!(sk["clouds"].as_u64().expect("clouds") == 2 || !sk["stopped_by"].is_null());
+    assert_eq!(
+        report["lods"][1]["clips"].as_array().expect("clips").len(),
+        1
+    );
+}
+
+/// Skeleton clouds of the sapling at `screen` px with `clouds` (None: the default rule).
+fn build_skeleton(screen: f32, clouds: Option<usize>) -> (Built, frond_skeleton::SkeletonReport) {
+    let (tree, sampled, params, pixel) = setup(&sapling(), screen);
+    let clock = LoopClock::of(&tree, &sampled);
+    let renderer = Renderer::new().expect("renderer");
+    let sk = SkeletonParams {
+        kind: BoneDescriptionKind::RotationSpectral,
+        clouds,
+        average_bone: false,
+        bins: 4,
+        attach_tolerance: 0.5 * pixel,
+        displacement_tolerance: pixel,
+    };
+    let (cloud, _, report) = build_skeleton_cloud(
+        &renderer,
+        &tree,
+        &sampled,
+        clock,
+        &params,
+        &sk,
+        tree.bounds.size(),
+    )
+    .expect("cloud");
+    (
+        Built {
+            tree,
+            sampled,
+            cloud,
+            epsilon: pixel,
+        },
+        report,
+    )
+}
+
+#[test]
+fn skeleton_billboards_stay_on_the_wood_they_grew_from() {
+    let (b, report) = build_skeleton(30.0, None);
+    assert!(report.merges > 0, "the test needs merged bones");
+    assert!(!report.trunk_on_original_skeleton);
+    let worlds = sampled_worlds(&b.cloud.rig, &b.cloud.clock);
+    let rest = b.cloud.rest_inverse();
+    let n = worlds.len();
+    let mut worst = 0.0f32;
+    let mut merged = 0;
+    for (i, bb) in b.cloud.billboards.iter().enumerate() {
+        // The wood its triangles grew from: their input bone, which the LOD's wood follows.
+        let t = bb.triangles[0];
+        let bone = b.tree.triangles[t].bone.expect("bound") as usize;
+        let wood = b.tree.bones[bone].node;
+        if bb.follows != Some(wood) {
+            merged += 1;
+        }
+        let local: Vec<glam::Vec3> = (0..n)
+            .map(|s| {
+                let centre = b
+                    .cloud
+                    .transform_at(i, &worlds[s], &rest, s, n)
+                    .transform_point3(bb.quad.center);
+                worlds[s][wood].inverse().transform_point3(centre)
+            })
+            .collect();
+        for l in &local {
+            worst = worst.max(l.distance(local[0]));
+        }
+    }
+    assert!(merged > 0, "some billboards follow a common-rotation bone");
+    // Within the attachment tolerance (half a pixel), as the report says.
+    assert!(
+        worst <= report.attach_tolerance * 1.01 + 1e-5,
+        "a billboard drifts {worst} off its wood (tolerance {})",
+        report.attach_tolerance
+    );
+    assert!(report.detachment_max <= report.attach_tolerance * 1.01 + 1e-5);
+}
+
+#[test]
+fn skeleton_round_trip_with_a_resampled_and_collapsed_rig() {
+    for clouds in [None, Some(2)] {
+        let (mut b, report) = build_skeleton(60.0, clouds);
+        assert_eq!(report.trunk_on_original_skeleton, clouds.is_some());
+        apply_budget(
+            &mut b.cloud,
+            &b.tree,
+            &b.sampled,
+            &ScreenBudget {
+                pixel: b.epsilon,
+                epsilon: b.epsilon,
+            },
+            &[],
+        );
+        assert_eq!(b.cloud.playable_clips, vec![0], "the resampled clip only");
+        round_trip(&b);
+    }
 }

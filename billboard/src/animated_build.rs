@@ -15,8 +15,8 @@ use crate::animated::{AnimatedBillboard, AnimatedBillboardCloud, LoopClock, Rig,
 use crate::bake::bake_cloud;
 use crate::cloud::{CloudError, CloudParams, fit_quad};
 use crate::plane_search::{search_planes, valid_for_plane};
-use frond_scene::rigid_fit::rigid_fit;
 use crate::soup::TriangleSoup;
+use frond_scene::rigid_fit::rigid_fit;
 
 /// How a cluster's billboards move.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

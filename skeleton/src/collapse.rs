@@ -66,7 +66,9 @@ fn descendant_sums(
     rest: &[Mat4],
     i: usize,
 ) -> EndJointSums {
-    let parent_rest_inv = model.nodes[i].parent.map_or(Mat4::IDENTITY, |p| rest[p].inverse());
+    let parent_rest_inv = model.nodes[i]
+        .parent
+        .map_or(Mat4::IDENTITY, |p| rest[p].inverse());
     let to_parent: Vec<Mat4> = (0..model.samples)
         .map(|s| parent_rest_inv * rest[i] * worlds[s][i].inverse())
         .collect();
@@ -131,7 +133,12 @@ pub fn collapse_candidates(
 
 /// Mean rest position of the children's pivots of `nodes` in their parent's rest frame,
 /// weighted by the foliage each child animates (the regularisation's guess for `E_T`).
-fn children_pivot_mean(model: &SkeletonModel, rest: &[Mat4], counts: &[usize], nodes: &[usize]) -> DVec3 {
+fn children_pivot_mean(
+    model: &SkeletonModel,
+    rest: &[Mat4],
+    counts: &[usize],
+    nodes: &[usize],
+) -> DVec3 {
     let parent_inv = model.nodes[nodes[0]]
         .parent
         .map_or(Mat4::IDENTITY, |p| rest[p].inverse());
@@ -167,7 +174,8 @@ pub fn collapse_pair<T: BoneDescriptionType>(
     let db = ty.describe(&model.nodes[b].deltas());
     let deltas = ty.apply(&ty.average(&[&da, &db], &[wa, wb]));
     let total = (wa + wb).max(1.0);
-    let pivot = (model.nodes[a].rest.translation * wa + model.nodes[b].rest.translation * wb) / total;
+    let pivot =
+        (model.nodes[a].rest.translation * wa + model.nodes[b].rest.translation * wb) / total;
     let parent = model.nodes[a].parent;
     let rest = Trs {
         translation: pivot,
@@ -227,7 +235,8 @@ pub fn collapse_pair<T: BoneDescriptionType>(
     let c_rest_inv = c_rest.inverse();
     let c_world: Vec<Mat4> = (0..model.samples)
         .map(|s| {
-            parent.map_or(Mat4::IDENTITY, |p| worlds_before[s][p]) * model.nodes[c_node].track[s].matrix()
+            parent.map_or(Mat4::IDENTITY, |p| worlds_before[s][p])
+                * model.nodes[c_node].track[s].matrix()
         })
         .collect();
     let j_local = j.as_vec3() - pivot;
@@ -251,14 +260,20 @@ pub fn collapse_pair<T: BoneDescriptionType>(
             .iter()
             .map(|r| (r.rest, r.weight))
             .collect();
-        let from: Vec<Vec3> = reps.iter().map(|(p, _)| c_rest_inv.transform_point3(*p)).collect();
+        let from: Vec<Vec3> = reps
+            .iter()
+            .map(|(p, _)| c_rest_inv.transform_point3(*p))
+            .collect();
         let weights: Vec<f32> = reps.iter().map(|(_, w)| *w).collect();
         let old_rest_inv = old_rest.inverse();
         let rotations: Vec<Quat> = (0..model.samples)
             .into_par_iter()
             .map(|s| {
                 let carry = c_world[s].inverse() * worlds_before[s][c] * old_rest_inv;
-                let to: Vec<Vec3> = reps.iter().map(|(p, _)| carry.transform_point3(*p)).collect();
+                let to: Vec<Vec3> = reps
+                    .iter()
+                    .map(|(p, _)| carry.transform_point3(*p))
+                    .collect();
                 pivot_rotation_fit(j_local, &from, &to, &weights)
             })
             .collect();

@@ -104,7 +104,10 @@ mod tests {
         trajs
             .iter()
             .map(|p| {
-                let r2 = p.iter().map(|v| (v.as_dvec3() - j).length_squared()).sum::<f64>()
+                let r2 = p
+                    .iter()
+                    .map(|v| (v.as_dvec3() - j).length_squared())
+                    .sum::<f64>()
                     / p.len() as f64;
                 p.iter()
                     .map(|v| {
@@ -146,8 +149,20 @@ mod tests {
         // Leaves swinging about three different pivots with different axes: no exact sphere
         // centre, a genuine least-squares optimum.
         let trajs = vec![
-            swinging(Vec3::new(0.0, 1.0, 0.0), Vec3::new(1.0, 1.0, 0.2), Vec3::Z, 0.4, 0.0),
-            swinging(Vec3::new(0.2, 1.1, 0.1), Vec3::new(-0.5, 1.2, 0.4), Vec3::X, 0.3, 0.7),
+            swinging(
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.2),
+                Vec3::Z,
+                0.4,
+                0.0,
+            ),
+            swinging(
+                Vec3::new(0.2, 1.1, 0.1),
+                Vec3::new(-0.5, 1.2, 0.4),
+                Vec3::X,
+                0.3,
+                0.7,
+            ),
             swinging(
                 Vec3::new(-0.1, 0.9, 0.3),
                 Vec3::new(0.3, 0.8, -0.9),

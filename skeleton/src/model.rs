@@ -8,7 +8,7 @@
 //! about that pivot, in the parent's frame. Siblings are nodes with the same parent.
 
 use frond_scene::animation::local_pose;
-use frond_scene::{Sampled, Trs, Tree};
+use frond_scene::{Sampled, Tree, Trs};
 use glam::{Mat4, Quat, Vec3};
 use rayon::prelude::*;
 
@@ -195,7 +195,9 @@ impl SkeletonModel {
         for (k, &(node, rest)) in leaves.iter().enumerate() {
             model.nodes[node].foliage.push(k);
             let carry = |s: usize| model.input_world[s][node] * model.input_rest[node].inverse();
-            let trajectory = (0..samples).map(|s| carry(s).transform_point3(rest)).collect();
+            let trajectory = (0..samples)
+                .map(|s| carry(s).transform_point3(rest))
+                .collect();
             model.representatives[node].push(Representative {
                 foliage: k,
                 weight: 1.0,

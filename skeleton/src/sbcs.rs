@@ -156,7 +156,15 @@ fn run<T: BoneDescriptionType>(
         Some(n) => (n, None),
         None => (1, Some(params.displacement_tolerance)),
     };
-    let mut cjr = common_rotation_sets(ty, &model, budget, extra, params.average_bone, attach, max_disp);
+    let mut cjr = common_rotation_sets(
+        ty,
+        &model,
+        budget,
+        extra,
+        params.average_bone,
+        attach,
+        max_disp,
+    );
     let mut split = false;
     if params.clouds.is_some() && cjr.sets.len() + extra > budget {
         // 2. Collapses, only while CJR cannot reach the budget, then CJR on what is left;
@@ -180,7 +188,11 @@ fn run<T: BoneDescriptionType>(
         .iter()
         .map(|m: &Merge| m.deviation)
         .fold(0.0, f32::max);
-    report.max_merge_displacement = cjr.merges.iter().map(|m| m.displacement).fold(0.0, f32::max);
+    report.max_merge_displacement = cjr
+        .merges
+        .iter()
+        .map(|m| m.displacement)
+        .fold(0.0, f32::max);
     let follow = apply_common_rotations(ty, &mut model, &cjr.sets, params.average_bone);
     report.clouds = cjr.sets.len() + extra;
     if let Some(n) = params.clouds
@@ -190,11 +202,7 @@ fn run<T: BoneDescriptionType>(
     }
     report.trunk_on_original_skeleton = split;
     report.attach_tolerance = params.attach_tolerance;
-    report.bones_changed = model
-        .nodes
-        .iter()
-        .filter(|n| n.alive && n.changed)
-        .count();
+    report.bones_changed = model.nodes.iter().filter(|n| n.alive && n.changed).count();
     let rig = materialize(tree, &model, clip, &sampled.times, sampled.period, split);
     let mut sets: Vec<CloudSet> = follow
         .iter()
@@ -238,7 +246,12 @@ fn measure(model: &SkeletonModel, follow: &[usize], split: bool, report: &mut Sk
     let n = model.samples;
     let reps: Vec<(usize, &crate::model::Representative)> = follow
         .iter()
-        .flat_map(|&f| model.node_representatives(f).into_iter().map(move |r| (f, r)))
+        .flat_map(|&f| {
+            model
+                .node_representatives(f)
+                .into_iter()
+                .map(move |r| (f, r))
+        })
         .collect();
     let per: Vec<(f32, f32, f32, f32)> = reps
         .par_iter()
@@ -280,7 +293,12 @@ fn measure(model: &SkeletonModel, follow: &[usize], split: bool, report: &mut Sk
                 d2 += d * d;
                 dmax = dmax.max(d);
             }
-            (e2 / n as f32 * r.weight, emax, d2 / n as f32 * r.weight, dmax)
+            (
+                e2 / n as f32 * r.weight,
+                emax,
+                d2 / n as f32 * r.weight,
+                dmax,
+            )
         })
         .collect();
     let total: f32 = reps.iter().map(|(_, r)| r.weight).sum::<f32>().max(1e-12);
