@@ -317,16 +317,6 @@ pub fn apply_common_rotations<T: BoneDescriptionType>(
             .flat_map(|&m| std::mem::take(&mut model.nodes[m].foliage))
             .collect();
         foliage.sort_unstable();
-        let rest = frond_scene::Trs {
-            translation: pivot,
-            ..frond_scene::Trs::IDENTITY
-        };
-        let track = (0..model.samples)
-            .map(|s| frond_scene::Trs {
-                rotation: deltas.get(s).copied().unwrap_or(Quat::IDENTITY),
-                ..rest
-            })
-            .collect();
         if !average_bone {
             for &m in set {
                 let node = &mut model.nodes[m];
@@ -338,17 +328,14 @@ pub fn apply_common_rotations<T: BoneDescriptionType>(
             }
         }
         let parent = model.nodes[set[0]].parent;
-        let node = model.push(SkNode {
-            name: format!("frond_cjr_{k}"),
+        let node = model.push(SkNode::turning(
+            format!("frond_cjr_{k}"),
             parent,
-            children: Vec::new(),
-            rest,
-            track,
-            source: None,
-            changed: true,
-            alive: true,
+            pivot,
+            &deltas,
+            model.samples,
             foliage,
-        });
+        ));
         follow.push(node);
     }
     follow

@@ -177,16 +177,6 @@ pub fn collapse_pair<T: BoneDescriptionType>(
     let pivot =
         (model.nodes[a].rest.translation * wa + model.nodes[b].rest.translation * wb) / total;
     let parent = model.nodes[a].parent;
-    let rest = Trs {
-        translation: pivot,
-        ..Trs::IDENTITY
-    };
-    let track: Vec<Trs> = (0..model.samples)
-        .map(|s| Trs {
-            rotation: deltas.get(s).copied().unwrap_or(Quat::IDENTITY),
-            ..rest
-        })
-        .collect();
     let mut foliage: Vec<usize> = model.nodes[a]
         .foliage
         .iter()
@@ -218,17 +208,15 @@ pub fn collapse_pair<T: BoneDescriptionType>(
     if let Some(p) = parent {
         model.nodes[p].children.retain(|&c| c != a && c != b);
     }
-    let c_node = model.push(SkNode {
-        name: into,
+    let c_node = model.push(SkNode::turning(
+        into,
         parent,
-        children: Vec::new(),
-        rest,
-        track,
-        source: None,
-        changed: true,
-        alive: true,
+        pivot,
+        &deltas,
+        model.samples,
         foliage,
-    });
+    ));
+    let rest = model.nodes[c_node].rest;
     // World frames of the new bone.
     let parent_rest = parent.map_or(Mat4::IDENTITY, |p| rest_before[p]);
     let c_rest = parent_rest * rest.matrix();

@@ -39,6 +39,38 @@ pub struct SkNode {
 }
 
 impl SkNode {
+    /// A new node under `parent` with its pivot at `pivot` (parent frame), no rest rotation,
+    /// turning by `deltas` (one per sample; identity past their end) and carrying `foliage`.
+    pub fn turning(
+        name: String,
+        parent: Option<usize>,
+        pivot: Vec3,
+        deltas: &[Quat],
+        samples: usize,
+        foliage: Vec<usize>,
+    ) -> SkNode {
+        let rest = Trs {
+            translation: pivot,
+            ..Trs::IDENTITY
+        };
+        SkNode {
+            name,
+            parent,
+            children: Vec::new(),
+            rest,
+            track: (0..samples)
+                .map(|s| Trs {
+                    rotation: deltas.get(s).copied().unwrap_or(Quat::IDENTITY),
+                    ..rest
+                })
+                .collect(),
+            source: None,
+            changed: true,
+            alive: true,
+            foliage,
+        }
+    }
+
     /// The delta rotation at every sample, `R(s)·R_rest⁻¹` (parent frame, about the pivot).
     pub fn deltas(&self) -> Vec<Quat> {
         let inv = self.rest.rotation.inverse();
