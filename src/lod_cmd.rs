@@ -755,14 +755,21 @@ fn build_lod(
     let dropped_clips: Vec<String> = (0..cloud.rig.clips.len())
         .filter(|c| !clips.contains(c))
         .map(|c| {
-            format!(
-                "{}: billboards have their own motion sampled from clip '{}' only",
-                cloud.rig.clips[c].name,
-                clock
-                    .clip
-                    .map(|i| tree.clips[i].name.as_str())
-                    .unwrap_or("-")
-            )
+            let from = clock
+                .clip
+                .map(|i| tree.clips[i].name.as_str())
+                .unwrap_or("-");
+            if cloud.rig.resampled {
+                format!(
+                    "{}: the simplified skeleton was resampled from clip '{from}' only",
+                    cloud.rig.clips[c].name
+                )
+            } else {
+                format!(
+                    "{}: billboards have their own motion sampled from clip '{from}' only",
+                    cloud.rig.clips[c].name
+                )
+            }
         })
         .collect();
     let vat = match req.animation {
