@@ -990,13 +990,17 @@ mod tests {
     fn method_names_round_trip() {
         for name in METHOD_NAMES {
             let m = Method::parse(name).expect("parses");
-            if *name != "spectral" {
+            if *name != "spectral" && *name != "skeleton" {
                 assert_eq!(m.name(), *name);
             }
         }
         assert_eq!(
             Method::parse("spectral"),
             Some(Method::Spectral(DEFAULT_SPECTRAL))
+        );
+        assert_eq!(
+            Method::parse("skeleton"),
+            Some(Method::Skeleton(DEFAULT_SKELETON))
         );
         assert_eq!(Method::parse("spectral-fourier"), None);
         assert_eq!(spectral_k(60.0), 6);
