@@ -68,7 +68,11 @@ fn horn_rotation(s: [[f64; 3]; 3]) -> DQuat {
     ];
     let q = largest_eigenvector(m);
     let rot = DQuat::from_xyzw(q[1], q[2], q[3], q[0]).normalize();
-    if rot.is_finite() { rot } else { DQuat::IDENTITY }
+    if rot.is_finite() {
+        rot
+    } else {
+        DQuat::IDENTITY
+    }
 }
 
 /// Eigenvector of the largest eigenvalue of a symmetric 4×4 matrix (cyclic Jacobi rotations).
