@@ -759,17 +759,15 @@ fn build_lod(
                 .clip
                 .map(|i| tree.clips[i].name.as_str())
                 .unwrap_or("-");
-            if cloud.rig.resampled {
-                format!(
-                    "{}: the simplified skeleton was resampled from clip '{from}' only",
-                    cloud.rig.clips[c].name
-                )
+            let what = if cloud.rig.resampled {
+                "the simplified skeleton was resampled"
             } else {
-                format!(
-                    "{}: billboards have their own motion sampled from clip '{from}' only",
-                    cloud.rig.clips[c].name
-                )
-            }
+                "billboards have their own motion sampled"
+            };
+            format!(
+                "{}: {what} from clip '{from}' only",
+                cloud.rig.clips[c].name
+            )
         })
         .collect();
     let vat = match req.animation {

@@ -40,6 +40,9 @@ pub struct Merge {
 pub struct CommonRotationSets {
     /// Model nodes per set (siblings), in a deterministic order.
     pub sets: Vec<Vec<usize>>,
+    /// Each set's common rotation: the delta rotations its average description applies to
+    /// (empty for a single bone, which keeps its own).
+    pub deltas: Vec<Vec<Quat>>,
     pub merges: Vec<Merge>,
 }
 
@@ -272,9 +275,25 @@ pub fn common_rotation_sets<T: BoneDescriptionType>(
         sets.push(Some(merged));
         alive -= 1;
     }
-    let mut out: Vec<Vec<usize>> = sets.into_iter().flatten().map(|s| s.members).collect();
-    out.sort();
-    CommonRotationSets { sets: out, merges }
+    let mut out: Vec<(Vec<usize>, Vec<Quat>)> = sets
+        .into_iter()
+        .flatten()
+        .map(|s| {
+            let deltas = if s.members.len() > 1 {
+                ty.apply(&s.average)
+            } else {
+                Vec::new()
+            };
+            (s.members, deltas)
+        })
+        .collect();
+    out.sort_by(|a, b| a.0.cmp(&b.0));
+    let (sets, deltas) = out.into_iter().unzip();
+    CommonRotationSets {
+        sets,
+        deltas,
+        merges,
+    }
 }
 
 /// Applies CJR's sets to the model (spec §6.1 "applying a common rotation"): each set of two
@@ -283,26 +302,17 @@ pub fn common_rotation_sets<T: BoneDescriptionType>(
 /// foliage. Without the average-animation-bone improvement (§7.1.2) the member bones turn by the
 /// average too, so their branches and descendants follow it; with it they keep their own
 /// animation and only the foliage moves by the average. Returns each set's node.
-pub fn apply_common_rotations<T: BoneDescriptionType>(
-    ty: &T,
+pub fn apply_common_rotations(
     model: &mut SkeletonModel,
-    sets: &[Vec<usize>],
+    cjr: &CommonRotationSets,
     average_bone: bool,
 ) -> Vec<usize> {
-    let counts = model.animated_counts();
-    let mut follow = Vec::with_capacity(sets.len());
-    for (k, set) in sets.iter().enumerate() {
+    let mut follow = Vec::with_capacity(cjr.sets.len());
+    for (k, (set, deltas)) in cjr.sets.iter().zip(&cjr.deltas).enumerate() {
         if set.len() == 1 {
             follow.push(set[0]);
             continue;
         }
-        let ds: Vec<_> = set
-            .iter()
-            .map(|&m| ty.describe(&model.nodes[m].deltas()))
-            .collect();
-        let refs: Vec<&T::Desc> = ds.iter().collect();
-        let ws: Vec<f32> = set.iter().map(|&m| counts[m] as f32).collect();
-        let deltas: Vec<Quat> = ty.apply(&ty.average(&refs, &ws));
         let direct: f32 = set
             .iter()
             .map(|&m| model.nodes[m].foliage.len() as f32)
@@ -321,7 +331,7 @@ pub fn apply_common_rotations<T: BoneDescriptionType>(
             for &m in set {
                 let node = &mut model.nodes[m];
                 let r = node.rest.rotation;
-                for (t, d) in node.track.iter_mut().zip(&deltas) {
+                for (t, d) in node.track.iter_mut().zip(deltas) {
                     t.rotation = (*d * r).normalize();
                 }
                 node.changed = true;
@@ -332,7 +342,7 @@ pub fn apply_common_rotations<T: BoneDescriptionType>(
             format!("frond_cjr_{k}"),
             parent,
             pivot,
-            &deltas,
+            deltas,
             model.samples,
             foliage,
         ));

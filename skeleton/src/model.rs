@@ -113,11 +113,6 @@ pub struct SkeletonModel {
     pub input_rest: Vec<Mat4>,
 }
 
-/// The times of `samples` uniform samples of `clip`'s loop: those of `sampled`.
-fn sample_times(sampled: &Sampled) -> &[f32] {
-    &sampled.times
-}
-
 impl SkeletonModel {
     /// The tree's nodes, sampled at `sampled`'s loop times of clip `clip`.
     pub fn from_tree(
@@ -128,7 +123,7 @@ impl SkeletonModel {
         if tree.bones.is_empty() {
             return Err(SkeletonError::NoBones);
         }
-        let times = sample_times(sampled);
+        let times = &sampled.times;
         let n = times.len().max(1);
         let clip_ref = clip.and_then(|c| tree.clips.get(c));
         let poses: Vec<Vec<Trs>> = (0..n)

@@ -193,7 +193,7 @@ fn run<T: BoneDescriptionType>(
         .iter()
         .map(|m| m.displacement)
         .fold(0.0, f32::max);
-    let follow = apply_common_rotations(ty, &mut model, &cjr.sets, params.average_bone);
+    let follow = apply_common_rotations(&mut model, &cjr, params.average_bone);
     report.clouds = cjr.sets.len() + extra;
     if let Some(n) = params.clouds
         && report.clouds > n
