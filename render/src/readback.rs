@@ -83,10 +83,30 @@ impl Readback {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| RenderError::Readback(format!("waiting for the GPU failed: {e}")))?;
 
+        // Another thread polling the same device may have taken our callbacks
+        // and fire them only after our poll returned: wait for every callback
+        // (each holds a sender; all of them gone means all of them ran),
+        // polling again meanwhile, with a deadline so a lost one cannot hang.
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
         let mut mapped = vec![false; readbacks.len()];
-        for (i, result) in receiver.try_iter() {
-            result.map_err(|e| RenderError::Readback(format!("mapping the buffer failed: {e}")))?;
-            mapped[i] = true;
+        loop {
+            match receiver.recv_timeout(std::time::Duration::from_millis(20)) {
+                Ok((i, result)) => {
+                    result.map_err(|e| {
+                        RenderError::Readback(format!("mapping the buffer failed: {e}"))
+                    })?;
+                    mapped[i] = true;
+                }
+                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => break,
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                    if std::time::Instant::now() > deadline {
+                        break;
+                    }
+                    device.poll(wgpu::PollType::Poll).map_err(|e| {
+                        RenderError::Readback(format!("waiting for the GPU failed: {e}"))
+                    })?;
+                }
+            }
         }
         if mapped.iter().any(|m| !m) {
             return Err(RenderError::Readback(

@@ -447,15 +447,24 @@ fn one_renderer_serves_several_threads() {
         vec![quad_z([-0.5, -0.5], [0.5, 0.5], 0.0, 0)],
         vec![DrawMaterial::opaque([1.0, 0.0, 0.0, 1.0])],
     );
+    // Many small renders at once: one thread's poll may run another's map
+    // callbacks after that thread's own poll returned (a CI failure once).
     let frames: Vec<Frame> = std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..4)
-            .map(|_| scope.spawn(|| r.render(&s, &ortho(0.0, 1.0), 32, 32, BLUE)))
+        let handles: Vec<_> = (0..8)
+            .map(|_| {
+                scope.spawn(|| {
+                    (0..25)
+                        .map(|_| r.render(&s, &ortho(0.0, 1.0), 32, 32, BLUE))
+                        .collect::<Result<Vec<_>, _>>()
+                })
+            })
             .collect();
         handles
             .into_iter()
-            .map(|h| h.join().expect("thread").expect("render"))
+            .flat_map(|h| h.join().expect("thread").expect("render"))
             .collect()
     });
+    assert_eq!(frames.len(), 200);
     for f in &frames {
         assert_eq!(f, &frames[0]);
         assert_eq!(f.covered_count(), 16 * 16);
