@@ -1,5 +1,7 @@
 //! The `frond` pipeline: each CLI command's work as a library function, so tests can call it.
 
+pub mod batch;
+pub mod child_job;
 pub mod cloud_cmd;
 pub mod eval_cmd;
 pub mod inspect;

@@ -6,6 +6,12 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
+use frond::batch::inputs::{ANIMATION_NAMES, Overrides};
+use frond::batch::preset::{EnginePreset, PRESET_NAMES};
+use frond::batch::shard::Shard;
+use frond::batch::summary::{BatchSummary, Status, TreeEntry, merge, read_summary, summaries_in};
+use frond::batch::tree_job::TreeContext;
+use frond::batch::{BatchProgress, BatchRequest, default_max_memory, parse_memory, run_batch};
 use frond::cloud_cmd::{CloudRequest, rest_diagonal, run_cloud};
 use frond::eval_cmd::{EvalRequest, evaluate, image_for_screen_height, same_bytes};
 use frond::inspect::{SamplingSummary, inspect};
@@ -386,6 +392,85 @@ enum Command {
         #[arg(long)]
         keep: bool,
         /// Print summary.json to stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Run `frond lod` over a tree library: every .glb/.gltf below a folder, or a TOML
+    /// manifest's trees with their own settings. OUTDIR/<path without extension>/ per tree,
+    /// summary.json + summary.csv; up-to-date trees are skipped, failed ones recorded.
+    Batch {
+        /// A folder, or a .toml manifest ([defaults] and [[tree]] path = ... with method, lods,
+        /// animation, foliage_material, ...; see docs/batch.md).
+        input: PathBuf,
+        /// Output folder (a shared volume for sharded runs).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Trees at once (default: one per core); each gets cores/jobs threads.
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        jobs: Option<u64>,
+        /// Do shard i of n (0-based), chosen by a hash of each tree's path relative to INPUT;
+        /// `auto` reads JOB_COMPLETION_INDEX/JOB_COMPLETIONS (Kubernetes Indexed Job) or
+        /// SLURM_ARRAY_TASK_ID/_MIN/_COUNT (Slurm array). Writes summary.shard-i-of-n.*.
+        #[arg(long, value_name = "i/n|auto")]
+        shard: Option<String>,
+        /// Engine conventions (texture limits, external textures, MSFT_lod, VAT format,
+        /// joint and influence checks; docs/engines.md).
+        #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(PRESET_NAMES))]
+        preset: Option<String>,
+        /// Memory the running trees may use together, like 8G (default: 3/4 of what is
+        /// available); a larger tree runs alone.
+        #[arg(long, value_name = "SIZE")]
+        max_memory: Option<String>,
+        /// Also run `frond eval` on every LOD at its screen height; metrics go to the summary.
+        #[arg(long)]
+        eval: bool,
+        /// Clustering method of every tree (default: frond lod's).
+        #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(METHOD_NAMES))]
+        method: Option<String>,
+        /// Screen heights in pixels, one LOD each (default: frond lod's).
+        #[arg(long, value_delimiter = ',')]
+        lods: Option<Vec<f32>>,
+        /// skin, vat (the preset's VAT format), vat-png16 or spectral.
+        #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(ANIMATION_NAMES))]
+        animation: Option<String>,
+        /// Random seed of every tree.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Animation samples over the loop.
+        #[arg(long)]
+        samples: Option<usize>,
+        /// Clip to sample.
+        #[arg(long)]
+        clip: Option<String>,
+        /// Screen-space error budget in pixels.
+        #[arg(long)]
+        pixel_error: Option<f32>,
+        /// Treat this material as foliage (repeatable).
+        #[arg(long = "foliage-material", value_name = "NAME")]
+        foliage_material: Vec<String>,
+        /// Treat this material as wood (repeatable).
+        #[arg(long = "wood-material", value_name = "NAME")]
+        wood_material: Vec<String>,
+        #[command(flatten)]
+        build: BuildArgs,
+        /// Seconds one tree's `frond lod` (or one eval) may take before it is stopped and
+        /// recorded as failed.
+        #[arg(long, default_value_t = 3600)]
+        timeout: u64,
+        /// Print summary.json to stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Merge the summaries of a sharded batch (summary.shard-*.json in each folder) into one
+    /// summary.json + summary.csv.
+    BatchMerge {
+        /// Output folders of the shards (often one shared folder).
+        #[arg(required = true)]
+        outputs: Vec<PathBuf>,
+        /// Folder for the merged summary (default: the first).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Print the merged summary.json to stdout.
         #[arg(long)]
         json: bool,
     },
@@ -800,6 +885,102 @@ fn run(cli: Cli) -> Result<()> {
                 );
             }
         }
+        Command::Batch {
+            input,
+            output,
+            jobs,
+            shard,
+            preset,
+            max_memory,
+            eval,
+            method,
+            lods,
+            animation,
+            seed,
+            samples,
+            clip,
+            pixel_error,
+            foliage_material,
+            wood_material,
+            build,
+            timeout,
+            json,
+        } => {
+            let defaults = Overrides {
+                method,
+                lods,
+                animation,
+                foliage_material: (!foliage_material.is_empty()).then_some(foliage_material),
+                wood_material: (!wood_material.is_empty()).then_some(wood_material),
+                clip,
+                seed,
+                samples,
+                pixel_error,
+                clouds: build.clouds,
+                clusters: build.clusters,
+            };
+            defaults.check("command line")?;
+            let shard = match shard.as_deref() {
+                None => None,
+                Some("auto") => Some(Shard::from_env(&|k| std::env::var(k).ok())?),
+                Some(s) => Some(Shard::parse(s)?),
+            };
+            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+            let jobs = jobs.map_or(cores, |j| j as usize);
+            let build_args = BuildArgs {
+                clouds: None,
+                clusters: None,
+                ..build
+            }
+            .to_args();
+            let req = BatchRequest {
+                input,
+                out_dir: output.clone(),
+                jobs,
+                shard,
+                max_memory: match &max_memory {
+                    Some(m) => parse_memory(m)?,
+                    None => default_max_memory(),
+                },
+                context: TreeContext {
+                    exe: std::env::current_exe().context("locating the frond executable")?,
+                    out_dir: output.clone(),
+                    defaults,
+                    build_args,
+                    preset: preset.as_deref().and_then(EnginePreset::named),
+                    eval,
+                    timeout: std::time::Duration::from_secs(timeout.max(1)),
+                    threads: (cores / jobs).max(1),
+                },
+            };
+            let bar = BatchBar::new();
+            let result = run_batch(&req, &bar);
+            drop(bar);
+            let summary = result?;
+            finish_batch(&summary, &output, json)?;
+        }
+        Command::BatchMerge {
+            outputs,
+            output,
+            json,
+        } => {
+            let mut parts = Vec::new();
+            for dir in &outputs {
+                for path in summaries_in(dir)? {
+                    let s = read_summary(&path)?;
+                    parts.push((path, s));
+                }
+            }
+            let (summary, warnings) = merge(&parts)?;
+            for w in &warnings {
+                eprintln!("warning: {w}");
+            }
+            let dir = output.unwrap_or_else(|| outputs[0].clone());
+            std::fs::create_dir_all(&dir)
+                .with_context(|| format!("{}: cannot create", dir.display()))?;
+            summary.write(&dir, &BatchSummary::stem(None))?;
+            finish_batch(&summary, &dir, json)?;
+        }
         Command::Sample {
             preset,
             seed,
@@ -875,6 +1056,127 @@ impl Progress {
 impl Drop for Progress {
     fn drop(&mut self) {
         if let Some(b) = &self.0 {
+            b.finish_and_clear();
+        }
+    }
+}
+
+/// The end of `frond batch` and `batch-merge`: the summary (with `--json`) and the count line,
+/// an error (non-zero exit) when any tree failed.
+fn finish_batch(summary: &BatchSummary, dir: &std::path::Path, json: bool) -> Result<()> {
+    if json {
+        print_json(summary)?;
+    }
+    let line = summary.counts.line();
+    if summary.counts.failed > 0 {
+        anyhow::bail!(
+            "{line} (reasons in {})",
+            dir.join(BatchSummary::stem(summary.shard))
+                .with_extension("json")
+                .display()
+        );
+    }
+    if !json {
+        println!("{}: {line}", dir.display());
+    }
+    Ok(())
+}
+
+/// `frond batch` progress: an overall bar plus a spinner per running tree on a terminal, plain
+/// log lines otherwise; a failed tree's error line always.
+struct BatchBar {
+    bars: Option<(indicatif::MultiProgress, indicatif::ProgressBar)>,
+    running: std::sync::Mutex<Vec<(String, indicatif::ProgressBar)>>,
+    done: std::sync::atomic::AtomicUsize,
+    total: std::sync::atomic::AtomicUsize,
+}
+
+impl BatchBar {
+    fn new() -> Self {
+        let bars = std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
+            let multi = indicatif::MultiProgress::new();
+            let b = multi.add(indicatif::ProgressBar::new(0));
+            if let Ok(style) = indicatif::ProgressStyle::with_template(
+                "{bar:30} {pos}/{len} trees {elapsed_precise} (eta {eta}) {msg}",
+            ) {
+                b.set_style(style);
+            }
+            b.enable_steady_tick(std::time::Duration::from_millis(250));
+            (multi, b)
+        });
+        BatchBar {
+            bars,
+            running: std::sync::Mutex::new(Vec::new()),
+            done: 0.into(),
+            total: 0.into(),
+        }
+    }
+
+    /// Prints a line above the bars (or plainly).
+    fn line(&self, text: &str) {
+        match &self.bars {
+            Some((multi, _)) => {
+                let _ = multi.println(text);
+            }
+            None => eprintln!("{text}"),
+        }
+    }
+}
+
+impl BatchProgress for BatchBar {
+    fn total(&self, trees: usize) {
+        self.total.store(trees, std::sync::atomic::Ordering::SeqCst);
+        if let Some((_, b)) = &self.bars {
+            b.set_length(trees as u64);
+        }
+    }
+
+    fn started(&self, tree: &str) {
+        tracing::info!("started {tree}");
+        if let Some((multi, _)) = &self.bars {
+            let s = multi.add(indicatif::ProgressBar::new_spinner());
+            s.enable_steady_tick(std::time::Duration::from_millis(120));
+            s.set_message(tree.to_string());
+            if let Ok(mut r) = self.running.lock() {
+                r.push((tree.to_string(), s));
+            }
+        }
+    }
+
+    fn finished(&self, entry: &TreeEntry) {
+        let done = self.done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+        let total = self.total.load(std::sync::atomic::Ordering::SeqCst);
+        if let Some((multi, b)) = &self.bars {
+            b.set_position(done as u64);
+            if let Ok(mut r) = self.running.lock()
+                && let Some(i) = r.iter().position(|(t, _)| *t == entry.tree)
+            {
+                let (_, s) = r.remove(i);
+                s.finish_and_clear();
+                multi.remove(&s);
+            }
+        }
+        match entry.status {
+            Status::Failed => self.line(&format!(
+                "error: {}: {}",
+                entry.tree,
+                entry.reason.as_deref().unwrap_or("failed")
+            )),
+            Status::Built if self.bars.is_none() => self.line(&format!(
+                "[{done}/{total}] built {} ({:.1} s)",
+                entry.tree, entry.wall_s
+            )),
+            Status::UpToDate if self.bars.is_none() => {
+                self.line(&format!("[{done}/{total}] up to date {}", entry.tree))
+            }
+            _ => {}
+        }
+    }
+}
+
+impl Drop for BatchBar {
+    fn drop(&mut self) {
+        if let Some((_, b)) = &self.bars {
             b.finish_and_clear();
         }
     }

@@ -190,7 +190,7 @@ impl GltfSource {
 }
 
 /// Decodes `%XX` escapes in a relative URI.
-fn percent_decode(s: &str) -> String {
+pub fn percent_decode(s: &str) -> String {
     let bytes = s.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;

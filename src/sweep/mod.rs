@@ -9,7 +9,6 @@
 
 pub mod charts;
 pub mod grid;
-pub mod job;
 pub mod results;
 
 use std::collections::BTreeMap;
@@ -20,13 +19,13 @@ use anyhow::{Context, Result, bail};
 use serde::Serialize;
 use serde_json::Value;
 
+use crate::child_job::{JobEnd, run_job};
 use crate::eval_cmd::{EvalContext, EvalRequest, image_for_screen_height, same_bytes};
 use crate::lod_cmd::{Method, auto_method, lod_name};
 use crate::output::write_atomic;
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, Tree};
 use grid::{Grid, GridPoint};
-use job::{JobEnd, run_job};
 use results::{Row, Stability};
 
 /// What `frond sweep` was asked for.

@@ -1,5 +1,5 @@
-//! One `frond` child process of a sweep, with a wall-clock limit: a run that crashes, fails or
-//! hangs is recorded with its reason and the sweep goes on.
+//! One `frond` child process of a sweep or a batch, with a wall-clock limit: a run that
+//! crashes, fails or hangs is recorded with its reason and the caller goes on.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -18,6 +18,24 @@ pub enum JobEnd {
     TimedOut(Duration),
 }
 
+/// How a child ended, how long it ran and the most memory it held.
+#[derive(Clone, Debug)]
+pub struct ChildRun {
+    pub end: JobEnd,
+    pub wall: Duration,
+    /// Peak resident set size (Linux `VmHWM`, sampled while it ran; None elsewhere).
+    pub peak_rss: Option<u64>,
+}
+
+/// Where and how to start a child.
+#[derive(Clone, Debug, Default)]
+pub struct ChildSpec<'a> {
+    /// Working folder (default: ours).
+    pub cwd: Option<&'a Path>,
+    /// Extra environment variables.
+    pub env: Vec<(String, String)>,
+}
+
 /// Runs `exe args…` with stdout and stderr in files under `log_dir` (named `<tag>.stdout`,
 /// `<tag>.stderr`), killing it once `limit` has passed. Err only when it could not be started.
 pub fn run_job(
@@ -27,6 +45,20 @@ pub fn run_job(
     tag: &str,
     limit: Duration,
 ) -> Result<JobEnd> {
+    Ok(run_child(exe, args, &ChildSpec::default(), log_dir, tag, limit)?.end)
+}
+
+/// [`run_job`] with a working folder and environment, reporting wall time and peak memory. On
+/// Linux the child is killed when this process dies (`PR_SET_PDEATHSIG`), so a killed batch
+/// leaves no orphan writing on.
+pub fn run_child(
+    exe: &Path,
+    args: &[String],
+    spec: &ChildSpec,
+    log_dir: &Path,
+    tag: &str,
+    limit: Duration,
+) -> Result<ChildRun> {
     std::fs::create_dir_all(log_dir)
         .with_context(|| format!("{}: cannot create folder", log_dir.display()))?;
     let out_path: PathBuf = log_dir.join(format!("{tag}.stdout"));
@@ -36,15 +68,26 @@ pub fn run_job(
     let stderr = std::fs::File::create(&err_path)
         .with_context(|| format!("{}: cannot create", err_path.display()))?;
     let start = Instant::now();
-    let mut child = Command::new(exe)
+    let mut command = Command::new(exe);
+    command
         .args(args)
+        .envs(spec.env.iter().map(|(k, v)| (k, v)))
         .stdin(Stdio::null())
         .stdout(stdout)
-        .stderr(stderr)
+        .stderr(stderr);
+    if let Some(dir) = spec.cwd {
+        command.current_dir(dir);
+    }
+    die_with_parent(&mut command);
+    let mut child = command
         .spawn()
         .with_context(|| format!("cannot start {}", exe.display()))?;
+    let mut peak_rss = None;
     let status = loop {
-        if let Some(s) = child.try_wait().context("waiting for a sweep run")? {
+        if let Some(rss) = peak_rss_of(child.id()) {
+            peak_rss = Some(peak_rss.map_or(rss, |p: u64| p.max(rss)));
+        }
+        if let Some(s) = child.try_wait().context("waiting for a child run")? {
             break Some(s);
         }
         if start.elapsed() >= limit {
@@ -55,6 +98,7 @@ pub fn run_job(
         }
         std::thread::sleep(Duration::from_millis(20));
     };
+    let wall = start.elapsed();
     let end = match status {
         None => JobEnd::TimedOut(limit),
         Some(s) if s.success() => JobEnd::Done,
@@ -76,8 +120,38 @@ pub fn run_job(
             })
         }
     };
-    Ok(end)
+    Ok(ChildRun {
+        end,
+        wall,
+        peak_rss,
+    })
 }
+
+/// The child's peak resident set so far, from `/proc/<pid>/status` (Linux only).
+fn peak_rss_of(pid: u32) -> Option<u64> {
+    let text = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let line = text.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+#[cfg(target_os = "linux")]
+fn die_with_parent(command: &mut Command) {
+    use std::os::unix::process::CommandExt;
+    // SAFETY: prctl is async-signal-safe and touches no memory of the parent; it runs in the
+    // forked child before exec.
+    unsafe {
+        command.pre_exec(|| {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) == -1 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn die_with_parent(_command: &mut Command) {}
 
 #[cfg(all(test, unix))]
 mod tests {

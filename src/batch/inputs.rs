@@ -1,0 +1,387 @@
+//! The trees of a batch: every `.glb`/`.gltf` below a folder, or the `[[tree]]` entries of a TOML
+//! manifest with per-tree overrides; and the hash of each tree's input files.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+use crate::lod_cmd::METHOD_NAMES;
+
+/// Animation modes `frond lod --animation` takes (`vat` is the preset's VAT format).
+pub const ANIMATION_NAMES: &[&str] = &["skin", "vat", "vat-png16", "spectral"];
+
+/// Settings a manifest may give every tree (`[defaults]`) or one tree (`[[tree]]`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Overrides {
+    pub method: Option<String>,
+    /// Screen heights in pixels, nearest first.
+    pub lods: Option<Vec<f32>>,
+    pub animation: Option<String>,
+    pub foliage_material: Option<Vec<String>>,
+    pub wood_material: Option<Vec<String>>,
+    pub clip: Option<String>,
+    pub seed: Option<u64>,
+    pub samples: Option<usize>,
+    pub pixel_error: Option<f32>,
+    /// Skeleton methods: billboard clouds per LOD.
+    pub clouds: Option<u64>,
+    /// Spectral methods: animation clusters per LOD.
+    pub clusters: Option<u64>,
+}
+
+impl Overrides {
+    /// `self` where set, else `base`.
+    pub fn or(&self, base: &Overrides) -> Overrides {
+        Overrides {
+            method: self.method.clone().or_else(|| base.method.clone()),
+            lods: self.lods.clone().or_else(|| base.lods.clone()),
+            animation: self.animation.clone().or_else(|| base.animation.clone()),
+            foliage_material: self
+                .foliage_material
+                .clone()
+                .or_else(|| base.foliage_material.clone()),
+            wood_material: self
+                .wood_material
+                .clone()
+                .or_else(|| base.wood_material.clone()),
+            clip: self.clip.clone().or_else(|| base.clip.clone()),
+            seed: self.seed.or(base.seed),
+            samples: self.samples.or(base.samples),
+            pixel_error: self.pixel_error.or(base.pixel_error),
+            clouds: self.clouds.or(base.clouds),
+            clusters: self.clusters.or(base.clusters),
+        }
+    }
+
+    /// Refuses names and values `frond lod` would refuse, naming `what` (the manifest entry).
+    pub fn check(&self, what: &str) -> Result<()> {
+        if let Some(m) = &self.method
+            && !METHOD_NAMES.contains(&m.as_str())
+        {
+            bail!(
+                "{what}: unknown method '{m}' (one of {})",
+                METHOD_NAMES.join(", ")
+            );
+        }
+        if let Some(a) = &self.animation
+            && !ANIMATION_NAMES.contains(&a.as_str())
+        {
+            bail!(
+                "{what}: unknown animation '{a}' (one of {})",
+                ANIMATION_NAMES.join(", ")
+            );
+        }
+        if let Some(l) = &self.lods {
+            if l.is_empty() {
+                bail!("{what}: lods is empty");
+            }
+            if let Some(h) = l.iter().find(|h| !(h.is_finite() && **h >= 1.0)) {
+                bail!("{what}: lods: {h} is not a screen height of at least 1 pixel");
+            }
+        }
+        if let Some(p) = self.pixel_error
+            && !(p.is_finite() && p > 0.0)
+        {
+            bail!("{what}: pixel_error {p} is not positive");
+        }
+        if self.samples == Some(0) || self.clouds == Some(0) || self.clusters == Some(0) {
+            bail!("{what}: samples, clouds and clusters must be at least 1");
+        }
+        Ok(())
+    }
+}
+
+/// One tree of the batch.
+#[derive(Clone, Debug)]
+pub struct TreeInput {
+    /// Its path relative to INPUT (the manifest's folder for a manifest), `/`-separated: the
+    /// tree's name in summaries and the key of `--shard`.
+    pub relative: String,
+    pub path: PathBuf,
+    /// Output folder relative to OUTDIR: `relative` without its extension (or the manifest's
+    /// `output`).
+    pub output: String,
+    /// The manifest's settings for it (with its `[defaults]`); empty for a folder.
+    pub overrides: Overrides,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Manifest {
+    #[serde(default)]
+    defaults: Overrides,
+    #[serde(default)]
+    tree: Vec<ManifestTree>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ManifestTree {
+    path: PathBuf,
+    output: Option<String>,
+    #[serde(flatten)]
+    settings: Overrides,
+}
+
+/// The trees of INPUT (a folder or a `.toml` manifest), sorted by relative path. Folders skip
+/// hidden entries and `skip` (the output folder when it lies inside INPUT).
+pub fn discover(input: &Path, skip: Option<&Path>) -> Result<Vec<TreeInput>> {
+    let meta = std::fs::metadata(input)
+        .with_context(|| format!("{}: cannot read the batch input", input.display()))?;
+    let mut trees = if meta.is_dir() {
+        let mut found = Vec::new();
+        walk(input, input, skip, &mut found)?;
+        found
+    } else if has_extension(input, "toml") {
+        read_manifest(input)?
+    } else {
+        bail!(
+            "{}: a batch input is a folder of .glb/.gltf files or a .toml manifest",
+            input.display()
+        );
+    };
+    trees.sort_by(|a, b| a.relative.cmp(&b.relative));
+    for pair in trees.windows(2) {
+        if pair[0].relative == pair[1].relative {
+            bail!(
+                "{}: tree '{}' is listed twice",
+                input.display(),
+                pair[0].relative
+            );
+        }
+    }
+    let mut outputs: Vec<(&str, &str)> = trees
+        .iter()
+        .map(|t| (t.output.as_str(), t.relative.as_str()))
+        .collect();
+    outputs.sort();
+    for pair in outputs.windows(2) {
+        if pair[0].0 == pair[1].0 {
+            bail!(
+                "{}: '{}' and '{}' would both write OUTDIR/{}/ (rename one, or give a manifest \
+                 `output`)",
+                input.display(),
+                pair[0].1,
+                pair[1].1,
+                pair[0].0
+            );
+        }
+    }
+    Ok(trees)
+}
+
+fn has_extension(path: &Path, ext: &str) -> bool {
+    path.extension()
+        .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case(ext))
+}
+
+fn is_tree_file(path: &Path) -> bool {
+    has_extension(path, "glb") || has_extension(path, "gltf")
+}
+
+/// `path` relative to `root`, `/`-separated.
+fn relative_name(root: &Path, path: &Path) -> Option<String> {
+    let rel = path.strip_prefix(root).ok()?;
+    let parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    (!parts.is_empty()).then(|| parts.join("/"))
+}
+
+/// `relative` without the file extension.
+fn without_extension(relative: &str) -> String {
+    match relative.rsplit_once('.') {
+        Some((stem, _)) if !stem.ends_with('/') && !stem.is_empty() => stem.to_string(),
+        _ => relative.to_string(),
+    }
+}
+
+fn walk(root: &Path, dir: &Path, skip: Option<&Path>, out: &mut Vec<TreeInput>) -> Result<()> {
+    let entries =
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot list", dir.display()))?;
+    for entry in entries {
+        let entry = entry.with_context(|| format!("{}: cannot list", dir.display()))?;
+        let path = entry.path();
+        if entry.file_name().to_string_lossy().starts_with('.') {
+            continue;
+        }
+        if let Some(skip) = skip
+            && std::fs::canonicalize(&path).is_ok_and(|c| c == skip)
+        {
+            continue;
+        }
+        // Symbolic links to folders are not followed (no cycles); links to files are.
+        let kind = entry
+            .file_type()
+            .with_context(|| format!("{}: cannot stat", path.display()))?;
+        if kind.is_dir() {
+            walk(root, &path, skip, out)?;
+        } else if is_tree_file(&path)
+            && let Some(relative) = relative_name(root, &path)
+        {
+            out.push(TreeInput {
+                output: without_extension(&relative),
+                relative,
+                path,
+                overrides: Overrides::default(),
+            });
+        }
+    }
+    Ok(())
+}
+
+fn read_manifest(path: &Path) -> Result<Vec<TreeInput>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read the manifest", path.display()))?;
+    let manifest: Manifest = toml::from_str(&text)
+        .with_context(|| format!("{}: not a batch manifest", path.display()))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    manifest
+        .defaults
+        .check(&format!("{} [defaults]", path.display()))?;
+    if manifest.tree.is_empty() {
+        bail!("{}: the manifest lists no [[tree]]", path.display());
+    }
+    manifest
+        .tree
+        .into_iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let what = format!("{} tree {} ({})", path.display(), i + 1, t.path.display());
+            t.settings.check(&what)?;
+            let full = base.join(&t.path);
+            let relative = relative_name(base, &full).unwrap_or_else(|| {
+                full.file_name()
+                    .map(|f| f.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            });
+            let output = match t.output {
+                Some(o) => {
+                    let ok = !o.is_empty()
+                        && Path::new(&o)
+                            .components()
+                            .all(|c| matches!(c, std::path::Component::Normal(_)));
+                    if !ok {
+                        bail!("{what}: output '{o}' must be a relative folder without '..'");
+                    }
+                    o
+                }
+                None => without_extension(&relative),
+            };
+            Ok(TreeInput {
+                relative,
+                path: full,
+                output,
+                overrides: t.settings.or(&manifest.defaults),
+            })
+        })
+        .collect()
+}
+
+/// SHA-256 (hex) of a tree's input: the file, and for a `.gltf` the external buffers and images
+/// it references (so a changed `.bin` rebuilds the tree). A reference that cannot be read is
+/// hashed as missing; the import reports it.
+pub fn input_hash(path: &Path) -> Result<String> {
+    let bytes = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let mut hasher = Sha256::new();
+    hasher.update(&bytes);
+    if has_extension(path, "gltf")
+        && let Ok(doc) = serde_json::from_slice::<serde_json::Value>(&bytes)
+    {
+        let dir = path.parent().unwrap_or(Path::new("."));
+        for key in ["buffers", "images"] {
+            let uris = doc[key].as_array().into_iter().flatten();
+            for uri in uris.filter_map(|b| b["uri"].as_str()) {
+                if uri.starts_with("data:") {
+                    continue;
+                }
+                hasher.update(uri.as_bytes());
+                match std::fs::read(dir.join(frond_scene::gltf_source::percent_decode(uri))) {
+                    Ok(b) => {
+                        hasher.update((b.len() as u64).to_le_bytes());
+                        hasher.update(&b);
+                    }
+                    Err(_) => hasher.update(b"<missing>"),
+                }
+            }
+        }
+    }
+    Ok(hex(&hasher.finalize()))
+}
+
+/// Lower-case hex of bytes.
+pub fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folder_and_manifest() {
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path();
+        std::fs::create_dir_all(root.join("a/b")).unwrap();
+        std::fs::create_dir_all(root.join(".hidden")).unwrap();
+        for f in [
+            "x.glb",
+            "a/y.GLTF",
+            "a/b/z.glb",
+            "a/notes.txt",
+            ".hidden/h.glb",
+        ] {
+            std::fs::write(root.join(f), b"-").unwrap();
+        }
+        let trees = discover(root, None).unwrap();
+        let names: Vec<(&str, &str)> = trees
+            .iter()
+            .map(|t| (t.relative.as_str(), t.output.as_str()))
+            .collect();
+        assert_eq!(
+            names,
+            [("a/b/z.glb", "a/b/z"), ("a/y.GLTF", "a/y"), ("x.glb", "x")]
+        );
+        std::fs::write(root.join("x.gltf"), b"-").unwrap();
+        let err = discover(root, None).unwrap_err().to_string();
+        assert!(err.contains("would both write OUTDIR/x/"), "{err}");
+
+        let m = root.join("m.toml");
+        std::fs::write(
+            &m,
+            "[defaults]\nmethod = \"static\"\nlods = [200, 60]\n\n[[tree]]\npath = \"x.glb\"\n\
+             \n[[tree]]\npath = \"a/b/z.glb\"\noutput = \"zed\"\nmethod = \"skeleton\"\n",
+        )
+        .unwrap();
+        let trees = discover(&m, None).unwrap();
+        assert_eq!(trees[0].relative, "a/b/z.glb");
+        assert_eq!(trees[0].output, "zed");
+        assert_eq!(trees[0].overrides.method.as_deref(), Some("skeleton"));
+        assert_eq!(trees[0].overrides.lods, Some(vec![200.0, 60.0]));
+        assert_eq!(trees[1].overrides.method.as_deref(), Some("static"));
+        std::fs::write(&m, "[[tree]]\npath = \"x.glb\"\nmethod = \"magic\"\n").unwrap();
+        let err = format!("{:#}", discover(&m, None).unwrap_err());
+        assert!(err.contains("unknown method 'magic'"), "{err}");
+        std::fs::write(&m, "[[tree]]\npath = \"x.glb\"\ncolour = 1\n").unwrap();
+        let err = format!("{:#}", discover(&m, None).unwrap_err());
+        assert!(err.contains("not a batch manifest"), "{err}");
+    }
+
+    #[test]
+    fn gltf_hash_covers_its_buffers() {
+        let dir = tempfile::tempdir().unwrap();
+        let g = dir.path().join("t.gltf");
+        std::fs::write(&g, br#"{"buffers":[{"uri":"t%20b.bin","byteLength":1}]}"#).unwrap();
+        std::fs::write(dir.path().join("t b.bin"), b"1").unwrap();
+        let h1 = input_hash(&g).unwrap();
+        std::fs::write(dir.path().join("t b.bin"), b"2").unwrap();
+        let h2 = input_hash(&g).unwrap();
+        assert_ne!(h1, h2);
+        assert_eq!(h2, input_hash(&g).unwrap());
+        assert_eq!(h1.len(), 64);
+    }
+}

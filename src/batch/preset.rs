@@ -1,0 +1,165 @@
+//! Engine presets of `frond batch`: the `frond lod` settings each engine's glTF importer needs,
+//! and the checks of each tree's output against the engine's limits (docs/engines.md has the
+//! sources and how to import).
+
+use anyhow::{Result, bail};
+use serde::Serialize;
+
+/// One engine's conventions.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct EnginePreset {
+    pub name: &'static str,
+    /// Largest atlas side written (`--max-atlas`).
+    pub max_atlas: u32,
+    /// Textures as PNG files beside the GLBs (`--external-textures`) rather than embedded.
+    pub external_textures: bool,
+    /// `MSFT_lod` + `MSFT_screencoverage` on the combined file (`--msft-lod`).
+    pub msft_lod: bool,
+    /// Bone influences per vertex the importer keeps (frond writes at most 4, `JOINTS_0`).
+    pub max_influences: u32,
+    /// Joints one skin may have before the engine needs a setting changed (None: no limit
+    /// documented).
+    pub max_joints: Option<usize>,
+    /// `frond lod --animation` value `vat` turns into (the VAT texture format the engine's
+    /// shader reads).
+    pub vat: &'static str,
+    /// Whether 16-bit PNG VAT textures reach the shader at 16 bits.
+    pub png16_vat: bool,
+}
+
+/// Every preset, by `--preset` name.
+pub const PRESETS: &[EnginePreset] = &[
+    // Unity (glTFast, UnityGLTF): external PNGs get Unity's own texture importer (Mip Maps
+    // Preserve Coverage, Max Size); UnityGLTF builds the LODGroup from MSFT_lod and keeps 4
+    // weights.
+    EnginePreset {
+        name: "unity",
+        max_atlas: 4096,
+        external_textures: true,
+        msft_lod: true,
+        max_influences: 4,
+        max_joints: None,
+        vat: "vat",
+        png16_vat: true,
+    },
+    // Unreal Engine 5 (Interchange): 8192 is the documented texture limit without .ini
+    // changes; 8-bit bone indices hold 256 joints per section unless "Support 16-bit Bone
+    // Index" is on.
+    EnginePreset {
+        name: "unreal",
+        max_atlas: 8192,
+        external_textures: true,
+        msft_lod: false,
+        max_influences: 4,
+        max_joints: Some(256),
+        vat: "vat",
+        png16_vat: true,
+    },
+    // Godot 4: embedded images are extracted on import; up to 16384 px; generates its own
+    // mesh LODs (turn off for billboard LODs), no name convention, no MSFT_lod.
+    EnginePreset {
+        name: "godot",
+        max_atlas: 4096,
+        external_textures: false,
+        msft_lod: false,
+        max_influences: 4,
+        max_joints: None,
+        vat: "vat",
+        png16_vat: true,
+    },
+    // three.js / the web: one GLB a LOD (one request), 4096 px (~99 % of WebGL devices), 4
+    // weights (JOINTS_0 only); browsers decode 16-bit PNG to 8 bits, so VAT is EXR
+    // (EXRLoader, half float).
+    EnginePreset {
+        name: "web",
+        max_atlas: 4096,
+        external_textures: false,
+        msft_lod: false,
+        max_influences: 4,
+        max_joints: None,
+        vat: "vat",
+        png16_vat: false,
+    },
+];
+
+/// Every `--preset` name.
+pub const PRESET_NAMES: &[&str] = &["unity", "unreal", "godot", "web"];
+
+impl EnginePreset {
+    /// The preset called `name`.
+    pub fn named(name: &str) -> Option<EnginePreset> {
+        PRESETS.iter().copied().find(|p| p.name == name)
+    }
+
+    /// The `frond lod` arguments of this preset for a tree animated with `animation`.
+    pub fn lod_args(&self, animation: &str) -> Result<Vec<String>> {
+        if animation == "vat-png16" && !self.png16_vat {
+            bail!(
+                "preset {}: browsers decode 16-bit PNG textures to 8 bits; use --animation vat \
+                 (EXR, three.js EXRLoader)",
+                self.name
+            );
+        }
+        let mut a = vec!["--max-atlas".to_string(), self.max_atlas.to_string()];
+        if self.external_textures {
+            a.push("--external-textures".into());
+        }
+        if self.msft_lod {
+            a.push("--msft-lod".into());
+        }
+        Ok(a)
+    }
+
+    /// What in a written LOD breaks this engine's limits: `joints` of its skin, whether its
+    /// GLB uses a second set of influences.
+    pub fn check_lod(&self, file: &str, joints: usize, glb: &[u8]) -> Vec<String> {
+        let mut warnings = Vec::new();
+        if let Some(max) = self.max_joints
+            && joints > max
+        {
+            warnings.push(format!(
+                "{file}: {joints} joints in one skin, over {}'s {max} (enable 16-bit bone \
+                 indices, or use --method skeleton with --clouds to merge bones)",
+                self.name
+            ));
+        }
+        let influences = if contains(glb, b"\"JOINTS_1\"") { 8 } else { 4 };
+        if influences > self.max_influences {
+            warnings.push(format!(
+                "{file}: {influences} influences per vertex, over {}'s {}",
+                self.name, self.max_influences
+            ));
+        }
+        warnings
+    }
+}
+
+fn contains(haystack: &[u8], needle: &[u8]) -> bool {
+    haystack.windows(needle.len()).any(|w| w == needle)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_args_and_checks() {
+        assert_eq!(
+            PRESET_NAMES,
+            PRESETS.iter().map(|p| p.name).collect::<Vec<_>>()
+        );
+        let web = EnginePreset::named("web").unwrap();
+        assert!(web.lod_args("vat-png16").is_err());
+        assert_eq!(web.lod_args("skin").unwrap(), ["--max-atlas", "4096"]);
+        let unity = EnginePreset::named("unity").unwrap();
+        assert_eq!(
+            unity.lod_args("vat").unwrap(),
+            ["--max-atlas", "4096", "--external-textures", "--msft-lod"]
+        );
+        let unreal = EnginePreset::named("unreal").unwrap();
+        assert!(unreal.check_lod("a.glb", 256, b"{\"JOINTS_0\"}").is_empty());
+        let w = unreal.check_lod("a.glb", 300, b"{\"JOINTS_0\",\"JOINTS_1\"}");
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(w[0].contains("300 joints"));
+    }
+}

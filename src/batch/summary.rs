@@ -1,0 +1,340 @@
+//! `summary.json` and `summary.csv` of a batch (one line a tree), the stamp each finished tree
+//! keeps beside its files, and the merge of shard summaries.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use serde::{Deserialize, Serialize};
+
+use super::shard::Shard;
+use crate::output::write_atomic;
+
+/// What happened to a tree.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Status {
+    /// Built by this run.
+    Built,
+    /// Its output matched the input hash and parameters already; left as it was.
+    UpToDate,
+    Failed,
+}
+
+/// One output file and its size.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FileEntry {
+    pub name: String,
+    pub bytes: u64,
+}
+
+/// One LOD of a tree, from its `report.json` (and `frond eval` with `--eval`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LodLine {
+    pub file: String,
+    pub screen_height: Option<f32>,
+    pub method: String,
+    pub triangles: u64,
+    pub billboards: u64,
+    pub bones: u64,
+    pub texture_bytes: u64,
+    /// Mean of each `frond eval` metric (with `--eval`; not for LOD0, the input itself).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub metrics: BTreeMap<String, Option<f64>>,
+}
+
+/// One tree's line of the summary; also its stamp `batch.json` in its output folder.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TreeEntry {
+    /// Path relative to INPUT.
+    pub tree: String,
+    /// Output folder relative to OUTDIR.
+    pub output: String,
+    pub status: Status,
+    /// Why it failed.
+    pub reason: Option<String>,
+    /// SHA-256 of the input file(s).
+    pub input_hash: Option<String>,
+    /// SHA-256 of `frond`'s version, the arguments and `--eval`.
+    pub params_hash: String,
+    /// The `frond lod` arguments the tree was built with (input and output aside).
+    pub args: Vec<String>,
+    pub preset: Option<String>,
+    /// The files written (`report.json`, whose size follows its timing fields, aside).
+    pub files: Vec<FileEntry>,
+    pub output_bytes: u64,
+    pub lods: Vec<LodLine>,
+    /// The engine preset's limits a LOD breaks.
+    pub warnings: Vec<String>,
+    /// Timing: `frond lod`'s stage times (sample, build, export, total) and eval's.
+    pub times_s: BTreeMap<String, f64>,
+    /// Timing: wall time of the tree's processes, and their peak resident memory.
+    pub wall_s: f64,
+    pub peak_rss_bytes: Option<u64>,
+}
+
+impl TreeEntry {
+    /// The entry without its timing fields (what equal runs share).
+    pub fn without_timing(&self) -> TreeEntry {
+        TreeEntry {
+            times_s: BTreeMap::new(),
+            wall_s: 0.0,
+            peak_rss_bytes: None,
+            ..self.clone()
+        }
+    }
+}
+
+/// Trees by status.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Counts {
+    pub trees: usize,
+    pub built: usize,
+    pub up_to_date: usize,
+    pub failed: usize,
+}
+
+impl Counts {
+    pub fn of(trees: &[TreeEntry]) -> Counts {
+        let n = |s| trees.iter().filter(|t| t.status == s).count();
+        Counts {
+            trees: trees.len(),
+            built: n(Status::Built),
+            up_to_date: n(Status::UpToDate),
+            failed: n(Status::Failed),
+        }
+    }
+
+    /// The batch's last line.
+    pub fn line(&self) -> String {
+        format!(
+            "{} trees: {} built, {} up to date, {} failed",
+            self.trees, self.built, self.up_to_date, self.failed
+        )
+    }
+}
+
+/// `summary.json`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct BatchSummary {
+    pub frond: String,
+    pub input: String,
+    pub preset: Option<String>,
+    /// The shard this run did (None: every tree).
+    pub shard: Option<Shard>,
+    /// Summaries `frond batch-merge` read.
+    #[serde(default)]
+    pub merged_from: Vec<String>,
+    pub counts: Counts,
+    /// Sorted by `tree`.
+    pub trees: Vec<TreeEntry>,
+    /// Timing: the run's wall time and most trees at once.
+    pub wall_s: f64,
+    pub jobs: usize,
+}
+
+impl BatchSummary {
+    /// File stem: `summary`, or `summary.shard-0001-of-0004` for a shard.
+    pub fn stem(shard: Option<Shard>) -> String {
+        match shard {
+            Some(s) => format!("summary.{}", s.tag()),
+            None => "summary".into(),
+        }
+    }
+
+    /// Writes `<stem>.json` and `<stem>.csv` into `dir`, atomically.
+    pub fn write(&self, dir: &Path, stem: &str) -> Result<()> {
+        let json = serde_json::to_vec_pretty(self).context("serialising the summary")?;
+        write_atomic(&dir.join(format!("{stem}.csv")), &self.csv()?)?;
+        write_atomic(&dir.join(format!("{stem}.json")), &json)
+    }
+
+    fn csv(&self) -> Result<Vec<u8>> {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        let metric_names: Vec<String> = {
+            let mut names: Vec<String> = self
+                .trees
+                .iter()
+                .flat_map(|t| t.lods.iter().flat_map(|l| l.metrics.keys().cloned()))
+                .collect();
+            names.sort();
+            names.dedup();
+            names
+        };
+        let mut header: Vec<String> = [
+            "tree",
+            "output",
+            "status",
+            "reason",
+            "input_hash",
+            "params_hash",
+            "preset",
+            "args",
+            "files",
+            "output_bytes",
+            "methods",
+            "screen_heights",
+            "triangles",
+            "billboards",
+            "bones",
+            "texture_bytes",
+            "warnings",
+            "sample_s",
+            "build_s",
+            "export_s",
+            "eval_s",
+            "wall_s",
+            "peak_rss_mb",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        header.extend(metric_names.iter().cloned());
+        w.write_record(&header).context("writing summary.csv")?;
+        for t in &self.trees {
+            // LOD values joined by ';', LOD0 first.
+            let join =
+                |f: &dyn Fn(&LodLine) -> String| t.lods.iter().map(f).collect::<Vec<_>>().join(";");
+            let time = |k: &str| {
+                t.times_s
+                    .get(k)
+                    .map(|v| format!("{v:.3}"))
+                    .unwrap_or_default()
+            };
+            let mut row = vec![
+                t.tree.clone(),
+                t.output.clone(),
+                serde_json::to_value(t.status)
+                    .ok()
+                    .and_then(|v| v.as_str().map(str::to_string))
+                    .unwrap_or_default(),
+                t.reason.clone().unwrap_or_default(),
+                t.input_hash.clone().unwrap_or_default(),
+                t.params_hash.clone(),
+                t.preset.clone().unwrap_or_default(),
+                t.args.join(" "),
+                t.files.len().to_string(),
+                t.output_bytes.to_string(),
+                join(&|l| l.method.clone()),
+                join(&|l| l.screen_height.map(|h| h.to_string()).unwrap_or_default()),
+                join(&|l| l.triangles.to_string()),
+                join(&|l| l.billboards.to_string()),
+                join(&|l| l.bones.to_string()),
+                join(&|l| l.texture_bytes.to_string()),
+                t.warnings.join(" | "),
+                time("sample"),
+                time("build"),
+                time("export"),
+                time("eval"),
+                format!("{:.3}", t.wall_s),
+                t.peak_rss_bytes
+                    .map(|b| format!("{:.1}", b as f64 / 1_048_576.0))
+                    .unwrap_or_default(),
+            ];
+            for m in &metric_names {
+                row.push(join(&|l| {
+                    l.metrics
+                        .get(m)
+                        .copied()
+                        .flatten()
+                        .map(|v| format!("{v:.5}"))
+                        .unwrap_or_default()
+                }));
+            }
+            w.write_record(&row).context("writing summary.csv")?;
+        }
+        w.into_inner().context("writing summary.csv")
+    }
+}
+
+/// Reads a summary JSON.
+pub fn read_summary(path: &Path) -> Result<BatchSummary> {
+    let bytes = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    serde_json::from_slice(&bytes)
+        .with_context(|| format!("{}: not a frond batch summary", path.display()))
+}
+
+/// The summaries in `dir`: `summary.shard-*.json` if any, else `summary.json`.
+pub fn summaries_in(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut shards: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("{}: cannot list", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name().is_some_and(|n| {
+                let n = n.to_string_lossy();
+                n.starts_with("summary.shard-") && n.ends_with(".json")
+            })
+        })
+        .collect();
+    shards.sort();
+    if shards.is_empty() {
+        let single = dir.join("summary.json");
+        if !single.is_file() {
+            bail!("{}: no summary.json or summary.shard-*.json", dir.display());
+        }
+        shards.push(single);
+    }
+    Ok(shards)
+}
+
+/// Merges shard summaries into one: every tree once (a tree two shards both list is an
+/// error), sorted; warns about shards of a count that are missing.
+pub fn merge(parts: &[(PathBuf, BatchSummary)]) -> Result<(BatchSummary, Vec<String>)> {
+    let Some((_, first)) = parts.first() else {
+        bail!("nothing to merge");
+    };
+    let mut warnings = Vec::new();
+    let mut trees: BTreeMap<String, (TreeEntry, &Path)> = BTreeMap::new();
+    for (path, s) in parts {
+        if s.input != first.input || s.preset != first.preset {
+            warnings.push(format!(
+                "{}: input '{}' preset {:?} differ from the first summary's ('{}', {:?})",
+                path.display(),
+                s.input,
+                s.preset,
+                first.input,
+                first.preset
+            ));
+        }
+        for t in &s.trees {
+            if let Some((_, other)) = trees.get(&t.tree) {
+                bail!(
+                    "tree '{}' is in both {} and {} (shards of different counts?)",
+                    t.tree,
+                    other.display(),
+                    path.display()
+                );
+            }
+            trees.insert(t.tree.clone(), (t.clone(), path));
+        }
+    }
+    let mut counts_seen: BTreeMap<u64, Vec<u64>> = BTreeMap::new();
+    for (_, s) in parts {
+        if let Some(sh) = s.shard {
+            counts_seen.entry(sh.count).or_default().push(sh.index);
+        }
+    }
+    for (count, mut seen) in counts_seen {
+        seen.sort();
+        seen.dedup();
+        let missing: Vec<u64> = (0..count).filter(|i| !seen.contains(i)).collect();
+        if !missing.is_empty() {
+            warnings.push(format!(
+                "shards {missing:?} of {count} are missing: their trees are not in the summary"
+            ));
+        }
+    }
+    let trees: Vec<TreeEntry> = trees.into_values().map(|(t, _)| t).collect();
+    let summary = BatchSummary {
+        frond: first.frond.clone(),
+        input: first.input.clone(),
+        preset: first.preset.clone(),
+        shard: None,
+        merged_from: parts.iter().map(|(p, _)| p.display().to_string()).collect(),
+        counts: Counts::of(&trees),
+        trees,
+        wall_s: parts.iter().map(|(_, s)| s.wall_s).fold(0.0, f64::max),
+        jobs: parts.iter().map(|(_, s)| s.jobs).sum(),
+    };
+    Ok((summary, warnings))
+}

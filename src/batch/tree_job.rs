@@ -1,0 +1,404 @@
+//! One tree of a batch: skip it when its output is up to date, else run `frond lod` (and
+//! `frond eval`) as child processes into a private folder and rename that into place, so a
+//! kill at any moment leaves either the old complete output, none, or the new complete one.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result};
+use sha2::{Digest, Sha256};
+
+use super::inputs::{Overrides, TreeInput, hex, input_hash};
+use super::preset::EnginePreset;
+use super::summary::{FileEntry, LodLine, Status, TreeEntry};
+use crate::child_job::{ChildSpec, JobEnd, run_child};
+use crate::output::write_atomic;
+
+/// Name of each tree's stamp, written last into its output folder.
+pub const STAMP: &str = "batch.json";
+/// `frond lod`'s report in each output folder.
+pub const REPORT: &str = "report.json";
+/// Private folder under OUTDIR for outputs being written.
+pub const TMP_DIR: &str = ".frond-tmp";
+/// Folder under OUTDIR with each tree's last `frond lod`/`frond eval` logs.
+pub const LOG_DIR: &str = ".frond-logs";
+
+/// What every tree of a batch shares.
+#[derive(Clone, Debug)]
+pub struct TreeContext {
+    /// The `frond` executable the children run.
+    pub exe: PathBuf,
+    /// OUTDIR, absolute.
+    pub out_dir: PathBuf,
+    /// Settings from the command line (a manifest's override them).
+    pub defaults: Overrides,
+    /// Plane search and bake options passed to every `frond lod`.
+    pub build_args: Vec<String>,
+    pub preset: Option<EnginePreset>,
+    pub eval: bool,
+    pub timeout: Duration,
+    /// `RAYON_NUM_THREADS` of each child.
+    pub threads: usize,
+}
+
+/// The `frond lod` arguments (input and output aside) of a tree with `o` as its settings.
+pub fn lod_args(ctx: &TreeContext, o: &Overrides) -> Result<Vec<String>> {
+    let mut a: Vec<String> = Vec::new();
+    let mut opt = |flag: &str, v: Option<String>| {
+        if let Some(v) = v {
+            a.push(flag.to_string());
+            a.push(v);
+        }
+    };
+    opt("--method", o.method.clone());
+    opt(
+        "--lods",
+        o.lods.as_ref().map(|l| {
+            l.iter()
+                .map(|h| h.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        }),
+    );
+    let animation = o.animation.clone().unwrap_or_else(|| "skin".into());
+    let animation_arg = match (&ctx.preset, animation.as_str()) {
+        (Some(p), "vat") => p.vat.to_string(),
+        _ => animation.clone(),
+    };
+    opt("--animation", Some(animation_arg));
+    opt("--seed", o.seed.map(|s| s.to_string()));
+    opt("--samples", o.samples.map(|s| s.to_string()));
+    opt("--clip", o.clip.clone());
+    opt("--pixel-error", o.pixel_error.map(|p| p.to_string()));
+    opt("--clouds", o.clouds.map(|c| c.to_string()));
+    opt("--clusters", o.clusters.map(|c| c.to_string()));
+    for m in o.foliage_material.iter().flatten() {
+        a.extend(["--foliage-material".to_string(), m.clone()]);
+    }
+    for m in o.wood_material.iter().flatten() {
+        a.extend(["--wood-material".to_string(), m.clone()]);
+    }
+    a.extend(ctx.build_args.iter().cloned());
+    if let Some(p) = &ctx.preset {
+        a.extend(p.lod_args(&animation)?);
+    }
+    Ok(a)
+}
+
+/// The hash of what decides a tree's output besides its input.
+pub fn params_hash(args: &[String], eval: bool) -> String {
+    let key = serde_json::json!({
+        "frond": env!("CARGO_PKG_VERSION"),
+        "args": args,
+        "eval": eval,
+    });
+    hex(&Sha256::digest(key.to_string().as_bytes()))
+}
+
+/// A file-name-safe key of an output folder (`/` and `%` escaped), followed by `%` in the
+/// names of its temporary folders, so one tree's prefix never matches another's.
+fn tmp_key(output: &str) -> String {
+    output.replace('%', "%25").replace('/', "%2F")
+}
+
+/// Processes one tree; never fails: a failure is the entry's status and reason.
+pub fn process(ctx: &TreeContext, tree: &TreeInput) -> TreeEntry {
+    let settings = tree.overrides.or(&ctx.defaults);
+    let args = lod_args(ctx, &settings);
+    let mut entry = TreeEntry {
+        tree: tree.relative.clone(),
+        output: tree.output.clone(),
+        status: Status::Failed,
+        reason: None,
+        input_hash: None,
+        params_hash: String::new(),
+        args: args.as_ref().cloned().unwrap_or_default(),
+        preset: ctx.preset.map(|p| p.name.to_string()),
+        files: Vec::new(),
+        output_bytes: 0,
+        lods: Vec::new(),
+        warnings: Vec::new(),
+        times_s: BTreeMap::new(),
+        wall_s: 0.0,
+        peak_rss_bytes: None,
+    };
+    entry.params_hash = params_hash(&entry.args, ctx.eval);
+    let start = Instant::now();
+    let result = args.and_then(|args| build(ctx, tree, &settings, &args, &mut entry));
+    entry.wall_s = start.elapsed().as_secs_f64();
+    match result {
+        Ok(status) => entry.status = status,
+        Err(e) => {
+            // The tree is named by the error line already: drop its absolute path.
+            let mut reason = format!("{e:#}");
+            if let Ok(abs) = std::path::absolute(&tree.path) {
+                reason = reason.replace(&format!("{}: ", abs.display()), "");
+            }
+            entry.status = Status::Failed;
+            entry.reason = Some(reason);
+            entry.files.clear();
+            entry.lods.clear();
+            entry.output_bytes = 0;
+        }
+    }
+    entry
+}
+
+/// The stamp of a complete earlier output with the same input and parameters.
+fn up_to_date(dir: &Path, input_hash: &str, params_hash: &str) -> Option<TreeEntry> {
+    let stamp: TreeEntry = serde_json::from_slice(&std::fs::read(dir.join(STAMP)).ok()?).ok()?;
+    let same = stamp.input_hash.as_deref() == Some(input_hash) && stamp.params_hash == params_hash;
+    let complete = dir.join(REPORT).is_file()
+        && stamp.files.iter().all(|f| {
+            std::fs::metadata(dir.join(&f.name)).is_ok_and(|m| m.is_file() && m.len() == f.bytes)
+        });
+    (same && complete).then_some(stamp)
+}
+
+fn build(
+    ctx: &TreeContext,
+    tree: &TreeInput,
+    settings: &Overrides,
+    args: &[String],
+    entry: &mut TreeEntry,
+) -> Result<Status> {
+    let hash = input_hash(&tree.path)?;
+    entry.input_hash = Some(hash.clone());
+    let final_dir = ctx.out_dir.join(&tree.output);
+    if let Some(stamp) = up_to_date(&final_dir, &hash, &entry.params_hash) {
+        *entry = TreeEntry {
+            status: Status::UpToDate,
+            ..stamp
+        };
+        return Ok(Status::UpToDate);
+    }
+
+    let key = tmp_key(&tree.output);
+    let tmp_root = ctx.out_dir.join(TMP_DIR);
+    std::fs::create_dir_all(&tmp_root)
+        .with_context(|| format!("{}: cannot create", tmp_root.display()))?;
+    // Leftovers of this tree from a killed run (only this tree's process writes them).
+    if let Ok(list) = std::fs::read_dir(&tmp_root) {
+        for e in list.flatten() {
+            if e.file_name()
+                .to_string_lossy()
+                .starts_with(&format!("{key}%"))
+            {
+                let _ = std::fs::remove_dir_all(e.path());
+            }
+        }
+    }
+    let tmp = tmp_root.join(format!("{key}%{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).with_context(|| format!("{}: cannot create", tmp.display()))?;
+    let result = build_into(ctx, tree, settings, args, entry, &tmp, &key)
+        .and_then(|()| swap_into_place(&tmp, &final_dir, &tmp_root, &key));
+    if result.is_err() {
+        let _ = std::fs::remove_dir_all(&tmp);
+    }
+    result.map(|()| Status::Built)
+}
+
+/// Runs the children into `tmp` and fills `entry`; writes the stamp last.
+fn build_into(
+    ctx: &TreeContext,
+    tree: &TreeInput,
+    settings: &Overrides,
+    args: &[String],
+    entry: &mut TreeEntry,
+    tmp: &Path,
+    key: &str,
+) -> Result<()> {
+    let input = std::path::absolute(&tree.path)
+        .with_context(|| format!("{}: cannot resolve", tree.path.display()))?;
+    let log_dir = ctx.out_dir.join(LOG_DIR).join(key);
+    let spec = ChildSpec {
+        cwd: Some(tmp),
+        env: vec![("RAYON_NUM_THREADS".into(), ctx.threads.max(1).to_string())],
+    };
+    let mut lod = vec![
+        "lod".to_string(),
+        input.display().to_string(),
+        "-o".into(),
+        ".".into(),
+    ];
+    lod.extend(args.iter().cloned());
+    let run = run_child(&ctx.exe, &lod, &spec, &log_dir, "lod", ctx.timeout)?;
+    entry.peak_rss_bytes = run.peak_rss;
+    check_end(run.end, "lod")?;
+
+    let report_path = tmp.join(REPORT);
+    let report: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(&report_path)
+            .with_context(|| format!("{}: frond lod wrote no report", report_path.display()))?,
+    )
+    .context("frond lod's report.json is not JSON")?;
+    for (k, v) in report["timings_s"].as_object().into_iter().flatten() {
+        if let Some(v) = v.as_f64() {
+            entry.times_s.insert(k.clone(), v);
+        }
+    }
+    let num = |v: &serde_json::Value| v.as_u64().unwrap_or(0);
+    for l in report["lods"].as_array().into_iter().flatten() {
+        entry.lods.push(LodLine {
+            file: l["file"].as_str().unwrap_or("").to_string(),
+            screen_height: l["screen_height"].as_f64().map(|h| h as f32),
+            method: l["method"].as_str().unwrap_or("").to_string(),
+            triangles: num(&l["triangles"]),
+            billboards: num(&l["billboards"]),
+            bones: num(&l["bones"]),
+            texture_bytes: num(&l["texture_bytes"]),
+            metrics: BTreeMap::new(),
+        });
+    }
+
+    if ctx.eval {
+        let t0 = Instant::now();
+        for (k, l) in entry.lods.iter_mut().enumerate() {
+            let Some(h) = l.screen_height else { continue };
+            let mut eval = vec![
+                "eval".to_string(),
+                input.display().to_string(),
+                l.file.clone(),
+                "--screen-height".into(),
+                (h.round().max(1.0) as u32).to_string(),
+                "--json".into(),
+            ];
+            if let Some(s) = settings.samples {
+                eval.extend(["--samples".to_string(), s.to_string()]);
+            }
+            if let Some(c) = &settings.clip {
+                eval.extend(["--clip".to_string(), c.clone()]);
+            }
+            for m in settings.foliage_material.iter().flatten() {
+                eval.extend(["--foliage-material".to_string(), m.clone()]);
+            }
+            for m in settings.wood_material.iter().flatten() {
+                eval.extend(["--wood-material".to_string(), m.clone()]);
+            }
+            let tag = format!("eval{k}");
+            let run = run_child(&ctx.exe, &eval, &spec, &log_dir, &tag, ctx.timeout)?;
+            if let Some(p) = run.peak_rss {
+                entry.peak_rss_bytes = Some(entry.peak_rss_bytes.map_or(p, |q| q.max(p)));
+            }
+            check_end(run.end, &format!("eval of {}", l.file))?;
+            let out = log_dir.join(format!("{tag}.stdout"));
+            let r: serde_json::Value = serde_json::from_slice(
+                &std::fs::read(&out).with_context(|| format!("{}: cannot read", out.display()))?,
+            )
+            .with_context(|| format!("frond eval of {} printed no JSON", l.file))?;
+            let mean = |v: &serde_json::Value| v["mean"].as_f64();
+            l.metrics
+                .insert("coverage".into(), mean(&r["coverage"]["static"]));
+            l.metrics
+                .insert("coverage_animated".into(), mean(&r["coverage"]["animated"]));
+            for name in [
+                "colour_difference",
+                "projected_distance",
+                "orientation",
+                "dominating_axis",
+            ] {
+                l.metrics.insert(name.into(), mean(&r[name]));
+            }
+        }
+        entry
+            .times_s
+            .insert("eval".into(), t0.elapsed().as_secs_f64());
+    }
+
+    // report.json's size follows its timing fields: listed apart, checked for presence.
+    entry.files = list_files(tmp)?
+        .into_iter()
+        .filter(|f| f.name != REPORT)
+        .collect();
+    entry.output_bytes = entry.files.iter().map(|f| f.bytes).sum();
+    if let Some(p) = &ctx.preset {
+        for l in &entry.lods {
+            let glb = std::fs::read(tmp.join(&l.file))
+                .with_context(|| format!("{}: cannot read", l.file))?;
+            entry
+                .warnings
+                .extend(p.check_lod(&l.file, l.bones as usize, &glb));
+        }
+    }
+    let stamp = TreeEntry {
+        status: Status::Built,
+        ..entry.clone()
+    };
+    write_atomic(
+        &tmp.join(STAMP),
+        &serde_json::to_vec_pretty(&stamp).context("serialising the stamp")?,
+    )
+}
+
+fn check_end(end: JobEnd, what: &str) -> Result<()> {
+    match end {
+        JobEnd::Done => Ok(()),
+        JobEnd::TimedOut(d) => anyhow::bail!("{what} ran past {} s (--timeout)", d.as_secs()),
+        JobEnd::Failed(why) => {
+            // "exit 1: error: FILE: problem" → "FILE: problem".
+            let why = why
+                .split_once(": error: ")
+                .map_or(why.as_str(), |(_, rest)| rest);
+            anyhow::bail!("{why}")
+        }
+    }
+}
+
+/// Every file below `dir`, `/`-separated, sorted.
+fn list_files(dir: &Path) -> Result<Vec<FileEntry>> {
+    fn walk(root: &Path, dir: &Path, out: &mut Vec<FileEntry>) -> Result<()> {
+        for e in
+            std::fs::read_dir(dir).with_context(|| format!("{}: cannot list", dir.display()))?
+        {
+            let e = e.with_context(|| format!("{}: cannot list", dir.display()))?;
+            let path = e.path();
+            let meta = e
+                .metadata()
+                .with_context(|| format!("{}: cannot stat", path.display()))?;
+            if meta.is_dir() {
+                walk(root, &path, out)?;
+            } else if let Ok(rel) = path.strip_prefix(root) {
+                let name = rel
+                    .components()
+                    .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                    .collect::<Vec<_>>()
+                    .join("/");
+                out.push(FileEntry {
+                    name,
+                    bytes: meta.len(),
+                });
+            }
+        }
+        Ok(())
+    }
+    let mut out = Vec::new();
+    walk(dir, dir, &mut out)?;
+    out.sort_by(|a, b| a.name.cmp(&b.name));
+    Ok(out)
+}
+
+/// Replaces `final_dir` by the complete `tmp`: the old output is moved aside first, so at any
+/// moment the path holds a complete output or nothing.
+fn swap_into_place(tmp: &Path, final_dir: &Path, tmp_root: &Path, key: &str) -> Result<()> {
+    if let Some(parent) = final_dir.parent() {
+        std::fs::create_dir_all(parent)
+            .with_context(|| format!("{}: cannot create", parent.display()))?;
+    }
+    let old = tmp_root.join(format!("{key}%old%{}", std::process::id()));
+    let had_old = match std::fs::rename(final_dir, &old) {
+        Ok(()) => true,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => false,
+        Err(e) => {
+            return Err(e).with_context(|| {
+                format!("{}: cannot move the old output aside", final_dir.display())
+            });
+        }
+    };
+    std::fs::rename(tmp, final_dir)
+        .with_context(|| format!("{}: cannot move the output into place", final_dir.display()))?;
+    if had_old {
+        let _ = std::fs::remove_dir_all(&old);
+    }
+    Ok(())
+}
