@@ -493,3 +493,42 @@ fn manifest_overrides_preset_eval_and_staleness() {
     );
     let _: PathBuf = dir.path().join("o2");
 }
+
+#[test]
+fn never_overwrites_what_it_did_not_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in");
+    std::fs::create_dir_all(&input).unwrap();
+    std::fs::copy(
+        root().join("samples/sapling.glb"),
+        input.join("sapling.glb"),
+    )
+    .unwrap();
+    sample_tree(&input.join("b.glb"), 7);
+    // An output folder inside which the input lies would feed outputs back as inputs.
+    for out in [input.clone(), dir.path().to_path_buf()] {
+        let r = frond(&["batch", s(&input), "-o", s(&out)]);
+        assert!(!r.status.success());
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(err.contains("holds the input"), "{err}");
+    }
+    // A folder of the user's where a tree's output would go is left alone, the tree failed;
+    // a budget smaller than any tree still runs every tree (one at a time).
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(out.join("sapling")).unwrap();
+    std::fs::write(out.join("sapling/mine.txt"), b"keep").unwrap();
+    let r = batch_cmd(&input, &out, &["--jobs", "2", "--max-memory", "1K"])
+        .output()
+        .unwrap();
+    assert!(!r.status.success());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("error: sapling.glb: ") && err.contains("is not a frond batch output"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(out.join("sapling/mine.txt")).unwrap(),
+        b"keep"
+    );
+    assert_eq!(complete_outputs(&out, &["b"]), ["b"]);
+}

@@ -21,10 +21,12 @@ use summary::{BatchSummary, Counts, Status, TreeEntry};
 use tree_job::{TreeContext, process};
 
 /// Memory a `frond lod` child is assumed to need before any has been measured: a fixed part
-/// (renderer, buffers) plus a multiple of the input file's size. Measured on the shared trees
-/// (docs/experiments.md §9): oak_dense (16 MB) peaked at ~1.1 GB, the 2–4 MB trees at 0.3–0.5 GB.
+/// (renderer, buffers) plus a multiple of the input file's size. Measured peaks (default
+/// settings, `cargo bench --bench batch_throughput`): small generated trees (0.4 MB) 0.21–0.24
+/// GB, the shared trees (2–4 MB) 0.32–0.54 GB, medium generated trees (3.3 MB) 0.68–0.84 GB,
+/// oak_dense (16 MB) 1.19 GB: at most ~150 bytes above the base per input byte.
 pub const BASE_MEMORY: u64 = 256 << 20;
-pub const MEMORY_PER_INPUT_BYTE: u64 = 64;
+pub const MEMORY_PER_INPUT_BYTE: u64 = 160;
 
 /// What `frond batch` was asked for.
 #[derive(Clone, Debug)]
@@ -115,6 +117,15 @@ pub fn run_batch(req: &BatchRequest, progress: &dyn BatchProgress) -> Result<Bat
         .with_context(|| format!("{}: cannot create the output folder", req.out_dir.display()))?;
     let out_abs = std::fs::canonicalize(&req.out_dir)
         .with_context(|| format!("{}: cannot resolve", req.out_dir.display()))?;
+    if let Ok(input_abs) = std::fs::canonicalize(&req.input)
+        && input_abs.starts_with(&out_abs)
+    {
+        anyhow::bail!(
+            "{}: the output folder {} holds the input; choose an output folder outside it",
+            req.input.display(),
+            req.out_dir.display()
+        );
+    }
     let mut trees = discover(&req.input, Some(&out_abs))?;
     if let Some(s) = req.shard {
         trees.retain(|t| s.takes(&t.relative));
@@ -217,7 +228,7 @@ mod tests {
         // A measured ratio only ever raises the model.
         assert_eq!(
             memory_estimate(1 << 20, Some(1.0)),
-            BASE_MEMORY + (64 << 20)
+            BASE_MEMORY + (MEMORY_PER_INPUT_BYTE << 20)
         );
         assert_eq!(
             memory_estimate(1 << 20, Some(1000.0)),

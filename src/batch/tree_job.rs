@@ -385,6 +385,17 @@ fn swap_into_place(tmp: &Path, final_dir: &Path, tmp_root: &Path, key: &str) -> 
         std::fs::create_dir_all(parent)
             .with_context(|| format!("{}: cannot create", parent.display()))?;
     }
+    // Only ever replace what a batch wrote: a folder with a stamp (or an empty one).
+    if final_dir.is_dir()
+        && !final_dir.join(STAMP).is_file()
+        && std::fs::read_dir(final_dir).is_ok_and(|mut d| d.next().is_some())
+    {
+        anyhow::bail!(
+            "{} exists and is not a frond batch output (no {STAMP}); move it away or choose \
+             another output folder",
+            final_dir.display()
+        );
+    }
     let old = tmp_root.join(format!("{key}%old%{}", std::process::id()));
     let had_old = match std::fs::rename(final_dir, &old) {
         Ok(()) => true,
