@@ -135,16 +135,22 @@ fn complete_outputs(out: &Path, outputs: &[&str]) -> Vec<String> {
     done
 }
 
-#[test]
-fn shards_in_separate_processes_equal_one_run() {
-    let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("in");
+/// `<dir>/in/` holding the bundled sapling.
+fn library_with_sapling(dir: &Path) -> PathBuf {
+    let input = dir.join("in");
     std::fs::create_dir_all(&input).unwrap();
     std::fs::copy(
         root().join("samples/sapling.glb"),
         input.join("sapling.glb"),
     )
     .unwrap();
+    input
+}
+
+#[test]
+fn shards_in_separate_processes_equal_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = library_with_sapling(dir.path());
     std::fs::copy(shared_tree("bush_1.glb"), input.join("bush_1.glb")).unwrap();
     sample_tree(&input.join("gen/a.glb"), 2);
     sample_tree(&input.join("gen/b.glb"), 3);
@@ -491,19 +497,12 @@ fn manifest_overrides_preset_eval_and_staleness() {
         err.contains("trees.toml tree 1") && err.contains("lods: 0"),
         "{err}"
     );
-    let _: PathBuf = dir.path().join("o2");
 }
 
 #[test]
 fn never_overwrites_what_it_did_not_write() {
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("in");
-    std::fs::create_dir_all(&input).unwrap();
-    std::fs::copy(
-        root().join("samples/sapling.glb"),
-        input.join("sapling.glb"),
-    )
-    .unwrap();
+    let input = library_with_sapling(dir.path());
     sample_tree(&input.join("b.glb"), 7);
     // An output folder inside which the input lies would feed outputs back as inputs.
     for out in [input.clone(), dir.path().to_path_buf()] {
