@@ -920,6 +920,10 @@ fn run(cli: Cli) -> Result<()> {
                 clusters: build.clusters,
             };
             defaults.check("command line")?;
+            let preset = preset.as_deref().and_then(EnginePreset::named);
+            if let (Some(p), Some(a)) = (&preset, &defaults.animation) {
+                p.lod_args(a)?;
+            }
             let shard = match shard.as_deref() {
                 None => None,
                 Some("auto") => Some(Shard::from_env(&|k| std::env::var(k).ok())?),
@@ -947,7 +951,7 @@ fn run(cli: Cli) -> Result<()> {
                     out_dir: output.clone(),
                     defaults,
                     build_args,
-                    preset: preset.as_deref().and_then(EnginePreset::named),
+                    preset,
                     eval,
                     timeout: std::time::Duration::from_secs(timeout.max(1)),
                     threads: (cores / jobs).max(1),
