@@ -430,7 +430,7 @@ enum Command {
         /// Screen heights in pixels, one LOD each (default: frond lod's).
         #[arg(long, value_delimiter = ',')]
         lods: Option<Vec<f32>>,
-        /// skin, vat (the preset's VAT format), vat-png16 or spectral.
+        /// skin, vat (EXR half), vat-png16 (refused by the web preset) or spectral.
         #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(ANIMATION_NAMES))]
         animation: Option<String>,
         /// Random seed of every tree.

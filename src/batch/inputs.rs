@@ -9,7 +9,7 @@ use sha2::{Digest, Sha256};
 
 use crate::lod_cmd::METHOD_NAMES;
 
-/// Animation modes `frond lod --animation` takes (`vat` is the preset's VAT format).
+/// Animation modes `frond lod --animation` takes (`vat`: EXR half; the web preset refuses `vat-png16`).
 pub const ANIMATION_NAMES: &[&str] = &["skin", "vat", "vat-png16", "spectral"];
 
 /// Settings a manifest may give every tree (`[defaults]`) or one tree (`[[tree]]`).

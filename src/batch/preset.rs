@@ -20,12 +20,21 @@ pub struct EnginePreset {
     /// Joints one skin may have before the engine needs a setting changed (None: no limit
     /// documented).
     pub max_joints: Option<usize>,
-    /// `frond lod --animation` value `vat` turns into (the VAT texture format the engine's
-    /// shader reads).
-    pub vat: &'static str,
-    /// Whether 16-bit PNG VAT textures reach the shader at 16 bits.
+    /// Whether 16-bit PNG VAT textures reach the shader at 16 bits (`vat`, EXR half, works
+    /// everywhere).
     pub png16_vat: bool,
 }
+
+/// What every engine shares: 4 influences, no joint limit known, 16-bit PNG VATs usable.
+const COMMON: EnginePreset = EnginePreset {
+    name: "",
+    max_atlas: 4096,
+    external_textures: false,
+    msft_lod: false,
+    max_influences: 4,
+    max_joints: None,
+    png16_vat: true,
+};
 
 /// Every preset, by `--preset` name.
 pub const PRESETS: &[EnginePreset] = &[
@@ -34,13 +43,9 @@ pub const PRESETS: &[EnginePreset] = &[
     // weights.
     EnginePreset {
         name: "unity",
-        max_atlas: 4096,
         external_textures: true,
         msft_lod: true,
-        max_influences: 4,
-        max_joints: None,
-        vat: "vat",
-        png16_vat: true,
+        ..COMMON
     },
     // Unreal Engine 5 (Interchange): 8192 is the documented texture limit without .ini
     // changes; 8-bit bone indices hold 256 joints per section unless "Support 16-bit Bone
@@ -49,36 +54,22 @@ pub const PRESETS: &[EnginePreset] = &[
         name: "unreal",
         max_atlas: 8192,
         external_textures: true,
-        msft_lod: false,
-        max_influences: 4,
         max_joints: Some(256),
-        vat: "vat",
-        png16_vat: true,
+        ..COMMON
     },
     // Godot 4: embedded images are extracted on import; up to 16384 px; generates its own
     // mesh LODs (turn off for billboard LODs), no name convention, no MSFT_lod.
     EnginePreset {
         name: "godot",
-        max_atlas: 4096,
-        external_textures: false,
-        msft_lod: false,
-        max_influences: 4,
-        max_joints: None,
-        vat: "vat",
-        png16_vat: true,
+        ..COMMON
     },
     // three.js / the web: one GLB a LOD (one request), 4096 px (~99 % of WebGL devices), 4
     // weights (JOINTS_0 only); browsers decode 16-bit PNG to 8 bits, so VAT is EXR
     // (EXRLoader, half float).
     EnginePreset {
         name: "web",
-        max_atlas: 4096,
-        external_textures: false,
-        msft_lod: false,
-        max_influences: 4,
-        max_joints: None,
-        vat: "vat",
         png16_vat: false,
+        ..COMMON
     },
 ];
 

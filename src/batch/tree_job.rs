@@ -62,11 +62,7 @@ pub fn lod_args(ctx: &TreeContext, o: &Overrides) -> Result<Vec<String>> {
         }),
     );
     let animation = o.animation.clone().unwrap_or_else(|| "skin".into());
-    let animation_arg = match (&ctx.preset, animation.as_str()) {
-        (Some(p), "vat") => p.vat.to_string(),
-        _ => animation.clone(),
-    };
-    opt("--animation", Some(animation_arg));
+    opt("--animation", Some(animation.clone()));
     opt("--seed", o.seed.map(|s| s.to_string()));
     opt("--samples", o.samples.map(|s| s.to_string()));
     opt("--clip", o.clip.clone());
