@@ -254,11 +254,31 @@ fn read_manifest(path: &Path) -> Result<Vec<TreeInput>> {
             let what = format!("{} tree {} ({})", path.display(), i + 1, t.path.display());
             t.settings.check(&what)?;
             let full = base.join(&t.path);
-            let relative = relative_name(base, &full).unwrap_or_else(|| {
-                full.file_name()
-                    .map(|f| f.to_string_lossy().into_owned())
-                    .unwrap_or_default()
-            });
+            // A path below the manifest's folder is named relative to it; any other (absolute,
+            // or with `..`) by the path as written, its output folder by its file name.
+            let below = t.path.is_relative()
+                && t.path.components().all(|c| {
+                    matches!(
+                        c,
+                        std::path::Component::Normal(_) | std::path::Component::CurDir
+                    )
+                });
+            let (relative, default_output) = match relative_name(base, &full) {
+                Some(r) if below => {
+                    let o = without_extension(&r);
+                    (r, o)
+                }
+                _ => {
+                    let file = full
+                        .file_name()
+                        .map(|f| f.to_string_lossy().into_owned())
+                        .with_context(|| format!("{what}: not a file path"))?;
+                    (
+                        t.path.to_string_lossy().replace('\\', "/"),
+                        without_extension(&file),
+                    )
+                }
+            };
             let output = match t.output {
                 Some(o) => {
                     let ok = !o.is_empty()
@@ -270,7 +290,7 @@ fn read_manifest(path: &Path) -> Result<Vec<TreeInput>> {
                     }
                     o
                 }
-                None => without_extension(&relative),
+                None => default_output,
             };
             Ok(TreeInput {
                 relative,
@@ -363,6 +383,20 @@ mod tests {
         assert_eq!(trees[0].overrides.method.as_deref(), Some("skeleton"));
         assert_eq!(trees[0].overrides.lods, Some(vec![200.0, 60.0]));
         assert_eq!(trees[1].overrides.method.as_deref(), Some("static"));
+        // Paths outside the manifest's folder keep their written name, and never lead the
+        // output folder outside OUTDIR.
+        let sub = root.join("a/m.toml");
+        std::fs::write(
+            &sub,
+            "[[tree]]\npath = \"../x.glb\"\n[[tree]]\npath = \"/abs/y.gltf\"\n",
+        )
+        .unwrap();
+        let trees = discover(&sub, None).unwrap();
+        let names: Vec<(&str, &str)> = trees
+            .iter()
+            .map(|t| (t.relative.as_str(), t.output.as_str()))
+            .collect();
+        assert_eq!(names, [("../x.glb", "x"), ("/abs/y.gltf", "y")]);
         std::fs::write(&m, "[[tree]]\npath = \"x.glb\"\nmethod = \"magic\"\n").unwrap();
         let err = format!("{:#}", discover(&m, None).unwrap_err());
         assert!(err.contains("unknown method 'magic'"), "{err}");
