@@ -1075,8 +1075,7 @@ fn finish_batch(summary: &BatchSummary, dir: &std::path::Path, json: bool) -> Re
     if summary.counts.failed > 0 {
         anyhow::bail!(
             "{line} (reasons in {})",
-            dir.join(BatchSummary::stem(summary.shard))
-                .with_extension("json")
+            dir.join(format!("{}.json", BatchSummary::stem(summary.shard)))
                 .display()
         );
     }

@@ -153,22 +153,39 @@ pub fn discover(input: &Path, skip: Option<&Path>) -> Result<Vec<TreeInput>> {
             );
         }
     }
-    let mut outputs: Vec<(&str, &str)> = trees
+    // Output folders must be distinct and none inside another (rebuilding the outer one would
+    // move the inner one away).
+    let by_output: std::collections::HashMap<&str, &str> = trees
         .iter()
         .map(|t| (t.output.as_str(), t.relative.as_str()))
         .collect();
-    outputs.sort();
-    for pair in outputs.windows(2) {
-        if pair[0].0 == pair[1].0 {
+    for t in &trees {
+        if by_output.get(t.output.as_str()) != Some(&t.relative.as_str()) {
             bail!(
                 "{}: '{}' and '{}' would both write OUTDIR/{}/ (rename one, or give a manifest \
                  `output`)",
                 input.display(),
-                pair[0].1,
-                pair[1].1,
-                pair[0].0
+                by_output[t.output.as_str()],
+                t.relative,
+                t.output
             );
         }
+        let mut prefix = t.output.as_str();
+        while let Some((outer, _)) = prefix.rsplit_once('/') {
+            if let Some(other) = by_output.get(outer) {
+                bail!(
+                    "{}: '{}' would write OUTDIR/{}/ inside OUTDIR/{outer}/, the output of '{other}' \
+                     (give a manifest `output`)",
+                    input.display(),
+                    t.relative,
+                    t.output
+                );
+            }
+            prefix = outer;
+        }
+    }
+    if trees.is_empty() {
+        bail!("{}: no .glb or .gltf file in it", input.display());
     }
     Ok(trees)
 }
@@ -194,9 +211,17 @@ fn relative_name(root: &Path, path: &Path) -> Option<String> {
 
 /// `relative` without the file extension.
 fn without_extension(relative: &str) -> String {
-    match relative.rsplit_once('.') {
-        Some((stem, _)) if !stem.ends_with('/') && !stem.is_empty() => stem.to_string(),
-        _ => relative.to_string(),
+    let (folder, file) = match relative.rsplit_once('/') {
+        Some((d, f)) => (Some(d), f),
+        None => (None, relative),
+    };
+    let stem = match file.rsplit_once('.') {
+        Some((stem, _)) if !stem.is_empty() => stem,
+        _ => file,
+    };
+    match folder {
+        Some(d) => format!("{d}/{stem}"),
+        None => stem.to_string(),
     }
 }
 
@@ -281,14 +306,24 @@ fn read_manifest(path: &Path) -> Result<Vec<TreeInput>> {
             };
             let output = match t.output {
                 Some(o) => {
-                    let ok = !o.is_empty()
-                        && Path::new(&o)
-                            .components()
-                            .all(|c| matches!(c, std::path::Component::Normal(_)));
-                    if !ok {
-                        bail!("{what}: output '{o}' must be a relative folder without '..'");
+                    // Normal parts only, rejoined: `x/`, `x/.` and `x` are one folder.
+                    let parts: Option<Vec<String>> = Path::new(&o)
+                        .components()
+                        .filter(|c| !matches!(c, std::path::Component::CurDir))
+                        .map(|c| match c {
+                            std::path::Component::Normal(n) => {
+                                Some(n.to_string_lossy().into_owned())
+                            }
+                            _ => None,
+                        })
+                        .collect();
+                    match parts {
+                        Some(p) if !p.is_empty() && !p[0].starts_with(".frond-") => p.join("/"),
+                        _ => bail!(
+                            "{what}: output '{o}' must be a relative folder without '..' (and not \
+                             one of frond's own .frond-* folders)"
+                        ),
                     }
-                    o
                 }
                 None => default_output,
             };
@@ -366,6 +401,16 @@ mod tests {
             names,
             [("a/b/z.glb", "a/b/z"), ("a/y.GLTF", "a/y"), ("x.glb", "x")]
         );
+        assert_eq!(without_extension("v1.2/tree"), "v1.2/tree");
+        assert_eq!(without_extension("v1.2/tree.glb"), "v1.2/tree");
+        std::fs::create_dir_all(root.join("x")).unwrap();
+        std::fs::write(root.join("x/inner.glb"), b"-").unwrap();
+        let err = discover(root, None).unwrap_err().to_string();
+        assert!(err.contains("inside OUTDIR/x/"), "{err}");
+        std::fs::remove_dir_all(root.join("x")).unwrap();
+        let empty = tempfile::tempdir().unwrap();
+        let err = discover(empty.path(), None).unwrap_err().to_string();
+        assert!(err.contains("no .glb or .gltf"), "{err}");
         std::fs::write(root.join("x.gltf"), b"-").unwrap();
         let err = discover(root, None).unwrap_err().to_string();
         assert!(err.contains("would both write OUTDIR/x/"), "{err}");
@@ -383,6 +428,12 @@ mod tests {
         assert_eq!(trees[0].overrides.method.as_deref(), Some("skeleton"));
         assert_eq!(trees[0].overrides.lods, Some(vec![200.0, 60.0]));
         assert_eq!(trees[1].overrides.method.as_deref(), Some("static"));
+        std::fs::write(&m, "[[tree]]\npath = \"x.glb\"\noutput = \"q/./\"\n[[tree]]\npath = \"a/y.GLTF\"\noutput = \"q\"\n").unwrap();
+        let err = discover(&m, None).unwrap_err().to_string();
+        assert!(err.contains("would both write OUTDIR/q/"), "{err}");
+        std::fs::write(&m, "[[tree]]\npath = \"x.glb\"\noutput = \".frond-tmp\"\n").unwrap();
+        let err = format!("{:#}", discover(&m, None).unwrap_err());
+        assert!(err.contains("frond's own"), "{err}");
         // Paths outside the manifest's folder keep their written name, and never lead the
         // output folder outside OUTDIR.
         let sub = root.join("a/m.toml");

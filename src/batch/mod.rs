@@ -96,7 +96,7 @@ fn memory_estimate(input_bytes: u64, measured_per_byte: Option<f64>) -> u64 {
     let per_byte = measured_per_byte
         .unwrap_or(0.0)
         .max(MEMORY_PER_INPUT_BYTE as f64);
-    BASE_MEMORY + (input_bytes as f64 * per_byte) as u64
+    BASE_MEMORY.saturating_add((input_bytes as f64 * per_byte) as u64)
 }
 
 /// Shared state of the workers.
@@ -110,7 +110,7 @@ struct Pool {
 
 /// Runs the batch and writes its summary (`summary.json`/`.csv`, or the shard's
 /// `summary.shard-i-of-n.*`) into OUTDIR. Err only for problems of the whole batch (no input,
-/// OUTDIR not writable); a tree's failure is in its entry.
+/// OUTDIR not writable, a folder without trees); a tree's failure is in its entry.
 pub fn run_batch(req: &BatchRequest, progress: &dyn BatchProgress) -> Result<BatchSummary> {
     let start = Instant::now();
     std::fs::create_dir_all(&req.out_dir)
@@ -153,7 +153,9 @@ pub fn run_batch(req: &BatchRequest, progress: &dyn BatchProgress) -> Result<Bat
                             let Some(next) = p.queue.front() else { return };
                             let bytes = std::fs::metadata(&next.path).map_or(0, |m| m.len());
                             let estimate = memory_estimate(bytes, p.per_byte);
-                            if p.running == 0 || p.reserved + estimate <= req.max_memory {
+                            if p.running == 0
+                                || p.reserved.saturating_add(estimate) <= req.max_memory
+                            {
                                 let Some(tree) = p.queue.pop_front() else {
                                     return;
                                 };
@@ -168,13 +170,18 @@ pub fn run_batch(req: &BatchRequest, progress: &dyn BatchProgress) -> Result<Bat
                         }
                     };
                     progress.started(&tree.relative);
-                    let entry = process(&context, &tree);
+                    // A panic is that tree's failure, never a stuck pool.
+                    let entry = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                        process(&context, &tree)
+                    }))
+                    .unwrap_or_else(|_| TreeEntry::failed(&tree, "internal error (a panic)"));
                     if let Ok(mut p) = pool.lock() {
                         p.reserved -= estimate;
                         p.running -= 1;
                         let bytes = std::fs::metadata(&tree.path).map_or(0, |m| m.len());
+                        // Small inputs' peaks are mostly the base: learn from 1 MiB up.
                         if let Some(rss) = entry.peak_rss_bytes
-                            && bytes > 0
+                            && bytes >= 1 << 20
                             && entry.status == Status::Built
                         {
                             let r = rss.saturating_sub(BASE_MEMORY) as f64 / bytes as f64;

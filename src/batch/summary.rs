@@ -74,6 +74,27 @@ pub struct TreeEntry {
 }
 
 impl TreeEntry {
+    /// A tree that failed before anything about it was known.
+    pub fn failed(tree: &super::inputs::TreeInput, reason: &str) -> TreeEntry {
+        TreeEntry {
+            tree: tree.relative.clone(),
+            output: tree.output.clone(),
+            status: Status::Failed,
+            reason: Some(reason.to_string()),
+            input_hash: None,
+            params_hash: String::new(),
+            args: Vec::new(),
+            preset: None,
+            files: Vec::new(),
+            output_bytes: 0,
+            lods: Vec::new(),
+            warnings: Vec::new(),
+            times_s: BTreeMap::new(),
+            wall_s: 0.0,
+            peak_rss_bytes: None,
+        }
+    }
+
     /// The entry without its timing fields (what equal runs share).
     pub fn without_timing(&self) -> TreeEntry {
         TreeEntry {

@@ -92,8 +92,8 @@ pub fn params_hash(args: &[String], eval: bool) -> String {
     hex(&Sha256::digest(key.to_string().as_bytes()))
 }
 
-/// A file-name-safe key of an output folder (`/` and `%` escaped), followed by `%` in the
-/// names of its temporary folders, so one tree's prefix never matches another's.
+/// A file-name-safe key of an output folder (`/` and `%` escaped); its temporary folders are
+/// `<key>%<pid>` and `<key>%old%<pid>`.
 fn tmp_key(output: &str) -> String {
     output.replace('%', "%25").replace('/', "%2F")
 }
@@ -103,21 +103,10 @@ pub fn process(ctx: &TreeContext, tree: &TreeInput) -> TreeEntry {
     let settings = tree.overrides.or(&ctx.defaults);
     let args = lod_args(ctx, &settings);
     let mut entry = TreeEntry {
-        tree: tree.relative.clone(),
-        output: tree.output.clone(),
-        status: Status::Failed,
         reason: None,
-        input_hash: None,
-        params_hash: String::new(),
         args: args.as_ref().cloned().unwrap_or_default(),
         preset: ctx.preset.map(|p| p.name.to_string()),
-        files: Vec::new(),
-        output_bytes: 0,
-        lods: Vec::new(),
-        warnings: Vec::new(),
-        times_s: BTreeMap::new(),
-        wall_s: 0.0,
-        peak_rss_bytes: None,
+        ..TreeEntry::failed(tree, "")
     };
     entry.params_hash = params_hash(&entry.args, ctx.eval);
     let start = Instant::now();
@@ -162,29 +151,22 @@ fn build(
     let hash = input_hash(&tree.path)?;
     entry.input_hash = Some(hash.clone());
     let final_dir = ctx.out_dir.join(&tree.output);
+    let key = tmp_key(&tree.output);
+    let tmp_root = ctx.out_dir.join(TMP_DIR);
+    clear_leftovers(&tmp_root, &key);
     if let Some(stamp) = up_to_date(&final_dir, &hash, &entry.params_hash) {
+        // Named as the tree is now (a manifest may have moved its input).
         *entry = TreeEntry {
             status: Status::UpToDate,
+            tree: tree.relative.clone(),
+            output: tree.output.clone(),
             ..stamp
         };
         return Ok(Status::UpToDate);
     }
 
-    let key = tmp_key(&tree.output);
-    let tmp_root = ctx.out_dir.join(TMP_DIR);
     std::fs::create_dir_all(&tmp_root)
         .with_context(|| format!("{}: cannot create", tmp_root.display()))?;
-    // Leftovers of this tree from a killed run (only this tree's process writes them).
-    if let Ok(list) = std::fs::read_dir(&tmp_root) {
-        for e in list.flatten() {
-            if e.file_name()
-                .to_string_lossy()
-                .starts_with(&format!("{key}%"))
-            {
-                let _ = std::fs::remove_dir_all(e.path());
-            }
-        }
-    }
     let tmp = tmp_root.join(format!("{key}%{}", std::process::id()));
     std::fs::create_dir_all(&tmp).with_context(|| format!("{}: cannot create", tmp.display()))?;
     let result = build_into(ctx, tree, settings, args, entry, &tmp, &key)
@@ -193,6 +175,26 @@ fn build(
         let _ = std::fs::remove_dir_all(&tmp);
     }
     result.map(|()| Status::Built)
+}
+
+/// Removes this tree's folders a killed run left in `tmp_root`: exactly `<key>%<pid>` and
+/// `<key>%old%<pid>` (only this tree's process writes them; other trees' keys may share the
+/// prefix, never the whole name).
+fn clear_leftovers(tmp_root: &Path, key: &str) {
+    let Ok(list) = std::fs::read_dir(tmp_root) else {
+        return;
+    };
+    let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
+    for e in list.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let mine = name
+            .strip_prefix(key)
+            .and_then(|r| r.strip_prefix('%'))
+            .is_some_and(|r| digits(r) || r.strip_prefix("old%").is_some_and(digits));
+        if mine {
+            let _ = std::fs::remove_dir_all(e.path());
+        }
+    }
 }
 
 /// Runs the children into `tmp` and fills `entry`; writes the stamp last.
@@ -382,6 +384,12 @@ fn swap_into_place(tmp: &Path, final_dir: &Path, tmp_root: &Path, key: &str) -> 
             .with_context(|| format!("{}: cannot create", parent.display()))?;
     }
     // Only ever replace what a batch wrote: a folder with a stamp (or an empty one).
+    if final_dir.exists() && !final_dir.is_dir() {
+        anyhow::bail!(
+            "{} exists and is not a folder; move it away or choose another output folder",
+            final_dir.display()
+        );
+    }
     if final_dir.is_dir()
         && !final_dir.join(STAMP).is_file()
         && std::fs::read_dir(final_dir).is_ok_and(|mut d| d.next().is_some())
@@ -408,4 +416,33 @@ fn swap_into_place(tmp: &Path, final_dir: &Path, tmp_root: &Path, key: &str) -> 
         let _ = std::fs::remove_dir_all(&old);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn leftovers_are_cleared_by_exact_name_only() {
+        let dir = tempfile::tempdir().unwrap();
+        let key = tmp_key("a");
+        assert_eq!(tmp_key("a/b%c"), "a%2Fb%25c");
+        for name in [
+            "a%12",
+            "a%old%12",
+            "a%2Fb%12",
+            "a%25x%12",
+            "a%2Fb%old%3",
+            "ab%12",
+        ] {
+            std::fs::create_dir_all(dir.path().join(name)).unwrap();
+        }
+        clear_leftovers(dir.path(), &key);
+        let mut left: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, ["a%25x%12", "a%2Fb%12", "a%2Fb%old%3", "ab%12"]);
+    }
 }
