@@ -189,4 +189,32 @@ mod tests {
             JobEnd::TimedOut(Duration::from_millis(200))
         );
     }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn working_folder_environment_and_peak_memory() {
+        let dir = tempfile::tempdir().unwrap();
+        let spec = ChildSpec {
+            cwd: Some(dir.path()),
+            env: vec![("FROND_T".into(), "xyz".into())],
+        };
+        // Holds ~64 MB in a shell variable for a moment.
+        let script = "pwd; echo $FROND_T; x=$(head -c 64000000 /dev/zero | tr '\\0' a); sleep 0.3";
+        let run = run_child(
+            Path::new("/bin/sh"),
+            &["-c".into(), script.into()],
+            &spec,
+            dir.path(),
+            "t",
+            Duration::from_secs(30),
+        )
+        .unwrap();
+        assert_eq!(run.end, JobEnd::Done);
+        let out = std::fs::read_to_string(dir.path().join("t.stdout")).unwrap();
+        let canonical = std::fs::canonicalize(dir.path()).unwrap();
+        assert_eq!(out, format!("{}\nxyz\n", canonical.display()));
+        let peak = run.peak_rss.expect("peak memory on Linux");
+        assert!(peak > 60_000_000, "{peak}");
+        assert!(run.wall >= Duration::from_millis(300));
+    }
 }

@@ -434,9 +434,40 @@ fn manifest_overrides_preset_eval_and_staleness() {
     assert!(args(&trees[0]).contains("--method skeleton --lods 100"));
     assert!(args(&trees[0]).contains("--max-atlas 8192 --external-textures"));
     assert!(args(&trees[1]).contains("--method static --lods 60"));
+    // The static LOD really is over the limit, so the check above is exercised both ways.
+    assert!(!trees[1]["warnings"].as_array().unwrap().is_empty());
+    assert!(trees[0]["warnings"].as_array().unwrap().is_empty());
     for t in trees {
         assert_eq!(t["status"], "built");
         assert_eq!(t["preset"], "unreal");
+        // Every GLB is read back: each LOD whose skin has more than Unreal's 256 joints (the
+        // static sapling LOD: a joint per moving billboard) is warned about, with the combined
+        // file holding it, and nothing else.
+        let over: Vec<String> = t["lods"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|l| l["bones"].as_u64().unwrap() > 256)
+            .map(|l| l["file"].as_str().unwrap().to_string())
+            .collect();
+        let mut expected = over.clone();
+        if !over.is_empty() {
+            expected.push(format!(
+                "{}_lods.glb",
+                over[0].split("_LOD").next().unwrap()
+            ));
+        }
+        let warned: Vec<String> = t["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|w| {
+                let w = w.as_str().unwrap();
+                assert!(w.contains("joints in one skin, over unreal's 256"), "{w}");
+                w.split(':').next().unwrap().to_string()
+            })
+            .collect();
+        assert_eq!(warned, expected);
         let lods = t["lods"].as_array().unwrap();
         assert_eq!(lods.len(), 2);
         // LOD1 evaluated at its size: coverage errors are fractions.

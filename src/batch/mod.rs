@@ -101,7 +101,8 @@ fn memory_estimate(input_bytes: u64, measured_per_byte: Option<f64>) -> u64 {
 
 /// Shared state of the workers.
 struct Pool {
-    queue: VecDeque<TreeInput>,
+    /// Trees not started, with their input's size.
+    queue: VecDeque<(TreeInput, u64)>,
     reserved: u64,
     running: usize,
     /// Largest peak RSS per input byte seen.
@@ -135,7 +136,14 @@ pub fn run_batch(req: &BatchRequest, progress: &dyn BatchProgress) -> Result<Bat
     context.out_dir = out_abs.clone();
     let jobs = req.jobs.max(1).min(trees.len().max(1));
     let pool = Mutex::new(Pool {
-        queue: trees.into_iter().collect(),
+        // Each input's size, read once: it sizes the tree's memory estimate.
+        queue: trees
+            .into_iter()
+            .map(|t| {
+                let bytes = std::fs::metadata(&t.path).map_or(0, |m| m.len());
+                (t, bytes)
+            })
+            .collect(),
         reserved: 0,
         running: 0,
         per_byte: None,
@@ -147,21 +155,22 @@ pub fn run_batch(req: &BatchRequest, progress: &dyn BatchProgress) -> Result<Bat
             scope.spawn(|| {
                 loop {
                     // Take the next tree once its memory fits (or nothing else runs).
-                    let (tree, estimate) = {
+                    let (tree, bytes, estimate) = {
                         let Ok(mut p) = pool.lock() else { return };
                         loop {
-                            let Some(next) = p.queue.front() else { return };
-                            let bytes = std::fs::metadata(&next.path).map_or(0, |m| m.len());
+                            let Some(&(_, bytes)) = p.queue.front() else {
+                                return;
+                            };
                             let estimate = memory_estimate(bytes, p.per_byte);
                             if p.running == 0
                                 || p.reserved.saturating_add(estimate) <= req.max_memory
                             {
-                                let Some(tree) = p.queue.pop_front() else {
+                                let Some((tree, _)) = p.queue.pop_front() else {
                                     return;
                                 };
-                                p.reserved += estimate;
+                                p.reserved = p.reserved.saturating_add(estimate);
                                 p.running += 1;
-                                break (tree, estimate);
+                                break (tree, bytes, estimate);
                             }
                             p = match freed.wait(p) {
                                 Ok(p) => p,
@@ -176,9 +185,8 @@ pub fn run_batch(req: &BatchRequest, progress: &dyn BatchProgress) -> Result<Bat
                     }))
                     .unwrap_or_else(|_| TreeEntry::failed(&tree, "internal error (a panic)"));
                     if let Ok(mut p) = pool.lock() {
-                        p.reserved -= estimate;
+                        p.reserved = p.reserved.saturating_sub(estimate);
                         p.running -= 1;
-                        let bytes = std::fs::metadata(&tree.path).map_or(0, |m| m.len());
                         // Small inputs' peaks are mostly the base: learn from 1 MiB up.
                         if let Some(rss) = entry.peak_rss_bytes
                             && bytes >= 1 << 20

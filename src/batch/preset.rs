@@ -101,10 +101,13 @@ impl EnginePreset {
         Ok(a)
     }
 
-    /// What in a written LOD breaks this engine's limits: `joints` of its skin, whether its
-    /// GLB uses a second set of influences.
-    pub fn check_lod(&self, file: &str, joints: usize, glb: &[u8]) -> Vec<String> {
+    /// What in a written glTF document breaks this engine's limits: the largest skin's joints,
+    /// the influences per vertex its `JOINTS_n` sets give (4 each).
+    pub fn check_file(&self, file: &str, doc: &gltf::json::Root) -> Vec<String> {
+        use gltf::json::mesh::Semantic;
+        use gltf::json::validation::Checked;
         let mut warnings = Vec::new();
+        let joints = doc.skins.iter().map(|s| s.joints.len()).max().unwrap_or(0);
         if let Some(max) = self.max_joints
             && joints > max
         {
@@ -114,7 +117,18 @@ impl EnginePreset {
                 self.name
             ));
         }
-        let influences = if contains(glb, b"\"JOINTS_1\"") { 8 } else { 4 };
+        let sets = doc
+            .meshes
+            .iter()
+            .flat_map(|m| &m.primitives)
+            .flat_map(|p| p.attributes.keys())
+            .filter_map(|k| match k {
+                Checked::Valid(Semantic::Joints(n)) => Some(*n + 1),
+                _ => None,
+            })
+            .max()
+            .unwrap_or(0);
+        let influences = 4 * sets;
         if influences > self.max_influences {
             warnings.push(format!(
                 "{file}: {influences} influences per vertex, over {}'s {}",
@@ -123,10 +137,6 @@ impl EnginePreset {
         }
         warnings
     }
-}
-
-fn contains(haystack: &[u8], needle: &[u8]) -> bool {
-    haystack.windows(needle.len()).any(|w| w == needle)
 }
 
 #[cfg(test)]
@@ -148,9 +158,32 @@ mod tests {
             ["--max-atlas", "4096", "--external-textures", "--msft-lod"]
         );
         let unreal = EnginePreset::named("unreal").unwrap();
-        assert!(unreal.check_lod("a.glb", 256, b"{\"JOINTS_0\"}").is_empty());
-        let w = unreal.check_lod("a.glb", 300, b"{\"JOINTS_0\",\"JOINTS_1\"}");
+        let doc = |joints: usize, sets: &[&str]| {
+            let attributes: Vec<String> = sets.iter().map(|s| format!("\"{s}\": 0")).collect();
+            let text = format!(
+                r#"{{"asset": {{"version": "2.0"}},
+                    "skins": [{{"joints": [{}]}}, {{"joints": [0]}}],
+                    "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, {}}}}}]}}]}}"#,
+                vec!["0"; joints].join(","),
+                attributes.join(",")
+            );
+            gltf::json::Root::from_str(&text).unwrap()
+        };
+        assert!(
+            unreal
+                .check_file("a.glb", &doc(256, &["JOINTS_0"]))
+                .is_empty()
+        );
+        let w = unreal.check_file("a.glb", &doc(300, &["JOINTS_0", "JOINTS_1"]));
         assert_eq!(w.len(), 2, "{w:?}");
-        assert!(w[0].contains("300 joints"));
+        assert!(w[0].contains("300 joints"), "{w:?}");
+        assert!(w[1].contains("8 influences"), "{w:?}");
+        // No joint limit known for Godot; influences still checked.
+        let godot = EnginePreset::named("godot").unwrap();
+        assert!(
+            godot
+                .check_file("a.glb", &doc(300, &["JOINTS_0"]))
+                .is_empty()
+        );
     }
 }

@@ -64,7 +64,7 @@ pub struct TreeEntry {
     pub files: Vec<FileEntry>,
     pub output_bytes: u64,
     pub lods: Vec<LodLine>,
-    /// The engine preset's limits a LOD breaks.
+    /// The engine preset's limits a written GLB breaks.
     pub warnings: Vec<String>,
     /// Timing: `frond lod`'s stage times (sample, build, export, total) and eval's.
     pub times_s: BTreeMap<String, f64>,

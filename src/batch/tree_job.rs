@@ -64,22 +64,34 @@ pub fn lod_args(ctx: &TreeContext, o: &Overrides) -> Result<Vec<String>> {
     let animation = o.animation.clone().unwrap_or_else(|| "skin".into());
     opt("--animation", Some(animation.clone()));
     opt("--seed", o.seed.map(|s| s.to_string()));
-    opt("--samples", o.samples.map(|s| s.to_string()));
-    opt("--clip", o.clip.clone());
     opt("--pixel-error", o.pixel_error.map(|p| p.to_string()));
     opt("--clouds", o.clouds.map(|c| c.to_string()));
     opt("--clusters", o.clusters.map(|c| c.to_string()));
+    a.extend(reading_args(o));
+    a.extend(ctx.build_args.iter().cloned());
+    if let Some(p) = &ctx.preset {
+        a.extend(p.lod_args(&animation)?);
+    }
+    Ok(a)
+}
+
+/// How a tree is read and sampled, as arguments both `frond lod` and `frond eval` take:
+/// samples, clip, foliage and wood materials.
+fn reading_args(o: &Overrides) -> Vec<String> {
+    let mut a = Vec::new();
+    if let Some(s) = o.samples {
+        a.extend(["--samples".to_string(), s.to_string()]);
+    }
+    if let Some(c) = &o.clip {
+        a.extend(["--clip".to_string(), c.clone()]);
+    }
     for m in o.foliage_material.iter().flatten() {
         a.extend(["--foliage-material".to_string(), m.clone()]);
     }
     for m in o.wood_material.iter().flatten() {
         a.extend(["--wood-material".to_string(), m.clone()]);
     }
-    a.extend(ctx.build_args.iter().cloned());
-    if let Some(p) = &ctx.preset {
-        a.extend(p.lod_args(&animation)?);
-    }
-    Ok(a)
+    a
 }
 
 /// The hash of what decides a tree's output besides its input.
@@ -252,6 +264,7 @@ fn build_into(
 
     if ctx.eval {
         let t0 = Instant::now();
+        let reading = reading_args(settings);
         for (k, l) in entry.lods.iter_mut().enumerate() {
             let Some(h) = l.screen_height else { continue };
             let mut eval = vec![
@@ -262,18 +275,7 @@ fn build_into(
                 (h.round().max(1.0) as u32).to_string(),
                 "--json".into(),
             ];
-            if let Some(s) = settings.samples {
-                eval.extend(["--samples".to_string(), s.to_string()]);
-            }
-            if let Some(c) = &settings.clip {
-                eval.extend(["--clip".to_string(), c.clone()]);
-            }
-            for m in settings.foliage_material.iter().flatten() {
-                eval.extend(["--foliage-material".to_string(), m.clone()]);
-            }
-            for m in settings.wood_material.iter().flatten() {
-                eval.extend(["--wood-material".to_string(), m.clone()]);
-            }
+            eval.extend(reading.iter().cloned());
             let tag = format!("eval{k}");
             let run = run_child(&ctx.exe, &eval, &spec, &log_dir, &tag, ctx.timeout)?;
             if let Some(p) = run.peak_rss {
@@ -311,12 +313,15 @@ fn build_into(
         .collect();
     entry.output_bytes = entry.files.iter().map(|f| f.bytes).sum();
     if let Some(p) = &ctx.preset {
-        for l in &entry.lods {
-            let glb = std::fs::read(tmp.join(&l.file))
-                .with_context(|| format!("{}: cannot read", l.file))?;
-            entry
-                .warnings
-                .extend(p.check_lod(&l.file, l.bones as usize, &glb));
+        // Every GLB written (each LOD and the combined file), as the engine will read it.
+        for f in entry.files.iter().filter(|f| f.name.ends_with(".glb")) {
+            let bytes = std::fs::read(tmp.join(&f.name))
+                .with_context(|| format!("{}: cannot read", f.name))?;
+            let glb = gltf::binary::Glb::from_slice(&bytes)
+                .map_err(|e| anyhow::anyhow!("{}: not a GLB ({e})", f.name))?;
+            let doc = gltf::json::Root::from_slice(&glb.json)
+                .map_err(|e| anyhow::anyhow!("{}: not glTF JSON ({e})", f.name))?;
+            entry.warnings.extend(p.check_file(&f.name, &doc));
         }
     }
     let stamp = TreeEntry {
