@@ -5,7 +5,8 @@
 //! time of a rerun that finds everything up to date.
 //!
 //! Run with `cargo bench --bench batch_throughput` (the library is made once under
-//! `target/bench-batch/`; `FROND_BENCH_DIR` moves it).
+//! `target/bench-batch/`; `FROND_BENCH_DIR` moves it). The shared trees come from
+//! `FROND_TEST_TREES`; those absent are left out of the library with one `skipped:` line.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -61,7 +62,6 @@ fn main() {
         .unwrap_or_else(|_| root.join("target/bench-batch"));
     let jobs = std::env::var("FROND_JOBS").unwrap_or_else(|_| "2".into());
     let lib = base.join("lib");
-    let shared = root.join("../shared/data/trees");
     let names = [
         "bush_1",
         "oak_dense",
@@ -72,11 +72,20 @@ fn main() {
         "pine_medium_blender",
     ];
     std::fs::create_dir_all(lib.join("shared")).expect("library folder");
+    let mut missing = Vec::new();
     for n in names {
         let to = lib.join("shared").join(format!("{n}.glb"));
         if !to.exists() {
-            std::fs::copy(shared.join(format!("{n}.glb")), &to).expect("shared tree");
+            match frond_testdata::tree(&format!("{n}.glb")) {
+                Some(from) => {
+                    std::fs::copy(from, &to).expect("shared tree");
+                }
+                None => missing.push(format!("{n}.glb")),
+            }
         }
+    }
+    if !missing.is_empty() {
+        frond_testdata::report_skip("batch_throughput (those trees only)", &missing);
     }
     for (preset, name, count) in [
         (Preset::Small, "small", 28u64),

@@ -1,5 +1,6 @@
 //! Import + 64-sample skinning benchmark: `oak_dense.glb` (target ≤ 1.5 s on 2 cores) and the
-//! generated large preset. Prints the median of several runs per stage.
+//! generated large preset. Prints the median of several runs per stage. `oak_dense.glb` is a
+//! shared tree (`FROND_TEST_TREES`); without it that case is skipped with one line.
 
 use std::path::Path;
 use std::time::Instant;
@@ -36,10 +37,14 @@ fn bench(name: &str, runs: usize, load: &dyn Fn() -> frond_scene::Tree) {
 }
 
 fn main() {
-    let dense = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/trees/oak_dense.glb");
-    bench("oak_dense.glb", 5, &|| {
-        import(&dense, &ImportOptions::default()).expect("imports")
-    });
+    match frond_testdata::tree("oak_dense.glb") {
+        Some(dense) => bench("oak_dense.glb", 5, &|| {
+            import(&dense, &ImportOptions::default()).expect("imports")
+        }),
+        None => {
+            frond_testdata::report_skip("import_sample oak_dense.glb", &["oak_dense.glb".into()])
+        }
+    }
     let large = generate(Preset::Large, 1).expect("generates").glb;
     bench("large preset", 3, &|| {
         import_bytes(Path::new("large.glb"), &large, &ImportOptions::default()).expect("imports")

@@ -3,20 +3,27 @@
 //! as `frond lod --method skeleton-* --clouds 20` runs it (collapses, CJR, the resampled rig,
 //! the error measures). Prints seconds, clouds, merges, collapses and the foliage error.
 //!
-//! `FROND_TREE` (a path) and `FROND_CLOUDS` (default 20) change the case.
+//! `FROND_TREE` (a path) and `FROND_CLOUDS` (default 20) change the case. `oak_dense.glb` is a
+//! shared tree (`FROND_TEST_TREES`); without it and without `FROND_TREE` the bench is skipped
+//! with one line.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use frond_scene::{ImportOptions, SampleOptions, import, sample};
 use frond_skeleton::{BoneDescriptionKind, SkeletonParams, simplify};
 
 fn main() {
-    let path = std::env::var("FROND_TREE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|_| {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/trees/oak_dense.glb")
-        });
+    let path = match std::env::var("FROND_TREE") {
+        Ok(path) => PathBuf::from(path),
+        Err(_) => match frond_testdata::tree("oak_dense.glb") {
+            Some(path) => path,
+            None => {
+                frond_testdata::report_skip("skeleton_simplify", &["oak_dense.glb".into()]);
+                return;
+            }
+        },
+    };
     let clouds = std::env::var("FROND_CLOUDS")
         .ok()
         .and_then(|v| v.parse().ok())

@@ -4,9 +4,10 @@
 //! count and the RMS motion residual of the clustering.
 //!
 //! `FROND_TREE` (a path), `FROND_ZONE` (% of the diagonal, default 2) and `FROND_K` (default
-//! 16) change the case.
+//! 16) change the case. `oak_dense.glb` is a shared tree (`FROND_TEST_TREES`); without it and
+//! without `FROND_TREE` the bench is skipped with one line.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use frond_billboard::animated::Rig;
@@ -49,11 +50,16 @@ fn run<T: DescriptionType>(
 }
 
 fn main() {
-    let path = std::env::var("FROND_TREE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|_| {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/trees/oak_dense.glb")
-        });
+    let path = match std::env::var("FROND_TREE") {
+        Ok(path) => PathBuf::from(path),
+        Err(_) => match frond_testdata::tree("oak_dense.glb") {
+            Some(path) => path,
+            None => {
+                frond_testdata::report_skip("spectral_cluster", &["oak_dense.glb".into()]);
+                return;
+            }
+        },
+    };
     let tree = import(&path, &ImportOptions::default()).expect("imports");
     let s = sample(&tree, &SampleOptions::default()).expect("samples");
     let b = tree.bounds;

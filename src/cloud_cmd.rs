@@ -1,8 +1,8 @@
 //! `frond cloud`: a static billboard cloud of a tree's foliage in the average pose of its loop,
-//! with the wood as it is, baked atlases, and `stats.json` (spec animated-billboard-clouds §2.4,
+//! with the wood as it is, baked atlases, and `<name>_cloud_stats.json` (spec animated-billboard-clouds §2.4,
 //! §5.4 for the coverage check).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use frond_billboard::TriangleSoup;
@@ -15,7 +15,7 @@ use frond_scene::{Part, SampleOptions, Sampled, Tree, sample};
 use glam::Vec3;
 use serde::Serialize;
 
-use crate::output::write_files_and_report;
+use crate::output_set::OutputSet;
 
 /// What `frond cloud` was asked for.
 #[derive(Clone, Debug)]
@@ -30,7 +30,7 @@ pub struct CloudRequest {
     pub coverage_size: (u32, u32),
 }
 
-/// `stats.json`.
+/// `<name>_cloud_stats.json`.
 #[derive(Debug, Serialize)]
 pub struct CloudReport {
     pub input: String,
@@ -223,14 +223,37 @@ pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Res
     Ok(doc.to_glb())
 }
 
-/// Builds the cloud and writes `cloud.glb`, `atlas_color.png`, `atlas_normal.png` and
-/// `stats.json` into `out_dir`. Nothing is written unless everything was built.
+/// The file names of a cloud of the tree called `name` (the input's stem): the GLB, the two
+/// atlases and the stats, each prefixed with the name so that a cloud never takes the name of
+/// its input's own files (a `cloud.glb` or an `atlas_color.png` texture beside a `.gltf`).
+pub fn cloud_file_names(name: &str) -> [String; 4] {
+    [
+        format!("{name}_cloud.glb"),
+        format!("{name}_atlas_color.png"),
+        format!("{name}_atlas_normal.png"),
+        format!("{name}_cloud_stats.json"),
+    ]
+}
+
+/// Builds the cloud and writes [`cloud_file_names`] into `out_dir` as one [`OutputSet`] (the
+/// folder checked before the build, the set installed whole at the end; nothing written unless
+/// everything was built, an input file never replaced).
 pub fn run_cloud(
     renderer: &Renderer,
     tree: &Tree,
     req: &CloudRequest,
     out_dir: &Path,
 ) -> Result<CloudReport> {
+    let name = crate::lod_cmd::lod_name(tree);
+    let [glb_name, color_name, normal_name, stats_name] = cloud_file_names(&name);
+    let mut set = OutputSet::prepare(
+        out_dir,
+        &format!("{name}_cloud"),
+        &stats_name,
+        &[&tree.source],
+    )?;
+    let names = [glb_name.clone(), color_name.clone(), normal_name.clone()];
+    set.check_names(&names)?;
     let (cloud, average, mut report) = make_cloud(renderer, tree, req)?;
     let glb = cloud_glb(tree, &average, &cloud)?;
     let atlas = &cloud.baked.atlas;
@@ -238,15 +261,12 @@ pub fn run_cloud(
         encode_png(atlas.width, atlas.height, &atlas.color).context("encoding the colour atlas")?;
     let normal = encode_png(atlas.width, atlas.height, &atlas.normal)
         .context("encoding the normal atlas")?;
-    let files: Vec<(PathBuf, Vec<u8>)> = vec![
-        (out_dir.join("cloud.glb"), glb),
-        (out_dir.join("atlas_color.png"), color),
-        (out_dir.join("atlas_normal.png"), normal),
-    ];
-    report.files = files.iter().map(|(p, _)| p.display().to_string()).collect();
-    report
-        .files
-        .push(out_dir.join("stats.json").display().to_string());
-    write_files_and_report(&files, &out_dir.join("stats.json"), &report)?;
+    set.stage(&glb_name, &glb)?;
+    set.stage(&color_name, &color)?;
+    set.stage(&normal_name, &normal)?;
+    report.files = names.to_vec();
+    report.files.push(stats_name);
+    let json = serde_json::to_vec_pretty(&report).context("serialising the stats")?;
+    set.commit(&json)?;
     Ok(report)
 }

@@ -7,6 +7,7 @@ pub mod eval_cmd;
 pub mod inspect;
 pub mod lod_cmd;
 pub mod output;
+pub mod output_set;
 pub mod render_cmd;
 pub mod screen_budget;
 pub mod sweep;

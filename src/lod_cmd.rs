@@ -2,7 +2,7 @@
 //! cleanly; every further LOD is an animated billboard cloud of the foliage plus the wood
 //! simplified to the LOD's error budget, sized from the screen height it is seen at.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -31,7 +31,7 @@ use frond_spectral::description::SpectralKind;
 use serde::Serialize;
 
 use crate::cloud_cmd::{rest_diagonal, sample_foliage};
-use crate::output::write_files_and_report;
+use crate::output_set::OutputSet;
 use crate::screen_budget::{LodLevel, lod_levels, tree_height};
 
 /// How the foliage of a LOD is clustered.
@@ -200,7 +200,7 @@ pub struct LodRequest {
     pub external_textures: bool,
 }
 
-/// One LOD's line of `report.json`.
+/// One LOD's line of `<name>_report.json`.
 #[derive(Clone, Debug, Serialize)]
 pub struct LodEntry {
     pub file: String,
@@ -260,7 +260,7 @@ pub struct LodTimings {
     pub export: f64,
 }
 
-/// `report.json`.
+/// `<name>_report.json`.
 #[derive(Debug, Serialize)]
 pub struct LodReport {
     pub input: String,
@@ -274,14 +274,27 @@ pub struct LodReport {
     pub tree_height: f32,
     pub lods: Vec<LodEntry>,
     pub combined: String,
+    /// Every file of the set, relative to the output folder, this report last.
     pub files: Vec<String>,
+    /// What the import accepted with a warning (silently repaired or ignored input).
+    pub warnings: Vec<String>,
     pub timings_s: serde_json::Value,
+}
+
+/// The report's file name: `<name>_report.json`, so that several trees can share one output
+/// folder without their reports colliding.
+pub fn report_name(name: &str) -> String {
+    format!("{name}_report.json")
 }
 
 /// Input-name stem used for the files.
 pub fn lod_name(tree: &Tree) -> String {
-    let stem = tree
-        .source
+    name_of(&tree.source)
+}
+
+/// The name a tree read from `input` gets in file names: its file stem, made file-name safe.
+pub fn name_of(input: &Path) -> String {
+    let stem = input
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "tree".into());
@@ -354,7 +367,9 @@ impl BuiltLod {
 }
 
 /// Builds everything in memory, then writes the LOD files, the combined file, the sidecars and
-/// `report.json` into `out_dir`. Nothing is written unless everything was built.
+/// `<name>_report.json` into `out_dir` as one [`OutputSet`]: the folder is checked (and a staging
+/// folder made in it) before the build, and the set is installed whole at the end, replacing the
+/// previous set of the same tree. Nothing is written unless everything was built.
 pub fn run_lod(
     renderer: &Renderer,
     tree: &Tree,
@@ -392,6 +407,12 @@ pub fn run_lod(
     }
     let levels = lod_levels(height, &req.screen_heights, req.pixel_error, eps_override)
         .with_context(|| format!("{path}: sizing the LODs"))?;
+    let mut set = OutputSet::prepare(out_dir, &name, &report_name(&name), &[&tree.source])?;
+    let mut expected: Vec<String> = (0..=levels.len())
+        .map(|k| format!("{name}_LOD{k}.glb"))
+        .collect();
+    expected.push(format!("{name}_lods.glb"));
+    set.check_names(&expected)?;
     progress("sampling the animation");
     let sampled = sample_foliage(tree, req.clip.as_deref(), req.samples)?;
     let t_sampled = Instant::now();
@@ -429,7 +450,7 @@ pub fn run_lod(
         "seed": req.seed,
         "source": tree.source.file_name().map(|f| f.to_string_lossy().into_owned()),
     });
-    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
     let mut entries = Vec::new();
     let inputs: Vec<LodInput> = built
         .iter()
@@ -465,10 +486,8 @@ pub fn run_lod(
         )
         .with_context(|| format!("{path}: writing LOD{k}"))?;
         let glb_name = format!("{}.glb", prefix(k));
-        files.push((out_dir.join(&glb_name), file.glb));
-        for (f, bytes) in file.external {
-            files.push((out_dir.join(f), bytes));
-        }
+        files.push((glb_name.clone(), file.glb));
+        files.extend(file.external);
         let mut entry = LodEntry {
             file: glb_name.clone(),
             bones: file.joints.first().copied().unwrap_or(0),
@@ -478,7 +497,7 @@ pub fn run_lod(
             let mapping = Mapping::of(cloud, k, &glb_name, &sampled.foliage);
             let mapping_name = format!("{}.mapping.json", prefix(k));
             files.push((
-                out_dir.join(&mapping_name),
+                mapping_name.clone(),
                 serde_json::to_vec_pretty(&mapping).context("serialising a mapping")?,
             ));
             entry.mapping = Some(mapping_name);
@@ -487,19 +506,19 @@ pub fn run_lod(
             let pos = v.sidecar.textures.position.clone();
             let rot = v.sidecar.textures.rotation.clone();
             let json = format!("{}_vat.json", prefix(k));
-            files.push((out_dir.join(&pos), v.position.bytes.clone()));
-            files.push((out_dir.join(&rot), v.rotation.bytes.clone()));
+            files.push((pos.clone(), v.position.bytes.clone()));
+            files.push((rot.clone(), v.rotation.bytes.clone()));
             files.push((
-                out_dir.join(&json),
+                json.clone(),
                 serde_json::to_vec_pretty(&v.sidecar).context("serialising a VAT sidecar")?,
             ));
             entry.vat = Some(vec![pos, rot, json]);
         }
         if let Some(t) = &b.spectral {
             let json = format!("{}_spectral.json", prefix(k));
-            files.push((out_dir.join(&t.sidecar.texture), t.image.bytes.clone()));
+            files.push((t.sidecar.texture.clone(), t.image.bytes.clone()));
             files.push((
-                out_dir.join(&json),
+                json.clone(),
                 serde_json::to_vec_pretty(&t.sidecar).context("serialising a spectral sidecar")?,
             ));
             entry.spectral_files = Some(vec![t.sidecar.texture.clone(), json]);
@@ -530,12 +549,10 @@ pub fn run_lod(
     )
     .with_context(|| format!("{path}: writing the combined file"))?;
     let combined_name = format!("{name}_lods.glb");
-    files.push((out_dir.join(&combined_name), combined.glb));
-    for (f, bytes) in combined.external {
-        files.push((out_dir.join(f), bytes));
-    }
+    files.push((combined_name.clone(), combined.glb));
+    files.extend(combined.external);
     let spectral_written = built.iter().any(|b| b.spectral.is_some());
-    files.extend(shader_files(req, spectral_written, out_dir));
+    files.extend(shader_files(req, spectral_written));
     let t_written = Instant::now();
 
     let mut report = LodReport {
@@ -554,7 +571,8 @@ pub fn run_lod(
         tree_height: height,
         lods: entries,
         combined: combined_name,
-        files: files.iter().map(|(p, _)| p.display().to_string()).collect(),
+        files: files.iter().map(|(p, _)| p.clone()).collect(),
+        warnings: tree.warnings.clone(),
         timings_s: serde_json::json!({
             "sample": (t_sampled - t_start).as_secs_f64(),
             "build": (t_built - t_sampled).as_secs_f64(),
@@ -562,27 +580,25 @@ pub fn run_lod(
             "total": (t_written - t_start).as_secs_f64(),
         }),
     };
-    report
-        .files
-        .push(out_dir.join("report.json").display().to_string());
-    write_files_and_report(&files, &out_dir.join("report.json"), &report)?;
+    report.files.push(report_name(&name));
+    for (rel, bytes) in &files {
+        set.stage(rel, bytes)?;
+    }
+    let json = serde_json::to_vec_pretty(&report).context("serialising the report")?;
+    set.commit(&json)?;
     Ok(report)
 }
 
 /// The reference shaders, copied next to VAT output and next to spectral textures (when a LOD
 /// wrote one).
-fn shader_files(
-    req: &LodRequest,
-    spectral_written: bool,
-    out_dir: &Path,
-) -> Vec<(PathBuf, Vec<u8>)> {
+fn shader_files(req: &LodRequest, spectral_written: bool) -> Vec<(String, Vec<u8>)> {
     let set = match req.animation {
         AnimationMode::Vat(_) => frond_export::shaders::SHADERS,
         AnimationMode::Spectral if spectral_written => frond_export::shaders::SPECTRAL_SHADERS,
         _ => return Vec::new(),
     };
     set.iter()
-        .map(|(file, text)| (out_dir.join("shaders").join(file), text.as_bytes().to_vec()))
+        .map(|(file, text)| (format!("shaders/{file}"), text.as_bytes().to_vec()))
         .collect()
 }
 

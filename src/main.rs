@@ -52,6 +52,8 @@ struct ImportArgs {
     /// Treat this material as wood (repeatable).
     #[arg(long = "wood-material", value_name = "NAME")]
     wood_material: Vec<String>,
+    #[command(flatten)]
+    limits: LimitArgs,
 }
 
 impl ImportArgs {
@@ -59,10 +61,44 @@ impl ImportArgs {
         let options = ImportOptions {
             foliage_materials: self.foliage_material.clone(),
             wood_materials: self.wood_material.clone(),
+            limits: self.limits.limits(),
             ..Default::default()
         };
         Ok(import(&self.input, &options)?)
     }
+}
+
+/// What reading one input may cost (every command that reads a tree; `frond batch` passes
+/// them to each tree's run).
+#[derive(clap::Args, Clone, Debug)]
+struct LimitArgs {
+    /// Refuse an input whose file plus external buffers exceed this size (K, M, G: binary
+    /// units; 1G = 1 GiB).
+    #[arg(long, value_name = "SIZE", default_value = "1G", value_parser = parse_size_arg)]
+    max_input_size: u64,
+    /// Refuse an input whose base-colour textures decode to more than this, at 4 bytes a
+    /// texel (384M = six 4096² maps); checked from the image headers before decoding.
+    #[arg(long, value_name = "SIZE", default_value = "384M", value_parser = parse_size_arg)]
+    max_texture_memory: u64,
+    /// Refuse an input whose mesh instances add up to more vertices than this (counted from
+    /// the accessors before decoding; 8000000 is four times the xlarge sample).
+    #[arg(long, value_name = "N", default_value_t = frond_scene::input_file::DEFAULT_MAX_VERTICES)]
+    max_vertices: u64,
+}
+
+impl LimitArgs {
+    fn limits(&self) -> frond_scene::InputLimits {
+        frond_scene::InputLimits {
+            max_input_bytes: self.max_input_size,
+            max_texture_bytes: self.max_texture_memory,
+            max_vertices: self.max_vertices,
+        }
+    }
+}
+
+/// A size option's value (`parse_memory`'s units), for clap.
+fn parse_size_arg(text: &str) -> std::result::Result<u64, String> {
+    parse_memory(text).map_err(|e| format!("{e:#}"))
 }
 
 /// Plane search and bake options of `frond lod`, which `frond sweep` passes to every build.
@@ -251,7 +287,7 @@ enum Command {
         json: bool,
     },
     /// Animated billboard LOD chain: LOD0 (the input) and one LOD per screen height, skinned
-    /// or vertex-animated, with a combined file, mapping sidecars and report.json.
+    /// or vertex-animated, with a combined file, mapping sidecars and <name>_report.json.
     Lod {
         #[command(flatten)]
         import: ImportArgs,
@@ -304,7 +340,7 @@ enum Command {
         /// Write textures as PNG files next to the GLBs instead of embedding them.
         #[arg(long)]
         external_textures: bool,
-        /// Print report.json to stdout.
+        /// Print the report (<name>_report.json) to stdout.
         #[arg(long)]
         json: bool,
     },
@@ -452,6 +488,8 @@ enum Command {
         #[arg(long = "wood-material", value_name = "NAME")]
         wood_material: Vec<String>,
         #[command(flatten)]
+        limits: LimitArgs,
+        #[command(flatten)]
         build: BuildArgs,
         /// Seconds one tree's `frond lod` (or one eval) may take before it is stopped and
         /// recorded as failed.
@@ -522,6 +560,11 @@ fn run(cli: Cli) -> Result<()> {
             json,
         } => {
             let (width, height) = parse_size(&size)?;
+            if let (Ok(o), Ok(i)) = (output.canonicalize(), import.input.canonicalize())
+                && o == i
+            {
+                anyhow::bail!("{}: -o names the input file", output.display());
+            }
             let tree = import.load()?;
             let renderer = Renderer::new()?;
             let parts = match parts.as_str() {
@@ -714,9 +757,10 @@ fn run(cli: Cli) -> Result<()> {
                     );
                 }
                 println!(
-                    "{}: {} LODs combined; report.json; {:.2} s",
+                    "{}: {} LODs combined; {}; {:.2} s",
                     report.combined,
                     report.lods.len(),
+                    frond::lod_cmd::report_name(&report.name),
                     report.timings_s["total"].as_f64().unwrap_or(0.0)
                 );
             }
@@ -737,6 +781,7 @@ fn run(cli: Cli) -> Result<()> {
                 &candidate,
                 &ImportOptions {
                     allow_empty: true,
+                    limits: import.limits.limits(),
                     ..Default::default()
                 },
             )?;
@@ -902,6 +947,7 @@ fn run(cli: Cli) -> Result<()> {
             pixel_error,
             foliage_material,
             wood_material,
+            limits,
             build,
             timeout,
             json,
@@ -955,6 +1001,7 @@ fn run(cli: Cli) -> Result<()> {
                     eval,
                     timeout: std::time::Duration::from_secs(timeout.max(1)),
                     threads: (cores / jobs).max(1),
+                    limits: limits.limits(),
                 },
             };
             let bar = BatchBar::new();
@@ -1195,6 +1242,12 @@ fn print_json(report: &impl serde::Serialize) -> Result<()> {
 }
 
 fn main() -> ExitCode {
+    // Like other Unix tools, end quietly when the reader of our output goes away
+    // (`frond inspect --json big.glb | head`): Rust ignores SIGPIPE, so `println!` would panic.
+    // SAFETY: setting a signal's disposition to the default before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let level = match cli.verbose {
         0 => "warn",
@@ -1206,9 +1259,12 @@ fn main() -> ExitCode {
         .unwrap_or_else(|_| {
             tracing_subscriber::EnvFilter::new(format!("{level},wgpu_hal::gles::egl=off"))
         });
+    // Colour codes only on a terminal: piped or redirected logs stay plain text.
+    let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
     tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
+        .with_ansi(ansi)
         .init();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,

@@ -50,6 +50,31 @@ pub fn lod_levels(
     if !(budget_px.is_finite() && budget_px > 0.0) {
         bail!("--pixel-error must be a positive number of pixels");
     }
+    // LOD1 is the nearest: each LOD must be built for a smaller screen size than the one before
+    // it, or the chain would get coarser and then finer again.
+    if let Some(w) = screen_heights
+        .windows(2)
+        .find(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Less))
+    {
+        let mut sorted: Vec<f32> = screen_heights.to_vec();
+        sorted.sort_by(|a, b| b.total_cmp(a));
+        sorted.dedup();
+        let list = |v: &[f32]| {
+            v.iter()
+                .map(|h| h.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        };
+        bail!(
+            "--lods {}: screen heights go from the nearest LOD (largest) to the farthest \
+             (smallest), each smaller than the one before, but {} is followed by {} (did you \
+             mean --lods {}?)",
+            list(screen_heights),
+            w[0],
+            w[1],
+            list(&sorted)
+        );
+    }
     screen_heights
         .iter()
         .map(|&h| {
@@ -72,6 +97,24 @@ pub fn lod_levels(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn screen_heights_go_near_to_far() {
+        let err = lod_levels(30.0, &[60.0, 600.0], 1.0, None)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("did you mean --lods 600,60"), "{err}");
+        let err = lod_levels(30.0, &[600.0, 600.0], 1.0, None)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("followed by 600"), "{err}");
+        assert_eq!(
+            lod_levels(30.0, &[600.0, 200.0, 60.0], 1.0, None)
+                .unwrap()
+                .len(),
+            3
+        );
+    }
 
     #[test]
     fn one_pixel_of_a_600_pixel_tree() {

@@ -3,49 +3,11 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+use common::gltf_cases::*;
 use common::*;
 use serde_json::{Value, json};
-
-/// A valid one-triangle glTF with an external `tri.bin`; tests then break one thing.
-fn triangle_gltf() -> Value {
-    json!({
-        "asset": { "version": "2.0" },
-        "scene": 0,
-        "scenes": [{ "nodes": [0] }],
-        "nodes": [{ "name": "leaf", "mesh": 0 }],
-        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1 }] }],
-        "accessors": [
-            { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
-              "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0] },
-            { "bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR" }
-        ],
-        "bufferViews": [
-            { "buffer": 0, "byteOffset": 0, "byteLength": 36 },
-            { "buffer": 0, "byteOffset": 36, "byteLength": 6 }
-        ],
-        "buffers": [{ "uri": "tri.bin", "byteLength": 42 }]
-    })
-}
-
-fn triangle_bin(positions: [f32; 9], indices: [u16; 3]) -> Vec<u8> {
-    let mut b: Vec<u8> = positions.iter().flat_map(|v| v.to_le_bytes()).collect();
-    b.extend(indices.iter().flat_map(|v| v.to_le_bytes()));
-    b
-}
-
-const GOOD: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
-
-/// Writes `doc` (and `tri.bin`) into `dir/sub`, returns the .gltf path.
-fn write_case(dir: &Path, name: &str, doc: &Value, bin: &[u8]) -> PathBuf {
-    let sub = dir.join(name);
-    std::fs::create_dir_all(&sub).expect("mkdir");
-    std::fs::write(sub.join("tri.bin"), bin).expect("write bin");
-    let path = sub.join(format!("{name}.gltf"));
-    std::fs::write(&path, serde_json::to_vec(doc).expect("json")).expect("write gltf");
-    path
-}
 
 /// Runs inspect and render on a bad file and checks the error contract.
 fn expect_clean_error(path: &Path, needle: &str) {
@@ -98,7 +60,7 @@ fn not_gltf() {
 #[test]
 fn truncated_glb() {
     let dir = tempfile::tempdir().expect("tmp");
-    let bytes = std::fs::read(shared_tree("bush_1.glb")).expect("read");
+    let bytes = std::fs::read(fixture("bush_1.glb")).expect("read");
     for cut in [10usize, 100, 5000, bytes.len() / 2] {
         let path = dir.path().join(format!("cut{cut}.glb"));
         std::fs::write(&path, &bytes[..cut]).expect("write");
@@ -197,7 +159,7 @@ fn missing_image() {
     doc["materials"] = json!([{ "name": "leaves", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]);
     doc["meshes"][0]["primitives"][0]["material"] = json!(0);
     let path = write_case(dir.path(), "image", &doc, &triangle_bin(GOOD, [0, 1, 2]));
-    expect_clean_error(&path, "image 0: cannot read");
+    expect_clean_error(&path, "leaf.png' cannot be read (No such file");
 }
 
 #[test]

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use common::{frond, frond_ok, root, shared_tree, validate};
+use common::{fixture, frond, frond_ok, root, validate};
 
 /// Small, quick settings for every batch here.
 const FAST: &[&str] = &["--lods", "100,30", "--samples", "16", "--planes", "60"];
@@ -151,7 +151,7 @@ fn library_with_sapling(dir: &Path) -> PathBuf {
 fn shards_in_separate_processes_equal_one_run() {
     let dir = tempfile::tempdir().unwrap();
     let input = library_with_sapling(dir.path());
-    std::fs::copy(shared_tree("bush_1.glb"), input.join("bush_1.glb")).unwrap();
+    std::fs::copy(fixture("bush_1.glb"), input.join("bush_1.glb")).unwrap();
     sample_tree(&input.join("gen/a.glb"), 2);
     sample_tree(&input.join("gen/b.glb"), 3);
     sample_tree(&input.join("gen/deep/c.glb"), 4);
@@ -318,11 +318,11 @@ fn a_killed_batch_shows_no_partial_tree_and_its_rerun_does_only_the_rest() {
 fn broken_files_are_isolated_with_one_error_line_each() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("in");
-    std::fs::create_dir_all(input.join("shared")).unwrap();
-    for t in ["bush_1.glb", "pine_medium_blender.glb"] {
-        std::fs::copy(shared_tree(t), input.join("shared").join(t)).unwrap();
+    std::fs::create_dir_all(input.join("real")).unwrap();
+    for t in ["bush_1.glb", "sapling_blender.glb"] {
+        std::fs::copy(fixture(t), input.join("real").join(t)).unwrap();
     }
-    let bush = std::fs::read(shared_tree("bush_1.glb")).unwrap();
+    let bush = std::fs::read(fixture("bush_1.glb")).unwrap();
     std::fs::write(input.join("truncated.glb"), &bush[..bush.len() / 3]).unwrap();
     std::fs::write(
         input.join("notes.glb"),
@@ -364,7 +364,7 @@ fn broken_files_are_isolated_with_one_error_line_each() {
         "{last}"
     );
     assert_eq!(
-        complete_outputs(&out, &["shared/bush_1", "shared/pine_medium_blender"]).len(),
+        complete_outputs(&out, &["real/bush_1", "real/sapling_blender"]).len(),
         2
     );
     let sum = summary(&out.join("summary.json"));
@@ -508,7 +508,7 @@ fn manifest_overrides_preset_eval_and_staleness() {
     );
     // A changed setting rebuilds that tree, a changed input file that one.
     write_manifest(2);
-    std::fs::copy(shared_tree("bush_1.glb"), lib.join("sapling.glb")).unwrap();
+    std::fs::copy(fixture("bush_1.glb"), lib.join("sapling.glb")).unwrap();
     let third = run();
     assert_eq!(third["counts"]["built"], 2);
     assert_ne!(third["trees"][0]["params_hash"], trees[0]["params_hash"]);

@@ -1,4 +1,4 @@
-//! `frond cloud` end to end: files, stats.json keys, validity, determinism, bad arguments.
+//! `frond cloud` end to end: files, `<name>_cloud_stats.json` keys, validity, determinism, bad arguments.
 
 mod common;
 
@@ -34,16 +34,17 @@ fn cloud_writes_a_valid_glb_atlases_and_stats() {
         String::from_utf8_lossy(&run.stderr)
     );
     for f in [
-        "cloud.glb",
-        "atlas_color.png",
-        "atlas_normal.png",
-        "stats.json",
+        "sapling_cloud.glb",
+        "sapling_atlas_color.png",
+        "sapling_atlas_normal.png",
+        "sapling_cloud_stats.json",
     ] {
         assert!(out.join(f).exists(), "{f} written");
     }
-    let stats: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("stats.json")).expect("stats"))
-            .expect("json");
+    let stats: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(out.join("sapling_cloud_stats.json")).expect("stats"),
+    )
+    .expect("json");
     for key in [
         "epsilon",
         "planes",
@@ -53,7 +54,7 @@ fn cloud_writes_a_valid_glb_atlases_and_stats() {
         "texture_bytes",
         "coverage_error",
     ] {
-        assert!(!stats[key].is_null(), "stats.json has {key}");
+        assert!(!stats[key].is_null(), "the stats have {key}");
     }
     for key in ["plane_search", "bake", "total"] {
         assert!(
@@ -76,7 +77,7 @@ fn cloud_writes_a_valid_glb_atlases_and_stats() {
     assert!((eps - 0.05 * diag).abs() < 1e-4 * diag);
     assert!(stats["cloud"]["max_distance"].as_f64().expect("max") <= eps * (1.0 + 1e-5));
     // Real clients accept the GLB: quads + wood, textured, no errors.
-    let report = validate(&out.join("cloud.glb"));
+    let report = validate(&out.join("sapling_cloud.glb"));
     assert_eq!(report["errors"], 0, "{report}");
     assert_eq!(report["info"]["hasTextures"], true);
     let tris = report["info"]["totalTriangleCount"]
@@ -84,7 +85,7 @@ fn cloud_writes_a_valid_glb_atlases_and_stats() {
         .expect("triangles");
     assert!(tris >= 2 * billboards, "{tris} triangles");
     // The atlas is an RGBA image whose alpha marks the baked leaves.
-    let atlas = image::open(out.join("atlas_color.png"))
+    let atlas = image::open(out.join("sapling_atlas_color.png"))
         .expect("png")
         .to_rgba8();
     let opaque = atlas.pixels().filter(|p| p[3] >= 128).count();
@@ -119,7 +120,11 @@ fn same_seed_gives_byte_identical_files_whatever_the_thread_count() {
     };
     let a = run("a", "1");
     let b = run("b", "2");
-    for f in ["cloud.glb", "atlas_color.png", "atlas_normal.png"] {
+    for f in [
+        "sapling_cloud.glb",
+        "sapling_atlas_color.png",
+        "sapling_atlas_normal.png",
+    ] {
         let (x, y) = (
             std::fs::read(a.join(f)).expect("a"),
             std::fs::read(b.join(f)).expect("b"),

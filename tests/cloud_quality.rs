@@ -1,9 +1,7 @@
 //! Heavy quality checks of billboard clouds, run by hand in release (numbers go in the issue
-//! notes): `cargo test --release --test cloud_quality -- --ignored --nocapture`.
+//! notes): `cargo test --release --test cloud_quality -- --ignored --nocapture`. They use the
+//! shared trees (`FROND_TEST_TREES`) and skip with one line where those are absent.
 
-mod common;
-
-use common::*;
 use frond::cloud_cmd::{CloudRequest, make_cloud};
 use frond_billboard::cloud::CloudParams;
 use frond_render::Renderer;
@@ -27,17 +25,19 @@ fn request(epsilon: &str, candidates: usize, seed: u64, texels_per_unit: f32) ->
 #[test]
 #[ignore = "bakes thousands of quads per tree; run by hand in release"]
 fn coverage_error_at_epsilon_zero_on_the_shared_trees() {
-    let renderer = Renderer::new().expect("adapter");
-    let mut worst = 0.0f64;
-    for name in [
+    let names = [
         "bush_1.glb",
         "oak_medium.glb",
         "oak_large.glb",
         "oak_medium_blendedleaves.glb",
         "pine_medium.glb",
         "pine_medium_blender.glb",
-    ] {
-        let tree = import(&shared_tree(name), &ImportOptions::default()).expect("imports");
+    ];
+    let paths = frond_testdata::require_trees!(names);
+    let renderer = Renderer::new().expect("adapter");
+    let mut worst = 0.0f64;
+    for (name, path) in names.iter().zip(&paths) {
+        let tree = import(path, &ImportOptions::default()).expect("imports");
         let diag = frond::cloud_cmd::rest_diagonal(&tree);
         // At ε = 0 each card is its own billboard; S = 20 finds it as surely as 500.
         let (cloud, _, report) =
@@ -56,8 +56,9 @@ fn coverage_error_at_epsilon_zero_on_the_shared_trees() {
 #[test]
 #[ignore = "20 clouds with coverage; run by hand in release"]
 fn stable_over_twenty_seeds_at_two_percent_on_oak_medium() {
+    let path = frond_testdata::require_tree!("oak_medium.glb");
     let renderer = Renderer::new().expect("adapter");
-    let tree = import(&shared_tree("oak_medium.glb"), &ImportOptions::default()).expect("imports");
+    let tree = import(&path, &ImportOptions::default()).expect("imports");
     let diag = frond::cloud_cmd::rest_diagonal(&tree);
     let (mut counts, mut covs) = (Vec::new(), Vec::new());
     for seed in 1..=20 {

@@ -1,6 +1,7 @@
 //! Structure-aware fuzzing of the importer on the stable toolchain (cargo fuzz needs nightly):
-//! shared trees are mutated in their JSON (numbers swapped for edge values, bytes flipped) and
-//! binary chunks, re-wrapped as valid GLB containers, or truncated. Every result must be
+//! real exporters' trees (the `tests/fixtures/` ez-tree bush and Blender round trip) are
+//! mutated in their JSON (numbers swapped for edge values, bytes flipped) and binary chunks,
+//! re-wrapped as valid GLB containers, or truncated. Every result must be
 //! `Ok` or a clean `Err`: never a panic. A short run is part of the tests; a long one is
 //! `FROND_FUZZ_RUNS=20000 cargo test --release --test fuzz_import -- --ignored`.
 
@@ -118,9 +119,9 @@ fn mutate(rng: &mut ChaCha8Rng, json: &[u8], bin: &[u8]) -> Vec<u8> {
 }
 
 fn fuzz(runs: usize, seed: u64) {
-    let seeds: Vec<Vec<u8>> = ["bush_1.glb", "pine_medium_blender.glb"]
+    let seeds: Vec<Vec<u8>> = ["bush_1.glb", "sapling_blender.glb"]
         .iter()
-        .map(|n| std::fs::read(common::shared_tree(n)).expect("shared tree"))
+        .map(|n| std::fs::read(common::fixture(n)).expect("fixture tree"))
         .collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let (mut ok, mut err) = (0, 0);
@@ -162,7 +163,7 @@ fn fuzz(runs: usize, seed: u64) {
 }
 
 #[test]
-fn importer_survives_mutated_shared_trees() {
+fn importer_survives_mutated_real_trees() {
     fuzz(120, 1);
 }
 

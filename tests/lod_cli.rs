@@ -1,4 +1,4 @@
-//! `frond lod` end to end: the files, report.json, the Khronos validator on every output, a
+//! `frond lod` end to end: the files, `<name>_report.json`, the Khronos validator on every output, a
 //! round trip through our own importer (billboard corners where the pipeline meant them), the
 //! per-bone ε property, VAT decoding back to motion, skeleton LODs whose foliage stays on its
 //! branches, determinism and bad arguments.
@@ -170,7 +170,10 @@ fn same_bytes_at_1_and_2_threads(extra: &[&str]) {
     let b = run("2", "b");
     for f in std::fs::read_dir(&a).expect("dir") {
         let p = f.expect("entry").path();
-        if p.file_name().is_some_and(|n| n == "report.json") || p.is_dir() {
+        if p.file_name()
+            .is_some_and(|n| n.to_string_lossy().ends_with("_report.json"))
+            || p.is_dir()
+        {
             continue;
         }
         let q = b.join(p.file_name().expect("name"));
@@ -505,8 +508,8 @@ fn per_bone_round_trip_and_epsilon_in_every_sample() {
 }
 
 #[test]
-fn static_round_trip_on_a_shared_tree() {
-    let b = build(&shared_tree("bush_1.glb"), false, 120.0);
+fn static_round_trip_on_a_real_exporters_tree() {
+    let b = build(&fixture("bush_1.glb"), false, 120.0);
     assert!(b.cloud.billboards.iter().any(|x| x.motion.is_some()));
     round_trip(&b);
 }
@@ -547,18 +550,30 @@ fn vat_textures_decode_back_to_the_motion() {
 }
 
 #[test]
+fn fixture_trees_every_method_and_mode_validate() {
+    let trees = [fixture("bush_1.glb"), fixture("sapling_blender.glb")];
+    every_method_and_mode_validates(&trees, 0);
+}
+
+#[test]
 fn shared_trees_every_method_and_mode_validate() {
-    let dir = tempfile::tempdir().expect("tmp");
-    let trees = [
-        "bush_1.glb",
+    let trees = frond_testdata::require_trees!([
         "pine_medium.glb",
         "pine_medium_blender.glb",
         "oak_medium.glb",
         "oak_medium_blendedleaves.glb",
-    ];
-    for (i, name) in trees.iter().enumerate() {
-        let input = shared_tree(name);
-        let tree = import(&input, &ImportOptions::default()).expect("import");
+    ]);
+    every_method_and_mode_validates(&trees, 1);
+}
+
+/// `frond lod` on each of `trees` twice (two LODs; one LOD with VAT animation and a method),
+/// every output through the Khronos validator. The VAT format and the method alternate with
+/// the tree's index counted from `first`.
+fn every_method_and_mode_validates(trees: &[PathBuf], first: usize) {
+    let dir = tempfile::tempdir().expect("tmp");
+    for (i, input) in (first..).zip(trees) {
+        let name = input.file_name().expect("file name").to_string_lossy();
+        let tree = import(input, &ImportOptions::default()).expect("import");
         let vat = if i % 2 == 0 { "vat" } else { "vat-png16" };
         let method = if i % 2 == 0 { "per-bone" } else { "static" };
         for (k, extra) in [
@@ -569,7 +584,7 @@ fn shared_trees_every_method_and_mode_validate() {
         .enumerate()
         {
             let out = dir.path().join(format!("{i}_{k}"));
-            let report = frond_lod(&input, &out, extra);
+            let report = frond_lod(input, &out, extra);
             let lods = report["lods"].as_array().expect("lods");
             // LOD0 is the input: every non-degenerate triangle, wood and foliage.
             let kept = tree.triangles.iter().filter(|t| !t.degenerate).count();

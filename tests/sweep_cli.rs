@@ -295,7 +295,7 @@ fn screen_height_grid_and_a_run_past_its_limit() {
     // The killed run left no LOD behind.
     let run = slow.join("runs").join(&rows[0]["run"]);
     assert!(run.join("lod.stderr").exists());
-    assert!(!run.join("lod/report.json").exists());
+    assert!(!run.join("lod/sapling_report.json").exists());
 }
 
 #[test]

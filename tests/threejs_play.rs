@@ -306,16 +306,12 @@ pub fn compare_play(
     }
 }
 
-/// Trees to check: the sample sapling and, when the shared data is there, bush_1.
+/// Trees to check: the sample sapling and ez-tree's bush_1 (a fixture).
 fn trees() -> Vec<PathBuf> {
-    let mut out = vec![common::root().join("samples/sapling.glb")];
-    let bush = common::shared_tree("bush_1.glb");
-    if bush.exists() {
-        out.push(bush);
-    } else {
-        eprintln!("shared tree {bush:?} not present; checking the sapling only");
-    }
-    out
+    vec![
+        common::root().join("samples/sapling.glb"),
+        common::fixture("bush_1.glb"),
+    ]
 }
 
 #[test]

@@ -2,8 +2,10 @@
 //! the bounding-box diagonal with S = 500 (targets ≤ 0.5 s and ≤ 0.9 s on 2 cores), oak_medium
 //! (~10k) and generated trees of ~20k, ~200k and ~1M leaf triangles. `FROND_BENCH_PLAIN=1` also times the plain
 //! O(planes·S·triangles) scan; `FROND_BENCH_SEEDS=N` averages billboard counts over N seeds.
+//! oak_dense and oak_medium are shared trees (`FROND_TEST_TREES`); each absent one is skipped
+//! with one line.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use frond_billboard::TriangleSoup;
@@ -50,30 +52,40 @@ fn run(name: &str, soup: &TriangleSoup, diag: f32, frac: f32, accelerated: bool,
     );
 }
 
+/// The shared tree `name`, or `None` after one `skipped:` line.
+fn shared(name: &str) -> Option<PathBuf> {
+    let path = frond_testdata::tree(name);
+    if path.is_none() {
+        frond_testdata::report_skip(&format!("plane_search {name}"), &[name.to_string()]);
+    }
+    path
+}
+
 fn main() {
     let seeds: u64 = std::env::var("FROND_BENCH_SEEDS")
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(3);
     let plain = std::env::var("FROND_BENCH_PLAIN").is_ok();
-    let dense = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/trees/oak_dense.glb");
-    let tree = import(&dense, &ImportOptions::default()).expect("oak_dense imports");
-    let (s, diag) = soup(&tree);
-    for frac in [0.05, 0.01] {
-        run("oak_dense", &s, diag, frac, true, seeds);
-        if plain {
-            run("oak_dense", &s, diag, frac, false, 1);
+    if let Some(dense) = shared("oak_dense.glb") {
+        let tree = import(&dense, &ImportOptions::default()).expect("oak_dense imports");
+        let (s, diag) = soup(&tree);
+        for frac in [0.05, 0.01] {
+            run("oak_dense", &s, diag, frac, true, seeds);
+            if plain {
+                run("oak_dense", &s, diag, frac, false, 1);
+            }
         }
     }
     if std::env::var("FROND_BENCH_DENSE_ONLY").is_ok() {
         return;
     }
-    let medium =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/trees/oak_medium.glb");
-    let tree = import(&medium, &ImportOptions::default()).expect("oak_medium imports");
-    let (s, diag) = soup(&tree);
-    for frac in [0.05, 0.01] {
-        run("oak_medium", &s, diag, frac, true, 1);
+    if let Some(medium) = shared("oak_medium.glb") {
+        let tree = import(&medium, &ImportOptions::default()).expect("oak_medium imports");
+        let (s, diag) = soup(&tree);
+        for frac in [0.05, 0.01] {
+            run("oak_medium", &s, diag, frac, true, 1);
+        }
     }
     for preset in [Preset::Medium, Preset::Large, Preset::Xlarge] {
         let g = generate(preset, 1).expect("generates");

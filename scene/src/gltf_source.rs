@@ -1,12 +1,16 @@
 //! Loads a `.glb` / `.gltf` file: its JSON document, its buffers, and (on request) its images.
-//! External files are read only from inside the input's own folder.
+//! External files are read only from inside the input's own folder, by the rules of
+//! [`crate::input_file`].
 
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 
 use base64::Engine;
 use gltf::json;
 
 use crate::error::{Result, SceneError};
+use crate::input_file::{
+    InputLimits, MAX_INPUT_OPTION, ReadRefusal, human_bytes, read_regular_file, resolve_uri,
+};
 
 /// Extensions whose presence in `extensionsRequired` we can honour.
 pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
@@ -26,26 +30,53 @@ pub struct GltfSource {
     pub root: json::Root,
     /// Buffer contents, index-aligned with `root.buffers`.
     pub buffers: Vec<Vec<u8>>,
+    /// What reading this input may cost.
+    pub limits: InputLimits,
 }
 
 impl GltfSource {
-    /// Reads and parses `path`, resolving every buffer.
-    pub fn open(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|error| SceneError::Io {
-            path: path.to_path_buf(),
-            error,
+    /// Reads and parses `path`, resolving every buffer, within `limits` (the file and its
+    /// external buffers are read by [`crate::input_file`]'s rules).
+    pub fn open(path: &Path, limits: &InputLimits) -> Result<Self> {
+        let bytes = read_regular_file(path, limits.max_input_bytes).map_err(|r| match r {
+            ReadRefusal::Io(error) => SceneError::Io {
+                path: path.to_path_buf(),
+                error,
+            },
+            other => SceneError::invalid(path, other.to_string()),
         })?;
-        Self::from_bytes(path, &bytes)
+        Self::from_bytes(path, &bytes, limits)
     }
 
-    /// Parses `bytes` as if read from `path` (which locates external resources).
-    pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self> {
+    /// Parses `bytes` as if read from `path` (which locates external resources), within
+    /// `limits` (`bytes` counts towards the input size).
+    pub fn from_bytes(path: &Path, bytes: &[u8], limits: &InputLimits) -> Result<Self> {
         let err = |p: String| SceneError::invalid(path, p);
         let parse = |json_bytes: &[u8]| -> Result<json::Root> {
             serde_json::from_slice(json_bytes)
                 .map_err(|e| err(format!("not a valid glTF JSON document ({e})")))
         };
         let (root, glb_bin): (json::Root, Option<Vec<u8>>) = if bytes.starts_with(b"glTF") {
+            // gltf 1.4 subtracts the header's size from the declared length before checking
+            // it (an overflow panic in debug builds): check the 12-byte header first.
+            let declared = bytes
+                .get(8..12)
+                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize);
+            match declared {
+                Some(n) if (12..=bytes.len()).contains(&n) => {}
+                Some(n) => {
+                    return Err(err(format!(
+                        "truncated or malformed GLB container (the header declares {n} bytes, the file has {})",
+                        bytes.len()
+                    )));
+                }
+                None => {
+                    return Err(err(
+                        "truncated or malformed GLB container (shorter than its 12-byte header)"
+                            .into(),
+                    ));
+                }
+            }
             let glb = gltf::binary::Glb::from_slice(bytes)
                 .map_err(|e| err(format!("truncated or malformed GLB container ({e})")))?;
             (parse(&glb.json)?, glb.bin.map(|b| b.into_owned()))
@@ -75,7 +106,9 @@ impl GltfSource {
             dir,
             root,
             buffers: Vec::new(),
+            limits: *limits,
         };
+        let mut total = bytes.len() as u64;
         let mut glb_bin = glb_bin;
         let mut buffers = Vec::with_capacity(src.root.buffers.len());
         for (i, buffer) in src.root.buffers.iter().enumerate() {
@@ -88,6 +121,16 @@ impl GltfSource {
                 })?,
                 Some(uri) => src.read_uri(uri, &format!("buffer {i}"))?,
             };
+            if buffer.uri.is_some() {
+                total = total.saturating_add(data.len() as u64);
+                if total > limits.max_input_bytes {
+                    return Err(err(format!(
+                        "buffer {i}: the file and its external buffers add up to {}, over the input size limit of {} (raise it with {MAX_INPUT_OPTION})",
+                        human_bytes(total),
+                        human_bytes(limits.max_input_bytes)
+                    )));
+                }
+            }
             if data.len() < declared {
                 return Err(err(format!(
                     "buffer {i} holds {} bytes but declares byteLength {declared} (truncated file?)",
@@ -115,35 +158,10 @@ impl GltfSource {
                 .decode(payload)
                 .map_err(|e| self.invalid(format!("{what}: bad base64 data URI ({e})")));
         }
-        let rel = percent_decode(uri);
-        if rel.contains("://") || rel.starts_with('/') || rel.starts_with('\\') {
-            return Err(self.invalid(format!(
-                "{what}: external URI '{uri}' is outside the input folder (only relative paths inside it are read)"
-            )));
-        }
-        let rel_path = Path::new(&rel);
-        let escapes = rel_path.components().any(|c| {
-            matches!(
-                c,
-                Component::ParentDir | Component::RootDir | Component::Prefix(_)
-            )
-        });
-        if escapes {
-            return Err(self.invalid(format!(
-                "{what}: external URI '{uri}' is outside the input folder"
-            )));
-        }
-        let full = self.dir.join(rel_path);
-        // Symlinks could still point elsewhere: compare canonical paths.
-        if let (Ok(canon), Ok(dir)) = (full.canonicalize(), self.dir.canonicalize())
-            && !canon.starts_with(&dir)
-        {
-            return Err(self.invalid(format!(
-                "{what}: external URI '{uri}' resolves outside the input folder"
-            )));
-        }
-        std::fs::read(&full)
-            .map_err(|e| self.invalid(format!("{what}: cannot read '{}' ({e})", full.display())))
+        let full = resolve_uri(&self.dir, uri)
+            .map_err(|why| self.invalid(format!("{what}: external URI '{uri}' {why}")))?;
+        read_regular_file(&full, self.limits.max_input_bytes)
+            .map_err(|r| self.invalid(format!("{what}: '{}' {r}", full.display())))
     }
 
     /// The encoded bytes of image `index` (from a buffer view, a data URI or a file).
@@ -189,25 +207,4 @@ impl GltfSource {
     }
 }
 
-/// Decodes `%XX` escapes in a relative URI.
-pub fn percent_decode(s: &str) -> String {
-    let bytes = s.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == b'%'
-            && i + 2 < bytes.len()
-            && let Ok(v) = u8::from_str_radix(
-                std::str::from_utf8(&bytes[i + 1..i + 3]).unwrap_or("zz"),
-                16,
-            )
-        {
-            out.push(v);
-            i += 3;
-            continue;
-        }
-        out.push(bytes[i]);
-        i += 1;
-    }
-    String::from_utf8_lossy(&out).into_owned()
-}
+pub use crate::input_file::percent_decode;

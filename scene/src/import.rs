@@ -1,5 +1,10 @@
 //! glTF import: turns any valid skinned (or static) tree into a [`Tree`]
 //! (spec animated-billboard-clouds §1, §1.3; gltf-and-toolchain.md for the crate traps).
+//!
+//! Malformed input is either refused with a one-line error naming the cause (the node, skin,
+//! primitive or animation channel, and the offending value), or accepted with a one-line
+//! warning in [`Tree::warnings`] saying what was read instead; nothing is repaired silently.
+//! The choice per case is documented on the function that reads that part.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -14,6 +19,7 @@ use crate::binding::assign_foliage_bones;
 use crate::classify::{PrimitiveInfo, classify_primitives};
 use crate::error::Result;
 use crate::gltf_source::GltfSource;
+use crate::input_file::{InputLimits, MAX_TEXTURE_OPTION, MAX_VERTICES_OPTION, human_bytes};
 use crate::model::*;
 use crate::skinning::skin_positions;
 
@@ -27,23 +33,27 @@ pub struct ImportOptions {
     /// Accept a file without any triangle (an empty tree) instead of refusing it: an
     /// evaluator compares such a candidate like any other.
     pub allow_empty: bool,
+    /// What reading the input may cost (file bytes, decoded texture memory).
+    pub limits: InputLimits,
 }
 
 /// Reads a `.glb` or `.gltf` tree from disk.
 pub fn import(path: &Path, options: &ImportOptions) -> Result<Tree> {
-    let src = GltfSource::open(path)?;
+    let src = GltfSource::open(path, &options.limits)?;
     import_source(&src, options)
 }
 
 /// Reads a tree from bytes, `path` naming it (and locating external files).
 pub fn import_bytes(path: &Path, bytes: &[u8], options: &ImportOptions) -> Result<Tree> {
-    let src = GltfSource::from_bytes(path, bytes)?;
+    let src = GltfSource::from_bytes(path, bytes, &options.limits)?;
     import_source(&src, options)
 }
 
 fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
     let mut warnings = Vec::new();
     let (nodes, node_order) = read_nodes(src)?;
+    check_scenes(src, &nodes, &mut warnings);
+    check_buffer_views(src, &mut warnings);
     let (bones, skin_bindings) = read_skins(src, &nodes)?;
     let mut nodes = nodes;
     for (b, bone) in bones.iter().enumerate() {
@@ -51,11 +61,20 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
     }
     let mut bindings: Vec<Binding> = skin_bindings;
     let materials = read_materials(src)?;
-    let (vertices, prims) =
-        read_meshes(src, &node_order, &mut bindings, &materials, &mut warnings)?;
+    let (vertices, prims) = read_meshes(
+        src,
+        &node_order,
+        &mut bindings,
+        &bones,
+        &materials,
+        &mut warnings,
+    )?;
+    check_inverse_binds(src, &bones, &bindings, &vertices, &mut warnings)?;
     if prims.is_empty() && !options.allow_empty {
         return Err(src.invalid("the file has no mesh with triangles (nothing to simplify)"));
     }
+    // Clips before textures: a broken animation is reported without decoding any image.
+    let clips = read_clips(src, nodes.len(), &mut warnings)?;
     let (textures, texture_images) = read_textures(src, &materials.1)?;
     let mut materials_out = materials.0;
     for (m, info) in materials_out.iter_mut().zip(&materials.1) {
@@ -63,7 +82,6 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
             info.and_then(|(img, _, _)| texture_images.iter().position(|&i| i == img));
     }
     let materials = materials_out;
-    let clips = read_clips(src, nodes.len(), &mut warnings)?;
 
     // Rest pose: every node at its own TRS.
     let rest_pose: Vec<Trs> = nodes.iter().map(|n| n.rest).collect();
@@ -89,6 +107,7 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
         bounds: Bounds::of([]),
     };
     let rest_positions = skin_positions(&tmp, &rest_world);
+    check_rest_positions(src, &tmp.nodes, &prims, &rest_positions)?;
     let mut tree = tmp;
     let (triangles, classification) = classify_primitives(&tree, &prims, &rest_positions, options);
     tree.triangles = triangles;
@@ -131,6 +150,30 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
     Ok(tree)
 }
 
+/// Deepest node hierarchy accepted, counting a root as level 1. Real tree skeletons are under
+/// 30 levels (the shared trees: at most 8 bones in a chain); a chain thousands deep is a
+/// malformed or hostile file, and writing it back out crashes glTF tools that walk the
+/// hierarchy recursively (the Khronos validator among them). frond's own walks are iterative,
+/// so the limit only keeps what frond writes readable.
+pub const MAX_NODE_DEPTH: usize = 256;
+
+/// Largest coordinate magnitude accepted for a vertex, in the file's units, both in a POSITION
+/// accessor and after the rest-pose transforms. No tree is ten thousand kilometres (or, in
+/// millimetres, ten kilometres) across, f32 cannot resolve a leaf out there, and sizes computed
+/// from such values overflow: refusing names the cause instead of a later "no height" or
+/// "no foliage".
+pub const MAX_COORDINATE: f32 = 1e7;
+
+/// Latest key time accepted in an animation, in seconds (one hour). Wind loops last seconds;
+/// a clip that runs for hours (or 4e30 s, as a corrupted time accessor gives) cannot be
+/// sampled meaningfully into a loop of a few dozen poses, so it is refused rather than guessed at.
+pub const MAX_ANIMATION_SECONDS: f32 = 3600.0;
+
+/// Reads the node hierarchy: rest transforms, parents and children, and a parents-first order.
+///
+/// Refuses a node with two parents, a cycle, and a hierarchy deeper than [`MAX_NODE_DEPTH`]
+/// (naming the first node past the limit). Everything here is iterative, so no depth can
+/// overflow the stack before that check.
 fn read_nodes(src: &GltfSource) -> Result<(Vec<Node>, Vec<usize>)> {
     let n = src.root.nodes.len();
     let mut nodes = Vec::with_capacity(n);
@@ -202,6 +245,16 @@ fn read_nodes(src: &GltfSource) -> Result<(Vec<Node>, Vec<usize>)> {
     }
     if order.len() != n {
         return Err(src.invalid("the node hierarchy contains a cycle"));
+    }
+    let mut depth = vec![0usize; n];
+    for &i in &order {
+        depth[i] = nodes[i].parent.map_or(1, |p| depth[p] + 1);
+        if depth[i] > MAX_NODE_DEPTH {
+            return Err(src.invalid(format!(
+                "node {i} ('{}') is {} levels deep; frond refuses node hierarchies deeper than {MAX_NODE_DEPTH} levels (tree skeletons are under 30; deeper chains break glTF tools)",
+                nodes[i].name, depth[i]
+            )));
+        }
     }
     Ok((nodes, order))
 }
@@ -289,6 +342,195 @@ fn read_skins(src: &GltfSource, nodes: &[Node]) -> Result<(Vec<Bone>, Vec<Bindin
     Ok((bones, bindings))
 }
 
+/// Warns about scene data frond does not rely on but a file may get wrong: a `"scene"` index
+/// past the scene list, a scene root that does not exist, and a scene root that is also
+/// another node's child. frond reads every node of the hierarchy whatever the scenes say, so
+/// none of these changes the import; the warning says what was read instead.
+fn check_scenes(src: &GltfSource, nodes: &[Node], warnings: &mut Vec<String>) {
+    let scenes = &src.root.scenes;
+    if let Some(s) = src.root.scene.map(|s| s.value())
+        && s >= scenes.len()
+    {
+        warnings.push(format!(
+            "\"scene\" is {s}, but the file has {} scenes; frond reads every node regardless",
+            scenes.len()
+        ));
+    }
+    for (si, scene) in scenes.iter().enumerate() {
+        for r in scene.nodes.iter().map(|r| r.value()) {
+            match nodes.get(r) {
+                None => warnings.push(format!(
+                    "scene {si} lists node {r} as a root, but there are only {} nodes; ignored",
+                    nodes.len()
+                )),
+                Some(node) => {
+                    if let Some(p) = node.parent {
+                        warnings.push(format!(
+                            "scene {si} lists node {r} ('{}') as a root, but it is a child of node {p} ('{}'); read as that node's child",
+                            node.name, nodes[p].name
+                        ));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Warns about a bufferView whose `byteStride` is 0: glTF allows 4 to 252, and frond (like
+/// most readers) takes 0 as tightly packed, which may not be what the writer meant.
+fn check_buffer_views(src: &GltfSource, warnings: &mut Vec<String>) {
+    for (vi, view) in src.root.buffer_views.iter().enumerate() {
+        if view.byte_stride.map(|s| s.0) != Some(0) {
+            continue;
+        }
+        let users: Vec<String> = src
+            .root
+            .accessors
+            .iter()
+            .enumerate()
+            .filter(|(_, a)| a.buffer_view.map(|v| v.value()) == Some(vi))
+            .map(|(a, _)| a.to_string())
+            .collect();
+        let readers = if users.is_empty() {
+            "no accessor reads it".to_string()
+        } else {
+            format!(
+                "accessor{} {} read it as tightly packed",
+                if users.len() == 1 { "" } else { "s" },
+                users.join(", ")
+            )
+        };
+        warnings.push(format!(
+            "bufferView {vi}: byteStride 0 is invalid (glTF allows 4 to 252); {readers}"
+        ));
+    }
+}
+
+/// How far an inverse bind matrix is from singular: |det| of its 3×3 part over the product of
+/// its column lengths (Hadamard's bound), so 1 for a rotation-and-scale matrix of any scale and
+/// 0 for a singular one. Computed in f64 so large but sane scales do not overflow.
+fn bind_conditioning(m: &Mat4) -> f64 {
+    let cols = [m.x_axis, m.y_axis, m.z_axis].map(|c| c.truncate().as_dvec3());
+    let norms = cols[0].length() * cols[1].length() * cols[2].length();
+    if norms > 0.0 && norms.is_finite() {
+        glam::DMat3::from_cols(cols[0], cols[1], cols[2])
+            .determinant()
+            .abs()
+            / norms
+    } else {
+        0.0
+    }
+}
+
+/// Inverse bind matrices closer to singular than this (see [`bind_conditioning`]) are refused:
+/// skinning through them flattens every vertex weighted to that joint onto a plane, a line or
+/// a point, and later stages then fail on the symptom ("the tree has no height").
+const SINGULAR_BIND: f64 = 1e-6;
+
+/// Checks every skin's inverse bind matrices for singular ones. A singular matrix on a joint
+/// that some vertex is weighted to (including vertices without weights, bound to the first
+/// joint) is an error naming the skin, the joint and its node; on a joint no vertex uses it is
+/// harmless for frond, so only a warning.
+fn check_inverse_binds(
+    src: &GltfSource,
+    bones: &[Bone],
+    bindings: &[Binding],
+    verts: &Vertices,
+    warnings: &mut Vec<String>,
+) -> Result<()> {
+    for (s, binding) in bindings.iter().enumerate() {
+        let Binding::Skin {
+            joints,
+            inverse_bind,
+        } = binding
+        else {
+            continue;
+        };
+        let singular: Vec<usize> = (0..inverse_bind.len())
+            .filter(|&k| bind_conditioning(&inverse_bind[k]) < SINGULAR_BIND)
+            .collect();
+        let Some(&first) = singular.first() else {
+            continue;
+        };
+        // Vertices weighted to each joint of this skin.
+        let mut users = vec![0usize; joints.len()];
+        for v in 0..verts.len() {
+            if verts.binding[v] as usize != s {
+                continue;
+            }
+            for j in 0..4 {
+                if verts.weights[v][j] > 0.0
+                    && let Some(u) = users.get_mut(verts.joints[v][j] as usize)
+                {
+                    *u += 1;
+                }
+            }
+        }
+        let skin_name = src
+            .root
+            .skins
+            .get(s)
+            .and_then(|sk| sk.name.as_deref())
+            .map(|n| format!(" ('{n}')"))
+            .unwrap_or_default();
+        let joint = |k: usize| {
+            let b = &bones[joints[k]];
+            format!(
+                "the inverse bind matrix of joint {k} (node {} '{}') is singular (determinant {:?})",
+                b.node,
+                b.name,
+                inverse_bind[k].determinant()
+            )
+        };
+        if let Some(&k) = singular.iter().find(|&&k| users[k] > 0) {
+            return Err(src.invalid(format!(
+                "skin {s}{skin_name}: {}; the {} vertices weighted to it would collapse",
+                joint(k),
+                users[k]
+            )));
+        }
+        let more = match singular.len() {
+            1 => String::new(),
+            n => format!(" (and {} more joints)", n - 1),
+        };
+        warnings.push(format!(
+            "skin {s}{skin_name}: {}{more}; harmless here, as no vertex is weighted to it",
+            joint(first)
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses a primitive whose vertices land at absurd or non-finite coordinates in the rest
+/// pose (beyond ±[`MAX_COORDINATE`]): sane POSITION values can still be scaled there by node or
+/// skin transforms, and the tree's size then overflows.
+fn check_rest_positions(
+    src: &GltfSource,
+    nodes: &[Node],
+    prims: &[PrimitiveInfo],
+    rest: &[Vec3],
+) -> Result<()> {
+    for p in prims {
+        let bad = p
+            .triangles
+            .iter()
+            .flatten()
+            .map(|&v| rest[v as usize])
+            .find(|q| !q.is_finite() || q.abs().max_element() > MAX_COORDINATE);
+        if let Some(q) = bad {
+            return Err(src.invalid(format!(
+                "mesh '{}' primitive {} (node {} '{}'): a vertex lies at {:?} in the rest pose, beyond ±{MAX_COORDINATE:e} (its node or skin transforms scale it absurdly)",
+                p.mesh,
+                p.primitive,
+                p.node,
+                nodes[p.node].name,
+                q.to_array()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Materials plus, per material, (image index, texcoord set, uv transform) of its base colour.
 type MaterialInfo = (Vec<Material>, Vec<Option<(usize, u32, glam::Affine2)>>);
 
@@ -351,6 +593,11 @@ fn read_materials(src: &GltfSource) -> Result<MaterialInfo> {
 }
 
 /// Decodes the base-colour images materials use (in parallel) and links them to materials.
+///
+/// The decoded size of every image is read from its header first and the total checked
+/// against [`InputLimits::max_texture_bytes`] before anything is decoded, so a small file that
+/// declares huge images (a "texture bomb") is refused without the memory being taken; each
+/// decoder is also held to the budget, in case a header lies.
 fn read_textures(
     src: &GltfSource,
     texinfo: &[Option<(usize, u32, glam::Affine2)>],
@@ -358,11 +605,42 @@ fn read_textures(
     let mut images: Vec<usize> = texinfo.iter().flatten().map(|t| t.0).collect();
     images.sort_unstable();
     images.dedup();
-    let textures = images
-        .par_iter()
+    let encoded = images
+        .iter()
         .map(|&img| {
             let bytes = src.image_bytes(img)?;
-            let decoded = image::load_from_memory(&bytes)
+            let (w, h) = image::ImageReader::new(std::io::Cursor::new(&bytes))
+                .with_guessed_format()
+                .map_err(|e| src.invalid(format!("image {img}: cannot read ({e})")))?
+                .into_dimensions()
+                .map_err(|e| src.invalid(format!("image {img}: cannot decode ({e})")))?;
+            Ok((img, bytes, u64::from(w) * u64::from(h) * 4))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let budget = src.limits.max_texture_bytes;
+    let total = encoded.iter().map(|e| e.2).fold(0u64, u64::saturating_add);
+    if total > budget {
+        let largest = encoded.iter().max_by_key(|e| e.2).map(|e| e.0).unwrap_or(0);
+        return Err(src.invalid(format!(
+            "its {} textures decode to {} (largest: image {largest}), over the texture memory limit of {} (raise it with {MAX_TEXTURE_OPTION})",
+            encoded.len(),
+            human_bytes(total),
+            human_bytes(budget)
+        )));
+    }
+    let textures = encoded
+        .par_iter()
+        .map(|(img, bytes, size)| {
+            let img = *img;
+            let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+                .with_guessed_format()
+                .map_err(|e| src.invalid(format!("image {img}: cannot read ({e})")))?;
+            let mut limits = image::Limits::default();
+            // The declared size plus slack for the decoder's own buffers.
+            limits.max_alloc = Some(size.saturating_mul(2).max(1 << 20));
+            reader.limits(limits);
+            let decoded = reader
+                .decode()
                 .map_err(|e| src.invalid(format!("image {img}: cannot decode ({e})")))?
                 .to_rgba8();
             let name = src.root.images[img]
@@ -380,14 +658,29 @@ fn read_textures(
     Ok((textures, images))
 }
 
-/// Where a primitive's triangles live in the flattened vertex/index arrays.
+/// Reads every mesh instance (in parents-first node order) into the flattened vertex arrays and
+/// returns where each primitive's triangles live.
+///
+/// Refused: a POSITION beyond ±[`MAX_COORDINATE`] (naming the primitive, vertex and value).
+/// Accepted with a one-line warning naming the mesh and primitive: integer POSITION without
+/// `KHR_mesh_quantization` (read as stored), morph targets (the base shape is read), a
+/// TRIANGLES index count that is not a multiple of 3 (the leftover indices are dropped),
+/// vertices whose skin weights are all zero (bound rigidly to the skin's first joint), and
+/// extra influence sets `JOINTS_1`/`WEIGHTS_1`, ... (folded: all sets are merged per vertex and
+/// the 4 largest influences kept, renormalised, since frond's vertices carry 4).
 fn read_meshes(
     src: &GltfSource,
     order: &[usize],
     bindings: &mut Vec<Binding>,
+    bones: &[Bone],
     materials: &MaterialInfo,
     warnings: &mut Vec<String>,
 ) -> Result<(Vertices, Vec<PrimitiveInfo>)> {
+    let quantization = src
+        .root
+        .extensions_used
+        .iter()
+        .any(|e| e == "KHR_mesh_quantization");
     let mut verts = Vertices::default();
     let mut prims = Vec::new();
     let mut node_binding: HashMap<usize, u32> = HashMap::new();
@@ -446,12 +739,44 @@ fn read_meshes(
             };
             let pos_acc = attr(json::mesh::Semantic::Positions)
                 .ok_or_else(|| src.invalid(format!("{what}: has no POSITION attribute")))?;
+            // Checked from the declared count before anything is decoded: a mesh instanced
+            // on many nodes, or an accessor without a bufferView (zeros of any count), would
+            // otherwise let a tiny file take gigabytes.
+            let declared = src
+                .root
+                .accessors
+                .get(pos_acc)
+                .map_or(0, |a| a.count.0 as usize);
+            let limit = src.limits.max_vertices;
+            if verts.len().saturating_add(declared) as u64 > limit {
+                return Err(src.invalid(format!(
+                    "{what} (node {ni}) brings the meshes to {} vertices, over the vertex limit of {limit} (raise it with {MAX_VERTICES_OPTION})",
+                    verts.len().saturating_add(declared)
+                )));
+            }
             let pos = src.read_floats(pos_acc, &format!("{what} POSITION"))?;
             if pos.width != 3 {
                 return Err(src.invalid(format!("{what}: POSITION must be VEC3")));
             }
             if pos.values.iter().any(|v| !v.is_finite()) {
                 return Err(src.invalid(format!("{what}: POSITION contains NaN or Inf")));
+            }
+            if let Some(k) = pos.values.iter().position(|v| v.abs() > MAX_COORDINATE) {
+                return Err(src.invalid(format!(
+                    "{what}: POSITION of vertex {} is {:?}, beyond ±{MAX_COORDINATE:e} (absurd for a tree in any unit)",
+                    k / 3,
+                    pos.get::<3>(k / 3)
+                )));
+            }
+            if let Some(w) = integer_position_warning(src, pos_acc, quantization) {
+                warnings.push(format!("{what}: {w}"));
+            }
+            if let Some(targets) = p.targets.as_ref().filter(|t| !t.is_empty()) {
+                warnings.push(format!(
+                    "{what}: {} morph target{} ignored (frond reads the base shape only)",
+                    targets.len(),
+                    if targets.len() == 1 { "" } else { "s" }
+                ));
             }
             let n = pos.count();
             let check_count = |d: &crate::accessor::Decoded, name: &str| -> Result<()> {
@@ -487,32 +812,53 @@ fn read_meshes(
                 }
                 None => None,
             };
-            let skin_attrs = if skin.is_some() {
-                match (
-                    attr(json::mesh::Semantic::Joints(0)),
-                    attr(json::mesh::Semantic::Weights(0)),
+            // Influence sets JOINTS_n/WEIGHTS_n for n = 0, 1, ... while both are present:
+            // (joint ids, weights), 4 per vertex each.
+            let mut influence_sets: Vec<(Vec<u32>, Vec<f32>)> = Vec::new();
+            if skin.is_some() {
+                use json::mesh::Semantic;
+                while let (Some(j), Some(w)) = (
+                    attr(Semantic::Joints(influence_sets.len() as u32)),
+                    attr(Semantic::Weights(influence_sets.len() as u32)),
                 ) {
-                    (Some(j), Some(w)) => {
-                        let (jw, jv) = src.read_ints(j, &format!("{what} JOINTS_0"))?;
-                        let wd = src.read_floats(w, &format!("{what} WEIGHTS_0"))?;
-                        check_count(&wd, "WEIGHTS_0")?;
-                        if jw != 4 || wd.width != 4 || jv.len() != n * 4 {
-                            return Err(src.invalid(format!(
-                                "{what}: JOINTS_0/WEIGHTS_0 must be VEC4 with one per vertex"
-                            )));
-                        }
-                        Some((jv, wd))
+                    let set = influence_sets.len();
+                    let (jw, jv) = src.read_ints(j, &format!("{what} JOINTS_{set}"))?;
+                    let wd = src.read_floats(w, &format!("{what} WEIGHTS_{set}"))?;
+                    check_count(&wd, &format!("WEIGHTS_{set}"))?;
+                    if jw != 4 || wd.width != 4 || jv.len() != n * 4 {
+                        return Err(src.invalid(format!(
+                            "{what}: JOINTS_{set}/WEIGHTS_{set} must be VEC4 with one per vertex"
+                        )));
                     }
-                    _ => {
-                        warnings.push(format!(
-                            "{what}: skinned node without JOINTS_0/WEIGHTS_0; bound to joint 0"
-                        ));
-                        None
-                    }
+                    influence_sets.push((jv, wd.values));
                 }
-            } else {
-                None
-            };
+                if influence_sets.is_empty() {
+                    warnings.push(format!(
+                        "{what}: skinned node without JOINTS_0/WEIGHTS_0; bound to joint 0"
+                    ));
+                }
+                let mut unpaired: Vec<String> = p
+                    .attributes
+                    .keys()
+                    .filter_map(|k| match k {
+                        Checked::Valid(sem @ (Semantic::Joints(s) | Semantic::Weights(s)))
+                            if *s as usize >= influence_sets.len().max(1) =>
+                        {
+                            Some(sem.to_string())
+                        }
+                        _ => None,
+                    })
+                    .collect();
+                unpaired.sort();
+                if !unpaired.is_empty() {
+                    warnings.push(format!(
+                        "{what}: {} ignored (influence sets are read as JOINTS_n/WEIGHTS_n pairs numbered from 0)",
+                        unpaired.join(", ")
+                    ));
+                }
+            }
+            let mut influences: Vec<(usize, f32)> = Vec::new();
+            let (mut zero_weight, mut folded, mut max_dropped) = (0usize, 0usize, 0.0f32);
             let base = verts.len() as u32;
             for i in 0..n {
                 verts.position.push(Vec3::from(pos.get::<3>(i)));
@@ -530,36 +876,116 @@ fn read_meshes(
                     .uv
                     .push(tex.map(|t| t.2.transform_point2(uv)).unwrap_or(uv));
                 verts.binding.push(binding);
-                let (joints, weights) = match &skin_attrs {
-                    Some((jv, wd)) => {
-                        let mut j = [0u16; 4];
-                        let mut w = Vec4::from(wd.get::<4>(i));
+                let (joints, weights) = if influence_sets.is_empty() {
+                    ([0; 4], [1.0, 0.0, 0.0, 0.0])
+                } else {
+                    let check = |jj: usize, w: f32| -> Result<()> {
+                        if w != 0.0 && jj >= palette {
+                            return Err(src.invalid(format!(
+                                "{what}: vertex {i} names joint {jj}, but the skin has {palette} joints"
+                            )));
+                        }
+                        if !w.is_finite() || w < 0.0 {
+                            return Err(src.invalid(format!(
+                                "{what}: vertex {i} has a negative or non-finite weight"
+                            )));
+                        }
+                        Ok(())
+                    };
+                    let mut j = [0u16; 4];
+                    let mut w = [0.0f32; 4];
+                    if let [(jv, wv)] = influence_sets.as_slice() {
+                        // One set: slots kept as written (zero-weight slots name joint 0).
                         for k in 0..4 {
-                            let jj = jv[i * 4 + k] as usize;
-                            if w[k] != 0.0 && jj >= palette {
-                                return Err(src.invalid(format!(
-                                    "{what}: vertex {i} names joint {jj}, but the skin has {palette} joints"
-                                )));
-                            }
-                            if !w[k].is_finite() || w[k] < 0.0 {
-                                return Err(src.invalid(format!(
-                                    "{what}: vertex {i} has a negative or non-finite weight"
-                                )));
-                            }
-                            j[k] = if w[k] == 0.0 { 0 } else { jj as u16 };
+                            let (jj, wk) = (jv[i * 4 + k] as usize, wv[i * 4 + k]);
+                            check(jj, wk)?;
+                            j[k] = if wk == 0.0 { 0 } else { jj as u16 };
+                            w[k] = wk;
                         }
-                        let sum = w.x + w.y + w.z + w.w;
-                        if sum > 0.0 {
-                            w /= sum;
-                        } else {
-                            w = Vec4::X;
+                    } else {
+                        // Several sets: merge per joint, keep the 4 largest.
+                        influences.clear();
+                        for (jv, wv) in &influence_sets {
+                            for k in i * 4..i * 4 + 4 {
+                                let (jj, wk) = (jv[k] as usize, wv[k]);
+                                check(jj, wk)?;
+                                if wk > 0.0 {
+                                    match influences.iter_mut().find(|e| e.0 == jj) {
+                                        Some(e) => e.1 += wk,
+                                        None => influences.push((jj, wk)),
+                                    }
+                                }
+                            }
                         }
-                        (j, w.to_array())
+                        if influences.len() > 4 {
+                            influences.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+                            let total: f32 = influences.iter().map(|e| e.1).sum();
+                            let dropped: f32 = influences[4..].iter().map(|e| e.1).sum();
+                            folded += 1;
+                            max_dropped = max_dropped.max(dropped / total);
+                            influences.truncate(4);
+                        }
+                        for (k, &(jj, wk)) in influences.iter().enumerate() {
+                            j[k] = jj as u16;
+                            w[k] = wk;
+                        }
                     }
-                    None => ([0; 4], [1.0, 0.0, 0.0, 0.0]),
+                    let sum: f32 = w.iter().sum();
+                    if !sum.is_finite() {
+                        // Each weight is finite, but e.g. 4 × 1e38 is not: normalising would
+                        // silently zero them all.
+                        return Err(src.invalid(format!(
+                            "{what}: vertex {i} has skin weights whose sum overflows ({:?})",
+                            w
+                        )));
+                    }
+                    if sum > 0.0 {
+                        for x in &mut w {
+                            *x /= sum;
+                        }
+                    } else {
+                        zero_weight += 1;
+                        j = [0; 4];
+                        w = [1.0, 0.0, 0.0, 0.0];
+                    }
+                    (j, w)
                 };
                 verts.joints.push(joints);
                 verts.weights.push(weights);
+            }
+            if zero_weight > 0
+                && let Binding::Skin { joints, .. } = &bindings[binding as usize]
+                && let Some(first) = joints.first().map(|&b| &bones[b])
+            {
+                warnings.push(format!(
+                    "{what}: {zero_weight} of {n} vertices {} all-zero skin weights; bound rigidly to the skin's first joint (joint 0, node {} '{}')",
+                    if zero_weight == 1 { "has" } else { "have" },
+                    first.node,
+                    first.name
+                ));
+            }
+            if influence_sets.len() > 1 {
+                let extra: Vec<String> = (1..influence_sets.len())
+                    .map(|s| format!("JOINTS_{s}/WEIGHTS_{s}"))
+                    .collect();
+                let outcome = if folded == 0 {
+                    "no vertex has more than 4, so nothing is lost".to_string()
+                } else {
+                    format!(
+                        "{folded} {} more than 4 and {} the 4 largest, renormalised (dropping at most {:.1}% of a vertex's weight)",
+                        if folded == 1 {
+                            "vertex has"
+                        } else {
+                            "vertices have"
+                        },
+                        if folded == 1 { "keeps" } else { "keep" },
+                        max_dropped * 100.0
+                    )
+                };
+                warnings.push(format!(
+                    "{what}: {} present; frond keeps 4 influences per vertex and merged the sets: {outcome}",
+                    extra.join(", ")
+                ));
             }
             let raw_indices: Vec<u32> = match p.indices {
                 Some(a) => {
@@ -576,6 +1002,18 @@ fn read_meshes(
                     "{what}: index {bad} is out of range ({n} vertices)"
                 )));
             }
+            let leftover = raw_indices.len() % 3;
+            if mode == json::mesh::Mode::Triangles && leftover != 0 {
+                let counted = if p.indices.is_some() {
+                    "indices"
+                } else {
+                    "vertices (no indices)"
+                };
+                warnings.push(format!(
+                    "{what}: {} {counted} is not a multiple of 3 for TRIANGLES; the last {leftover} dropped",
+                    raw_indices.len()
+                ));
+            }
             let tris = triangulate(&raw_indices, mode);
             prims.push(PrimitiveInfo {
                 mesh: mesh_name.clone(),
@@ -587,6 +1025,67 @@ fn read_meshes(
         }
     }
     Ok((verts, prims))
+}
+
+/// Why an integer POSITION accessor breaks the glTF rules, if it does: core glTF allows only
+/// floats, `KHR_mesh_quantization` adds (normalized or not) bytes and shorts, and nothing
+/// allows unsigned ints. frond reads such values anyway (as stored, or scaled to [0, 1] /
+/// [-1, 1] when `normalized`), so this is a warning saying how.
+fn integer_position_warning(src: &GltfSource, index: usize, quantization: bool) -> Option<String> {
+    use json::accessor::ComponentType;
+    let acc = src.root.accessors.get(index)?;
+    let Checked::Valid(c) = acc.component_type else {
+        return None;
+    };
+    let (name, range) = match c.0 {
+        ComponentType::F32 => return None,
+        ComponentType::I8 => ("BYTE", "[-1, 1]"),
+        ComponentType::U8 => ("UNSIGNED_BYTE", "[0, 1]"),
+        ComponentType::I16 => ("SHORT", "[-1, 1]"),
+        ComponentType::U16 => ("UNSIGNED_SHORT", "[0, 1]"),
+        ComponentType::U32 => ("UNSIGNED_INT", "[0, 1]"),
+    };
+    // accessor.rs scales normalized bytes and shorts only (glTF has no normalized u32).
+    let how = if acc.normalized && c.0 != ComponentType::U32 {
+        format!("read as normalized values in {range}")
+    } else {
+        "read as integer coordinates".to_string()
+    };
+    if c.0 == ComponentType::U32 {
+        Some(format!(
+            "POSITION accessor {index} is {name}, which glTF never allows (not even with KHR_mesh_quantization); {how}"
+        ))
+    } else if !quantization {
+        Some(format!(
+            "POSITION accessor {index} is {name}, which glTF allows only with KHR_mesh_quantization (not in extensionsUsed); {how}"
+        ))
+    } else {
+        None
+    }
+}
+
+/// Removes keys whose time equals the next key's time, keeping the last key of every run of
+/// equal times; `per_key` values go with each key (3 for CUBICSPLINE: in-tangent, value,
+/// out-tangent). Returns the times, the values and how many keys were dropped.
+fn drop_repeated_keys(
+    times: Vec<f32>,
+    values: Vec<Vec4>,
+    per_key: usize,
+) -> (Vec<f32>, Vec<Vec4>, usize) {
+    if times.windows(2).all(|w| w[0] < w[1]) {
+        return (times, values, 0);
+    }
+    let mut kept_times = Vec::with_capacity(times.len());
+    let mut kept_values = Vec::with_capacity(values.len());
+    for (k, &t) in times.iter().enumerate() {
+        if times.get(k + 1) == Some(&t) {
+            continue;
+        }
+        kept_times.push(t);
+        kept_values.extend_from_slice(&values[k * per_key..(k + 1) * per_key]);
+    }
+    let dropped = times.len() - kept_times.len();
+    (kept_times, kept_values, dropped)
 }
 
 /// Triangle list from TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN indices.
@@ -617,6 +1116,21 @@ fn mark_degenerate(tris: &mut [Triangle], pos: &[Vec3], size: f32) {
     }
 }
 
+/// Reads every animation into a [`Clip`], so that each channel's key times are finite,
+/// non-negative, strictly increasing and at most [`MAX_ANIMATION_SECONDS`] — what glTF
+/// requires of a sampler input, and so what frond writes back validates.
+///
+/// Broken key times are handled per case:
+/// - non-finite, negative, or decreasing (a key before the one preceding it): an error naming
+///   the animation, channel, key and time. No repair is right there: shifting negative times
+///   would move this channel against the others, and reordering keys guesses the intent.
+/// - a key at the same time as the key before it (a run of equal times, as some exporters
+///   write for a jump): repaired by keeping only the last key of the run, the value the
+///   channel holds from that time on (and what frond sampled at that time before), with a
+///   warning naming the channel and how many keys were dropped. For CUBICSPLINE the dropped
+///   key's in-tangent, value and out-tangent go together.
+/// - a key after [`MAX_ANIMATION_SECONDS`]: an error naming the channel and the time, since a
+///   clip that long (a corrupted accessor gives 4e30 s) cannot be sampled into a loop.
 fn read_clips(
     src: &GltfSource,
     node_count: usize,
@@ -668,9 +1182,32 @@ fn read_clips(
             if times.width != 1 {
                 return Err(src.invalid(format!("{what}: input must be SCALAR")));
             }
-            let times = times.values;
-            if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] < w[0]) {
-                return Err(src.invalid(format!("{what}: key times must be finite and increasing")));
+            // `+ 0.0` turns -0 into +0, so no written time reads as negative.
+            let times: Vec<f32> = times.values.iter().map(|t| t + 0.0).collect();
+            if let Some((k, t)) = times.iter().enumerate().find(|(_, t)| !t.is_finite()) {
+                return Err(src.invalid(format!("{what}: key time {t:?} at key {k} is not finite")));
+            }
+            if let Some((k, t)) = times.iter().enumerate().find(|(_, t)| **t < 0.0) {
+                return Err(src.invalid(format!(
+                    "{what}: key time {t:?} at key {k} is negative (glTF requires times ≥ 0)"
+                )));
+            }
+            if let Some(k) = (1..times.len()).find(|&k| times[k] < times[k - 1]) {
+                return Err(src.invalid(format!(
+                    "{what}: key time {:?} at key {k} is before key {}'s {:?} (glTF requires increasing times)",
+                    times[k],
+                    k - 1,
+                    times[k - 1]
+                )));
+            }
+            if let Some((k, t)) = times
+                .iter()
+                .enumerate()
+                .find(|(_, t)| **t > MAX_ANIMATION_SECONDS)
+            {
+                return Err(src.invalid(format!(
+                    "{what}: key time {t:?} s at key {k} is past frond's limit of {MAX_ANIMATION_SECONDS} s (1 hour) for an animation; sampling a clip that long is meaningless"
+                )));
             }
             let out = src.read_floats(sampler.output.value(), &format!("{what} output"))?;
             let want_width = if property == Property::Rotation { 4 } else { 3 };
@@ -702,12 +1239,19 @@ fn read_clips(
             {
                 return Err(src.invalid(format!("{what}: a rotation key is not a unit quaternion")));
             }
-            let values = (0..out.count())
+            let values: Vec<Vec4> = (0..out.count())
                 .map(|k| {
                     let v = out.get::<4>(k);
                     Vec4::from(v)
                 })
                 .collect();
+            let (times, values, dropped) = drop_repeated_keys(times, values, per_key);
+            if dropped > 0 {
+                warnings.push(format!(
+                    "{what}: {dropped} key{} at the same time as the key before dropped, keeping the last key at each repeated time (glTF requires strictly increasing times)",
+                    if dropped == 1 { "" } else { "s" }
+                ));
+            }
             if let (Some(&a), Some(&b)) = (times.first(), times.last()) {
                 start = start.min(a);
                 end = end.max(b);

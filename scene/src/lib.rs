@@ -10,6 +10,7 @@ pub mod generator;
 pub mod gltf_source;
 pub mod gltf_writer;
 pub mod import;
+pub mod input_file;
 pub mod model;
 pub mod rigid_fit;
 pub mod sampling;
@@ -19,5 +20,6 @@ pub mod wood;
 
 pub use error::{Result, SceneError};
 pub use import::{ImportOptions, import, import_bytes};
+pub use input_file::InputLimits;
 pub use model::*;
 pub use sampling::{Motion, SampleOptions, Sampled, sample};

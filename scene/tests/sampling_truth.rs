@@ -1,17 +1,12 @@
 //! Sampled motion agrees with ground truth: the generator's own keyed transforms for generated
-//! trees, and `_meta/<name>.structure.json` leaf-to-bone bindings for the shared trees.
+//! trees, and `_meta/<name>.structure.json` leaf-to-bone bindings for the shared trees
+//! (`FROND_TEST_TREES`; those tests skip with one line where the shared trees are absent).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use frond_scene::generator::{GeneratedTree, Preset, generate};
 use frond_scene::{ImportOptions, Part, SampleOptions, Tree, import, import_bytes, sample};
 use glam::Vec3;
-
-fn shared(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data/trees")
-        .join(name)
-}
 
 /// Imports a generated tree from memory.
 fn load(g: &GeneratedTree) -> Tree {
@@ -136,11 +131,15 @@ fn twigs_sway_faster_than_the_trunk() {
 
 #[test]
 fn shared_rigid_trees_bind_leaves_as_structure_json_says() {
-    for name in ["bush_1", "oak_medium", "oak_large", "pine_medium"] {
-        let tree =
-            import(&shared(&format!("{name}.glb")), &ImportOptions::default()).expect("imports");
-        let text = std::fs::read_to_string(shared(&format!("_meta/{name}.structure.json")))
-            .expect("structure");
+    let names = ["bush_1", "oak_medium", "oak_large", "pine_medium"];
+    let paths = frond_testdata::require_trees!(
+        names
+            .iter()
+            .flat_map(|n| [format!("{n}.glb"), format!("_meta/{n}.structure.json")])
+    );
+    for (name, pair) in names.iter().zip(paths.chunks_exact(2)) {
+        let tree = import(&pair[0], &ImportOptions::default()).expect("imports");
+        let text = std::fs::read_to_string(&pair[1]).expect("structure");
         let st: serde_json::Value = serde_json::from_str(&text).expect("json");
         let quad_bone = st["leafQuads"]["bone"].as_array().expect("leafQuads.bone");
         let bones = st["bones"].as_array().expect("bones");
@@ -164,11 +163,8 @@ fn shared_rigid_trees_bind_leaves_as_structure_json_says() {
 
 #[test]
 fn blended_leaves_are_bound_to_a_bone_they_are_weighted_to() {
-    let tree = import(
-        &shared("oak_medium_blendedleaves.glb"),
-        &ImportOptions::default(),
-    )
-    .expect("imports");
+    let path = frond_testdata::require_tree!("oak_medium_blendedleaves.glb");
+    let tree = import(&path, &ImportOptions::default()).expect("imports");
     let v = &tree.vertices;
     let mut checked = 0;
     for t in tree.triangles.iter().filter(|t| t.part == Part::Foliage) {

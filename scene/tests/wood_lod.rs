@@ -1,8 +1,11 @@
 //! The wood mesh of a LOD: `WoodMesh::from_tree` reproduces the tree's wood at rest (and, through
 //! its per-bone skin, in motion), and `WoodMesh::simplify` stays within its error budget, measured
 //! as true point-to-surface distances rather than trusting the simplifier's estimate.
+//!
+//! Trees: generated ones, ez-tree's bush_1 (`tests/fixtures/`), and the larger shared trees
+//! (`FROND_TEST_TREES`; tests that need them skip with one line where they are absent).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use frond_scene::generator::{Preset, generate};
@@ -13,14 +16,21 @@ use frond_scene::wood::{NO_BONE, WoodMesh, WoodPrimitive};
 use frond_scene::{ImportOptions, Part, Tree, import, import_bytes};
 use glam::{Mat4, Vec3};
 
-fn shared(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data/trees")
-        .join(name)
+fn load(path: &Path) -> Tree {
+    import(path, &ImportOptions::default()).expect("tree imports")
 }
 
-fn load(name: &str) -> Tree {
-    import(&shared(name), &ImportOptions::default()).expect("shared tree imports")
+/// ez-tree's bush_1, committed as a fixture.
+fn bush() -> Tree {
+    load(&frond_testdata::fixture("bush_1.glb"))
+}
+
+/// The file name of `path`, for messages.
+fn name_of(path: &Path) -> String {
+    path.file_name()
+        .expect("file name")
+        .to_string_lossy()
+        .into_owned()
 }
 
 fn generated(seed: u64) -> Tree {
@@ -285,9 +295,14 @@ fn check_from_tree(name: &str, tree: &Tree) {
 }
 
 #[test]
+fn from_tree_reproduces_the_wood_of_bush_1() {
+    check_from_tree("bush_1.glb", &bush());
+}
+
+#[test]
 fn from_tree_reproduces_the_wood_of_shared_trees() {
-    for name in ["bush_1.glb", "pine_medium.glb", "oak_medium.glb"] {
-        check_from_tree(name, &load(name));
+    for path in frond_testdata::require_trees!(["pine_medium.glb", "oak_medium.glb"]) {
+        check_from_tree(&name_of(&path), &load(&path));
     }
 }
 
@@ -313,7 +328,7 @@ fn a_tree_without_wood_gives_an_empty_mesh() {
         foliage_materials: vec!["branches".into()],
         ..ImportOptions::default()
     };
-    let tree = import(&shared("bush_1.glb"), &options).expect("imports");
+    let tree = import(&frond_testdata::fixture("bush_1.glb"), &options).expect("imports");
     assert_eq!(wood_triangles(&tree), 0);
     let mesh = WoodMesh::from_tree(&tree);
     assert_eq!(mesh.triangles(), 0);
@@ -377,52 +392,67 @@ fn check_simplify(name: &str, tree: &Tree, mesh: &WoodMesh, frac: f32, animated:
     s.triangles()
 }
 
+/// Simplifies at 0.1 %, 1 % and 5 % of the height: within budget, and at 1 % down to
+/// `at_1_percent` of the triangles.
+fn check_budget(name: &str, tree: &Tree, at_1_percent: f32) {
+    let mesh = WoodMesh::from_tree(tree);
+    let n = mesh.triangles() as f32;
+    let fine = check_simplify(name, tree, &mesh, 0.001, false);
+    let one = check_simplify(name, tree, &mesh, 0.01, true);
+    let coarse = check_simplify(name, tree, &mesh, 0.05, false);
+    println!("{name}: {n} wood triangles; 0.1 % of height: {fine}, 1 %: {one}, 5 %: {coarse}");
+    assert!(
+        (one as f32) <= at_1_percent * n,
+        "{name}: only down to {one} of {n} triangles at 1 %"
+    );
+    assert!(
+        coarse <= one && one <= fine,
+        "{name}: more error, fewer triangles"
+    );
+}
+
 #[test]
-fn simplify_stays_within_the_budget_and_reduces() {
-    for (name, at_1_percent) in [
-        ("bush_1.glb", 0.45),
-        ("pine_medium.glb", 0.35),
-        ("oak_medium.glb", 0.5),
-    ] {
-        let tree = load(name);
-        let mesh = WoodMesh::from_tree(&tree);
-        let n = mesh.triangles() as f32;
-        let fine = check_simplify(name, &tree, &mesh, 0.001, false);
-        let one = check_simplify(name, &tree, &mesh, 0.01, true);
-        let coarse = check_simplify(name, &tree, &mesh, 0.05, false);
-        println!("{name}: {n} wood triangles; 0.1 % of height: {fine}, 1 %: {one}, 5 %: {coarse}");
-        assert!(
-            (one as f32) <= at_1_percent * n,
-            "{name}: only down to {one} of {n} triangles at 1 %"
-        );
-        assert!(
-            coarse <= one && one <= fine,
-            "{name}: more error, fewer triangles"
-        );
+fn simplify_stays_within_the_budget_and_reduces_on_bush_1() {
+    check_budget("bush_1.glb", &bush(), 0.45);
+}
+
+#[test]
+fn simplify_stays_within_the_budget_and_reduces_on_shared_trees() {
+    let names = ["pine_medium.glb", "oak_medium.glb"];
+    let paths = frond_testdata::require_trees!(names);
+    for ((name, at_1_percent), path) in names.into_iter().zip([0.35, 0.5]).zip(&paths) {
+        check_budget(name, &load(path), at_1_percent);
+    }
+}
+
+/// Simplifying with no error keeps (almost) every triangle; nonsense budgets count as zero.
+fn check_no_error(name: &str, tree: &Tree) {
+    let mesh = WoodMesh::from_tree(tree);
+    let (s, err) = mesh.simplify(0.0);
+    assert!(err <= 1e-6 * tree.bounds.size(), "{name}: error {err}");
+    assert!(
+        s.triangles() as f32 >= 0.99 * mesh.triangles() as f32,
+        "{name}: {} of {} triangles at zero error",
+        s.triangles(),
+        mesh.triangles()
+    );
+    assert_within(name, &mesh, &s, 0.0, 1e-5 * tree.bounds.height());
+    for bad in [-1.0, f32::NAN] {
+        let (t, e) = mesh.simplify(bad);
+        assert_same(&s, &t);
+        assert_eq!(e.to_bits(), err.to_bits());
     }
 }
 
 #[test]
-fn simplify_with_no_error_keeps_the_mesh() {
-    for name in ["bush_1.glb", "oak_medium.glb"] {
-        let tree = load(name);
-        let mesh = WoodMesh::from_tree(&tree);
-        let (s, err) = mesh.simplify(0.0);
-        assert!(err <= 1e-6 * tree.bounds.size(), "{name}: error {err}");
-        assert!(
-            s.triangles() as f32 >= 0.99 * mesh.triangles() as f32,
-            "{name}: {} of {} triangles at zero error",
-            s.triangles(),
-            mesh.triangles()
-        );
-        assert_within(name, &mesh, &s, 0.0, 1e-5 * tree.bounds.height());
-        // Nonsense budgets count as zero.
-        for bad in [-1.0, f32::NAN] {
-            let (t, e) = mesh.simplify(bad);
-            assert_same(&s, &t);
-            assert_eq!(e.to_bits(), err.to_bits());
-        }
-    }
+fn simplify_with_no_error_keeps_the_mesh_of_bush_1() {
+    check_no_error("bush_1.glb", &bush());
+}
+
+#[test]
+fn simplify_with_no_error_keeps_the_mesh_of_oak_medium() {
+    let path = frond_testdata::require_tree!("oak_medium.glb");
+    check_no_error("oak_medium.glb", &load(&path));
 }
 
 #[test]
@@ -437,7 +467,7 @@ fn simplify_a_generated_tree() {
 
 #[test]
 fn simplified_again_stays_a_subset() {
-    let tree = load("bush_1.glb");
+    let tree = bush();
     let mesh = WoodMesh::from_tree(&tree);
     let e = 0.01 * tree.bounds.height();
     let (once, _) = mesh.simplify(e);
@@ -451,7 +481,7 @@ fn simplified_again_stays_a_subset() {
 /// second material keeps its own triangles.
 #[test]
 fn simplify_keeps_materials_apart() {
-    let tree = load("oak_medium.glb");
+    let tree = bush();
     let mut mesh = WoodMesh::from_tree(&tree);
     // Split the single wood primitive in two materials, alternating triangles.
     let p = mesh.primitives.remove(0);
@@ -486,13 +516,14 @@ fn simplify_keeps_materials_apart() {
 #[test]
 #[ignore]
 fn report_numbers() {
-    for name in [
+    let names = [
         "bush_1.glb",
         "pine_medium.glb",
         "oak_medium.glb",
         "oak_dense.glb",
-    ] {
-        let tree = load(name);
+    ];
+    for (name, path) in names.iter().zip(frond_testdata::require_trees!(names)) {
+        let tree = load(&path);
         let h = tree.bounds.height();
         let t0 = Instant::now();
         let mesh = WoodMesh::from_tree(&tree);
@@ -529,7 +560,7 @@ fn report_numbers() {
 #[test]
 #[ignore]
 fn time_oak_dense() {
-    let tree = load("oak_dense.glb");
+    let tree = load(&frond_testdata::require_tree!("oak_dense.glb"));
     let mesh = WoodMesh::from_tree(&tree);
     for frac in [0.001, 0.01, 0.05] {
         let e = frac * tree.bounds.height();

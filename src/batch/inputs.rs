@@ -4,6 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
+use frond_scene::InputLimits;
+use frond_scene::input_file::{read_regular_file, resolve_uri};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
@@ -338,16 +340,20 @@ fn read_manifest(path: &Path) -> Result<Vec<TreeInput>> {
 }
 
 /// SHA-256 (hex) of a tree's input: the file, and for a `.gltf` the external buffers and images
-/// it references (so a changed `.bin` rebuilds the tree). A reference that cannot be read is
-/// hashed as missing; the import reports it.
-pub fn input_hash(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
+/// it references (so a changed `.bin` rebuilds the tree). Every file is read by the importer's
+/// own rules ([`frond_scene::input_file`]: regular files inside the input's folder, within
+/// `limits`), so a URI the import would refuse is never opened here either: a FIFO, a device or
+/// `../../etc/passwd` is hashed as its refusal and the tree's import then fails saying why.
+pub fn input_hash(path: &Path, limits: &InputLimits) -> Result<String> {
+    let bytes = read_regular_file(path, limits.max_input_bytes)
+        .map_err(|r| anyhow::anyhow!("{}: {r}", path.display()))?;
     let mut hasher = Sha256::new();
     hasher.update(&bytes);
     if has_extension(path, "gltf")
         && let Ok(doc) = serde_json::from_slice::<serde_json::Value>(&bytes)
     {
         let dir = path.parent().unwrap_or(Path::new("."));
+        let mut total = bytes.len() as u64;
         for key in ["buffers", "images"] {
             let uris = doc[key].as_array().into_iter().flatten();
             for uri in uris.filter_map(|b| b["uri"].as_str()) {
@@ -355,12 +361,17 @@ pub fn input_hash(path: &Path) -> Result<String> {
                     continue;
                 }
                 hasher.update(uri.as_bytes());
-                match std::fs::read(dir.join(frond_scene::gltf_source::percent_decode(uri))) {
-                    Ok(b) => {
+                let read = resolve_uri(dir, uri)
+                    .ok()
+                    .and_then(|full| read_regular_file(&full, limits.max_input_bytes).ok());
+                match read {
+                    Some(b) if total.saturating_add(b.len() as u64) <= limits.max_input_bytes => {
+                        total += b.len() as u64;
                         hasher.update((b.len() as u64).to_le_bytes());
                         hasher.update(&b);
                     }
-                    Err(_) => hasher.update(b"<missing>"),
+                    Some(_) => hasher.update(b"<over the input size limit>"),
+                    None => hasher.update(b"<refused or missing>"),
                 }
             }
         }
@@ -462,11 +473,11 @@ mod tests {
         let g = dir.path().join("t.gltf");
         std::fs::write(&g, br#"{"buffers":[{"uri":"t%20b.bin","byteLength":1}]}"#).unwrap();
         std::fs::write(dir.path().join("t b.bin"), b"1").unwrap();
-        let h1 = input_hash(&g).unwrap();
+        let h1 = input_hash(&g, &InputLimits::default()).unwrap();
         std::fs::write(dir.path().join("t b.bin"), b"2").unwrap();
-        let h2 = input_hash(&g).unwrap();
+        let h2 = input_hash(&g, &InputLimits::default()).unwrap();
         assert_ne!(h1, h2);
-        assert_eq!(h2, input_hash(&g).unwrap());
+        assert_eq!(h2, input_hash(&g, &InputLimits::default()).unwrap());
         assert_eq!(h1.len(), 64);
     }
 }

@@ -9,6 +9,9 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result};
 use sha2::{Digest, Sha256};
 
+use frond_scene::InputLimits;
+use frond_scene::input_file::{MAX_INPUT_OPTION, MAX_TEXTURE_OPTION, MAX_VERTICES_OPTION};
+
 use super::inputs::{Overrides, TreeInput, hex, input_hash};
 use super::preset::EnginePreset;
 use super::summary::{FileEntry, LodLine, Status, TreeEntry};
@@ -18,7 +21,10 @@ use crate::output::write_atomic;
 /// Name of each tree's stamp, written last into its output folder.
 pub const STAMP: &str = "batch.json";
 /// `frond lod`'s report in each output folder.
-pub const REPORT: &str = "report.json";
+/// `frond lod`'s report of the tree read from `input` (`<name>_report.json`).
+pub fn report_file(input: &Path) -> String {
+    crate::lod_cmd::report_name(&crate::lod_cmd::name_of(input))
+}
 /// Private folder under OUTDIR for outputs being written.
 pub const TMP_DIR: &str = ".frond-tmp";
 /// Folder under OUTDIR with each tree's last `frond lod`/`frond eval` logs.
@@ -40,6 +46,8 @@ pub struct TreeContext {
     pub timeout: Duration,
     /// `RAYON_NUM_THREADS` of each child.
     pub threads: usize,
+    /// What reading an input may cost: used to hash the inputs, and passed to every child.
+    pub limits: InputLimits,
 }
 
 /// The `frond lod` arguments (input and output aside) of a tree with `o` as its settings.
@@ -67,7 +75,7 @@ pub fn lod_args(ctx: &TreeContext, o: &Overrides) -> Result<Vec<String>> {
     opt("--pixel-error", o.pixel_error.map(|p| p.to_string()));
     opt("--clouds", o.clouds.map(|c| c.to_string()));
     opt("--clusters", o.clusters.map(|c| c.to_string()));
-    a.extend(reading_args(o));
+    a.extend(reading_args(ctx, o));
     a.extend(ctx.build_args.iter().cloned());
     if let Some(p) = &ctx.preset {
         a.extend(p.lod_args(&animation)?);
@@ -76,9 +84,10 @@ pub fn lod_args(ctx: &TreeContext, o: &Overrides) -> Result<Vec<String>> {
 }
 
 /// How a tree is read and sampled, as arguments both `frond lod` and `frond eval` take:
-/// samples, clip, foliage and wood materials.
-fn reading_args(o: &Overrides) -> Vec<String> {
-    let mut a = Vec::new();
+/// samples, clip, foliage and wood materials, input limits (when not the defaults, so the
+/// parameter hash of a default run stays as it was).
+fn reading_args(ctx: &TreeContext, o: &Overrides) -> Vec<String> {
+    let mut a = limit_args(&ctx.limits);
     if let Some(s) = o.samples {
         a.extend(["--samples".to_string(), s.to_string()]);
     }
@@ -90,6 +99,32 @@ fn reading_args(o: &Overrides) -> Vec<String> {
     }
     for m in o.wood_material.iter().flatten() {
         a.extend(["--wood-material".to_string(), m.clone()]);
+    }
+    a
+}
+
+/// `--max-input-size` / `--max-texture-memory` / `--max-vertices` as arguments, each only when
+/// not the default.
+pub fn limit_args(limits: &InputLimits) -> Vec<String> {
+    let defaults = InputLimits::default();
+    let mut a = Vec::new();
+    if limits.max_input_bytes != defaults.max_input_bytes {
+        a.extend([
+            MAX_INPUT_OPTION.to_string(),
+            limits.max_input_bytes.to_string(),
+        ]);
+    }
+    if limits.max_texture_bytes != defaults.max_texture_bytes {
+        a.extend([
+            MAX_TEXTURE_OPTION.to_string(),
+            limits.max_texture_bytes.to_string(),
+        ]);
+    }
+    if limits.max_vertices != defaults.max_vertices {
+        a.extend([
+            MAX_VERTICES_OPTION.to_string(),
+            limits.max_vertices.to_string(),
+        ]);
     }
     a
 }
@@ -143,10 +178,10 @@ pub fn process(ctx: &TreeContext, tree: &TreeInput) -> TreeEntry {
 }
 
 /// The stamp of a complete earlier output with the same input and parameters.
-fn up_to_date(dir: &Path, input_hash: &str, params_hash: &str) -> Option<TreeEntry> {
+fn up_to_date(dir: &Path, report: &str, input_hash: &str, params_hash: &str) -> Option<TreeEntry> {
     let stamp: TreeEntry = serde_json::from_slice(&std::fs::read(dir.join(STAMP)).ok()?).ok()?;
     let same = stamp.input_hash.as_deref() == Some(input_hash) && stamp.params_hash == params_hash;
-    let complete = dir.join(REPORT).is_file()
+    let complete = dir.join(report).is_file()
         && stamp.files.iter().all(|f| {
             std::fs::metadata(dir.join(&f.name)).is_ok_and(|m| m.is_file() && m.len() == f.bytes)
         });
@@ -160,13 +195,14 @@ fn build(
     args: &[String],
     entry: &mut TreeEntry,
 ) -> Result<Status> {
-    let hash = input_hash(&tree.path)?;
+    let hash = input_hash(&tree.path, &ctx.limits)?;
     entry.input_hash = Some(hash.clone());
     let final_dir = ctx.out_dir.join(&tree.output);
     let key = tmp_key(&tree.output);
     let tmp_root = ctx.out_dir.join(TMP_DIR);
     clear_leftovers(&tmp_root, &key);
-    if let Some(stamp) = up_to_date(&final_dir, &hash, &entry.params_hash) {
+    let report = report_file(&tree.path);
+    if let Some(stamp) = up_to_date(&final_dir, &report, &hash, &entry.params_hash) {
         // Named as the tree is now (a manifest may have moved its input).
         *entry = TreeEntry {
             status: Status::UpToDate,
@@ -237,12 +273,13 @@ fn build_into(
     entry.peak_rss_bytes = run.peak_rss;
     check_end(run.end, "lod")?;
 
-    let report_path = tmp.join(REPORT);
+    let report_name = report_file(&tree.path);
+    let report_path = tmp.join(&report_name);
     let report: serde_json::Value = serde_json::from_slice(
         &std::fs::read(&report_path)
             .with_context(|| format!("{}: frond lod wrote no report", report_path.display()))?,
     )
-    .context("frond lod's report.json is not JSON")?;
+    .with_context(|| format!("frond lod's {report_name} is not JSON"))?;
     for (k, v) in report["timings_s"].as_object().into_iter().flatten() {
         if let Some(v) = v.as_f64() {
             entry.times_s.insert(k.clone(), v);
@@ -264,7 +301,7 @@ fn build_into(
 
     if ctx.eval {
         let t0 = Instant::now();
-        let reading = reading_args(settings);
+        let reading = reading_args(ctx, settings);
         for (k, l) in entry.lods.iter_mut().enumerate() {
             let Some(h) = l.screen_height else { continue };
             let mut eval = vec![
@@ -306,10 +343,10 @@ fn build_into(
             .insert("eval".into(), t0.elapsed().as_secs_f64());
     }
 
-    // report.json's size follows its timing fields: listed apart, checked for presence.
+    // The report's size follows its timing fields: listed apart, checked for presence.
     entry.files = list_files(tmp)?
         .into_iter()
-        .filter(|f| f.name != REPORT)
+        .filter(|f| f.name != report_name)
         .collect();
     entry.output_bytes = entry.files.iter().map(|f| f.bytes).sum();
     if let Some(p) = &ctx.preset {

@@ -46,7 +46,7 @@ pub struct SweepRequest {
     /// Wall-clock limit of one `lod` child (the evaluation runs in the sweep's process, which
     /// renders the original once per image size for every run).
     pub timeout: Duration,
-    /// Keep every run's LOD files (otherwise only report.json, eval.json and the logs stay).
+    /// Keep every run's LOD files (otherwise only the report, eval.json and the logs stay).
     pub keep: bool,
     /// Rest-pose bounding-box diagonal of the input, for ε in %.
     pub diagonal: f32,
@@ -305,7 +305,7 @@ fn lod_run(
     }
     args.extend(req.lod_args.iter().cloned());
     let end = run_job(&req.exe, &args, dir, "lod", req.timeout)?;
-    let report_path = dir.join("lod").join("report.json");
+    let report_path = dir.join("lod").join(crate::lod_cmd::report_name(tree_name));
     let report: Result<Value, String> = match end {
         JobEnd::Done => std::fs::read(&report_path)
             .ok()
@@ -337,7 +337,10 @@ fn prune_run(lod_dir: &Path) -> Result<()> {
         .with_context(|| format!("{}: cannot list", lod_dir.display()))?;
     for e in entries.flatten() {
         let path = e.path();
-        if path.file_name().is_some_and(|n| n == "report.json") {
+        if path
+            .file_name()
+            .is_some_and(|n| n.to_string_lossy().ends_with("_report.json"))
+        {
             continue;
         }
         let r = if path.is_dir() {

@@ -1,6 +1,11 @@
 //! Helpers shared by the end-to-end tests: paths to the shared trees, running the CLI, and the
 //! real glTF clients (Khronos validator, gltfpack) installed into `tools/node_modules`.
-#![allow(dead_code)]
+//!
+//! The large shared trees are found through `frond_testdata` (`FROND_TEST_TREES`); a test that
+//! needs one starts with `frond_testdata::require_tree!`, which skips it with one line when the
+//! tree is absent. Fixtures that travel with the repository: [`fixture`], `samples/`.
+
+pub mod gltf_cases;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -11,16 +16,22 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// `../shared/data/trees/<name>`.
+/// `<name>` in the shared trees' folder (`$FROND_TEST_TREES`, default `../shared/data/trees`),
+/// whether or not it is there: tests check with `frond_testdata::require_tree!` first.
 pub fn shared_tree(name: &str) -> PathBuf {
-    root().join("../shared/data/trees").join(name)
+    frond_testdata::trees_dir().join(name)
 }
 
-/// The shared MANIFEST.json.
+/// The shared MANIFEST.json (tests check with `require_tree!("MANIFEST.json")` first).
 pub fn manifest() -> serde_json::Value {
     let text = std::fs::read_to_string(shared_tree("MANIFEST.json"))
         .expect("shared MANIFEST.json is readable");
     serde_json::from_str(&text).expect("MANIFEST.json is JSON")
+}
+
+/// `tests/fixtures/<name>`: a small tree committed with the repository.
+pub fn fixture(name: &str) -> PathBuf {
+    frond_testdata::fixture(name)
 }
 
 /// Runs the `frond` binary.
@@ -44,7 +55,7 @@ pub fn frond_ok(args: &[&str]) -> Output {
 }
 
 /// Runs `frond lod INPUT -o OUT` with small test settings (16 samples, 60 candidate planes)
-/// plus `extra`, asserts it succeeded and returns its report.json.
+/// plus `extra`, asserts it succeeded and returns its report (`<input stem>_report.json`).
 pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
     let mut args = vec![
         "lod",
@@ -58,7 +69,12 @@ pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value 
     ];
     args.extend_from_slice(extra);
     frond_ok(&args);
-    serde_json::from_slice(&std::fs::read(out.join("report.json")).expect("report.json"))
+    let stem = input
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .expect("utf-8 stem");
+    let report = out.join(format!("{stem}_report.json"));
+    serde_json::from_slice(&std::fs::read(&report).expect("the lod report"))
         .expect("report is JSON")
 }
 
@@ -113,3 +129,27 @@ pub fn validate(file: &Path) -> serde_json::Value {
         )
     })
 }
+
+// Each test binary compiles this module on its own (`mod common;`) and uses only some of the
+// helpers, and the dead_code lint runs per binary. Instead of a lint exception (a bare `allow`
+// is against house rules, and `#![expect(dead_code)]` fails in any binary that happens to use
+// every helper), this unnamed constant names each helper once: rustc's dead-code pass treats
+// `const _` items as always used, so whatever they name is used too. A new helper (here or in
+// a submodule) goes in this list.
+const _: () = {
+    let _ = (
+        root,
+        shared_tree,
+        manifest,
+        fixture,
+        frond,
+        frond_ok,
+        frond_lod,
+        node_tools,
+        validate,
+        gltf_cases::triangle_gltf,
+        gltf_cases::triangle_bin,
+        gltf_cases::GOOD,
+        gltf_cases::write_case,
+    );
+};

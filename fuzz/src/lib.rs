@@ -1,0 +1,170 @@
+//! Shared code of frond's cargo-fuzz targets: the harness that imports and samples one input,
+//! GLB splitting, and the structure-aware mutator (`mutator`) used by `import_structured`.
+
+pub mod mutator;
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use frond_scene::gltf_writer::{encode_png, glb_container};
+use frond_scene::{ImportOptions, SampleOptions, SceneError, import_bytes, sample};
+
+/// Trees with more vertices than this are imported but not sampled (sampling is
+/// samples × vertices; the importer's own bounds are what is under test).
+const MAX_SAMPLED_VERTICES: usize = 1 << 20;
+/// Upper bound on samples × (vertices + bones) per sampled clip.
+const SAMPLE_WORK: usize = 1 << 22;
+
+struct Env {
+    /// The path every input is imported as: a file in a folder of small external resources
+    /// (`buffer.bin`, `image.png`, `sub/inner.bin`, `escape.bin` → a file outside), so that
+    /// relative URIs resolve to something, deterministically, and never to the fuzzer's cwd.
+    path: PathBuf,
+}
+
+fn env() -> &'static Env {
+    static ENV: OnceLock<Env> = OnceLock::new();
+    ENV.get_or_init(|| {
+        // One rayon worker: the importer and sampler use rayon, and the fuzzer must stay on
+        // one core (and a fork-mode child must not multiply threads).
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build_global();
+        let dir = std::env::temp_dir().join("frond-fuzz-ext");
+        let _ = std::fs::create_dir_all(dir.join("sub"));
+        let write = |name: &str, bytes: &[u8]| {
+            let p = dir.join(name);
+            if std::fs::metadata(&p).map(|m| m.len() as usize).ok() != Some(bytes.len()) {
+                let tmp = dir.join(format!(".{name}.{}", std::process::id()).replace('/', "_"));
+                if std::fs::write(&tmp, bytes).is_ok() {
+                    let _ = std::fs::rename(&tmp, &p);
+                }
+            }
+        };
+        let pattern: Vec<u8> = (0..4096u32)
+            .flat_map(|i| ((i % 97) as f32 * 0.25).to_le_bytes())
+            .take(4096)
+            .collect();
+        write("buffer.bin", &pattern);
+        write("sub/inner.bin", &pattern[..256]);
+        write("image.png", &tiny_png(4, 4, 7));
+        #[cfg(unix)]
+        {
+            let link = dir.join("escape.bin");
+            if std::fs::symlink_metadata(&link).is_err() {
+                let _ = std::os::unix::fs::symlink("/etc/hostname", &link);
+            }
+        }
+        Env {
+            path: dir.join("fuzz.glb"),
+        }
+    })
+}
+
+/// A small RGBA PNG with a deterministic pattern (alpha varies, so it looks like a leaf card).
+pub fn tiny_png(w: u32, h: u32, seed: u32) -> Vec<u8> {
+    let rgba: Vec<u8> = (0..w * h)
+        .flat_map(|i| {
+            let v = i.wrapping_mul(2654435761).wrapping_add(seed);
+            [
+                (v >> 8) as u8,
+                0x80 | (v >> 16) as u8,
+                (v >> 24) as u8,
+                if i % 3 == 0 { 0 } else { 255 },
+            ]
+        })
+        .collect();
+    encode_png(w, h, &rgba).unwrap_or_default()
+}
+
+fn check_error(e: &SceneError, path: &Path) {
+    let msg = e.to_string();
+    assert!(
+        msg.starts_with(&format!("{}: ", path.display())),
+        "error does not name the file: {msg}"
+    );
+}
+
+/// Imports `bytes`; on success samples up to two clips with a bounded number of samples.
+/// Panics (a fuzzer crash) only when the library panics or breaks a documented contract.
+pub fn import_and_sample(bytes: &[u8]) {
+    let path = env().path.as_path();
+    let options = ImportOptions {
+        allow_empty: true,
+        ..ImportOptions::default()
+    };
+    let tree = match import_bytes(path, bytes, &options) {
+        Ok(tree) => tree,
+        Err(e) => {
+            check_error(&e, path);
+            return;
+        }
+    };
+    if tree.triangles.is_empty() {
+        // The refusing path too (empty trees are an error by default).
+        if let Err(e) = import_bytes(path, bytes, &ImportOptions::default()) {
+            check_error(&e, path);
+        }
+    }
+    let nv = tree.vertices.len();
+    if nv > MAX_SAMPLED_VERTICES {
+        return;
+    }
+    let samples = (SAMPLE_WORK / (nv + tree.bones.len() + 1)).clamp(1, 3);
+    let mut clips: Vec<Option<String>> = vec![None];
+    clips.extend(
+        tree.clips
+            .iter()
+            .skip(1)
+            .take(1)
+            .map(|c| Some(c.name.clone())),
+    );
+    for clip in clips {
+        match sample(
+            &tree,
+            &SampleOptions {
+                clip: clip.clone(),
+                samples,
+            },
+        ) {
+            Ok(s) => {
+                assert_eq!(s.positions.len(), s.times.len() * nv, "positions layout");
+                assert_eq!(
+                    s.centres.len(),
+                    s.foliage.len() * s.times.len(),
+                    "centres layout"
+                );
+                assert_eq!(s.average.len(), nv, "average layout");
+            }
+            Err(e) => {
+                check_error(&e, path);
+            }
+        }
+    }
+}
+
+/// Splits a GLB into its JSON chunk and (if present) its BIN chunk; None if the container
+/// header or the JSON chunk header is malformed.
+pub fn split_glb(bytes: &[u8]) -> Option<(Vec<u8>, Option<Vec<u8>>)> {
+    let u32_at = |i: usize| -> Option<usize> {
+        Some(u32::from_le_bytes(bytes.get(i..i + 4)?.try_into().ok()?) as usize)
+    };
+    if !bytes.starts_with(b"glTF") || bytes.get(16..20)? != b"JSON" {
+        return None;
+    }
+    let jl = u32_at(12)?;
+    let json = bytes.get(20..20usize.checked_add(jl)?)?.to_vec();
+    let rest = &bytes[20 + jl..];
+    let bin = if rest.len() >= 8 && &rest[4..8] == b"BIN\0" {
+        let bl = u32::from_le_bytes(rest[0..4].try_into().ok()?) as usize;
+        Some(rest[8..8 + bl.min(rest.len() - 8)].to_vec())
+    } else {
+        None
+    };
+    Some((json, bin))
+}
+
+/// A GLB of `json` and `bin` (no BIN chunk when `bin` is None or empty).
+pub fn join_glb(json: &[u8], bin: Option<&[u8]>) -> Vec<u8> {
+    glb_container(json, bin.unwrap_or(&[]))
+}

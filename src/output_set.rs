@@ -1,0 +1,575 @@
+//! Output sets: every file one `frond lod` (or `frond cloud`) run writes for one tree, installed
+//! into the output folder as a whole, so that a killed, failed or disk-full run never leaves a
+//! partial or mixed set.
+//!
+//! How (the rule tested in `tests/output_set.rs`: after a kill at any point, the folder holds the
+//! complete old set or the complete new set, plus files frond never wrote, untouched):
+//!
+//! 1. [`OutputSet::prepare`], before any work: refuses an output folder that is a system root or
+//!    is the input file; creates the folder if needed and a staging folder
+//!    `.frond-staging-<name>%<pid>` inside it (so an unwritable folder fails now, not after the
+//!    build); finishes or clears what an earlier, killed run of the same tree left (see 4);
+//!    refuses to start while another live run stages the same tree there.
+//! 2. [`OutputSet::stage`]: each file is written into the staging folder. A failure (disk full)
+//!    removes the staging folder: the old set was never touched.
+//! 3. [`OutputSet::commit`]: the report is staged last, then the journal
+//!    (`frond-commit.json`: the files to install and the old files to remove) is written
+//!    atomically. That rename is the commit point. Installing then: the old report is removed
+//!    first (a folder whose report is missing is mid-install), then the old set's files that the
+//!    new set does not have, then each new file is renamed into place (same file system, so each
+//!    rename is atomic), the report last. A reader that trusts the report never sees a mix.
+//! 4. A run killed after the commit point leaves the journal: the next run of that tree into that
+//!    folder rolls it forward before it starts (the renames are idempotent). A run killed before
+//!    it leaves a staging folder without a journal, which the next run deletes; the old set was
+//!    never touched.
+//!
+//! Ownership: a file belongs to this tree's previous set when that set's report
+//! (`<name>_report.json`, or `report.json` of frond before 0.2 with the same `name`) lists it.
+//! A file in the way that no report of this tree lists is never replaced: the run is refused,
+//! naming it. Files listed by another tree's report in the same folder (the reference shaders
+//! under `shaders/`, identical for every tree) may be replaced by the same bytes but are never
+//! deleted while that report lists them.
+//!
+//! Fault injection for the tests: `FROND_FAULT=abort-after:K` aborts the process (as `kill -9`
+//! would: no destructor runs) after the K-th file operation of the set (stage, journal, removal or
+//! rename, counted from 1), `FROND_FAULT=fail-after:K` makes the next one fail as a full disk
+//! would.
+
+use std::collections::BTreeSet;
+use std::io::Write;
+use std::path::{Component, Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use serde::{Deserialize, Serialize};
+
+/// Prefix of staging folders inside an output folder.
+pub const STAGING_PREFIX: &str = ".frond-staging-";
+/// The journal that marks a staged set as committed.
+const JOURNAL: &str = "frond-commit.json";
+
+/// Folders an output set is never written into (a typo such as `-o /` would otherwise fill
+/// them).
+const SYSTEM_ROOTS: &[&str] = &[
+    "/", "/bin", "/boot", "/dev", "/etc", "/lib", "/lib32", "/lib64", "/proc", "/root", "/run",
+    "/sbin", "/sys", "/usr", "/var",
+];
+
+/// What `FROND_FAULT` asks for (tests only; see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Fault {
+    None,
+    AbortAfter(usize),
+    FailAfter(usize),
+}
+
+impl Fault {
+    fn from_env() -> Fault {
+        let Ok(v) = std::env::var("FROND_FAULT") else {
+            return Fault::None;
+        };
+        let parse = |s: &str| s.trim().parse::<usize>().ok();
+        if let Some(k) = v.strip_prefix("abort-after:").and_then(parse) {
+            Fault::AbortAfter(k)
+        } else if let Some(k) = v.strip_prefix("fail-after:").and_then(parse) {
+            Fault::FailAfter(k)
+        } else {
+            tracing::warn!("FROND_FAULT={v} not understood (abort-after:K or fail-after:K)");
+            Fault::None
+        }
+    }
+}
+
+/// The journal: what installing a committed set does.
+#[derive(Serialize, Deserialize, Debug)]
+struct Journal {
+    /// Files to rename from the staging folder into the output folder, the report last.
+    install: Vec<String>,
+    /// Old files to delete first (the old report first).
+    remove: Vec<String>,
+}
+
+/// The files of one tree's run, staged and then installed together (see the module doc).
+pub struct OutputSet {
+    dir: PathBuf,
+    name: String,
+    report: String,
+    staging: PathBuf,
+    staged: Vec<String>,
+    created: Option<PathBuf>,
+    done: bool,
+    fault: Fault,
+    ops: usize,
+}
+
+impl OutputSet {
+    /// Checks `dir` and opens a staging folder in it for tree `name`, whose report will be
+    /// `report` (a file name inside `dir`). `inputs` are the run's input files: none of them may
+    /// be the folder, and none will be replaced.
+    pub fn prepare(dir: &Path, name: &str, report: &str, inputs: &[&Path]) -> Result<OutputSet> {
+        check_output_folder(dir, inputs)?;
+        let created = create_folder(dir)?;
+        let set = OutputSet {
+            dir: dir.to_path_buf(),
+            name: name.to_string(),
+            report: report.to_string(),
+            staging: dir.join(format!("{STAGING_PREFIX}{name}%{}", std::process::id())),
+            staged: Vec::new(),
+            created,
+            done: false,
+            fault: Fault::from_env(),
+            ops: 0,
+        };
+        set.recover()?;
+        std::fs::create_dir(&set.staging).with_context(|| {
+            format!(
+                "{}: cannot write into the output folder",
+                set.staging.display()
+            )
+        })?;
+        // Another run may have started between the look and the mkdir.
+        if let Some(pid) = set.live_other_run()? {
+            let _ = std::fs::remove_dir_all(&set.staging);
+            bail!(
+                "{}: another frond run (pid {pid}) is writing {name} into this folder",
+                dir.display()
+            );
+        }
+        Ok(set)
+    }
+
+    /// The output folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Refuses now, before any work, if a file the run will write is in the way (see the module
+    /// doc); `names` are relative to the folder. [`OutputSet::commit`] checks every file again.
+    pub fn check_names(&self, names: &[String]) -> Result<()> {
+        let owned = self.owned_files()?;
+        for n in names {
+            self.check_free(n, &owned)?;
+        }
+        Ok(())
+    }
+
+    /// Writes one file of the set (`rel`: a relative name, `shaders/x.wgsl` allowed) into the
+    /// staging folder.
+    pub fn stage(&mut self, rel: &str, bytes: &[u8]) -> Result<()> {
+        let rel = checked_relative(rel)?;
+        if self.staged.contains(&rel) {
+            bail!("{rel}: written twice in one output set");
+        }
+        self.step()?;
+        let path = self.staging.join(&rel);
+        let result = (|| -> std::io::Result<()> {
+            if let Some(parent) = path.parent() {
+                std::fs::create_dir_all(parent)?;
+            }
+            let mut f = std::fs::File::create(&path)?;
+            f.write_all(bytes)?;
+            f.sync_all()
+        })();
+        result.with_context(|| format!("{}: cannot write", self.dir.join(&rel).display()))?;
+        self.staged.push(rel);
+        Ok(())
+    }
+
+    /// The relative names staged so far, in order.
+    pub fn staged(&self) -> &[String] {
+        &self.staged
+    }
+
+    /// Stages the report (`report_bytes`, the set's last file) and installs the whole set.
+    pub fn commit(mut self, report_bytes: &[u8]) -> Result<()> {
+        let report = self.report.clone();
+        self.stage(&report, report_bytes)?;
+        let owned = self.owned_files()?;
+        for n in &self.staged {
+            self.check_free(n, &owned)?;
+        }
+        let shared = self.files_of_other_reports()?;
+        let new: BTreeSet<&String> = self.staged.iter().collect();
+        let mut remove: Vec<String> = Vec::new();
+        // The old report goes first: from then on the folder says it is mid-install.
+        if let Some(old) = &owned.report {
+            remove.push(old.clone());
+        }
+        for f in &owned.files {
+            if !new.contains(f) && !shared.contains(f) && !remove.contains(f) {
+                remove.push(f.clone());
+            }
+        }
+        // The report was staged last, so it is installed last.
+        let journal = Journal {
+            install: self.staged.clone(),
+            remove,
+        };
+        self.step()?;
+        let text = serde_json::to_vec_pretty(&journal).context("serialising the journal")?;
+        let tmp = self.staging.join(format!("{JOURNAL}.tmp"));
+        (|| -> std::io::Result<()> {
+            let mut f = std::fs::File::create(&tmp)?;
+            f.write_all(&text)?;
+            f.sync_all()?;
+            std::fs::rename(&tmp, self.staging.join(JOURNAL))?;
+            sync_dir(&self.staging)
+        })()
+        .with_context(|| format!("{}: cannot write the journal", self.staging.display()))?;
+        // Committed: from here a failure is finished by the next run, not undone.
+        self.done = true;
+        let (dir, staging) = (self.dir.clone(), self.staging.clone());
+        install(&dir, &staging, &journal, &mut || self.step())
+    }
+
+    /// Counts one file operation and applies `FROND_FAULT`.
+    fn step(&mut self) -> Result<()> {
+        self.ops += 1;
+        match self.fault {
+            Fault::AbortAfter(k) if self.ops > k => std::process::abort(),
+            Fault::FailAfter(k) if self.ops > k => {
+                bail!(
+                    "{}: no space left on device (FROND_FAULT)",
+                    self.dir.display()
+                )
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Finishes or clears what killed runs of this tree left in the folder; refuses when a live
+    /// run is staging it.
+    fn recover(&self) -> Result<()> {
+        if let Some(pid) = self.live_other_run()? {
+            bail!(
+                "{}: another frond run (pid {pid}) is writing {} into this folder",
+                self.dir.display(),
+                self.name
+            );
+        }
+        for (path, _) in self.stagings()? {
+            if path == self.staging {
+                continue;
+            }
+            let journal = path.join(JOURNAL);
+            if journal.is_file() {
+                let text = std::fs::read(&journal)
+                    .with_context(|| format!("{}: cannot read", journal.display()))?;
+                let j: Journal = serde_json::from_slice(&text)
+                    .with_context(|| format!("{}: not a frond journal", journal.display()))?;
+                tracing::warn!(
+                    "{}: finishing the install of a run that was killed",
+                    self.dir.display()
+                );
+                install(&self.dir, &path, &j, &mut || Ok(()))?;
+            } else {
+                tracing::info!("{}: removing a killed run's staging", path.display());
+                std::fs::remove_dir_all(&path)
+                    .with_context(|| format!("{}: cannot remove", path.display()))?;
+            }
+        }
+        self.remove_stale_temp_files();
+        Ok(())
+    }
+
+    /// `.<file>.tmp-<pid>` files of older frond versions' per-file writes, for this tree, whose
+    /// process is gone.
+    fn remove_stale_temp_files(&self) {
+        let Ok(entries) = std::fs::read_dir(&self.dir) else {
+            return;
+        };
+        let prefix = format!(".{}_", self.name);
+        for e in entries.flatten() {
+            let file = e.file_name().to_string_lossy().into_owned();
+            let Some((stem, pid)) = file.rsplit_once(".tmp-") else {
+                continue;
+            };
+            let ours = stem.starts_with(&prefix) || stem == ".report.json";
+            if ours && pid.parse::<u32>().is_ok_and(|p| !process_alive(p)) {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+
+    /// Staging folders of this tree in the folder, with their pid.
+    fn stagings(&self) -> Result<Vec<(PathBuf, u32)>> {
+        let prefix = format!("{STAGING_PREFIX}{}%", self.name);
+        let mut out = Vec::new();
+        let entries = std::fs::read_dir(&self.dir)
+            .with_context(|| format!("{}: cannot list", self.dir.display()))?;
+        for e in entries.flatten() {
+            let file = e.file_name().to_string_lossy().into_owned();
+            if let Some(pid) = file.strip_prefix(&prefix).and_then(|p| p.parse().ok()) {
+                out.push((e.path(), pid));
+            }
+        }
+        out.sort();
+        Ok(out)
+    }
+
+    /// The pid of another live frond run staging this tree here.
+    fn live_other_run(&self) -> Result<Option<u32>> {
+        let me = std::process::id();
+        Ok(self
+            .stagings()?
+            .into_iter()
+            .map(|(_, pid)| pid)
+            .find(|&pid| pid != me && process_alive(pid)))
+    }
+
+    /// This tree's previous set: its report and the files it lists.
+    fn owned_files(&self) -> Result<Owned> {
+        let current = self.dir.join(&self.report);
+        if current.is_file() {
+            return Ok(Owned {
+                report: Some(self.report.clone()),
+                files: listed_files(&current, &self.dir)?,
+            });
+        }
+        // frond before 0.2 wrote `report.json`; adopt its set when it is this tree's.
+        let legacy = self.dir.join("report.json");
+        if legacy.is_file()
+            && let Ok(text) = std::fs::read(&legacy)
+            && let Ok(v) = serde_json::from_slice::<serde_json::Value>(&text)
+            && v["name"].as_str() == Some(self.name.as_str())
+        {
+            return Ok(Owned {
+                report: Some("report.json".into()),
+                files: listed_files(&legacy, &self.dir)?,
+            });
+        }
+        Ok(Owned::default())
+    }
+
+    /// Files listed by the reports of other trees in the folder (shared reference shaders).
+    fn files_of_other_reports(&self) -> Result<BTreeSet<String>> {
+        let mut out = BTreeSet::new();
+        let entries = std::fs::read_dir(&self.dir)
+            .with_context(|| format!("{}: cannot list", self.dir.display()))?;
+        for e in entries.flatten() {
+            let file = e.file_name().to_string_lossy().into_owned();
+            if file != self.report
+                && (file.ends_with("_report.json") || file.ends_with("_cloud_stats.json"))
+            {
+                out.extend(listed_files(&e.path(), &self.dir).unwrap_or_default());
+            }
+        }
+        Ok(out)
+    }
+
+    /// Refuses when `rel` exists in the folder and is not this tree's, nor a shared file.
+    fn check_free(&self, rel: &str, owned: &Owned) -> Result<()> {
+        let path = self.dir.join(rel);
+        if std::fs::symlink_metadata(&path).is_err() {
+            return Ok(());
+        }
+        let ours = owned.files.iter().any(|f| f == rel) || owned.report.as_deref() == Some(rel);
+        if ours || self.files_of_other_reports()?.contains(rel) {
+            if !path.is_file() {
+                bail!(
+                    "{}: is in the way and is not a file frond wrote; move it or choose another output folder",
+                    path.display()
+                );
+            }
+            return Ok(());
+        }
+        bail!(
+            "{}: already exists and no frond report of {} in this folder lists it; frond never \
+             replaces a file it did not write (move it or choose another output folder)",
+            path.display(),
+            self.name
+        )
+    }
+}
+
+impl Drop for OutputSet {
+    /// An uncommitted set (an error, a panic) leaves nothing: its staging folder goes, and the
+    /// output folder too when this run created it and it is empty.
+    fn drop(&mut self) {
+        if self.done {
+            return;
+        }
+        let _ = std::fs::remove_dir_all(&self.staging);
+        if let Some(top) = &self.created {
+            // Only empty folders: remove_dir refuses anything else.
+            let mut d = Some(self.dir.as_path());
+            while let Some(p) = d {
+                if std::fs::remove_dir(p).is_err() || p == top {
+                    break;
+                }
+                d = p.parent();
+            }
+        }
+    }
+}
+
+/// A previous set of this tree.
+#[derive(Default)]
+struct Owned {
+    report: Option<String>,
+    files: Vec<String>,
+}
+
+/// Installs a committed set: removals, then renames (the report last), then the journal and
+/// staging folder go. Idempotent, so a killed install is finished by running it again.
+fn install(
+    dir: &Path,
+    staging: &Path,
+    journal: &Journal,
+    step: &mut dyn FnMut() -> Result<()>,
+) -> Result<()> {
+    for rel in &journal.remove {
+        let path = dir.join(rel);
+        // A name the new set also has is removed only while its new file is still staged:
+        // once installed (a killed install being finished), it is the new file.
+        let replaced_already = journal.install.contains(rel) && !staging.join(rel).exists();
+        if !replaced_already && std::fs::symlink_metadata(&path).is_ok() {
+            step()?;
+            std::fs::remove_file(&path)
+                .with_context(|| format!("{}: cannot remove the old file", path.display()))?;
+        }
+        if let Some(parent) = Path::new(rel).parent()
+            && !parent.as_os_str().is_empty()
+        {
+            // An emptied subfolder of the old set (shaders/) goes too; a non-empty one stays.
+            let _ = std::fs::remove_dir(dir.join(parent));
+        }
+    }
+    for rel in &journal.install {
+        let from = staging.join(rel);
+        let to = dir.join(rel);
+        if !from.exists() {
+            // Installed before a kill.
+            continue;
+        }
+        step()?;
+        if let Some(parent) = to.parent() {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("{}: cannot create", parent.display()))?;
+        }
+        std::fs::rename(&from, &to)
+            .with_context(|| format!("{}: cannot move into place", to.display()))?;
+    }
+    sync_dir(dir).with_context(|| format!("{}: cannot sync", dir.display()))?;
+    std::fs::remove_dir_all(staging)
+        .with_context(|| format!("{}: cannot remove", staging.display()))?;
+    Ok(())
+}
+
+/// The files a report lists (`files`), as names relative to `dir`. Older reports list paths
+/// joined to the folder as it was spelt: those are taken by their part below a folder of the
+/// same name, else by file name.
+fn listed_files(report: &Path, dir: &Path) -> Result<Vec<String>> {
+    let text =
+        std::fs::read(report).with_context(|| format!("{}: cannot read", report.display()))?;
+    let v: serde_json::Value = serde_json::from_slice(&text)
+        .with_context(|| format!("{}: not a JSON report", report.display()))?;
+    let mut out = Vec::new();
+    for f in v["files"].as_array().into_iter().flatten() {
+        let Some(f) = f.as_str() else { continue };
+        let p = Path::new(f);
+        let rel = if p.is_relative() && checked_relative(f).is_ok() && !f.contains("..") {
+            Some(f.to_string())
+        } else {
+            p.strip_prefix(dir)
+                .ok()
+                .and_then(|r| r.to_str())
+                .map(str::to_string)
+                .or_else(|| p.file_name().and_then(|n| n.to_str()).map(str::to_string))
+        };
+        if let Some(rel) = rel.filter(|r| checked_relative(r).is_ok()) {
+            out.push(rel);
+        }
+    }
+    // Older reports spelt files as `<out>/x`: a relative `-o out` gives `out/x`; keep what is
+    // really in the folder.
+    let fixed = out
+        .into_iter()
+        .map(|r| {
+            if dir.join(&r).exists() {
+                r
+            } else {
+                Path::new(&r)
+                    .file_name()
+                    .and_then(|n| n.to_str())
+                    .map(str::to_string)
+                    .unwrap_or(r)
+            }
+        })
+        .collect();
+    Ok(fixed)
+}
+
+/// A relative name without `..`, root or prefix.
+fn checked_relative(rel: &str) -> Result<String> {
+    let p = Path::new(rel);
+    if rel.is_empty() || !p.components().all(|c| matches!(c, Component::Normal(_))) {
+        bail!("'{rel}' is not a plain relative file name");
+    }
+    Ok(rel.to_string())
+}
+
+/// Refuses an output folder that is a system root, an existing non-folder, or an input file.
+pub fn check_output_folder(dir: &Path, inputs: &[&Path]) -> Result<()> {
+    let canon = dir.canonicalize().ok();
+    let shown = canon.as_deref().unwrap_or(dir);
+    if let Some(c) = &canon
+        && SYSTEM_ROOTS.iter().any(|r| c == Path::new(r))
+    {
+        bail!(
+            "{}: refusing to write into a system folder; give a folder of your own with -o",
+            shown.display()
+        );
+    }
+    for input in inputs {
+        if let (Some(c), Ok(i)) = (&canon, input.canonicalize())
+            && *c == i
+        {
+            bail!(
+                "{}: -o names the input file; give a folder for the output",
+                dir.display()
+            );
+        }
+    }
+    if let Ok(meta) = std::fs::metadata(dir)
+        && !meta.is_dir()
+    {
+        bail!("{}: -o exists and is not a folder", dir.display());
+    }
+    Ok(())
+}
+
+/// Creates `dir` (and missing parents); returns the topmost folder created, if any.
+fn create_folder(dir: &Path) -> Result<Option<PathBuf>> {
+    let mut top = None;
+    let mut p = Some(dir);
+    while let Some(d) = p {
+        if d.as_os_str().is_empty() || d.exists() {
+            break;
+        }
+        top = Some(d.to_path_buf());
+        p = d.parent();
+    }
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
+    Ok(top)
+}
+
+/// Whether process `pid` is a live frond (signal 0 reaches it, and where `/proc` tells, its
+/// command name says frond: a pid reused by another program does not hold a folder forever).
+fn process_alive(pid: u32) -> bool {
+    let Ok(raw) = i32::try_from(pid) else {
+        return false;
+    };
+    // SAFETY: kill with signal 0 sends nothing; it only checks that the process exists.
+    let r = unsafe { libc::kill(raw, 0) };
+    let exists = r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM);
+    exists
+        && std::fs::read_to_string(format!("/proc/{pid}/comm"))
+            .map(|c| c.contains("frond"))
+            .unwrap_or(true)
+}
+
+/// fsync of a folder, so renames in it survive a power cut.
+fn sync_dir(dir: &Path) -> std::io::Result<()> {
+    std::fs::File::open(dir)?.sync_all()
+}

@@ -1,0 +1,453 @@
+//! Output sets (`src/output_set.rs`): after a kill at any point of `frond lod`'s writing, the
+//! output folder holds the complete old set or the complete new set (plus the user's own files,
+//! untouched); the next run finishes or clears what a killed one left; a failed write (disk
+//! full) leaves the old set; a rerun with fewer LODs removes the old set's extra files; frond
+//! never replaces a file it did not write; bad output folders are refused before any work.
+//!
+//! Kills are deterministic: `FROND_FAULT=abort-after:K` aborts the process after its K-th file
+//! operation, as `kill -9` would (no destructor runs).
+//!
+//! (The file is named `frond_…` so that this test process counts as a live frond run for the
+//! concurrent-run check, which looks at `/proc/<pid>/comm`.)
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use common::*;
+
+const SAMPLE: &str = "samples/sapling.glb";
+
+/// `frond lod` of the sample into `out` with small settings, `FROND_FAULT` as given.
+fn lod(out: &Path, lods: &str, seed: &str, fault: Option<&str>) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_frond"));
+    c.args(["lod", SAMPLE, "-o"])
+        .arg(out)
+        .args([
+            "--samples",
+            "8",
+            "--planes",
+            "30",
+            "--lods",
+            lods,
+            "--seed",
+            seed,
+        ])
+        .current_dir(root())
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .env_remove("FROND_FAULT");
+    if let Some(f) = fault {
+        c.env("FROND_FAULT", f);
+    }
+    c.output().expect("frond runs")
+}
+
+/// Every visible file below `dir` (relative name → bytes); a report without its timings.
+fn visible_files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("list") {
+            let p = e.expect("entry").path();
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            if name.starts_with('.') {
+                continue;
+            }
+            if p.is_dir() {
+                stack.push(p);
+                continue;
+            }
+            let rel = p.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
+            let mut bytes = std::fs::read(&p).expect("read");
+            if rel.ends_with("_report.json") {
+                let mut v: serde_json::Value = serde_json::from_slice(&bytes).expect("json");
+                strip_timings(&mut v);
+                bytes = serde_json::to_vec(&v).unwrap();
+            }
+            out.insert(rel, bytes);
+        }
+    }
+    out
+}
+
+fn strip_timings(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.retain(|k, _| k != "timings_s" && !k.starts_with("t_"));
+            m.values_mut().for_each(strip_timings);
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(strip_timings),
+        _ => {}
+    }
+}
+
+/// Hidden entries frond left in `dir` (staging folders, temporary files).
+fn hidden(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .expect("list")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect()
+}
+
+/// A folder holding `set` plus the user's `notes.txt`.
+fn reset(dir: &Path, set: &BTreeMap<String, Vec<u8>>, raw: &Path) {
+    let _ = std::fs::remove_dir_all(dir);
+    std::fs::create_dir_all(dir).unwrap();
+    // Copy the raw files (reports with their timings) so the folder is what a run left.
+    for rel in set.keys() {
+        let to = dir.join(rel);
+        std::fs::create_dir_all(to.parent().unwrap()).unwrap();
+        std::fs::copy(raw.join(rel), to).unwrap();
+    }
+    std::fs::write(dir.join("notes.txt"), b"the user's own file").unwrap();
+}
+
+/// Asserts two file sets are equal, naming the files that differ (not their bytes).
+#[track_caller]
+fn assert_same(a: &BTreeMap<String, Vec<u8>>, b: &BTreeMap<String, Vec<u8>>, what: &str) {
+    let names = |m: &BTreeMap<String, Vec<u8>>| m.keys().cloned().collect::<Vec<_>>();
+    assert_eq!(names(a), names(b), "{what}: the same files");
+    let differ: Vec<&String> = a.keys().filter(|k| a[*k] != b[*k]).collect();
+    assert!(differ.is_empty(), "{what}: {differ:?} differ");
+}
+
+fn with_notes(set: &BTreeMap<String, Vec<u8>>) -> BTreeMap<String, Vec<u8>> {
+    let mut s = set.clone();
+    s.insert("notes.txt".into(), b"the user's own file".to_vec());
+    s
+}
+
+fn ok(o: &Output) {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn a_kill_at_any_point_leaves_the_old_or_the_new_set() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (ref_old, ref_new) = (tmp.path().join("old"), tmp.path().join("new"));
+    // The old set has three LODs; the new one two, another seed: fewer files, other bytes.
+    ok(&lod(&ref_old, "150,60,30", "1", None));
+    ok(&lod(&ref_new, "150,40", "2", None));
+    let (old, new) = (visible_files(&ref_old), visible_files(&ref_new));
+    assert!(old.contains_key("sapling_LOD3.glb") && !new.contains_key("sapling_LOD3.glb"));
+    assert!(old.contains_key("sapling_report.json"));
+    assert_ne!(old["sapling_LOD1.glb"], new["sapling_LOD1.glb"]);
+    let (old_n, new_n) = (with_notes(&old), with_notes(&new));
+
+    let work = tmp.path().join("work");
+    let mut k = 0;
+    let (mut committed_kills, mut kills_before_commit) = (0, 0);
+    loop {
+        reset(&work, &old, &ref_old);
+        let run = lod(&work, "150,40", "2", Some(&format!("abort-after:{k}")));
+        if run.status.success() {
+            // k is past the last file operation: the run finished.
+            assert_same(
+                &visible_files(&work),
+                &new_n,
+                &format!("k = {k}: complete run"),
+            );
+            assert!(hidden(&work).is_empty(), "{:?}", hidden(&work));
+            break;
+        }
+        assert_eq!(run.status.code(), None, "k = {k}: killed by a signal");
+        let now = visible_files(&work);
+        let journal = hidden(&work)
+            .iter()
+            .any(|h| work.join(h).join("frond-commit.json").exists());
+        // The report is the set's mark for readers: the old report means exactly the old
+        // set, the new one exactly the new set; none only while a committed install is
+        // under way (its journal then says how to finish it).
+        if !journal {
+            kills_before_commit += 1;
+        }
+        match now.get("sapling_report.json") {
+            None => {
+                assert!(journal, "k = {k}: no report and no journal");
+                committed_kills += 1;
+            }
+            Some(r) if Some(r) == old.get("sapling_report.json") => {
+                assert_same(&now, &old_n, &format!("k = {k}: the old report"));
+            }
+            Some(_) => assert_same(&now, &new_n, &format!("k = {k}: the new report")),
+        }
+        // Whatever was left, the next run (here: the old settings again) starts from a whole
+        // set and leaves exactly its own set, nothing hidden.
+        ok(&lod(&work, "150,60,30", "1", None));
+        assert_same(
+            &visible_files(&work),
+            &old_n,
+            &format!("k = {k}: rerun after the kill"),
+        );
+        assert!(hidden(&work).is_empty(), "k = {k}: {:?}", hidden(&work));
+        k += 1;
+        assert!(k < 100, "the run never finished");
+    }
+    assert!(k > 10, "{k} file operations");
+    assert!(
+        committed_kills > 3,
+        "{committed_kills} kills during the install"
+    );
+    assert!(
+        kills_before_commit > 3,
+        "{kills_before_commit} kills before the commit"
+    );
+}
+
+#[test]
+fn a_failed_write_leaves_the_old_set_and_nothing_else() {
+    let tmp = tempfile::tempdir().unwrap();
+    let work = tmp.path().join("work");
+    ok(&lod(&work, "150,60,30", "1", None));
+    std::fs::write(work.join("notes.txt"), b"the user's own file").unwrap();
+    let before = visible_files(&work);
+    for k in [0, 2, 4] {
+        let run = lod(&work, "150,40", "2", Some(&format!("fail-after:{k}")));
+        assert_eq!(run.status.code(), Some(1));
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(err.contains("no space left"), "{err}");
+        assert_same(&visible_files(&work), &before, &format!("fail-after:{k}"));
+        assert!(hidden(&work).is_empty(), "{:?}", hidden(&work));
+    }
+    // A run into a new folder that fails leaves no folder at all.
+    let fresh = tmp.path().join("a/b/fresh");
+    let run = lod(&fresh, "150", "1", Some("fail-after:1"));
+    assert_eq!(run.status.code(), Some(1));
+    assert!(!tmp.path().join("a").exists(), "no empty folders left");
+}
+
+#[test]
+fn stale_temporary_files_and_stagings_of_dead_runs_are_cleared() {
+    let tmp = tempfile::tempdir().unwrap();
+    let work = tmp.path().join("work");
+    std::fs::create_dir_all(work.join(".frond-staging-sapling%999999999/shaders")).unwrap();
+    std::fs::write(
+        work.join(".frond-staging-sapling%999999999/sapling_LOD1.glb"),
+        b"x",
+    )
+    .unwrap();
+    // What frond 0.1's per-file writes left when killed.
+    std::fs::write(work.join(".sapling_LOD2.glb.tmp-999999999"), b"half").unwrap();
+    // Another tree's staging is not ours to clear.
+    std::fs::create_dir_all(work.join(".frond-staging-oak%999999999")).unwrap();
+    ok(&lod(&work, "150", "1", None));
+    assert_eq!(hidden(&work), [".frond-staging-oak%999999999"]);
+}
+
+#[test]
+fn a_live_run_of_the_same_tree_is_not_disturbed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let work = tmp.path().join("work");
+    // This test process is a live "frond" (see the module doc) staging the sample.
+    let staging = work.join(format!(".frond-staging-sapling%{}", std::process::id()));
+    std::fs::create_dir_all(&staging).unwrap();
+    let run = lod(&work, "150", "1", None);
+    assert_eq!(run.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(err.contains("another frond run"), "{err}");
+    assert!(staging.exists());
+}
+
+#[test]
+fn user_files_are_never_replaced() {
+    let tmp = tempfile::tempdir().unwrap();
+    let work = tmp.path().join("work");
+    std::fs::create_dir_all(&work).unwrap();
+    // A file of the user's where frond would write: refused before any work, untouched.
+    std::fs::write(work.join("sapling_LOD1.glb"), b"mine").unwrap();
+    let run = lod(&work, "150", "1", None);
+    assert_eq!(run.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains("sapling_LOD1.glb") && err.contains("never replaces"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(work.join("sapling_LOD1.glb")).unwrap(),
+        b"mine"
+    );
+    assert_eq!(visible_files(&work).len(), 1);
+    assert!(hidden(&work).is_empty());
+}
+
+#[test]
+fn two_trees_share_a_folder_and_a_rerun_keeps_the_other_tree() {
+    let tmp = tempfile::tempdir().unwrap();
+    let work = tmp.path().join("work");
+    let other = tmp.path().join("twin.glb");
+    std::fs::copy(root().join(SAMPLE), &other).unwrap();
+    let run = |input: &Path, lods: &str| {
+        let o = Command::new(env!("CARGO_BIN_EXE_frond"))
+            .arg("lod")
+            .arg(input)
+            .arg("-o")
+            .arg(&work)
+            .args(["--samples", "8", "--planes", "30", "--lods", lods])
+            .args(["--animation", "vat"])
+            .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+            .output()
+            .expect("runs");
+        ok(&o);
+    };
+    run(&root().join(SAMPLE), "150,40");
+    run(&other, "150,40");
+    let both = visible_files(&work);
+    assert!(both.contains_key("sapling_report.json") && both.contains_key("twin_report.json"));
+    assert!(both.keys().any(|k| k.starts_with("shaders/")));
+    // The sapling again with one LOD: its own extra files go, the twin's and the shared
+    // shaders (which the twin's report lists) stay.
+    run(&root().join(SAMPLE), "150");
+    let after = visible_files(&work);
+    assert!(!after.contains_key("sapling_LOD2.glb"));
+    for (name, bytes) in &both {
+        if name.starts_with("twin") || name.starts_with("shaders/") {
+            assert_eq!(after.get(name), Some(bytes), "{name} kept");
+        }
+    }
+}
+
+#[test]
+fn bad_output_folders_are_refused_before_any_work() {
+    let tmp = tempfile::tempdir().unwrap();
+    let input = tmp.path().join("tree.glb");
+    std::fs::copy(root().join(SAMPLE), &input).unwrap();
+    let refuse = |out: &Path, why: &str| {
+        let o = Command::new(env!("CARGO_BIN_EXE_frond"))
+            .arg("lod")
+            .arg(&input)
+            .arg("-o")
+            .arg(out)
+            .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+            .output()
+            .expect("runs");
+        assert_eq!(o.status.code(), Some(1), "{}", out.display());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(why), "{}: {err}", out.display());
+        // Refused at once: no build progress, nothing sampled.
+        assert!(!err.contains("LOD1"), "{err}");
+    };
+    refuse(Path::new("/"), "system folder");
+    refuse(Path::new("/usr"), "system folder");
+    refuse(&input, "input file");
+    // A folder below a file cannot be made.
+    refuse(&input.join("sub"), "cannot create the output folder");
+    assert_eq!(
+        std::fs::read(&input).unwrap(),
+        std::fs::read(root().join(SAMPLE)).unwrap()
+    );
+}
+
+#[test]
+fn cloud_names_its_files_after_the_input_and_never_replaces_one() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("trees");
+    std::fs::create_dir_all(&dir).unwrap();
+    // The input is called cloud.glb and sits in the output folder.
+    let input = dir.join("cloud.glb");
+    std::fs::copy(root().join(SAMPLE), &input).unwrap();
+    let cloud = |out: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_frond"))
+            .arg("cloud")
+            .arg(&input)
+            .args([
+                "--epsilon",
+                "5%",
+                "--planes",
+                "30",
+                "--coverage-views",
+                "0",
+                "-o",
+            ])
+            .arg(out)
+            .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+            .output()
+            .expect("runs")
+    };
+    ok(&cloud(&dir));
+    assert_eq!(
+        std::fs::read(&input).unwrap(),
+        std::fs::read(root().join(SAMPLE)).unwrap(),
+        "the input is untouched"
+    );
+    let names: Vec<String> = visible_files(&dir).into_keys().collect();
+    assert_eq!(
+        names,
+        [
+            "cloud.glb",
+            "cloud_atlas_color.png",
+            "cloud_atlas_normal.png",
+            "cloud_cloud.glb",
+            "cloud_cloud_stats.json"
+        ]
+    );
+    // Rerunning replaces its own set.
+    ok(&cloud(&dir));
+    // A user's file where the atlas would go: refused, untouched.
+    let other = tmp.path().join("other");
+    std::fs::create_dir_all(&other).unwrap();
+    std::fs::write(other.join("cloud_atlas_color.png"), b"mine").unwrap();
+    let run = cloud(&other);
+    assert_eq!(run.status.code(), Some(1));
+    assert_eq!(
+        std::fs::read(other.join("cloud_atlas_color.png")).unwrap(),
+        b"mine"
+    );
+    assert_eq!(visible_files(&other).len(), 1);
+    let _: PathBuf = other;
+}
+
+#[test]
+fn render_never_writes_over_its_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let input = tmp.path().join("tree.glb");
+    std::fs::copy(root().join(SAMPLE), &input).unwrap();
+    let p = input.to_str().unwrap();
+    let out = frond(&["render", p, "-o", p]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("-o names the input file"), "{err}");
+    assert_eq!(
+        std::fs::read(&input).unwrap(),
+        std::fs::read(root().join(SAMPLE)).unwrap()
+    );
+}
+
+#[test]
+fn a_set_written_by_frond_0_1_is_adopted_and_replaced() {
+    let tmp = tempfile::tempdir().unwrap();
+    let work = tmp.path().join("work");
+    ok(&lod(&work, "150,60,30", "1", None));
+    // What frond 0.1 left: `report.json` listing the files as `<-o>/<file>`.
+    let mut report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(work.join("sapling_report.json")).unwrap()).unwrap();
+    let files: Vec<serde_json::Value> = report["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            let f = f
+                .as_str()
+                .unwrap()
+                .replace("sapling_report.json", "report.json");
+            serde_json::Value::from(work.join(f).display().to_string())
+        })
+        .collect();
+    report["files"] = serde_json::Value::from(files);
+    std::fs::write(work.join("report.json"), report.to_string()).unwrap();
+    std::fs::remove_file(work.join("sapling_report.json")).unwrap();
+    ok(&lod(&work, "150", "1", None));
+    let names: Vec<String> = visible_files(&work).into_keys().collect();
+    assert_eq!(
+        names,
+        [
+            "sapling_LOD0.glb",
+            "sapling_LOD1.glb",
+            "sapling_LOD1.mapping.json",
+            "sapling_lods.glb",
+            "sapling_report.json"
+        ]
+    );
+}
