@@ -112,3 +112,29 @@ fn inspect_refuses_a_negative_key_time_in_one_line() {
     );
     assert_eq!(err.trim().lines().count(), 1, "{err}");
 }
+
+/// `frond lod`'s report carries the import's warnings too (`warnings[]`).
+#[test]
+fn lod_reports_the_import_warnings() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let bytes = std::fs::read(root().join("samples/sapling.glb")).expect("sample");
+    let glb = gltf::binary::Glb::from_slice(&bytes).expect("glb");
+    let mut doc: Value = serde_json::from_slice(&glb.json).expect("json");
+    doc["scene"] = json!(7);
+    let bin = glb.bin.expect("bin");
+    let tree = dir.path().join("warned.glb");
+    std::fs::write(
+        &tree,
+        glb_container(&serde_json::to_vec(&doc).expect("json"), &bin),
+    )
+    .expect("write");
+    let out = dir.path().join("out");
+    let report = frond_lod(&tree, &out, &["--lods", "60"]);
+    let warnings = report["warnings"].as_array().expect("warnings[]");
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().is_some_and(|w| w.contains("\"scene\" is 7"))),
+        "{warnings:?}"
+    );
+}
