@@ -186,6 +186,9 @@ fn a_kill_at_any_point_leaves_the_old_or_the_new_set() {
         k += 1;
         assert!(k < 100, "the run never finished");
     }
+    eprintln!(
+        "{k} file operations: {kills_before_commit} kills before the commit, {committed_kills} during the install"
+    );
     assert!(k > 10, "{k} file operations");
     assert!(
         committed_kills > 3,
