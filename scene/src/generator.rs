@@ -431,24 +431,7 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
     );
     let bark = doc.add_texture("bark", &encode_png(64, 64, &bark_texture(&mut rng))?, false);
     let leaf = doc.add_texture("leaf", &encode_png(128, 128, &leaf_texture())?, true);
-    let bark_mat = doc.add_material(&MaterialDesc {
-        name: "bark".into(),
-        base_color: [1.0; 4],
-        base_color_texture: Some(bark),
-        alpha: WriteAlpha::Opaque,
-        double_sided: false,
-        metallic: 0.0,
-        roughness: 0.9,
-    });
-    let leaf_mat = doc.add_material(&MaterialDesc {
-        name: "leaves".into(),
-        base_color: [1.0; 4],
-        base_color_texture: Some(leaf),
-        alpha: WriteAlpha::Mask(0.5),
-        double_sided: true,
-        metallic: 0.0,
-        roughness: 0.8,
-    });
+    let (bark_mat, leaf_mat) = add_tree_materials(&mut doc, bark, leaf);
     wood.material = Some(bark_mat);
     leaves.material = Some(leaf_mat);
     let wood_triangles = wood.indices.len() / 3;
@@ -557,4 +540,29 @@ fn bark_texture(rng: &mut ChaCha8Rng) -> Vec<u8> {
         }
     }
     px
+}
+
+/// The sample trees' two materials on `doc`: opaque one-sided "bark" and alpha-tested (cutoff
+/// 0.5) double-sided "leaves", textured with `bark` and `leaf`. Returns their indices (bark,
+/// leaves). The fuzzing seeds (`fuzz/seedgen`) build their tiny trees with the same pair.
+pub fn add_tree_materials(doc: &mut GltfBuilder, bark: usize, leaf: usize) -> (usize, usize) {
+    let bark_mat = doc.add_material(&MaterialDesc {
+        name: "bark".into(),
+        base_color: [1.0; 4],
+        base_color_texture: Some(bark),
+        alpha: WriteAlpha::Opaque,
+        double_sided: false,
+        metallic: 0.0,
+        roughness: 0.9,
+    });
+    let leaf_mat = doc.add_material(&MaterialDesc {
+        name: "leaves".into(),
+        base_color: [1.0; 4],
+        base_color_texture: Some(leaf),
+        alpha: WriteAlpha::Mask(0.5),
+        double_sided: true,
+        metallic: 0.0,
+        roughness: 0.8,
+    });
+    (bark_mat, leaf_mat)
 }

@@ -211,24 +211,7 @@ fn tiny(o: &Opts) -> (GltfBuilder, [usize; 4], usize, usize) {
         }),
         true,
     );
-    let bark_mat = doc.add_material(&MaterialDesc {
-        name: "bark".into(),
-        base_color: [1.0; 4],
-        base_color_texture: Some(bark),
-        alpha: WriteAlpha::Opaque,
-        double_sided: false,
-        metallic: 0.0,
-        roughness: 0.9,
-    });
-    let leaf_mat = doc.add_material(&MaterialDesc {
-        name: "leaves".into(),
-        base_color: [1.0; 4],
-        base_color_texture: Some(leaf),
-        alpha: WriteAlpha::Mask(0.5),
-        double_sided: true,
-        metallic: 0.0,
-        roughness: 0.8,
-    });
+    let (bark_mat, leaf_mat) = frond_scene::generator::add_tree_materials(&mut doc, bark, leaf);
     // Trunk: triangles at y=0 and y=1.8, sides as quads.
     let ring = |y: f32, r: f32| -> Vec<[f32; 3]> {
         (0..3)
