@@ -153,7 +153,7 @@ pub enum RigidMotion {
 }
 
 /// `M(t) = translate(Σ_j a_j cos(2π f_j t/N + φ_j) per axis)`, t in loop samples of `N`: the
-/// quad never turns, as spec §4.11 [ENG] asks (the apply of a centre trajectory is a rigid
+/// quad never turns, as spec §4.11 \[ENG\] asks (the apply of a centre trajectory is a rigid
 /// translation of all four corners).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpectralMotion {

@@ -448,9 +448,12 @@ impl Search<'_> {
 }
 
 // Index loops mirror the Jacobi rotation formulas; iterator forms would obscure them.
-#[allow(clippy::needless_range_loop)]
 /// Least-squares plane through points: normal = eigenvector of the smallest eigenvalue of the
 /// covariance (Jacobi iteration on the symmetric 3×3 matrix).
+#[expect(
+    clippy::needless_range_loop,
+    reason = "Jacobi rotations index rows and columns of the same matrices by one index"
+)]
 fn fit_plane(points: impl Iterator<Item = Vec3A> + Clone) -> Option<Plane> {
     let mut count = 0.0f64;
     let mut mean = [0.0f64; 3];

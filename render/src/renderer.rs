@@ -207,7 +207,10 @@ impl Renderer {
         )
     }
 
-    #[allow(clippy::too_many_arguments)]
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "a draw is defined by scene, target, camera and pass options, all needed here"
+    )]
     pub(crate) fn render_with_buffer_cap(
         &self,
         scene: &DrawScene,
@@ -238,7 +241,10 @@ impl Renderer {
     }
 
     /// Validates the scene, draws it and reads both targets back. The size was checked.
-    #[allow(clippy::too_many_arguments)]
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "a draw is defined by scene, target, camera and pass options, all needed here"
+    )]
     fn draw(
         &self,
         scene: &DrawScene,

@@ -233,7 +233,10 @@ impl GltfSource {
         Ok(Decoded { width, values })
     }
 
-    #[allow(clippy::too_many_arguments)]
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "a sparse block is defined by that many glTF fields, passed as they are read"
+    )]
     fn apply_sparse(
         &self,
         sparse: &json::accessor::sparse::Sparse,

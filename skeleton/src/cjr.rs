@@ -3,7 +3,7 @@
 //! start as one per bone carrying foliage; the pair of sibling sets whose merge moves foliage
 //! least is merged until the budget of clouds is met or no two sets are siblings.
 //!
-//! [ENG] merge order: the thesis merges the pair whose average descriptions deviate least.
+//! \[ENG\] merge order: the thesis merges the pair whose average descriptions deviate least.
 //! Description deviations are unitless and blind to lever arms: on glTF trees, whose siblings
 //! start at different points along their parent, the first such merge of oak_medium moved
 //! leaves 12 px at 600 px. Here the pair merged first is the one whose common rotation moves

@@ -4,7 +4,7 @@
 //! `E_T`, [`crate::end_joint`]) and each child gets the rotation about that joint that best
 //! keeps its own frame where it was.
 //!
-//! [ENG] joint animation: the thesis maps every triangle onto its centroid rotation sphere and
+//! \[ENG\] joint animation: the thesis maps every triangle onto its centroid rotation sphere and
 //! averages the per-triangle rotations per bone, admitting the average is not guaranteed to be
 //! good. Here each child's rotation at each sample is the least-squares rotation about the end
 //! joint of all the foliage its frame carries (Horn's method with a fixed centre): the best

@@ -3,7 +3,7 @@
 //! `E_T = Σ_tr Σ_n [ r_tr² − |p_n − j|² ]²` over the centre trajectories `p_n` of the foliage
 //! the two bones' children animate.
 //!
-//! [ENG] erratum: the thesis fixes `r = |j − c|` (`c` the trajectory's centroid). The centroid
+//! \[ENG\] erratum: the thesis fixes `r = |j − c|` (`c` the trajectory's centroid). The centroid
 //! of an arc lies inside it, not on the sphere, so even leaves turning exactly about one point
 //! leave a residual there and the minimiser misses the point. Here each trajectory's radius is
 //! free: the optimal `r_tr²` is the mean of `|p_n − j|²`, and eliminating it leaves

@@ -3,7 +3,7 @@
 //! centroid of a cluster and the motion of a billboard), and the motion an average gives back.
 //!
 //! Every type describes the *motion* of a trajectory: the DC bin (the rest position) is kept
-//! apart by the caller (spec §4.5 [ENG]), `apply` returns the zero-mean offset per sample.
+//! apart by the caller (spec §4.5 \[ENG\]), `apply` returns the zero-mean offset per sample.
 //! Frequency bins (§4.10) are used in deviation and average: two spectra whose energy sits at
 //! neighbouring frequencies (sin 4t, sin 5t) are close, and average to one component at the
 //! amplitude-weighted mean frequency rather than to two half-amplitude ones.
@@ -514,7 +514,7 @@ impl DescriptionType for DominatingAxisType {
 /// The axis-phase type (§4.9): the three amplitude spectra and, per frequency, the phase
 /// relationships `φ_xy = φ_x − φ_y`, `φ_xz = φ_x − φ_z`, which a time offset leaves unchanged.
 /// Deviation `NEP(A, P)`, P weighting each relationship's cyclic difference by the pair's mean
-/// of [`relation_weight`] `√(A_x·A_y)` (resp. `√(A_x·A_z)`). Average: mean amplitudes, weighted cyclic means of the
+/// of `relation_weight` `√(A_x·A_y)` (resp. `√(A_x·A_z)`). Average: mean amplitudes, weighted cyclic means of the
 /// relationships. Apply: instead of the thesis's random `φ_x` (§4.9) the members' own
 /// amplitude-weighted mean `φ_x`, so billboards whose leaves swing together keep their timing;
 /// where the members disagree the mean is as arbitrary as a random pick. Lossy: inter-frequency

@@ -21,7 +21,7 @@ pub struct Clustering<D> {
     pub error: f64,
     /// Assignment rounds until nothing moved (or the cap).
     pub iterations: usize,
-    /// Which start won: "skeleton" or "random <i>".
+    /// Which start won: `"skeleton"` or `"random <i>"`.
     pub start: String,
 }
 
@@ -323,7 +323,10 @@ pub fn skeleton_start<T: DescriptionType>(
 /// k-means with restarts (App. C.1): the skeleton start (when `bone` is given) and `restarts`
 /// seeded k-means++ starts; the lowest error wins, ties to the earlier start. `k` is capped at
 /// the number of descriptions.
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "k-means over descriptions: type, data, weights, k, start, restarts, seed and bins"
+)]
 pub fn cluster_descriptions<T: DescriptionType>(
     ty: &T,
     descs: &[T::Desc],

@@ -262,7 +262,10 @@ fn evaluate_into(ctx: &mut EvalContext, row: &mut Row, candidate: &Path, dir: &P
     Ok(())
 }
 
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "one grid point of the sweep: context, tree, method, point, seed and paths"
+)]
 fn lod_run(
     ctx: &mut EvalContext,
     tree_name: &str,
