@@ -1,6 +1,6 @@
 //! Fidelity metrics (spec animated-billboard-clouds §5).
 //!
-//! So far: the coverage ("colour") metric of §5.4, with the thesis' experiment setup of §8.2
+//! The coverage ("colour") metric of §5.4, with the thesis' experiment setup of §8.2
 //! and the checklist rules of §11 item 7, in [`coverage`]; App. A's normalisation in
 //! [`normalise`]; the dominating-axis animation metrics of §5.5 in [`animation`]; plane, projected,
 //! Euclidean distance and orientation metrics of §5.2–5.3 in [`triangle_metrics`]; the

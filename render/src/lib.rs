@@ -10,8 +10,9 @@
 //!
 //! Conventions: Y-up right-handed world (as in glTF), counter-clockwise front faces,
 //! depth in [0, 1] (Depth32Float), a fixed world-space light from above
-//! ([`LIGHT_DIRECTION`]). Textures are sampled without mipmaps, so alpha-tested
-//! coverage is never thinned by mip averaging.
+//! ([`LIGHT_DIRECTION`]). Textures are sampled at full size unless a caller asks for mip
+//! chains ([`Renderer::render_mipmapped`], used by the coverage metric), and those chains
+//! preserve alpha-tested coverage per level, so leaves are never thinned by mip averaging.
 //!
 //! ```no_run
 //! use frond_render::{Camera, DrawMaterial, DrawMesh, DrawScene, Projection, Renderer};
