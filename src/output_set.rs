@@ -137,17 +137,12 @@ impl OutputSet {
         Ok(set)
     }
 
-    /// The output folder.
-    pub fn dir(&self) -> &Path {
-        &self.dir
-    }
-
     /// Refuses now, before any work, if a file the run will write is in the way (see the module
     /// doc); `names` are relative to the folder. [`OutputSet::commit`] checks every file again.
     pub fn check_names(&self, names: &[String]) -> Result<()> {
-        let owned = self.owned_files()?;
+        let (owned, shared) = (self.owned_files()?, self.files_of_other_reports()?);
         for n in names {
-            self.check_free(n, &owned)?;
+            self.check_free(n, &owned, &shared)?;
         }
         Ok(())
     }
@@ -174,20 +169,15 @@ impl OutputSet {
         Ok(())
     }
 
-    /// The relative names staged so far, in order.
-    pub fn staged(&self) -> &[String] {
-        &self.staged
-    }
-
     /// Stages the report (`report_bytes`, the set's last file) and installs the whole set.
     pub fn commit(mut self, report_bytes: &[u8]) -> Result<()> {
         let report = self.report.clone();
         self.stage(&report, report_bytes)?;
-        let owned = self.owned_files()?;
+        // Checked again: the folder may have changed during the build.
+        let (owned, shared) = (self.owned_files()?, self.files_of_other_reports()?);
         for n in &self.staged {
-            self.check_free(n, &owned)?;
+            self.check_free(n, &owned, &shared)?;
         }
-        let shared = self.files_of_other_reports()?;
         let new: BTreeSet<&String> = self.staged.iter().collect();
         let mut remove: Vec<String> = Vec::new();
         // The old report goes first: from then on the folder says it is mid-install.
@@ -356,14 +346,15 @@ impl OutputSet {
         Ok(out)
     }
 
-    /// Refuses when `rel` exists in the folder and is not this tree's, nor a shared file.
-    fn check_free(&self, rel: &str, owned: &Owned) -> Result<()> {
+    /// Refuses when `rel` exists in the folder and is not this tree's (`owned`), nor listed by
+    /// another tree's report (`shared`).
+    fn check_free(&self, rel: &str, owned: &Owned, shared: &BTreeSet<String>) -> Result<()> {
         let path = self.dir.join(rel);
         if std::fs::symlink_metadata(&path).is_err() {
             return Ok(());
         }
         let ours = owned.files.iter().any(|f| f == rel) || owned.report.as_deref() == Some(rel);
-        if ours || self.files_of_other_reports()?.contains(rel) {
+        if ours || shared.contains(rel) {
             if !path.is_file() {
                 bail!(
                     "{}: is in the way and is not a file frond wrote; move it or choose another output folder",
@@ -455,48 +446,41 @@ fn install(
     Ok(())
 }
 
-/// The files a report lists (`files`), as names relative to `dir`. Older reports list paths
-/// joined to the folder as it was spelt: those are taken by their part below a folder of the
-/// same name, else by file name.
+/// The files a report lists (`files`), as names relative to `dir`.
 fn listed_files(report: &Path, dir: &Path) -> Result<Vec<String>> {
     let text =
         std::fs::read(report).with_context(|| format!("{}: cannot read", report.display()))?;
     let v: serde_json::Value = serde_json::from_slice(&text)
         .with_context(|| format!("{}: not a JSON report", report.display()))?;
-    let mut out = Vec::new();
-    for f in v["files"].as_array().into_iter().flatten() {
-        let Some(f) = f.as_str() else { continue };
-        let p = Path::new(f);
-        let rel = if p.is_relative() && checked_relative(f).is_ok() && !f.contains("..") {
-            Some(f.to_string())
-        } else {
-            p.strip_prefix(dir)
-                .ok()
-                .and_then(|r| r.to_str())
-                .map(str::to_string)
-                .or_else(|| p.file_name().and_then(|n| n.to_str()).map(str::to_string))
-        };
-        if let Some(rel) = rel.filter(|r| checked_relative(r).is_ok()) {
-            out.push(rel);
-        }
-    }
-    // Older reports spelt files as `<out>/x`: a relative `-o out` gives `out/x`; keep what is
-    // really in the folder.
-    let fixed = out
+    Ok(v["files"]
+        .as_array()
         .into_iter()
-        .map(|r| {
-            if dir.join(&r).exists() {
-                r
-            } else {
-                Path::new(&r)
-                    .file_name()
-                    .and_then(|n| n.to_str())
-                    .map(str::to_string)
-                    .unwrap_or(r)
-            }
-        })
-        .collect();
-    Ok(fixed)
+        .flatten()
+        .filter_map(|f| relative_name(f.as_str()?, dir))
+        .collect())
+}
+
+/// One `files` entry as a plain name relative to `dir`. frond 0.2 lists names relative to the
+/// folder; 0.1 listed `<-o as spelt>/<file>` (`out/x.glb`, `/abs/out/x.glb`). Of the entry
+/// itself, its part below `dir` and its file name, the first that names a file in the folder
+/// wins, else the file name.
+fn relative_name(entry: &str, dir: &Path) -> Option<String> {
+    let p = Path::new(entry);
+    let names: Vec<&str> = [
+        Some(p),
+        p.strip_prefix(dir).ok(),
+        p.file_name().map(Path::new),
+    ]
+    .into_iter()
+    .flatten()
+    .filter_map(Path::to_str)
+    .filter(|n| checked_relative(n).is_ok())
+    .collect();
+    names
+        .iter()
+        .find(|n| dir.join(n).exists())
+        .or(names.last())
+        .map(|n| n.to_string())
 }
 
 /// A relative name without `..`, root or prefix.
@@ -572,4 +556,35 @@ fn process_alive(pid: u32) -> bool {
 /// fsync of a folder, so renames in it survive a power cut.
 fn sync_dir(dir: &Path) -> std::io::Result<()> {
     std::fs::File::open(dir)?.sync_all()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn report_entries_of_both_versions_name_files_in_the_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::create_dir_all(d.join("shaders")).unwrap();
+        std::fs::write(d.join("oak_LOD0.glb"), b"x").unwrap();
+        std::fs::write(d.join("shaders/frond_vat.wgsl"), b"x").unwrap();
+        let name = |e: &str| relative_name(e, d);
+        // 0.2: relative to the folder.
+        assert_eq!(name("oak_LOD0.glb").as_deref(), Some("oak_LOD0.glb"));
+        assert_eq!(
+            name("shaders/frond_vat.wgsl").as_deref(),
+            Some("shaders/frond_vat.wgsl")
+        );
+        // 0.1: `-o out` spelt relative, or absolute.
+        assert_eq!(name("out/oak_LOD0.glb").as_deref(), Some("oak_LOD0.glb"));
+        let abs = d.join("shaders/frond_vat.wgsl");
+        assert_eq!(
+            name(abs.to_str().unwrap()).as_deref(),
+            Some("shaders/frond_vat.wgsl")
+        );
+        // Never a name outside the folder.
+        assert_eq!(name("../oak_LOD0.glb").as_deref(), Some("oak_LOD0.glb"));
+        assert_eq!(name("..").as_deref(), None);
+    }
 }

@@ -13,7 +13,7 @@
 mod common;
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 use common::*;
@@ -399,7 +399,6 @@ fn cloud_names_its_files_after_the_input_and_never_replaces_one() {
         b"mine"
     );
     assert_eq!(visible_files(&other).len(), 1);
-    let _: PathBuf = other;
 }
 
 #[test]

@@ -206,5 +206,3 @@ impl GltfSource {
         }
     }
 }
-
-pub use crate::input_file::percent_decode;

@@ -226,7 +226,7 @@ fn has_scheme(uri: &str) -> bool {
 }
 
 /// Decodes `%XX` escapes in a relative URI.
-pub fn percent_decode(s: &str) -> String {
+fn percent_decode(s: &str) -> String {
     let bytes = s.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;
