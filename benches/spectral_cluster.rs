@@ -10,8 +10,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use frond_billboard::animated::Rig;
-use frond_billboard::spectral_build::{SpectralParams, cluster_zones};
+use frond_lod::methods::spectral::{SpectralParams, cluster_zones};
 use frond_scene::{ImportOptions, SampleOptions, import, sample};
 use frond_spectral::description::{
     AxisPhase, DescriptionType, DominatingAxisType, Naive, SpectralKind,
@@ -74,7 +73,7 @@ fn main() {
         env_f32("FROND_ZONE", 2.0),
         rayon::current_num_threads()
     );
-    let rest = Rig::from_tree(&tree).rest_world();
+    let rest = tree.rig.rest_world();
     for kind in SpectralKind::ALL {
         let sp = SpectralParams {
             kind,

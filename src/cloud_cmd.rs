@@ -4,14 +4,14 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use frond_billboard::TriangleSoup;
 use frond_billboard::cloud::{BillboardCloud, CloudParams, CloudStats, build_cloud, parse_epsilon};
 use frond_export::textures::TextureSink;
 use frond_metrics::{CoverageParams, coverage_error};
 use frond_render::{Renderer, TreeParts, scene_from_positions};
 use frond_scene::gltf_writer::*;
-use frond_scene::{Part, SampleOptions, Sampled, Tree, sample};
+use frond_scene::{Part, Tree};
 use glam::Vec3;
 use serde::Serialize;
 
@@ -52,30 +52,6 @@ pub struct CloudReport {
     pub files: Vec<String>,
 }
 
-/// Samples the loop of `clip` (the first when None); an error names the file when the tree
-/// has no foliage to make billboards of.
-pub fn sample_foliage(tree: &Tree, clip: Option<&str>, samples: usize) -> Result<Sampled> {
-    let sampled = sample(
-        tree,
-        &SampleOptions {
-            clip: clip.map(str::to_string),
-            samples,
-        },
-    )?;
-    if sampled.foliage.is_empty() {
-        bail!(
-            "{}: the tree has no foliage to turn into billboards",
-            tree.source.display()
-        );
-    }
-    Ok(sampled)
-}
-
-/// Bounding-box diagonal of the rest pose.
-pub fn rest_diagonal(tree: &Tree) -> f32 {
-    (Vec3::from(tree.bounds.max) - Vec3::from(tree.bounds.min)).length()
-}
-
 /// Builds the cloud and its report; writes nothing.
 pub fn make_cloud(
     renderer: &Renderer,
@@ -83,14 +59,14 @@ pub fn make_cloud(
     req: &CloudRequest,
 ) -> Result<(BillboardCloud, Vec<Vec3>, CloudReport)> {
     let path = tree.source.display().to_string();
-    let diag = rest_diagonal(tree);
+    let diag = tree.bounds.diagonal();
     let epsilon = parse_epsilon(&req.epsilon, diag).with_context(|| {
         format!(
             "--epsilon '{}': expected a length or a percentage like 5%",
             req.epsilon
         )
     })?;
-    let sampled = sample_foliage(tree, req.clip.as_deref(), req.samples)?;
+    let sampled = frond_lod::chain::sample_foliage(tree, req.clip.as_deref(), req.samples)?;
     let frond_scene::Sampled {
         average, foliage, ..
     } = sampled;

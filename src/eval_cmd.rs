@@ -376,7 +376,7 @@ fn score(
         views: 0,
         frames: 0,
         size: [0, 0],
-        tree_height: crate::screen_budget::tree_height(original),
+        tree_height: frond_lod::tree_height(original),
         coverage: CoverageMetrics {
             static_: coverage_metric(stat),
             animated: coverage_metric(anim),

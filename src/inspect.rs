@@ -117,10 +117,10 @@ pub struct ClipSummary {
 
 /// Builds the report for an imported tree and its sampled loop.
 pub fn inspect(tree: &Tree, sampling: SamplingSummary) -> InspectReport {
-    let clips = (0..tree.clips.len())
+    let clips = (0..tree.rig.clips.len())
         .map(|c| {
             let m = clip_motion(tree, c, MOTION_SAMPLES);
-            let clip = &tree.clips[c];
+            let clip = &tree.rig.clips[c];
             ClipSummary {
                 name: clip.name.clone(),
                 duration_s: clip.duration(),

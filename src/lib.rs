@@ -9,5 +9,4 @@ pub mod lod_cmd;
 pub mod output;
 pub mod output_set;
 pub mod render_cmd;
-pub mod screen_budget;
 pub mod sweep;

@@ -12,21 +12,26 @@ use frond::batch::shard::Shard;
 use frond::batch::summary::{BatchSummary, Status, TreeEntry, merge, read_summary, summaries_in};
 use frond::batch::tree_job::TreeContext;
 use frond::batch::{BatchProgress, BatchRequest, default_max_memory, parse_memory, run_batch};
-use frond::cloud_cmd::{CloudRequest, rest_diagonal, run_cloud};
+use frond::cloud_cmd::{CloudRequest, run_cloud};
 use frond::eval_cmd::{EvalRequest, evaluate, image_for_screen_height, same_bytes};
 use frond::inspect::{SamplingSummary, inspect};
-use frond::lod_cmd::{AnimationMode, LodRequest, METHOD_NAMES, Method, run_lod};
+use frond::lod_cmd::{LodRequest, run_lod};
 use frond::output::write_atomic;
 use frond::render_cmd::{RenderRequest, frame_png, parse_size, render_tree};
-use frond::screen_budget::{screen_height_at, tree_height};
 use frond::sweep::grid::{Grid, parse_epsilons};
 use frond::sweep::{SweepRequest, run_sweep};
 use frond_billboard::cloud::CloudParams;
 use frond_billboard::plane_search::SearchParams;
+use frond_export::AnimationMode;
 use frond_export::vat::VatFormat;
+use frond_lod::method::ignored_options;
+use frond_lod::{
+    ChainRequest, CloudOptions, Method, MethodName, SkeletonOptions, SpectralOptions,
+    screen_height_at, tree_height,
+};
 use frond_render::{Renderer, TreeParts};
 use frond_scene::generator::{Preset, generate};
-use frond_scene::{ImportOptions, SampleOptions, import, sample};
+use frond_scene::{ImportOptions, Length, SampleOptions, import, sample};
 
 #[derive(Parser)]
 #[command(
@@ -123,7 +128,7 @@ struct BuildArgs {
     /// Spectral methods: animation zone size, a length or % of the diagonal (default: 2% or
     /// the LOD's ε, the larger; 0: a zone per triangle, triangles with one centre sharing one).
     #[arg(long, value_name = "SIZE")]
-    zone_size: Option<String>,
+    zone_size: Option<Length>,
     /// Spectral methods: no shared-bone binding; billboards translate in world space only.
     #[arg(long)]
     no_shared_bone: bool,
@@ -138,6 +143,24 @@ struct BuildArgs {
 }
 
 impl BuildArgs {
+    /// The spectral and skeleton methods' options (description types at their defaults: the
+    /// method name sets them).
+    fn method_options(&self) -> Result<(SpectralOptions, SkeletonOptions)> {
+        Ok((
+            SpectralOptions {
+                clusters: self.clusters.map(|k| k as usize),
+                zone_size: self.zone_size,
+                shared_bone: !self.no_shared_bone,
+                ..Default::default()
+            },
+            SkeletonOptions {
+                clouds: self.clouds.map(|c| c as usize),
+                average_bone: self.average_bone,
+                ..Default::default()
+            },
+        ))
+    }
+
     /// The same options as `frond lod` arguments.
     fn to_args(&self) -> Vec<String> {
         let mut a = vec![
@@ -156,7 +179,7 @@ impl BuildArgs {
             a.extend(["--clusters".to_string(), k.to_string()]);
         }
         if let Some(z) = &self.zone_size {
-            a.extend(["--zone-size".to_string(), z.clone()]);
+            a.extend(["--zone-size".to_string(), z.to_string()]);
         }
         if self.no_shared_bone {
             a.push("--no-shared-bone".to_string());
@@ -298,7 +321,7 @@ enum Command {
         /// the axis-phase type; spectral-naive, spectral-dominating-axis and
         /// spectral-axis-phase name the type) or skeleton (SBCS with the rotation-spectral
         /// bone type; skeleton-axis-angle and skeleton-rotation-spectral name the type).
-        #[arg(long, default_value = "auto", value_parser = clap::builder::PossibleValuesParser::new(METHOD_NAMES))]
+        #[arg(long, default_value = "auto", value_parser = clap::builder::PossibleValuesParser::new(frond_lod::METHOD_NAMES.iter().map(|(n, _)| *n)))]
         method: String,
         /// Screen heights in pixels the whole tree covers, one LOD each, nearest first.
         #[arg(long, value_delimiter = ',', default_value = "600,200,60")]
@@ -317,7 +340,7 @@ enum Command {
         pixel_error: f32,
         /// Override the derived ε: a length, or a percentage of the bounding-box diagonal.
         #[arg(long)]
-        epsilon: Option<String>,
+        epsilon: Option<Length>,
         /// skin (glTF skin and channels), vat (vertex animation textures, EXR half), vat-png16,
         /// or spectral (skinned billboards + a small float texture of each billboard's cosine
         /// terms, with reference shaders; spectral and per-bone methods).
@@ -385,7 +408,7 @@ enum Command {
         output: PathBuf,
         /// Methods to compare.
         #[arg(long, value_delimiter = ',', default_value = "per-bone,static",
-              value_parser = clap::builder::PossibleValuesParser::new(METHOD_NAMES))]
+              value_parser = clap::builder::PossibleValuesParser::new(frond_lod::METHOD_NAMES.iter().map(|(n, _)| *n)))]
         method: Vec<String>,
         /// Screen heights (pixels), one LOD each; ε follows the screen-space rule.
         #[arg(long, value_delimiter = ',', default_value = "600,200,60")]
@@ -461,7 +484,7 @@ enum Command {
         #[arg(long)]
         eval: bool,
         /// Clustering method of every tree (default: frond lod's).
-        #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(METHOD_NAMES))]
+        #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(frond_lod::METHOD_NAMES.iter().map(|(n, _)| *n)))]
         method: Option<String>,
         /// Screen heights in pixels, one LOD each (default: frond lod's).
         #[arg(long, value_delimiter = ',')]
@@ -619,7 +642,7 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let tree = import.load()?;
             let renderer = Renderer::new()?;
-            let diag = rest_diagonal(&tree);
+            let diag = tree.bounds.diagonal();
             let mut params = CloudParams {
                 increased_density,
                 ..Default::default()
@@ -714,34 +737,45 @@ fn run(cli: Cli) -> Result<()> {
                 }
                 None => lods,
             };
+            let spectral_animation = animation == "spectral";
+            let name = MethodName::parse(&method).unwrap_or(MethodName::Auto);
+            let (spectral, skeleton) = build.method_options()?;
+            for w in ignored_options(
+                name,
+                spectral != SpectralOptions::default(),
+                skeleton != SkeletonOptions::default(),
+                spectral_animation,
+            ) {
+                tracing::warn!("{w}");
+            }
             let req = LodRequest {
-                method: Method::parse(&method).unwrap_or(Method::Auto),
-                screen_heights,
-                pixel_error,
-                epsilon,
+                chain: ChainRequest {
+                    method: Method::new(name, spectral, skeleton),
+                    screen_heights,
+                    pixel_error,
+                    epsilon,
+                    spectral_animation,
+                    seed,
+                    samples,
+                    clip,
+                    cloud: CloudOptions {
+                        planes: build.planes,
+                        view_penalty: build.view_penalty.map(f32::to_radians),
+                        increased_density: build.increased_density,
+                        max_atlas,
+                        supersample: build.supersample,
+                        padding,
+                    },
+                },
                 animation: match animation.as_str() {
                     "vat" => AnimationMode::Vat(VatFormat::ExrHalf),
                     "vat-png16" => AnimationMode::Vat(VatFormat::Png16),
                     "spectral" => AnimationMode::Spectral,
                     _ => AnimationMode::Skin,
                 },
-                seed,
-                samples,
-                clip,
-                planes: build.planes,
-                view_penalty: build.view_penalty.map(f32::to_radians),
-                increased_density: build.increased_density,
-                max_atlas,
-                supersample: build.supersample,
-                padding,
                 msft_lod,
                 resolution,
                 external_textures,
-                clusters: build.clusters.map(|k| k as usize),
-                zone_size: build.zone_size.clone(),
-                shared_bone: !build.no_shared_bone,
-                clouds: build.clouds.map(|c| c as usize),
-                average_bone: build.average_bone,
             };
             let bar = Spinner::new();
             let result = run_lod(&renderer, &tree, &req, &output, &|m: &str| bar.say(m));
@@ -760,7 +794,7 @@ fn run(cli: Cli) -> Result<()> {
                     "{}: {} LODs combined; {}; {:.2} s",
                     report.combined,
                     report.lods.len(),
-                    frond::lod_cmd::report_name(&report.name),
+                    frond_lod::report::report_name(&report.name),
                     report.timings_s["total"].as_f64().unwrap_or(0.0)
                 );
             }
@@ -854,7 +888,7 @@ fn run(cli: Cli) -> Result<()> {
             json,
         } => {
             let tree = import.load()?;
-            let diagonal = rest_diagonal(&tree);
+            let diagonal = tree.bounds.diagonal();
             let grid = match &epsilon {
                 Some(text) => {
                     if !(screen_height.is_finite() && screen_height >= 1.0) {

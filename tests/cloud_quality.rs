@@ -38,7 +38,7 @@ fn coverage_error_at_epsilon_zero_on_the_shared_trees() {
     let mut worst = 0.0f64;
     for (name, path) in names.iter().zip(&paths) {
         let tree = import(path, &ImportOptions::default()).expect("imports");
-        let diag = frond::cloud_cmd::rest_diagonal(&tree);
+        let diag = tree.bounds.diagonal();
         // At ε = 0 each card is its own billboard; S = 20 finds it as surely as 500.
         let (cloud, _, report) =
             make_cloud(&renderer, &tree, &request("0", 20, 1, 2048.0 / diag)).expect("cloud");
@@ -59,7 +59,7 @@ fn stable_over_twenty_seeds_at_two_percent_on_oak_medium() {
     let path = frond_testdata::require_tree!("oak_medium.glb");
     let renderer = Renderer::new().expect("adapter");
     let tree = import(&path, &ImportOptions::default()).expect("imports");
-    let diag = frond::cloud_cmd::rest_diagonal(&tree);
+    let diag = tree.bounds.diagonal();
     let (mut counts, mut covs) = (Vec::new(), Vec::new());
     for seed in 1..=20 {
         let (cloud, _, report) =

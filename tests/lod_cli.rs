@@ -8,17 +8,17 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::*;
-use frond_billboard::animated::{AnimatedBillboardCloud, LoopClock, Rig, RigidMotion};
-use frond_billboard::animated_build::{
-    build_animated_cloud, per_bone_clusters, sampled_worlds, static_clusters,
-};
 use frond_billboard::cloud::CloudParams;
-use frond_billboard::motion_budget::{ScreenBudget, apply_budget};
-use frond_billboard::skeleton_build::build_skeleton_cloud;
-use frond_billboard::spectral_build::{SpectralParams, build_spectral_cloud};
 use frond_export::LodInput;
 use frond_export::lod_file::{FileOptions, write_glb};
 use frond_export::vat::{VatFormat, decode_rigid};
+use frond_lod::cloud_build::{build_animated_cloud, sampled_worlds};
+use frond_lod::methods::per_bone::per_bone_clusters;
+use frond_lod::methods::skeleton::build_skeleton_cloud;
+use frond_lod::methods::spectral::{SpectralParams, build_spectral_cloud};
+use frond_lod::methods::static_cloud::static_clusters;
+use frond_lod::motion_budget::{ScreenBudget, apply_budget};
+use frond_lod::{AnimatedBillboardCloud, BuildContext, LodLevel, LoopClock, RigidMotion};
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, SampleOptions, Sampled, Tree, import, import_bytes, sample};
 use frond_skeleton::{BoneDescriptionKind, SkeletonParams};
@@ -85,11 +85,11 @@ fn skin_lods_are_valid_and_reported() {
     let tree = import(&out.join("sapling_lods.glb"), &ImportOptions::default()).expect("import");
     for k in 0..3 {
         let name = format!("sapling_LOD{k}");
-        assert!(tree.nodes.iter().any(|n| n.name == name), "{name} node");
+        assert!(tree.rig.nodes.iter().any(|n| n.name == name), "{name} node");
     }
     let input = import(&sapling(), &ImportOptions::default()).expect("input");
-    assert_eq!(tree.clips.len(), input.clips.len());
-    for (a, b) in tree.clips.iter().zip(&input.clips) {
+    assert_eq!(tree.rig.clips.len(), input.rig.clips.len());
+    for (a, b) in tree.rig.clips.iter().zip(&input.rig.clips) {
         assert_eq!(a.name, b.name);
         assert!(
             (a.duration() - b.duration()).abs() < 1e-4,
@@ -288,17 +288,9 @@ fn spectral_skin_round_trip() {
         max_iterations: 10,
         shared_bone: true,
     };
-    let clock = LoopClock::of(&tree, &sampled);
-    let (mut cloud, _, _) = build_spectral_cloud(
-        &renderer,
-        &tree,
-        &sampled,
-        Rig::from_tree(&tree),
-        clock,
-        &params,
-        &sp,
-        tree.bounds.size(),
-    )
+    let (mut cloud, _, _) = with_context(&renderer, &tree, &sampled, &params, pixel, |ctx| {
+        build_spectral_cloud(ctx, &sp)
+    })
     .expect("spectral cloud");
     apply_budget(
         &mut cloud,
@@ -386,26 +378,48 @@ fn setup(path: &Path, screen: f32) -> (Tree, Sampled, CloudParams, f32) {
     (tree, sampled, params, pixel)
 }
 
+/// Runs `f` with the build context of a LOD whose pixel is `pixel` world units.
+fn with_context<R>(
+    renderer: &Renderer,
+    tree: &Tree,
+    sampled: &Sampled,
+    params: &CloudParams,
+    pixel: f32,
+    f: impl FnOnce(&BuildContext) -> R,
+) -> R {
+    let level = LodLevel {
+        screen_height: tree.bounds.height() / pixel,
+        pixel,
+        epsilon: pixel,
+        texels_per_unit: 1.0 / pixel,
+        wood_error: pixel,
+    };
+    let clock = LoopClock::of(tree, sampled);
+    f(&BuildContext {
+        renderer,
+        tree,
+        sampled,
+        clock: &clock,
+        level: &level,
+        index: 0,
+        cloud: params,
+        scale: tree.bounds.size(),
+        seed: params.search.seed,
+    })
+}
+
 fn build(path: &Path, per_bone: bool, screen: f32) -> Built {
     let (tree, sampled, params, pixel) = setup(path, screen);
-    let clock = LoopClock::of(&tree, &sampled);
     let clusters = if per_bone {
         per_bone_clusters(&tree, &sampled)
     } else {
         static_clusters(&sampled)
     };
     let renderer = Renderer::new().expect("renderer");
-    let (mut cloud, _) = build_animated_cloud(
-        &renderer,
-        &tree,
-        &sampled,
-        Rig::from_tree(&tree),
-        clock,
-        &clusters,
-        &params,
-        tree.bounds.size(),
-        if per_bone { "per-bone" } else { "static" },
-    )
+    let name = if per_bone { "per-bone" } else { "static" };
+    let (mut cloud, _) = with_context(&renderer, &tree, &sampled, &params, pixel, |ctx| {
+        build_animated_cloud(ctx, tree.rig.clone(), false, &clusters, name)
+    })
     .expect("cloud");
     apply_budget(
         &mut cloud,
@@ -518,7 +532,7 @@ fn static_round_trip_on_a_real_exporters_tree() {
 fn vat_textures_decode_back_to_the_motion() {
     let b = build(&sapling(), false, 150.0);
     for format in [VatFormat::ExrHalf, VatFormat::Png16] {
-        let vat = frond::lod_cmd::vat_textures(&b.cloud, format, "t").expect("vat");
+        let vat = frond_export::cloud_motion::vat_textures(&b.cloud, format, "t").expect("vat");
         let frames =
             decode_rigid(&vat.position.bytes, &vat.rotation.bytes, &vat.sidecar).expect("decode");
         let worlds = sampled_worlds(&b.cloud.rig, &b.cloud.clock);
@@ -683,7 +697,7 @@ fn bone_bound_lods_keep_every_clip_and_rigid_fit_lods_say_what_they_drop() {
     }
     // The combined file has both clips, each as long as the input's.
     let tree = import(&out.join("two_clips_lods.glb"), &ImportOptions::default()).expect("import");
-    let names: Vec<&str> = tree.clips.iter().map(|c| c.name.as_str()).collect();
+    let names: Vec<&str> = tree.rig.clips.iter().map(|c| c.name.as_str()).collect();
     assert_eq!(names, ["Wind", "Gust"]);
 }
 
@@ -755,7 +769,6 @@ fn skeleton_lods_validate_and_report_what_they_did() {
 /// Skeleton clouds of the sapling at `screen` px with `clouds` (None: the default rule).
 fn build_skeleton(screen: f32, clouds: Option<usize>) -> (Built, frond_skeleton::SkeletonReport) {
     let (tree, sampled, params, pixel) = setup(&sapling(), screen);
-    let clock = LoopClock::of(&tree, &sampled);
     let renderer = Renderer::new().expect("renderer");
     let sk = SkeletonParams {
         kind: BoneDescriptionKind::RotationSpectral,
@@ -765,15 +778,9 @@ fn build_skeleton(screen: f32, clouds: Option<usize>) -> (Built, frond_skeleton:
         attach_tolerance: 0.5 * pixel,
         displacement_tolerance: pixel,
     };
-    let (cloud, _, report) = build_skeleton_cloud(
-        &renderer,
-        &tree,
-        &sampled,
-        clock,
-        &params,
-        &sk,
-        tree.bounds.size(),
-    )
+    let (cloud, _, report) = with_context(&renderer, &tree, &sampled, &params, pixel, |ctx| {
+        build_skeleton_cloud(ctx, &sk)
+    })
     .expect("cloud");
     (
         Built {

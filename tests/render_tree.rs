@@ -20,7 +20,7 @@ fn request(time: f32) -> RenderRequest {
 #[test]
 fn frames_at_zero_and_quarter_period_are_plausible_and_differ() {
     let tree = import(&fixture("bush_1.glb"), &ImportOptions::default()).expect("imports");
-    let period = tree.clips[0].duration();
+    let period = tree.rig.clips[0].duration();
     let renderer = Renderer::new().expect("a graphics adapter (Mesa llvmpipe on CI)");
     let a = render_tree(&renderer, &tree, &request(0.0)).expect("renders");
     let b = render_tree(&renderer, &tree, &request(period / 4.0)).expect("renders");

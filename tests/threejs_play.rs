@@ -161,14 +161,14 @@ fn gltf_json(path: &Path) -> serde_json::Value {
 }
 
 /// For every vertex of `flatten(play)`, its index in `tree.vertices`, when the layouts line up:
-/// frond visits `tree.node_order`, and appends the vertices of each triangle-mode primitive
+/// frond visits `tree.rig.order`, and appends the vertices of each triangle-mode primitive
 /// (modes 4, 5, 6) of each mesh node. None when any three.js mesh lacks its indices or the counts
 /// disagree.
 pub fn frond_order(glb: &Path, tree: &Tree, play: &ThreeClip) -> Option<Vec<usize>> {
     let json = gltf_json(glb);
     let mut base: HashMap<(usize, usize), (usize, usize)> = HashMap::new();
     let mut next = 0usize;
-    for &ni in &tree.node_order {
+    for &ni in &tree.rig.order {
         let Some(mi) = usize_of(&json["nodes"][ni]["mesh"]) else {
             continue;
         };
@@ -255,7 +255,7 @@ pub fn compare_with_frond(
     rel_times: &[f32],
     radius: f32,
 ) -> Agreement {
-    let c = &tree.clips[clip];
+    let c = &tree.rig.clips[clip];
     let abs: Vec<f32> = rel_times.iter().map(|t| c.start + t).collect();
     let play = three_play(glb, Some(&c.name), &abs);
     compare_play(glb, tree, clip, &play, radius)
@@ -269,7 +269,7 @@ pub fn compare_play(
     play: &ThreeClip,
     radius: f32,
 ) -> Agreement {
-    let c = &tree.clips[clip];
+    let c = &tree.rig.clips[clip];
     let abs = &play.times;
     assert_eq!(play.name.as_deref(), Some(c.name.as_str()));
     assert!(
@@ -322,13 +322,13 @@ fn threejs_plays_trees_like_frond_samples_them() {
     }
     for path in trees() {
         let tree = import(&path, &ImportOptions::default()).expect("tree imports");
-        assert!(!tree.clips.is_empty(), "{path:?} has a clip");
+        assert!(!tree.rig.clips.is_empty(), "{path:?} has a clip");
         let height = tree.bounds.height();
         // frond skins in f32 (three.js in f64 from the same f32 data): a few dozen ulps through
         // the bone chain and the weighted sum, ~1e-6 of the coordinates. Measured: 2e-7 × height
         // (sapling, bush_1). The brief's bound was 1e-4 × height; 1e-5 still leaves 40× headroom.
         let tolerance = 1e-5 * height;
-        let period = tree.clips[0].duration();
+        let period = tree.rig.clips[0].duration();
         // The four quarter points of the loop, plus one between keys (interpolation).
         let times = [
             0.0,
@@ -376,9 +376,13 @@ fn point_set_fallback_agrees_with_the_one_to_one_match() {
     }
     let path = common::root().join("samples/sapling.glb");
     let tree = import(&path, &ImportOptions::default()).expect("sapling imports");
-    let t = 0.3 * tree.clips[0].duration();
-    let three = three_positions(&path, Some(&tree.clips[0].name), &[tree.clips[0].start + t]);
-    let frond = pose_at(&tree, Some(0), tree.clips[0].start + t);
+    let t = 0.3 * tree.rig.clips[0].duration();
+    let three = three_positions(
+        &path,
+        Some(&tree.rig.clips[0].name),
+        &[tree.rig.clips[0].start + t],
+    );
+    let frond = pose_at(&tree, Some(0), tree.rig.clips[0].start + t);
     let tolerance = 1e-4 * tree.bounds.height();
     let d = nearest_max_distance(&three[0], &frond, 10.0 * tolerance);
     assert!(d <= tolerance, "nearest distance {d}");
@@ -420,8 +424,8 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
     files.push(out.join(report["combined"].as_str().expect("combined file name")));
 
     let input = import(&input_path, &ImportOptions::default()).expect("sapling imports");
-    let wind = |tree: &Tree| tree.clips.iter().position(|c| c.name == "Wind");
-    let clip_in = &input.clips[wind(&input).expect("the sapling has a Wind clip")];
+    let wind = |tree: &Tree| tree.rig.clips.iter().position(|c| c.name == "Wind");
+    let clip_in = &input.rig.clips[wind(&input).expect("the sapling has a Wind clip")];
     let period = clip_in.duration();
     assert!(period > 0.0);
     let height = input.bounds.height();
@@ -445,7 +449,7 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
         let label = file.file_name().unwrap_or_default().to_string_lossy();
         let tree = import(file, &ImportOptions::default()).expect("LOD file imports");
         let ci = wind(&tree).unwrap_or_else(|| panic!("{label}: no Wind clip"));
-        let c = &tree.clips[ci];
+        let c = &tree.rig.clips[ci];
         // In phase and the same length as the input's clip (frond's reading of the file).
         assert!(
             (c.start - clip_in.start).abs() <= 1e-4 && (c.end - clip_in.end).abs() <= 1e-4,

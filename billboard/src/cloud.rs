@@ -67,8 +67,6 @@ pub enum CloudError {
     Empty,
     #[error(transparent)]
     Bake(#[from] BakeError),
-    #[error(transparent)]
-    Skeleton(#[from] frond_skeleton::SkeletonError),
 }
 
 /// The minimum-area rectangle of `triangles` projected onto the cluster's plane.

@@ -17,4 +17,11 @@ pub enum ExportError {
     NoLod,
     #[error(transparent)]
     Vat(#[from] crate::vat::VatError),
+    #[error(
+        "--animation spectral: method '{0}' gives billboards sampled rigid motion, which has no \
+         spectral form; use a spectral method (or per-bone), or --animation skin/vat"
+    )]
+    NoSpectralForm(String),
+    #[error("serialising a sidecar: {0}")]
+    Json(String),
 }

@@ -10,10 +10,11 @@
 
 use std::collections::HashMap;
 
-use frond_billboard::animated::{AnimatedBillboardCloud, Rig};
+use frond_lod::AnimatedBillboardCloud;
+use frond_scene::Rig;
 use frond_scene::Tree;
-use frond_scene::animation::{Interpolation, Property};
 use frond_scene::gltf_writer::*;
+use frond_scene::rig::{Interpolation, Property};
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use glam::Mat4;
 

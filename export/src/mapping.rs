@@ -2,7 +2,7 @@
 //! replaces (indices in the input's triangle order), what it follows and whether it has its own
 //! motion. The metrics read it to compare a LOD with the original, triangle by triangle.
 
-use frond_billboard::animated::AnimatedBillboardCloud;
+use frond_lod::AnimatedBillboardCloud;
 use serde::{Deserialize, Serialize};
 
 /// One billboard's entry.

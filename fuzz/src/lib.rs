@@ -113,7 +113,7 @@ pub fn import_and_sample(bytes: &[u8]) {
     let samples = (SAMPLE_WORK / (nv + tree.bones.len() + 1)).clamp(1, 3);
     let mut clips: Vec<Option<String>> = vec![None];
     clips.extend(
-        tree.clips
+        tree.rig.clips
             .iter()
             .skip(1)
             .take(1)

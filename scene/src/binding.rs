@@ -7,10 +7,10 @@ use crate::model::{Part, Tree};
 pub fn bone_of_node(tree: &Tree, node: usize) -> Option<usize> {
     let mut n = Some(node);
     while let Some(i) = n {
-        if let Some(b) = tree.nodes[i].bone {
+        if let Some(b) = tree.rig.nodes[i].bone {
             return Some(b);
         }
-        n = tree.nodes[i].parent;
+        n = tree.rig.nodes[i].parent;
     }
     None
 }

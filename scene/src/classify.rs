@@ -5,7 +5,6 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
-use crate::import::ImportOptions;
 use crate::model::{AlphaMode, Classification, Material, Part, Tree, Triangle};
 
 /// Name fragments that mark foliage.
@@ -95,13 +94,21 @@ fn has_word(name: &str, words: &[&str]) -> Option<String> {
         .map(|w| w.to_string())
 }
 
+/// Materials the user named as foliage or as wood (`--foliage-material`, `--wood-material`):
+/// they win over every heuristic.
+#[derive(Clone, Copy, Debug)]
+pub struct MaterialOverrides<'a> {
+    pub foliage: &'a [String],
+    pub wood: &'a [String],
+}
+
 /// Classifies every primitive and flattens them into triangles. Primitives without a material
 /// get a default one appended to `tree.materials` by the caller's materials list.
 pub fn classify_primitives(
     tree: &Tree,
     prims: &[PrimitiveInfo],
     rest: &[Vec3],
-    options: &ImportOptions,
+    overrides: MaterialOverrides,
 ) -> (Vec<Triangle>, Vec<Classification>) {
     let tree_size = crate::model::Bounds::of(
         prims
@@ -117,10 +124,10 @@ pub fn classify_primitives(
         let mat_name = mat
             .map(|m| m.name.clone())
             .unwrap_or_else(|| "(none)".into());
-        let node_name = &tree.nodes[p.node].name;
-        let (part, reason) = if options.foliage_materials.contains(&mat_name) {
+        let node_name = &tree.rig.nodes[p.node].name;
+        let (part, reason) = if overrides.foliage.contains(&mat_name) {
             (Part::Foliage, format!("--foliage-material {mat_name}"))
-        } else if options.wood_materials.contains(&mat_name) {
+        } else if overrides.wood.contains(&mat_name) {
             (Part::Wood, format!("--wood-material {mat_name}"))
         } else if let Some(w) = has_word(&mat_name, FOLIAGE_WORDS) {
             (Part::Foliage, format!("material name contains '{w}'"))

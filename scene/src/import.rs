@@ -14,13 +14,14 @@ use gltf::json;
 use gltf::json::validation::Checked;
 use rayon::prelude::*;
 
-use crate::animation::{Channel, Clip, Interpolation, Property, world_matrices};
 use crate::binding::assign_foliage_bones;
-use crate::classify::{PrimitiveInfo, classify_primitives};
+use crate::classify::{MaterialOverrides, PrimitiveInfo, classify_primitives};
 use crate::error::Result;
 use crate::gltf_source::GltfSource;
 use crate::input_file::{InputLimits, MAX_TEXTURE_OPTION, MAX_VERTICES_OPTION, human_bytes};
 use crate::model::*;
+use crate::rig::{Channel, Clip, Interpolation, Property, world_matrices};
+use crate::rig::{Node, Rig, Trs};
 use crate::skinning::skin_positions;
 
 /// User choices that change how a file is read.
@@ -92,24 +93,34 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
     }
     let tmp = Tree {
         source: src.path.clone(),
-        nodes,
-        node_order,
+        rig: Rig {
+            nodes,
+            order: node_order,
+            clips,
+        },
         bones,
         bindings,
         vertices,
         triangles: Vec::new(),
         materials,
         textures,
-        clips,
         classification: Vec::new(),
         foliage_reassigned: 0,
         warnings: Vec::new(),
         bounds: Bounds::of([]),
     };
     let rest_positions = skin_positions(&tmp, &rest_world);
-    check_rest_positions(src, &tmp.nodes, &prims, &rest_positions)?;
+    check_rest_positions(src, &tmp.rig.nodes, &prims, &rest_positions)?;
     let mut tree = tmp;
-    let (triangles, classification) = classify_primitives(&tree, &prims, &rest_positions, options);
+    let (triangles, classification) = classify_primitives(
+        &tree,
+        &prims,
+        &rest_positions,
+        MaterialOverrides {
+            foliage: &options.foliage_materials,
+            wood: &options.wood_materials,
+        },
+    );
     tree.triangles = triangles;
     tree.classification = classification;
     if tree
@@ -137,7 +148,7 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
         warnings.push(
             "static tree: no skin, so foliage follows no bone (treated as a one-frame loop)".into(),
         );
-    } else if tree.clips.is_empty() {
+    } else if tree.rig.clips.is_empty() {
         warnings.push("static tree: no animation clip (treated as a one-frame loop)".into());
     }
     if tree.count(Part::Foliage) == 0 {

@@ -2,7 +2,6 @@
 //! sample-tree generator.
 
 pub mod accessor;
-pub mod animation;
 pub mod binding;
 pub mod classify;
 pub mod error;
@@ -11,7 +10,9 @@ pub mod gltf_source;
 pub mod gltf_writer;
 pub mod import;
 pub mod input_file;
+pub mod length;
 pub mod model;
+pub mod rig;
 pub mod rigid_fit;
 pub mod sampling;
 pub mod skinning;
@@ -21,5 +22,7 @@ pub mod wood;
 pub use error::{Result, SceneError};
 pub use import::{ImportOptions, import, import_bytes};
 pub use input_file::InputLimits;
+pub use length::Length;
 pub use model::*;
+pub use rig::{Clip, Node, Rig, Trs};
 pub use sampling::{Motion, SampleOptions, Sampled, sample};

@@ -3,45 +3,10 @@
 
 use std::path::PathBuf;
 
-use glam::{Mat4, Quat, Vec2, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 use serde::Serialize;
 
-use crate::animation::Clip;
-
-/// A node's local transform as translation, rotation, scale.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Trs {
-    pub translation: Vec3,
-    pub rotation: Quat,
-    pub scale: Vec3,
-}
-
-impl Trs {
-    /// The identity transform.
-    pub const IDENTITY: Trs = Trs {
-        translation: Vec3::ZERO,
-        rotation: Quat::IDENTITY,
-        scale: Vec3::ONE,
-    };
-    /// As a column-major matrix (T · R · S).
-    pub fn matrix(&self) -> Mat4 {
-        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
-    }
-}
-
-/// One node of the glTF hierarchy.
-#[derive(Clone, Debug)]
-pub struct Node {
-    pub name: String,
-    pub parent: Option<usize>,
-    pub children: Vec<usize>,
-    /// Rest (un-animated) local transform.
-    pub rest: Trs,
-    /// The bone this node is, if it is a skin joint.
-    pub bone: Option<usize>,
-    /// The node's `extras`, verbatim JSON (empty when absent).
-    pub extras: Option<serde_json::Value>,
-}
+use crate::rig::Rig;
 
 /// A bone: a node that is a joint of some skin.
 #[derive(Clone, Debug)]
@@ -187,22 +152,24 @@ impl Bounds {
     pub fn height(&self) -> f32 {
         self.max[1] - self.min[1]
     }
+    /// Length of the box's diagonal: what relative lengths (`2%`) are a fraction of.
+    pub fn diagonal(&self) -> f32 {
+        (Vec3::from(self.max) - Vec3::from(self.min)).length()
+    }
 }
 
 /// A whole tree as imported.
 #[derive(Clone, Debug)]
 pub struct Tree {
     pub source: PathBuf,
-    pub nodes: Vec<Node>,
-    /// Nodes ordered parents-first (for global transforms).
-    pub node_order: Vec<usize>,
+    /// Every glTF node with its rest transform, and every clip.
+    pub rig: Rig,
     pub bones: Vec<Bone>,
     pub bindings: Vec<Binding>,
     pub vertices: Vertices,
     pub triangles: Vec<Triangle>,
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
-    pub clips: Vec<Clip>,
     pub classification: Vec<Classification>,
     /// Foliage triangles whose vertices were not all rigidly bound to their chosen bone.
     pub foliage_reassigned: usize,
@@ -245,8 +212,8 @@ impl Tree {
     /// Find a clip by name, or the first clip.
     pub fn clip_index(&self, name: Option<&str>) -> Option<usize> {
         match name {
-            None => (!self.clips.is_empty()).then_some(0),
-            Some(n) => self.clips.iter().position(|c| c.name == n),
+            None => (!self.rig.clips.is_empty()).then_some(0),
+            Some(n) => self.rig.clip_named(n),
         }
     }
 }

@@ -4,9 +4,9 @@
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 
-use crate::animation::{local_pose, world_matrices};
 use crate::error::{Result, SceneError};
 use crate::model::Tree;
+use crate::rig::{local_pose, world_matrices};
 use crate::skinning::{palettes, skin_into};
 
 /// A loop whose first and last poses differ by more than this × tree height does not loop.
@@ -85,8 +85,8 @@ pub fn pose_at(tree: &Tree, clip: Option<usize>, t: f32) -> Vec<Vec3> {
 
 /// Node world matrices at time `t` of clip `clip`.
 pub fn world_at(tree: &Tree, clip: Option<usize>, t: f32) -> Vec<Mat4> {
-    let local = local_pose(&tree.nodes, clip.map(|c| &tree.clips[c]), t);
-    world_matrices(&tree.nodes, &tree.node_order, &local)
+    let local = local_pose(&tree.rig.nodes, clip.map(|c| &tree.rig.clips[c]), t);
+    world_matrices(&tree.rig.nodes, &tree.rig.order, &local)
 }
 
 fn max_distance(a: &[Vec3], b: &[Vec3]) -> f32 {
@@ -107,7 +107,7 @@ fn scale_of(tree: &Tree) -> f32 {
 
 /// Loop and motion facts of clip `clip`, checked on `samples` uniform poses.
 pub fn clip_motion(tree: &Tree, clip: usize, samples: usize) -> Motion {
-    let c = &tree.clips[clip];
+    let c = &tree.rig.clips[clip];
     let first = pose_at(tree, Some(clip), c.start);
     let last = pose_at(tree, Some(clip), c.end);
     let mut max_disp = max_distance(&first, &last);
@@ -143,7 +143,8 @@ pub fn sample(tree: &Tree, options: &SampleOptions) -> Result<Sampled> {
                     path: tree.source.clone(),
                     problem: format!(
                         "no clip named '{name}' (clips: {})",
-                        tree.clips
+                        tree.rig
+                            .clips
                             .iter()
                             .map(|c| c.name.as_str())
                             .collect::<Vec<_>>()
@@ -154,12 +155,12 @@ pub fn sample(tree: &Tree, options: &SampleOptions) -> Result<Sampled> {
         None => tree.clip_index(None),
     };
     let (start, period, n) = match clip {
-        Some(c) if tree.clips[c].duration() > 0.0 => (
-            tree.clips[c].start,
-            tree.clips[c].duration(),
+        Some(c) if tree.rig.clips[c].duration() > 0.0 => (
+            tree.rig.clips[c].start,
+            tree.rig.clips[c].duration(),
             options.samples,
         ),
-        Some(c) => (tree.clips[c].start, 0.0, 1),
+        Some(c) => (tree.rig.clips[c].start, 0.0, 1),
         None => (0.0, 0.0, 1),
     };
     let times: Vec<f32> = (0..n)
@@ -196,14 +197,16 @@ pub fn sample(tree: &Tree, options: &SampleOptions) -> Result<Sampled> {
         .collect();
     let first = &positions[..nv];
     let loop_gap = match clip {
-        Some(c) if period > 0.0 => max_distance(first, &pose_at(tree, Some(c), tree.clips[c].end)),
+        Some(c) if period > 0.0 => {
+            max_distance(first, &pose_at(tree, Some(c), tree.rig.clips[c].end))
+        }
         _ => 0.0,
     };
     let max_disp = (1..n)
         .map(|s| max_distance(first, &positions[s * nv..(s + 1) * nv]))
         .fold(loop_gap, f32::max);
     Ok(Sampled {
-        clip: clip.map(|c| tree.clips[c].name.clone()),
+        clip: clip.map(|c| tree.rig.clips[c].name.clone()),
         period,
         times,
         vertices: nv,

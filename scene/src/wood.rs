@@ -190,7 +190,7 @@ impl WoodMesh {
                     })
                     .collect(),
                 Binding::Node(n) => vec![
-                    (*n < tree.nodes.len())
+                    (*n < tree.rig.nodes.len())
                         .then(|| bone_of_node(tree, *n))
                         .flatten()
                         .map_or(NO_BONE, |b| b as u32),

@@ -5,8 +5,8 @@
 
 use std::path::Path;
 
-use frond_scene::animation::Interpolation;
 use frond_scene::gltf_writer::glb_container;
+use frond_scene::rig::Interpolation;
 use frond_scene::{ImportOptions, Tree, import_bytes};
 use glam::{Mat4, Quat, Vec3, Vec4};
 use serde_json::{Value, json};
@@ -228,7 +228,7 @@ fn assert_error(e: &str, needle: &str) {
 
 /// Every clip channel has what glTF requires of a sampler input.
 fn assert_valid_times(tree: &Tree) {
-    for clip in &tree.clips {
+    for clip in &tree.rig.clips {
         for ch in &clip.channels {
             assert!(
                 ch.times.iter().all(|t| t.is_finite() && *t >= 0.0),
@@ -290,7 +290,7 @@ fn non_finite_key_times_are_refused() {
 #[test]
 fn negative_zero_is_read_as_zero() {
     let tree = skinned(&[-0.0, 1.0], "LINEAR").load();
-    let t0 = tree.clips[0].channels[0].times[0];
+    let t0 = tree.rig.clips[0].channels[0].times[0];
     assert!(t0 == 0.0 && t0.is_sign_positive(), "{t0}");
 }
 
@@ -300,7 +300,7 @@ fn repeated_key_times_keep_the_last_key_with_a_warning() {
     let w = warning(&tree, "animation 'wind' channel 0: 2 keys at the same time");
     assert!(w.contains("keeping the last key"), "{w}");
     assert_valid_times(&tree);
-    let ch = &tree.clips[0].channels[0];
+    let ch = &tree.rig.clips[0].channels[0];
     assert_eq!(ch.times, [0.0, 1.0, 2.0]);
     // Keys 0, 3 and 4 of the written ones remain (key k rotates by 0.1·k about z).
     for (got, k) in ch.values.iter().zip([0, 3, 4]) {
@@ -314,7 +314,7 @@ fn repeated_cubic_spline_keys_drop_their_tangent_triplet() {
     let tree = skinned(&[0.0, 0.0, 1.0], "CUBICSPLINE").load();
     warning(&tree, "animation 'wind' channel 0: 1 key at the same time");
     assert_valid_times(&tree);
-    let ch = &tree.clips[0].channels[0];
+    let ch = &tree.rig.clips[0].channels[0];
     assert_eq!(ch.times, [0.0, 1.0]);
     // Written values 0..9 are (in, value, out) of keys 0, 1, 2; key 0's triplet (0, 1, 2) goes.
     for (got, k) in ch.values.iter().zip(3..9) {
@@ -332,7 +332,7 @@ fn a_clip_longer_than_an_hour_is_refused() {
     );
     // An hour itself is fine.
     let tree = skinned(&[0.0, 3600.0], "LINEAR").load();
-    assert_eq!(tree.clips[0].duration(), 3600.0);
+    assert_eq!(tree.rig.clips[0].duration(), 3600.0);
 }
 
 // --- 2. warnings for what used to pass silently ---------------------------------------------
@@ -363,7 +363,7 @@ fn a_scene_root_that_is_also_a_child_is_a_warning() {
         "scene 0 lists node 1 ('bone1') as a root, but it is a child of node 0 ('bone0'); read as that node's child",
     );
     warning(&tree, "scene 0 lists node 99 as a root, but there are only");
-    assert_eq!(tree.nodes[1].parent, Some(0));
+    assert_eq!(tree.rig.nodes[1].parent, Some(0));
 }
 
 #[test]

@@ -279,11 +279,11 @@ fn check_from_tree(name: &str, tree: &Tree) {
         assert_eq!(mesh.uvs[i], tree.vertices.uv[s as usize], "{name}: uv {i}");
     }
     // The per-bone skin moves the mesh exactly as the tree's own skinning does.
-    if !tree.clips.is_empty() {
+    if !tree.rig.clips.is_empty() {
         let tol = 1e-4 * tree.bounds.height();
-        let period = tree.clips[0].duration();
+        let period = tree.rig.clips[0].duration();
         for f in [0.13, 0.5, 0.81] {
-            let t = tree.clips[0].start + f * period;
+            let t = tree.rig.clips[0].start + f * period;
             let want = pose_at(tree, Some(0), t);
             let got = skin_mesh(tree, &mesh, Some(0), t);
             for (i, &s) in source.iter().enumerate() {
@@ -375,7 +375,7 @@ fn check_simplify(name: &str, tree: &Tree, mesh: &WoodMesh, frac: f32, animated:
         assert!(mesh.primitives.iter().any(|q| q.material == p.material));
     }
     assert_within(name, mesh, &s, e, tol);
-    if animated && !tree.clips.is_empty() {
+    if animated && !tree.rig.clips.is_empty() {
         // Moving, the bound loosens a little: linear-blend skinning is not linear in the
         // weights, so a triangle spanning a joint bends differently than the finer original
         // (measured at most 1.37 e on the shared trees).

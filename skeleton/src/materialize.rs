@@ -5,18 +5,16 @@
 //! for the trunk and the foliage gets its own copies of every bone that changed or hangs
 //! below one (§7.4: the trunk stays on the original skeleton).
 
-use frond_scene::animation::{Channel, Clip, Interpolation, Property};
-use frond_scene::{Node, Tree};
+use frond_scene::rig::{Channel, Interpolation, Property};
+use frond_scene::{Node, Rig, Tree};
 use glam::{Quat, Vec4};
 
 use crate::model::SkeletonModel;
 
-/// Rig nodes, their parents-first order and the clips, glTF-shaped.
+/// The simplified skeleton as a glTF-shaped rig.
 #[derive(Clone, Debug)]
-pub struct RigParts {
-    pub nodes: Vec<Node>,
-    pub order: Vec<usize>,
-    pub clips: Vec<Clip>,
+pub struct MaterializedRig {
+    pub rig: Rig,
     /// Rig node of every model node (None for nodes the foliage no longer needs).
     pub map: Vec<Option<usize>>,
 }
@@ -90,10 +88,10 @@ pub fn materialize(
     times: &[f32],
     period: f32,
     split: bool,
-) -> RigParts {
-    let mut nodes = tree.nodes.clone();
-    let mut order = tree.node_order.clone();
-    let mut clips = tree.clips.clone();
+) -> MaterializedRig {
+    let mut nodes = tree.rig.nodes.clone();
+    let mut order = tree.rig.order.clone();
+    let mut clips = tree.rig.clips.clone();
     let counts = model.animated_counts();
     let keys = key_times(times, period);
     let mut map: Vec<Option<usize>> = vec![None; model.nodes.len()];
@@ -146,10 +144,12 @@ pub fn materialize(
         c.channels.retain(|ch| !replaced.contains(&ch.node));
         c.channels.extend(new_channels);
     }
-    RigParts {
-        nodes,
-        order,
-        clips,
+    MaterializedRig {
+        rig: Rig {
+            nodes,
+            order,
+            clips,
+        },
         map,
     }
 }

@@ -7,7 +7,7 @@
 //! parent's frame, and its *animation* is the delta rotation `d(s) = R(s)·R_rest⁻¹` it turns
 //! about that pivot, in the parent's frame. Siblings are nodes with the same parent.
 
-use frond_scene::animation::local_pose;
+use frond_scene::rig::local_pose;
 use frond_scene::{Sampled, Tree, Trs};
 use glam::{Mat4, Quat, Vec3};
 use rayon::prelude::*;
@@ -125,12 +125,19 @@ impl SkeletonModel {
         }
         let times = &sampled.times;
         let n = times.len().max(1);
-        let clip_ref = clip.and_then(|c| tree.clips.get(c));
+        let clip_ref = clip.and_then(|c| tree.rig.clips.get(c));
         let poses: Vec<Vec<Trs>> = (0..n)
             .into_par_iter()
-            .map(|s| local_pose(&tree.nodes, clip_ref, times.get(s).copied().unwrap_or(0.0)))
+            .map(|s| {
+                local_pose(
+                    &tree.rig.nodes,
+                    clip_ref,
+                    times.get(s).copied().unwrap_or(0.0),
+                )
+            })
             .collect();
         let mut nodes: Vec<SkNode> = tree
+            .rig
             .nodes
             .iter()
             .enumerate()

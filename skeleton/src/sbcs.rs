@@ -16,7 +16,7 @@ use crate::cjr::{Merge, apply_common_rotations, common_rotation_sets};
 use crate::collapse::{CollapseRecord, EndJointCache, collapse_candidates, collapse_pair};
 use crate::description::{AxisAngle, BoneDescriptionKind, BoneDescriptionType, RotationSpectral};
 use crate::error::SkeletonError;
-use crate::materialize::{RigParts, materialize};
+use crate::materialize::{MaterializedRig, materialize};
 use crate::model::SkeletonModel;
 
 /// What SBCS is asked for.
@@ -94,7 +94,7 @@ pub struct SkeletonReport {
 /// The simplified skeleton and the clouds to build on it.
 #[derive(Clone, Debug)]
 pub struct SimplifiedSkeleton {
-    pub rig: RigParts,
+    pub rig: MaterializedRig,
     pub sets: Vec<CloudSet>,
     pub report: SkeletonReport,
 }

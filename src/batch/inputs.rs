@@ -9,7 +9,7 @@ use frond_scene::input_file::{read_regular_file, resolve_uri};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use crate::lod_cmd::METHOD_NAMES;
+use frond_lod::{METHOD_NAMES, MethodName};
 
 /// Animation modes `frond lod --animation` takes (`vat`: EXR half; the web preset refuses `vat-png16`).
 pub const ANIMATION_NAMES: &[&str] = &["skin", "vat", "vat-png16", "spectral"];
@@ -61,11 +61,15 @@ impl Overrides {
     /// Refuses names and values `frond lod` would refuse, naming `what` (the manifest entry).
     pub fn check(&self, what: &str) -> Result<()> {
         if let Some(m) = &self.method
-            && !METHOD_NAMES.contains(&m.as_str())
+            && MethodName::parse(m).is_none()
         {
             bail!(
                 "{what}: unknown method '{m}' (one of {})",
-                METHOD_NAMES.join(", ")
+                METHOD_NAMES
+                    .iter()
+                    .map(|(n, _)| *n)
+                    .collect::<Vec<_>>()
+                    .join(", ")
             );
         }
         if let Some(a) = &self.animation

@@ -23,7 +23,7 @@ pub const STAMP: &str = "batch.json";
 /// `frond lod`'s report in each output folder.
 /// `frond lod`'s report of the tree read from `input` (`<name>_report.json`).
 pub fn report_file(input: &Path) -> String {
-    crate::lod_cmd::report_name(&crate::lod_cmd::name_of(input))
+    frond_lod::report::report_name(&crate::lod_cmd::name_of(input))
 }
 /// Private folder under OUTDIR for outputs being written.
 pub const TMP_DIR: &str = ".frond-tmp";

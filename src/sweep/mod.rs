@@ -21,8 +21,9 @@ use serde_json::Value;
 
 use crate::child_job::{JobEnd, run_job};
 use crate::eval_cmd::{EvalContext, EvalRequest, image_for_screen_height, same_bytes};
-use crate::lod_cmd::{Method, auto_method, lod_name};
+use crate::lod_cmd::lod_name;
 use crate::output::write_atomic;
+use frond_lod::method::{MethodName, auto_method};
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, Tree};
 use grid::{Grid, GridPoint};
@@ -283,8 +284,8 @@ fn lod_run(
     }
     // `auto` picks by LOD rank: each run builds one LOD, so resolve the rule for this grid
     // point's rank among the grid's screen heights (nearest first), as `frond lod` would.
-    let resolved = match Method::parse(method) {
-        Some(Method::Auto) => {
+    let resolved = match MethodName::parse(method) {
+        Some(MethodName::Auto) => {
             let heights = distinct_heights(&req.grid.points());
             let rank = heights.iter().filter(|&&h| h > p.screen_height).count();
             auto_method(rank, false).0.name().to_string()
@@ -308,7 +309,9 @@ fn lod_run(
     }
     args.extend(req.lod_args.iter().cloned());
     let end = run_job(&req.exe, &args, dir, "lod", req.timeout)?;
-    let report_path = dir.join("lod").join(crate::lod_cmd::report_name(tree_name));
+    let report_path = dir
+        .join("lod")
+        .join(frond_lod::report::report_name(tree_name));
     let report: Result<Value, String> = match end {
         JobEnd::Done => std::fs::read(&report_path)
             .ok()

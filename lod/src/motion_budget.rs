@@ -9,8 +9,8 @@ use glam::{Affine3A, Mat4, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::animated::{AnimatedBillboardCloud, RigidMotion};
-use crate::animated_build::sampled_worlds;
+use crate::cloud_build::sampled_worlds;
+use crate::contract::{AnimatedBillboardCloud, RigidMotion};
 use frond_scene::rigid_fit::rigid_fit;
 
 /// What one LOD can show.

@@ -1,6 +1,6 @@
 //! The contract between clustering and export: an animated billboard cloud (spec
-//! animated-billboard-clouds §1.4). Every clustering method (per-bone, static, and later
-//! spectral and skeleton) produces one; `frond-export` writes it without knowing the method.
+//! animated-billboard-clouds §1.4). Every clustering method (per-bone, static, spectral,
+//! skeleton) produces one; `frond-export` writes it without knowing the method.
 //!
 //! Motion of a billboard, in world space at loop time `t`:
 //! `corners(t) = W_b(t) · Rest_b⁻¹ · M(t) · quad.corners()` when it follows rig node `b`, or
@@ -8,104 +8,10 @@
 //! `Rest_b` its rest world matrix and `M(t)` its own rigid motion (identity when `None`).
 //! Quads never deform: `M` is rotation plus translation only.
 
-use frond_scene::animation::{Clip, local_pose, world_matrices};
-use frond_scene::{Node, Tree};
+use frond_billboard::{Atlas, Quad};
+use frond_scene::{Rig, Tree};
 use frond_spectral::description::Components;
 use glam::{Affine3A, Mat4, Vec2, Vec3};
-
-use crate::bake::Atlas;
-use crate::quad::Quad;
-
-/// The output skeleton: a node hierarchy with rest transforms and the clips that drive it.
-/// Node and channel indices are the rig's own (the pipeline may prune or rebuild it).
-#[derive(Clone, Debug)]
-pub struct Rig {
-    /// Nodes; `parent`/`children` index this list, `bone` is unused.
-    pub nodes: Vec<Node>,
-    /// Nodes ordered parents first.
-    pub order: Vec<usize>,
-    /// Clips over these nodes; each keeps the input's name, start and end.
-    pub clips: Vec<Clip>,
-    /// Some nodes' channels were resampled from the loop clock's clip alone (skeleton
-    /// simplification): only that clip plays correctly.
-    pub resampled: bool,
-}
-
-impl Rig {
-    /// The tree's whole node hierarchy and every clip, unchanged.
-    pub fn from_tree(tree: &Tree) -> Rig {
-        Rig {
-            nodes: tree.nodes.clone(),
-            order: tree.node_order.clone(),
-            clips: tree.clips.clone(),
-            resampled: false,
-        }
-    }
-
-    /// World matrices of every node at time `t` of clip `clip` (rest pose when None).
-    pub fn world_at(&self, clip: Option<usize>, t: f32) -> Vec<Mat4> {
-        let local = local_pose(&self.nodes, clip.and_then(|c| self.clips.get(c)), t);
-        world_matrices(&self.nodes, &self.order, &local)
-    }
-
-    /// Rest world matrices of every node.
-    pub fn rest_world(&self) -> Vec<Mat4> {
-        self.world_at(None, 0.0)
-    }
-
-    /// Index of the clip named `name`.
-    pub fn clip_named(&self, name: &str) -> Option<usize> {
-        self.clips.iter().position(|c| c.name == name)
-    }
-
-    /// Keeps only `keep` (and their ancestors), remapping indices; returns old → new index.
-    /// Channels of removed nodes are dropped; clips are kept (names and lengths), even when
-    /// left without channels.
-    pub fn retain(&mut self, keep: &[bool]) -> Vec<Option<usize>> {
-        let n = self.nodes.len();
-        let mut kept = vec![false; n];
-        for (i, &k) in keep.iter().enumerate().take(n) {
-            if k {
-                let mut cur = Some(i);
-                while let Some(c) = cur {
-                    if kept[c] {
-                        break;
-                    }
-                    kept[c] = true;
-                    cur = self.nodes[c].parent;
-                }
-            }
-        }
-        let mut map = vec![None; n];
-        let mut next = 0;
-        for (i, k) in kept.iter().enumerate() {
-            if *k {
-                map[i] = Some(next);
-                next += 1;
-            }
-        }
-        let mut nodes = Vec::with_capacity(next);
-        for (i, node) in self.nodes.iter().enumerate() {
-            if !kept[i] {
-                continue;
-            }
-            let mut node = node.clone();
-            node.parent = node.parent.and_then(|p| map[p]);
-            node.children = node.children.iter().filter_map(|&c| map[c]).collect();
-            node.bone = None;
-            nodes.push(node);
-        }
-        self.order = self.order.iter().filter_map(|&i| map[i]).collect();
-        self.nodes = nodes;
-        for clip in &mut self.clips {
-            clip.channels.retain(|c| map[c.node].is_some());
-            for c in &mut clip.channels {
-                c.node = map[c.node].unwrap_or(0);
-            }
-        }
-        map
-    }
-}
 
 /// When a billboard's own motion is sampled: uniformly over one period of one clip.
 #[derive(Clone, Debug, PartialEq)]
@@ -294,7 +200,11 @@ pub struct AnimatedBillboardCloud {
     pub atlas: Atlas,
     pub texels_per_unit: f32,
     pub density_reduced: bool,
+    /// The LOD's skeleton: the tree's rig, pruned or rebuilt.
     pub rig: Rig,
+    /// Some nodes' channels were resampled from the loop clock's clip alone (skeleton
+    /// simplification): only that clip plays correctly.
+    pub rig_resampled: bool,
     /// The samples [`RigidMotion`] refers to.
     pub clock: LoopClock,
     /// Clips the cloud can play correctly (indices into `rig.clips`): every clip when no
@@ -347,7 +257,7 @@ impl AnimatedBillboardCloud {
     /// Recomputes which clips are playable from the billboards' motions.
     pub fn update_playable_clips(&mut self) {
         let own_motion = self.billboards.iter().any(|b| b.motion.is_some());
-        self.playable_clips = if own_motion || self.rig.resampled {
+        self.playable_clips = if own_motion || self.rig_resampled {
             self.clock.clip.into_iter().collect()
         } else {
             (0..self.rig.clips.len()).collect()

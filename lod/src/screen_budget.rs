@@ -3,8 +3,12 @@
 //! one pixel there is `tree height / screen height` world units, the plane tolerance ε is the
 //! pixel budget in those units, and textures get about one texel per screen pixel.
 
-use anyhow::{Result, bail};
 use serde::Serialize;
+
+/// Why the LODs cannot be sized: the message names the option to change.
+#[derive(Clone, Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct SizingError(pub String);
 
 /// What one LOD may spend.
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
@@ -43,12 +47,14 @@ pub fn lod_levels(
     screen_heights: &[f32],
     budget_px: f32,
     epsilon: Option<f32>,
-) -> Result<Vec<LodLevel>> {
+) -> Result<Vec<LodLevel>, SizingError> {
     if !(tree_height.is_finite() && tree_height > 0.0) {
-        bail!("the tree has no height to size LODs by");
+        return Err(SizingError("the tree has no height to size LODs by".into()));
     }
     if !(budget_px.is_finite() && budget_px > 0.0) {
-        bail!("--pixel-error must be a positive number of pixels");
+        return Err(SizingError(
+            "--pixel-error must be a positive number of pixels".into(),
+        ));
     }
     // LOD1 is the nearest: each LOD must be built for a smaller screen size than the one before
     // it, or the chain would get coarser and then finer again.
@@ -65,7 +71,7 @@ pub fn lod_levels(
                 .collect::<Vec<_>>()
                 .join(",")
         };
-        bail!(
+        return Err(SizingError(format!(
             "--lods {}: screen heights go from the nearest LOD (largest) to the farthest \
              (smallest), each smaller than the one before, but {} is followed by {} (did you \
              mean --lods {}?)",
@@ -73,13 +79,15 @@ pub fn lod_levels(
             w[0],
             w[1],
             list(&sorted)
-        );
+        )));
     }
     screen_heights
         .iter()
         .map(|&h| {
             if !(h.is_finite() && h >= 1.0) {
-                bail!("LOD screen height {h} must be at least 1 pixel");
+                return Err(SizingError(format!(
+                    "LOD screen height {h} must be at least 1 pixel"
+                )));
             }
             let pixel = tree_height / h;
             let eps = epsilon.unwrap_or(budget_px * pixel);

@@ -4,12 +4,13 @@
 
 use std::path::Path;
 
-use frond_billboard::animated::{LoopClock, Rig, RigidMotion, SpectralMotion};
-use frond_billboard::animated_build::sampled_worlds;
 use frond_billboard::cloud::CloudParams;
-use frond_billboard::spectral_build::{
-    SpectralParams, build_spectral_cloud, cluster_zones, deepest_shared,
+use frond_lod::cloud_build::{BuildTimings, sampled_worlds};
+use frond_lod::contract::SpectralMotion;
+use frond_lod::methods::spectral::{
+    SpectralParams, SpectralReport, build_spectral_cloud, cluster_zones, deepest_shared,
 };
+use frond_lod::{AnimatedBillboardCloud, BuildContext, LodLevel, LoopClock, RigidMotion};
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, SampleOptions, Sampled, Tree, import, sample};
 use frond_spectral::description::{AxisPhase, Components, SpectralKind};
@@ -53,26 +54,45 @@ fn cloud_params(tree: &Tree) -> CloudParams {
     p
 }
 
+/// SCA at a LOD 150 pixels high (the sizes of [`cloud_params`]).
+fn build(
+    renderer: &Renderer,
+    tree: &Tree,
+    s: &Sampled,
+    sp: &SpectralParams,
+    scale: f32,
+) -> (AnimatedBillboardCloud, BuildTimings, SpectralReport) {
+    let cloud = cloud_params(tree);
+    let pixel = tree.bounds.height() / 150.0;
+    let level = LodLevel {
+        screen_height: 150.0,
+        pixel,
+        epsilon: pixel,
+        texels_per_unit: 1.0 / pixel,
+        wood_error: pixel,
+    };
+    let clock = LoopClock::of(tree, s);
+    let ctx = BuildContext {
+        renderer,
+        tree,
+        sampled: s,
+        clock: &clock,
+        level: &level,
+        index: 0,
+        cloud: &cloud,
+        scale,
+        seed: sp.seed,
+    };
+    build_spectral_cloud(&ctx, sp).expect("spectral cloud")
+}
+
 #[test]
 fn sca_billboards_move_like_their_leaves() {
     let tree = sapling();
     let s = sampled(&tree);
     let renderer = Renderer::new().expect("renderer");
-    let rig = Rig::from_tree(&tree);
-    let clock = LoopClock::of(&tree, &s);
     let sp = params(SpectralKind::AxisPhase, 6, &tree);
-    let scale = tree.bounds.size();
-    let (cloud, _, report) = build_spectral_cloud(
-        &renderer,
-        &tree,
-        &s,
-        rig,
-        clock,
-        &cloud_params(&tree),
-        &sp,
-        scale,
-    )
-    .expect("spectral cloud");
+    let (cloud, _, report) = build(&renderer, &tree, &s, &sp, tree.bounds.size());
     assert_eq!(cloud.method, "spectral-axis-phase");
     assert_eq!(report.clusters, 6);
     assert!(report.loops);
@@ -132,7 +152,7 @@ fn sca_billboards_move_like_their_leaves() {
 fn k_larger_than_the_zones_is_capped() {
     let tree = sapling();
     let s = sampled(&tree);
-    let rest = Rig::from_tree(&tree).rest_world();
+    let rest = tree.rig.rest_world();
     let mut sp = params(SpectralKind::AxisPhase, 1_000_000, &tree);
     sp.zone_size = 0.2 * tree.bounds.size();
     let zc = cluster_zones::<AxisPhase>(&tree, &s, &rest, &sp);
@@ -161,7 +181,7 @@ fn one_bone_splits_by_distance_from_the_joint() {
             t.bone = Some(0);
         }
     }
-    let rest = Rig::from_tree(&tree).rest_world();
+    let rest = tree.rig.rest_world();
     let zc =
         cluster_zones::<AxisPhase>(&tree, &s, &rest, &params(SpectralKind::AxisPhase, 4, &tree));
     assert_eq!(zc.report.clusters, 4);
@@ -172,11 +192,11 @@ fn one_bone_splits_by_distance_from_the_joint() {
 #[test]
 fn a_clip_that_does_not_loop_is_described_as_one_period() {
     let mut tree = sapling();
-    let c = &mut tree.clips[0];
+    let c = &mut tree.rig.clips[0];
     c.end = c.start + 0.55 * (c.end - c.start);
     let s = sampled(&tree);
     assert!(!s.motion.loops, "the cut clip does not loop");
-    let rest = Rig::from_tree(&tree).rest_world();
+    let rest = tree.rig.rest_world();
     let zc =
         cluster_zones::<AxisPhase>(&tree, &s, &rest, &params(SpectralKind::AxisPhase, 3, &tree));
     assert!(!zc.report.loops);
@@ -200,20 +220,11 @@ fn a_clip_that_does_not_loop_is_described_as_one_period() {
 #[test]
 fn no_motion_gives_still_billboards() {
     let mut tree = sapling();
-    tree.clips.clear();
+    tree.rig.clips.clear();
     let s = sampled(&tree);
     let renderer = Renderer::new().expect("renderer");
-    let (cloud, _, report) = build_spectral_cloud(
-        &renderer,
-        &tree,
-        &s,
-        Rig::from_tree(&tree),
-        LoopClock::of(&tree, &s),
-        &cloud_params(&tree),
-        &params(SpectralKind::DominatingAxis, 3, &tree),
-        tree.bounds.size(),
-    )
-    .expect("cloud");
+    let sp = params(SpectralKind::DominatingAxis, 3, &tree);
+    let (cloud, _, report) = build(&renderer, &tree, &s, &sp, tree.bounds.size());
     assert_eq!(report.motion_rms, 0.0);
     assert!(!cloud.billboards.is_empty());
     assert!(cloud.billboards.iter().all(|b| b.motion.is_none()));
@@ -222,7 +233,7 @@ fn no_motion_gives_still_billboards() {
 #[test]
 fn deepest_shared_bone_and_pruning() {
     let tree = sapling();
-    let nodes = &tree.nodes;
+    let nodes = &tree.rig.nodes;
     // A node and its parent share the parent; a node alone is its own.
     let child = (0..nodes.len())
         .find(|&i| nodes[i].parent.is_some())

@@ -5,18 +5,20 @@
 
 use std::time::Instant;
 
-use frond_render::{Renderer, TreeParts, scene_from_positions};
-use frond_scene::{Sampled, Tree};
+use frond_render::{TreeParts, scene_from_positions};
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::animated::{AnimatedBillboard, AnimatedBillboardCloud, LoopClock, Rig, RigidMotion};
-use crate::bake::bake_cloud;
-use crate::cloud::{CloudError, CloudParams, fit_quad};
-use crate::plane_search::{search_planes, valid_for_plane};
-use crate::soup::TriangleSoup;
+use frond_billboard::bake::bake_cloud;
+use frond_billboard::cloud::{CloudError, fit_quad};
+use frond_billboard::plane_search::{search_planes, valid_for_plane};
+use frond_billboard::{Quad, TriangleSoup};
+use frond_scene::Rig;
 use frond_scene::rigid_fit::rigid_fit;
+
+use crate::contract::{AnimatedBillboard, AnimatedBillboardCloud, LoopClock, RigidMotion};
+use crate::method::BuildContext;
 
 /// How a cluster's billboards move.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -28,7 +30,7 @@ pub enum Driver {
     /// built in the average pose.
     RigidFit,
     /// Built in the average pose with no motion yet: the caller gives each billboard its
-    /// own (spectral clustering, [`crate::spectral_build`]).
+    /// own (spectral clustering, [`crate::methods::spectral`]).
     Assigned,
 }
 
@@ -41,7 +43,7 @@ pub struct FoliageCluster {
 }
 
 /// One billboard of a cluster: its quad, the triangles it replaces and those drawn on it.
-type ClusterQuad = (crate::Quad, Vec<usize>, Vec<usize>);
+type ClusterQuad = (Quad, Vec<usize>, Vec<usize>);
 
 /// Wall times of the build, seconds.
 #[derive(Clone, Debug, Default, Serialize)]
@@ -60,24 +62,20 @@ pub fn sampled_worlds(rig: &Rig, clock: &LoopClock) -> Vec<Vec<Mat4>> {
         .collect()
 }
 
-/// Builds the animated cloud of `clusters`. `sampled` is the tree's sampled loop, `rig` the
-/// output skeleton (node indices as in the tree when built by [`Rig::from_tree`]) and `clock`
-/// the loop the samples come from. `scale` sizes the search's float tolerances.
-#[expect(
-    clippy::too_many_arguments,
-    reason = "the build context of one LOD; issue 16 gathers it into one type"
-)]
+/// Builds the animated cloud of `clusters` for the LOD of `ctx`: one stochastic billboard
+/// cloud per cluster, all baked into one atlas. `rig` is the LOD's skeleton (the tree's own,
+/// or a simplified one whose node indices extend the tree's: `rig_resampled` when some of its
+/// channels were resampled from the clock's clip), `method` the name the report writes.
 pub fn build_animated_cloud(
-    renderer: &Renderer,
-    tree: &Tree,
-    sampled: &Sampled,
+    ctx: &BuildContext,
     rig: Rig,
-    clock: LoopClock,
+    rig_resampled: bool,
     clusters: &[FoliageCluster],
-    params: &CloudParams,
-    scale: f32,
     method: &str,
 ) -> Result<(AnimatedBillboardCloud, BuildTimings), CloudError> {
+    let (renderer, tree, sampled, params, scale) =
+        (ctx.renderer, ctx.tree, ctx.sampled, ctx.cloud, ctx.scale);
+    let clock = ctx.clock.clone();
     let mut timings = BuildTimings::default();
     let t0 = Instant::now();
     let worlds = sampled_worlds(&rig, &clock);
@@ -252,35 +250,10 @@ pub fn build_animated_cloud(
         texels_per_unit: baked.texels_per_unit,
         density_reduced: baked.density_reduced,
         rig,
+        rig_resampled,
         clock,
         playable_clips: Vec::new(),
     };
     cloud.update_playable_clips();
     Ok((cloud, timings))
-}
-
-/// `per-bone` clusters: one per rig node that foliage follows (spec §6 "Bone Clustering",
-/// without reduction); foliage without a bone gets one rigid-fit cluster.
-pub fn per_bone_clusters(tree: &Tree, sampled: &Sampled) -> Vec<FoliageCluster> {
-    let mut by_node: std::collections::BTreeMap<Option<usize>, Vec<usize>> = Default::default();
-    for (k, &t) in sampled.foliage.iter().enumerate() {
-        let node = tree.triangles[t].bone.map(|b| tree.bones[b as usize].node);
-        by_node.entry(node).or_default().push(k);
-    }
-    by_node
-        .into_iter()
-        .map(|(node, members)| FoliageCluster {
-            members,
-            driver: node.map_or(Driver::RigidFit, Driver::Node),
-        })
-        .collect()
-}
-
-/// `static` clusters: all foliage in one cloud in the average pose, each billboard following
-/// the rigid fit of its triangles (thesis §5.2.2, Static Co-planar Clustering).
-pub fn static_clusters(sampled: &Sampled) -> Vec<FoliageCluster> {
-    vec![FoliageCluster {
-        members: (0..sampled.foliage.len()).collect(),
-        driver: Driver::RigidFit,
-    }]
 }

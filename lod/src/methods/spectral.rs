@@ -8,7 +8,6 @@
 use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
 
-use frond_render::Renderer;
 use frond_scene::{Sampled, Tree};
 use frond_spectral::description::{
     AxisPhase, Bins, DescriptionType, DominatingAxisType, Naive, SpectralKind,
@@ -19,11 +18,17 @@ use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::animated::{AnimatedBillboardCloud, LoopClock, Rig, RigidMotion, SpectralMotion};
-use crate::animated_build::{
+use crate::cloud_build::{
     BuildTimings, Driver, FoliageCluster, build_animated_cloud, sampled_worlds,
 };
-use crate::cloud::{CloudError, CloudParams};
+use crate::contract::{AnimatedBillboardCloud, RigidMotion, SpectralMotion};
+use crate::error::LodError;
+use crate::method::{
+    BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput, MethodReport,
+    SpectralOptions,
+};
+use frond_billboard::Quad;
+use frond_billboard::cloud::CloudError;
 use frond_scene::rigid_fit::rigid_fit;
 
 /// What SCA is asked for.
@@ -110,34 +115,57 @@ pub fn deepest_shared(rig_nodes: &[frond_scene::Node], nodes: &[Option<usize>]) 
     chain.get(deepest).copied()
 }
 
-/// Builds the spectral animated cloud of the foliage (SCA). `scale` sizes the plane search's
-/// tolerances, as in [`build_animated_cloud`].
-#[expect(
-    clippy::too_many_arguments,
-    reason = "the build context of one LOD; issue 16 gathers it into one type"
-)]
+impl SpectralOptions {
+    /// What SCA is asked for at the LOD of `ctx`: k from the options or the LOD's screen
+    /// height, the zone size from the options or [`crate::DEFAULT_ZONE_FRACTION`] of the
+    /// diagonal (the LOD's ε when larger), the skeleton depth as frequency bins.
+    pub fn params(&self, ctx: &BuildContext) -> SpectralParams {
+        SpectralParams {
+            kind: self.kind,
+            clusters: self
+                .clusters
+                .unwrap_or_else(|| crate::spectral_k(ctx.level.screen_height)),
+            zone_size: match self.zone_size {
+                Some(z) => z.resolve(ctx.scale),
+                None => ctx
+                    .level
+                    .epsilon
+                    .max(crate::DEFAULT_ZONE_FRACTION * ctx.scale),
+            },
+            bins: ctx.tree.skeleton_depth().max(1) as usize,
+            restarts: 2,
+            seed: ctx.seed,
+            max_iterations: 20,
+            shared_bone: self.shared_bone,
+        }
+    }
+}
+
+impl ClusteringMethod for SpectralOptions {
+    fn name(&self) -> MethodName {
+        MethodName::Spectral(self.kind)
+    }
+
+    fn build(&self, ctx: &BuildContext) -> Result<MethodOutput, LodError> {
+        let (cloud, timings, report) = build_spectral_cloud(ctx, &self.params(ctx))?;
+        Ok(MethodOutput {
+            foliage: Foliage::Cloud(cloud),
+            timings,
+            report: MethodReport::Spectral(report),
+        })
+    }
+}
+
+/// Builds the spectral animated cloud of the foliage (SCA) for the LOD of `ctx`.
 pub fn build_spectral_cloud(
-    renderer: &Renderer,
-    tree: &Tree,
-    sampled: &Sampled,
-    rig: Rig,
-    clock: LoopClock,
-    params: &CloudParams,
+    ctx: &BuildContext,
     sp: &SpectralParams,
-    scale: f32,
 ) -> Result<(AnimatedBillboardCloud, BuildTimings, SpectralReport), CloudError> {
-    let run = Run {
-        renderer,
-        tree,
-        sampled,
-        params,
-        sp,
-        scale,
-    };
+    let run = Run { ctx, sp };
     match sp.kind {
-        SpectralKind::Naive => run.go::<Naive>(rig, clock),
-        SpectralKind::DominatingAxis => run.go::<DominatingAxisType>(rig, clock),
-        SpectralKind::AxisPhase => run.go::<AxisPhase>(rig, clock),
+        SpectralKind::Naive => run.go::<Naive>(),
+        SpectralKind::DominatingAxis => run.go::<DominatingAxisType>(),
+        SpectralKind::AxisPhase => run.go::<AxisPhase>(),
     }
 }
 
@@ -284,22 +312,16 @@ pub fn residual<T: DescriptionType>(
 }
 
 struct Run<'a> {
-    renderer: &'a Renderer,
-    tree: &'a Tree,
-    sampled: &'a Sampled,
-    params: &'a CloudParams,
+    ctx: &'a BuildContext<'a>,
     sp: &'a SpectralParams,
-    scale: f32,
 }
 
 impl Run<'_> {
     fn go<T: DescriptionType>(
         &self,
-        rig: Rig,
-        clock: LoopClock,
     ) -> Result<(AnimatedBillboardCloud, BuildTimings, SpectralReport), CloudError> {
-        let (tree, sampled, sp) = (self.tree, self.sampled, self.sp);
-        let rest = rig.rest_world();
+        let (tree, sampled, sp) = (self.ctx.tree, self.ctx.sampled, self.sp);
+        let rest = tree.rig.rest_world();
         let zc = cluster_zones::<T>(tree, sampled, &rest, sp);
         if !zc.report.loops {
             tracing::warn!(
@@ -326,14 +348,10 @@ impl Run<'_> {
             })
             .collect();
         let (mut cloud, mut timings) = build_animated_cloud(
-            self.renderer,
-            tree,
-            sampled,
-            rig,
-            clock,
+            self.ctx,
+            tree.rig.clone(),
+            false,
             &clusters,
-            self.params,
-            self.scale,
             &format!("spectral-{}", sp.kind.name()),
         )?;
         let t0 = Instant::now();
@@ -384,7 +402,7 @@ fn assign_motions<T: DescriptionType>(
     let rest = cloud.rig.rest_world();
     let nodes = cloud.rig.nodes.clone();
     let ty = &zc.ty;
-    let results: Vec<(Option<usize>, Option<crate::Quad>, Option<RigidMotion>)> = cloud
+    let results: Vec<(Option<usize>, Option<Quad>, Option<RigidMotion>)> = cloud
         .billboards
         .par_iter()
         .map(|b| {

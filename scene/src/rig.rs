@@ -1,9 +1,44 @@
-//! Animation clips and their evaluation as glTF specifies (LINEAR with shortest-path slerp for
-//! rotations, STEP, CUBICSPLINE Hermite), plus world transforms of every node at a time.
+//! The rig: the node hierarchy with rest transforms and the animation clips that drive it,
+//! one type for the imported tree, the simplified skeleton of a LOD and the written files
+//! (spec animated-billboard-clouds §1.1). Clips are evaluated as glTF specifies (LINEAR with
+//! shortest-path slerp for rotations, STEP, CUBICSPLINE Hermite).
 
-use glam::{Mat4, Quat, Vec4};
+use glam::{Mat4, Quat, Vec3, Vec4};
 
-use crate::model::{Node, Trs};
+/// A node's local transform as translation, rotation, scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trs {
+    pub translation: Vec3,
+    pub rotation: Quat,
+    pub scale: Vec3,
+}
+
+impl Trs {
+    /// The identity transform.
+    pub const IDENTITY: Trs = Trs {
+        translation: Vec3::ZERO,
+        rotation: Quat::IDENTITY,
+        scale: Vec3::ONE,
+    };
+    /// As a column-major matrix (T · R · S).
+    pub fn matrix(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+    }
+}
+
+/// One node of the glTF hierarchy.
+#[derive(Clone, Debug)]
+pub struct Node {
+    pub name: String,
+    pub parent: Option<usize>,
+    pub children: Vec<usize>,
+    /// Rest (un-animated) local transform.
+    pub rest: Trs,
+    /// The bone this node is, if it is a skin joint.
+    pub bone: Option<usize>,
+    /// The node's `extras`, verbatim JSON (empty when absent).
+    pub extras: Option<serde_json::Value>,
+}
 
 /// Which node property a channel drives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -138,6 +173,85 @@ pub fn world_matrices(nodes: &[Node], order: &[usize], pose: &[Trs]) -> Vec<Mat4
         };
     }
     world
+}
+
+/// A node hierarchy with rest transforms and the clips that drive it. Node and channel indices
+/// are the rig's own: the imported tree's rig holds every glTF node, a LOD's rig may be pruned
+/// ([`Rig::retain`]) or rebuilt (skeleton simplification).
+#[derive(Clone, Debug, Default)]
+pub struct Rig {
+    /// Nodes; `parent`/`children` index this list.
+    pub nodes: Vec<Node>,
+    /// Nodes ordered parents first (for world transforms).
+    pub order: Vec<usize>,
+    /// Clips over these nodes; each keeps the input's name, start and end.
+    pub clips: Vec<Clip>,
+}
+
+impl Rig {
+    /// World matrices of every node at time `t` of clip `clip` (rest pose when None).
+    pub fn world_at(&self, clip: Option<usize>, t: f32) -> Vec<Mat4> {
+        let local = local_pose(&self.nodes, clip.and_then(|c| self.clips.get(c)), t);
+        world_matrices(&self.nodes, &self.order, &local)
+    }
+
+    /// Rest world matrices of every node.
+    pub fn rest_world(&self) -> Vec<Mat4> {
+        self.world_at(None, 0.0)
+    }
+
+    /// Index of the clip named `name`.
+    pub fn clip_named(&self, name: &str) -> Option<usize> {
+        self.clips.iter().position(|c| c.name == name)
+    }
+
+    /// Keeps only `keep` (and their ancestors), remapping indices; returns old → new index.
+    /// Channels of removed nodes are dropped; clips are kept (names and lengths), even when
+    /// left without channels. Kept nodes lose their `bone` (a LOD's skin is its own).
+    pub fn retain(&mut self, keep: &[bool]) -> Vec<Option<usize>> {
+        let n = self.nodes.len();
+        let mut kept = vec![false; n];
+        for (i, &k) in keep.iter().enumerate().take(n) {
+            if k {
+                let mut cur = Some(i);
+                while let Some(c) = cur {
+                    if kept[c] {
+                        break;
+                    }
+                    kept[c] = true;
+                    cur = self.nodes[c].parent;
+                }
+            }
+        }
+        let mut map = vec![None; n];
+        let mut next = 0;
+        for (i, k) in kept.iter().enumerate() {
+            if *k {
+                map[i] = Some(next);
+                next += 1;
+            }
+        }
+        let mut nodes = Vec::with_capacity(next);
+        for (i, node) in self.nodes.iter().enumerate() {
+            if !kept[i] {
+                continue;
+            }
+            let mut node = node.clone();
+            node.parent = node.parent.and_then(|p| map[p]);
+            node.children = node.children.iter().filter_map(|&c| map[c]).collect();
+            node.bone = None;
+            nodes.push(node);
+        }
+        self.order = self.order.iter().filter_map(|&i| map[i]).collect();
+        self.nodes = nodes;
+        for clip in &mut self.clips {
+            clip.channels.retain(|c| map[c.node].is_some());
+            for c in &mut clip.channels {
+                c.node = map[c.node].unwrap_or(0);
+            }
+        }
+        map
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,266 @@
+//! A LOD chain as files: one GLB per LOD, the combined GLB, each billboard LOD's mapping
+//! sidecar and animation textures (VAT or spectral) with their sidecars and the reference
+//! shaders. Works from the chain alone: which method built a LOD does not matter here.
+
+use std::time::Instant;
+
+use frond_lod::{Chain, ChainLod, LodEntry};
+use frond_scene::Tree;
+
+use crate::ExportError;
+use crate::LodInput;
+use crate::cloud_motion::{spectral_textures, vat_textures};
+use crate::lod_file::{FileOptions, write_glb};
+use crate::mapping::Mapping;
+use crate::spectral::SpectralTextures;
+use crate::vat::{VatFormat, VatTextures};
+
+/// How billboards are animated in the files.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AnimationMode {
+    /// Standard glTF skin and channels.
+    Skin,
+    /// Vertex animation textures (Houdini VAT 3.0 rigid layout) plus a skinned wood.
+    Vat(VatFormat),
+    /// Skinned billboards plus each one's own motion as a few cosines in a float texture
+    /// (spectral methods, spec §4.11 "runtime"); per-bone LODs need no texture.
+    Spectral,
+}
+
+impl AnimationMode {
+    /// The name the report writes (`skin`, `vat-exr`, `vat-png`, `spectral`).
+    pub fn report_name(self) -> String {
+        match self {
+            AnimationMode::Skin => "skin".into(),
+            AnimationMode::Vat(f) => format!("vat-{}", f.extension()),
+            AnimationMode::Spectral => "spectral".into(),
+        }
+    }
+}
+
+/// How a chain is written.
+#[derive(Clone, Debug)]
+pub struct ChainFileOptions {
+    /// The tree's name in file names (`<name>_LOD1.glb`).
+    pub name: String,
+    pub animation: AnimationMode,
+    /// Textures as PNG files next to the GLBs instead of embedded.
+    pub external_textures: bool,
+    /// `MSFT_lod` screen coverages of the combined file's LODs (None: no `MSFT_lod`).
+    pub msft_lod: Option<Vec<f32>>,
+    /// The asset `extras` of every file (generator, seed, source).
+    pub extras: serde_json::Value,
+}
+
+/// The files of a chain, relative to the output folder, and the report lines with the files
+/// filled in.
+pub struct ChainFiles {
+    pub files: Vec<(String, Vec<u8>)>,
+    pub entries: Vec<LodEntry>,
+    /// The combined file's name.
+    pub combined: String,
+}
+
+/// One LOD's animation textures.
+struct Motion {
+    vat: Option<VatTextures>,
+    spectral: Option<SpectralTextures>,
+}
+
+/// Encodes LOD `k`'s billboard motion as `mode` asks, and records its size in `entry`.
+fn lod_motion(
+    lod: &ChainLod,
+    tree: &Tree,
+    mode: AnimationMode,
+    prefix: &str,
+    entry: &mut LodEntry,
+) -> Result<Motion, ExportError> {
+    let Some(cloud) = lod.cloud() else {
+        return Ok(Motion {
+            vat: None,
+            spectral: None,
+        });
+    };
+    let vat = match mode {
+        AnimationMode::Vat(format) => Some(vat_textures(cloud, format, &format!("{prefix}_vat"))?),
+        _ => None,
+    };
+    let spectral = match mode {
+        AnimationMode::Spectral => {
+            spectral_textures(cloud, tree, &format!("{prefix}_spectral.exr"))?
+        }
+        _ => None,
+    };
+    entry.animation_bytes = vat
+        .as_ref()
+        .map(|v| v.position.bytes.len() + v.rotation.bytes.len())
+        .or(spectral.as_ref().map(|t| t.image.bytes.len()))
+        .unwrap_or(0);
+    // For comparison only: a LOD VAT cannot hold (too large) just has no figure.
+    entry.vat_equivalent_bytes = match &spectral {
+        Some(_) => vat_textures(cloud, VatFormat::ExrHalf, "vat")
+            .ok()
+            .map(|v| v.position.bytes.len() + v.rotation.bytes.len()),
+        None => None,
+    };
+    Ok(Motion { vat, spectral })
+}
+
+/// The sidecars of LOD `k` (mapping, animation textures): appended to `files`, named in `entry`.
+fn sidecars(
+    lod: &ChainLod,
+    motion: &Motion,
+    chain: &Chain,
+    k: usize,
+    prefix: &str,
+    files: &mut Vec<(String, Vec<u8>)>,
+    entry: &mut LodEntry,
+) -> Result<(), ExportError> {
+    if let Some(cloud) = lod.cloud() {
+        let mapping = Mapping::of(cloud, k, &entry.file, &chain.sampled.foliage);
+        let name = format!("{prefix}.mapping.json");
+        files.push((name.clone(), json(&mapping)?));
+        entry.mapping = Some(name);
+    }
+    if let Some(v) = &motion.vat {
+        let pos = v.sidecar.textures.position.clone();
+        let rot = v.sidecar.textures.rotation.clone();
+        let name = format!("{prefix}_vat.json");
+        files.push((pos.clone(), v.position.bytes.clone()));
+        files.push((rot.clone(), v.rotation.bytes.clone()));
+        files.push((name.clone(), json(&v.sidecar)?));
+        entry.vat = Some(vec![pos, rot, name]);
+    }
+    if let Some(t) = &motion.spectral {
+        let name = format!("{prefix}_spectral.json");
+        files.push((t.sidecar.texture.clone(), t.image.bytes.clone()));
+        files.push((name.clone(), json(&t.sidecar)?));
+        entry.spectral_files = Some(vec![t.sidecar.texture.clone(), name]);
+    }
+    Ok(())
+}
+
+/// Pretty JSON of a sidecar.
+fn json<T: serde::Serialize>(value: &T) -> Result<Vec<u8>, ExportError> {
+    serde_json::to_vec_pretty(value).map_err(|e| ExportError::Json(e.to_string()))
+}
+
+/// Writes `chain` of `tree` in memory: every LOD's GLB and sidecars, then the combined file
+/// and the shaders the animation mode needs. Errors name the LOD.
+pub fn chain_files(
+    tree: &Tree,
+    chain: &Chain,
+    options: &ChainFileOptions,
+) -> Result<ChainFiles, (String, ExportError)> {
+    let name = &options.name;
+    let prefix = |k: usize| format!("{name}_LOD{k}");
+    let mut entries: Vec<LodEntry> = chain.lods.iter().map(|l| l.entry.clone()).collect();
+    let mut motions = Vec::with_capacity(chain.lods.len());
+    for (k, lod) in chain.lods.iter().enumerate() {
+        let m = lod_motion(lod, tree, options.animation, &prefix(k), &mut entries[k])
+            .map_err(|e| (format!("building LOD{k}"), e))?;
+        motions.push(m);
+    }
+    let inputs: Vec<LodInput> = chain
+        .lods
+        .iter()
+        .zip(&motions)
+        .enumerate()
+        .map(|(k, (lod, m))| lod_input(tree, lod, m, prefix(k)))
+        .collect();
+    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
+    for (k, input) in inputs.iter().enumerate() {
+        let t0 = Instant::now();
+        let at = |e| (format!("writing LOD{k}"), e);
+        let file = write_glb(
+            std::slice::from_ref(input),
+            &FileOptions {
+                external_textures: options.external_textures.then(|| format!("{}_", prefix(k))),
+                msft_lod: None,
+                extras: Some(options.extras.clone()),
+            },
+        )
+        .map_err(at)?;
+        let entry = &mut entries[k];
+        entry.file = format!("{}.glb", prefix(k));
+        entry.bones = file.joints.first().copied().unwrap_or(0);
+        files.push((entry.file.clone(), file.glb));
+        files.extend(file.external);
+        sidecars(
+            &chain.lods[k],
+            &motions[k],
+            chain,
+            k,
+            &prefix(k),
+            &mut files,
+            entry,
+        )
+        .map_err(at)?;
+        entry.timings_s.export = t0.elapsed().as_secs_f64();
+    }
+    let combined = write_glb(
+        &inputs,
+        &FileOptions {
+            external_textures: options.external_textures.then(|| format!("{name}_lods_")),
+            msft_lod: options.msft_lod.clone(),
+            extras: Some(options.extras.clone()),
+        },
+    )
+    .map_err(|e| ("writing the combined file".to_string(), e))?;
+    let combined_name = format!("{name}_lods.glb");
+    files.push((combined_name.clone(), combined.glb));
+    files.extend(combined.external);
+    let spectral_written = motions.iter().any(|m| m.spectral.is_some());
+    files.extend(shader_files(options.animation, spectral_written));
+    Ok(ChainFiles {
+        files,
+        entries,
+        combined: combined_name,
+    })
+}
+
+/// What export needs of one LOD.
+fn lod_input<'a>(tree: &'a Tree, lod: &'a ChainLod, m: &Motion, name: String) -> LodInput<'a> {
+    LodInput {
+        name,
+        tree,
+        rig: lod.rig(),
+        parts: lod.parts.iter().collect(),
+        cloud: lod.cloud(),
+        clips: lod.clips.clone(),
+        vat_uvs: m.vat.as_ref().map(|v| {
+            vec![
+                v.piece_uv.clone(),
+                v.pivot_uv.iter().map(|p| p[0]).collect(),
+                v.pivot_uv.iter().map(|p| p[1]).collect(),
+            ]
+        }),
+        spectral_uvs: m.spectral.as_ref().map(|t| t.row_uv.clone()),
+    }
+}
+
+/// The reference shaders, copied next to VAT output and next to spectral textures (when a LOD
+/// wrote one).
+fn shader_files(mode: AnimationMode, spectral_written: bool) -> Vec<(String, Vec<u8>)> {
+    let set = match mode {
+        AnimationMode::Vat(_) => crate::shaders::SHADERS,
+        AnimationMode::Spectral if spectral_written => crate::shaders::SPECTRAL_SHADERS,
+        _ => return Vec::new(),
+    };
+    set.iter()
+        .map(|(file, text)| (format!("shaders/{file}"), text.as_bytes().to_vec()))
+        .collect()
+}
+
+/// `MSFT_lod` screen coverages for LODs built at `screen_heights` (pixels) on an image
+/// `resolution` pixels high: LOD k is shown down to the size the next LOD was built for; the
+/// last one to a quarter of its own.
+pub fn msft_coverages(screen_heights: &[f32], resolution: f32) -> Vec<f32> {
+    let mut c: Vec<f32> = screen_heights
+        .iter()
+        .map(|h| (h / resolution).min(1.0))
+        .collect();
+    let last = c.last().copied().unwrap_or(0.0) * 0.25;
+    c.push(last);
+    c
+}

@@ -1,0 +1,26 @@
+//! Why a LOD chain could not be built.
+
+use frond_billboard::cloud::CloudError;
+use frond_skeleton::SkeletonError;
+
+use crate::screen_budget::SizingError;
+
+/// Why a LOD chain could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum LodError {
+    /// The static cloud (plane search, bake) failed.
+    #[error(transparent)]
+    Cloud(#[from] CloudError),
+    /// Skeleton simplification failed.
+    #[error(transparent)]
+    Skeleton(#[from] SkeletonError),
+    /// The LODs cannot be sized (screen heights, pixel error).
+    #[error(transparent)]
+    Sizing(#[from] SizingError),
+    /// Sampling the loop failed.
+    #[error(transparent)]
+    Scene(#[from] frond_scene::SceneError),
+    /// The tree has nothing to turn into billboards.
+    #[error("{0}: the tree has no foliage to turn into billboards")]
+    NoFoliage(String),
+}

@@ -1,0 +1,46 @@
+//! The animated LOD layer (spec animated-billboard-clouds §1.4, §3–§6; view-dependent
+//! hierarchies §2.3–2.4): the contract between clustering and export (an animated billboard
+//! cloud), the clustering methods behind one trait, the screen and motion budgets, and the
+//! chain builder that turns a tree into LODs in memory. Export writes a chain without knowing
+//! which method built it; the static cloud (plane search, bake, atlas) is `frond-billboard`'s.
+
+pub mod chain;
+pub mod cloud_build;
+pub mod contract;
+pub mod error;
+pub mod method;
+pub mod methods;
+pub mod motion_budget;
+pub mod report;
+pub mod screen_budget;
+
+use frond_skeleton::BoneDescriptionKind;
+use frond_spectral::description::SpectralKind;
+
+pub use chain::{Chain, ChainLod, ChainRequest, CloudOptions, LodContent, build_chain};
+pub use contract::{AnimatedBillboard, AnimatedBillboardCloud, LoopClock, RigidMotion};
+pub use error::LodError;
+pub use method::{
+    BuildContext, ClusteringMethod, Foliage, METHOD_NAMES, Method, MethodName, MethodOutput,
+    SkeletonOptions, SpectralOptions,
+};
+pub use report::{DroppedReport, LodEntry, LodReport, LodTimings};
+pub use screen_budget::{LodLevel, lod_levels, screen_height_at, tree_height};
+
+/// The description type `--method spectral` uses.
+pub const DEFAULT_SPECTRAL: SpectralKind = SpectralKind::AxisPhase;
+
+/// The bone description type `--method skeleton` uses: axis-angle reached fewer clouds at the
+/// same screen tolerance with less foliage error than rotation-spectral on oak_medium and
+/// oak_dense (docs/experiments.md §8).
+pub const DEFAULT_SKELETON: BoneDescriptionKind = BoneDescriptionKind::AxisAngle;
+
+/// Default animation zone size as a fraction of the bounding-box diagonal (or the LOD's ε when
+/// larger): oak_dense's 116k triangles become ~4,400 zones, which k-means clusters in ~1 s.
+pub const DEFAULT_ZONE_FRACTION: f32 = 0.02;
+
+/// The spectral k rule: one animation cluster per 10 pixels of tree height (6 at 60 px, 20 at
+/// 200 px), at least 1.
+pub fn spectral_k(screen_height: f32) -> usize {
+    ((screen_height / 10.0).round() as usize).max(1)
+}

@@ -1,0 +1,53 @@
+//! `per-bone`: one billboard cloud per rig node that foliage follows, each billboard skinned
+//! rigidly to that node (spec animated-billboard-clouds §6 "Bone Clustering", without
+//! reduction); foliage without a bone gets one cloud whose billboards follow the rigid fit of
+//! their triangles' motion.
+
+use frond_scene::{Sampled, Tree};
+
+use crate::cloud_build::{Driver, FoliageCluster, build_animated_cloud};
+use crate::error::LodError;
+use crate::method::{BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput};
+
+/// The `per-bone` method; it has no options.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PerBone;
+
+impl ClusteringMethod for PerBone {
+    fn name(&self) -> MethodName {
+        MethodName::PerBone
+    }
+
+    fn build(&self, ctx: &BuildContext) -> Result<MethodOutput, LodError> {
+        let clusters = per_bone_clusters(ctx.tree, ctx.sampled);
+        let (cloud, timings) = build_animated_cloud(
+            ctx,
+            ctx.tree.rig.clone(),
+            false,
+            &clusters,
+            self.name().name(),
+        )?;
+        Ok(MethodOutput {
+            foliage: Foliage::Cloud(cloud),
+            timings,
+            report: Default::default(),
+        })
+    }
+}
+
+/// `per-bone` clusters: one per rig node that foliage follows; foliage without a bone gets one
+/// rigid-fit cluster.
+pub fn per_bone_clusters(tree: &Tree, sampled: &Sampled) -> Vec<FoliageCluster> {
+    let mut by_node: std::collections::BTreeMap<Option<usize>, Vec<usize>> = Default::default();
+    for (k, &t) in sampled.foliage.iter().enumerate() {
+        let node = tree.triangles[t].bone.map(|b| tree.bones[b as usize].node);
+        by_node.entry(node).or_default().push(k);
+    }
+    by_node
+        .into_iter()
+        .map(|(node, members)| FoliageCluster {
+            members,
+            driver: node.map_or(Driver::RigidFit, Driver::Node),
+        })
+        .collect()
+}

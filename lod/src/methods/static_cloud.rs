@@ -1,0 +1,42 @@
+//! `static`: all foliage in one billboard cloud built in the loop's average pose, each
+//! billboard following the rigid fit of its triangles' sampled motion (thesis §5.2.2, Static
+//! Co-planar Clustering).
+
+use frond_scene::Sampled;
+
+use crate::cloud_build::{Driver, FoliageCluster, build_animated_cloud};
+use crate::error::LodError;
+use crate::method::{BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput};
+
+/// The `static` method; it has no options.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StaticCloud;
+
+impl ClusteringMethod for StaticCloud {
+    fn name(&self) -> MethodName {
+        MethodName::Static
+    }
+
+    fn build(&self, ctx: &BuildContext) -> Result<MethodOutput, LodError> {
+        let (cloud, timings) = build_animated_cloud(
+            ctx,
+            ctx.tree.rig.clone(),
+            false,
+            &static_clusters(ctx.sampled),
+            self.name().name(),
+        )?;
+        Ok(MethodOutput {
+            foliage: Foliage::Cloud(cloud),
+            timings,
+            report: Default::default(),
+        })
+    }
+}
+
+/// `static` clusters: every foliage triangle in one rigid-fit cluster.
+pub fn static_clusters(sampled: &Sampled) -> Vec<FoliageCluster> {
+    vec![FoliageCluster {
+        members: (0..sampled.foliage.len()).collect(),
+        driver: Driver::RigidFit,
+    }]
+}

@@ -1,0 +1,97 @@
+//! What `<name>_report.json` says about a chain and each of its LODs. The chain builder fills
+//! what it knows (sizes, method, budgets, what was dropped); export fills the files it wrote
+//! (names, joints, animation textures).
+
+use serde::Serialize;
+
+use crate::cloud_build::BuildTimings;
+use crate::methods::spectral::SpectralReport;
+use crate::motion_budget::Dropped;
+use frond_skeleton::SkeletonReport;
+
+/// One LOD's line of `<name>_report.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct LodEntry {
+    pub file: String,
+    pub mapping: Option<String>,
+    /// Pixels the tree covers (None for LOD0, the input itself).
+    pub screen_height: Option<f32>,
+    pub pixel: Option<f32>,
+    pub epsilon: Option<f32>,
+    pub method: String,
+    pub method_reason: String,
+    /// Triangles drawn (wood plus two per billboard).
+    pub triangles: usize,
+    pub wood_triangles: usize,
+    pub billboards: usize,
+    /// Joints of the LOD's skin.
+    pub bones: usize,
+    pub texture_bytes: usize,
+    pub atlas: Option<[u32; 2]>,
+    pub texels_per_unit: Option<f32>,
+    pub density_reduced: bool,
+    pub clips: Vec<String>,
+    pub dropped: DroppedReport,
+    pub vat: Option<Vec<String>>,
+    /// `--animation spectral`: the coefficient texture and its sidecar.
+    pub spectral_files: Option<Vec<String>>,
+    /// Bytes of the coefficient texture (`--animation spectral`), or of the VAT textures.
+    pub animation_bytes: usize,
+    /// `--animation spectral`: what EXR VAT textures of the same LOD would take (encoded, not
+    /// written), for comparison.
+    pub vat_equivalent_bytes: Option<usize>,
+    /// What spectral clustering did (spectral LODs only).
+    pub spectral: Option<SpectralReport>,
+    /// What skeleton simplification did (skeleton LODs only).
+    pub skeleton: Option<SkeletonReport>,
+    pub timings_s: LodTimings,
+}
+
+/// What a LOD left out, and why.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct DroppedReport {
+    #[serde(flatten)]
+    pub budget: Dropped,
+    /// Wood triangles removed by simplification within `wood_error` world units.
+    pub wood_triangles: usize,
+    pub wood_error: f32,
+    /// Input clips not written, with the reason.
+    pub clips: Vec<String>,
+}
+
+/// Per-stage wall times of one LOD.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct LodTimings {
+    #[serde(flatten)]
+    pub build: BuildTimings,
+    pub budget: f64,
+    pub wood: f64,
+    pub export: f64,
+}
+
+/// `<name>_report.json`.
+#[derive(Debug, Serialize)]
+pub struct LodReport {
+    pub input: String,
+    pub name: String,
+    pub clip: Option<String>,
+    pub period: f32,
+    pub samples: usize,
+    pub seed: u64,
+    pub pixel_error: f32,
+    pub animation: String,
+    pub tree_height: f32,
+    pub lods: Vec<LodEntry>,
+    pub combined: String,
+    /// Every file of the set, relative to the output folder, this report last.
+    pub files: Vec<String>,
+    /// What the import accepted with a warning (silently repaired or ignored input).
+    pub warnings: Vec<String>,
+    pub timings_s: serde_json::Value,
+}
+
+/// The report's file name: `<name>_report.json`, so that several trees can share one output
+/// folder without their reports colliding.
+pub fn report_name(name: &str) -> String {
+    format!("{name}_report.json")
+}
