@@ -2,6 +2,7 @@
 
 pub mod batch;
 pub mod child_job;
+pub mod cli;
 pub mod cloud_cmd;
 pub mod eval_cmd;
 pub mod inspect;

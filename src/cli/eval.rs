@@ -1,0 +1,119 @@
+//! Compare a candidate (a LOD, any glTF) with the original: colour (coverage), colour
+//! difference, distance, orientation and animation metrics, and cost.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+
+use crate::cli::args::ImportArgs;
+use crate::cli::progress::{Spinner, print_json};
+use crate::eval_cmd::{EvalRequest, evaluate, image_for_screen_height, same_bytes};
+use crate::render_cmd::parse_size;
+use frond_render::Renderer;
+use frond_scene::ImportOptions;
+
+/// `frond eval`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct EvalArgs {
+    #[command(flatten)]
+    pub import: ImportArgs,
+    /// The candidate model (.glb/.gltf); a `frond lod` LOD's `.mapping.json` beside it
+    /// enables the per-triangle metrics.
+    pub candidate: PathBuf,
+    /// Ring views of the colour metric.
+    #[arg(long, default_value_t = 5)]
+    pub views: u32,
+    /// Frames of the animated colour metric, uniform over the loop.
+    #[arg(long, default_value_t = 5)]
+    pub frames: u32,
+    /// Image size of the colour metric (default 800x600).
+    #[arg(long, conflicts_with = "screen_height")]
+    pub size: Option<String>,
+    /// Size the images for a tree seen this many pixels high (the LOD's size), 4:3.
+    #[arg(long)]
+    pub screen_height: Option<u32>,
+    /// Samples over the loop for the trajectory metrics.
+    #[arg(long, default_value_t = 64)]
+    pub samples: usize,
+    /// Clip (default: the original's first; the candidate plays the clip of that name).
+    #[arg(long)]
+    pub clip: Option<String>,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl EvalArgs {
+    /// Runs the command.
+    pub fn run(self) -> Result<()> {
+        let EvalArgs {
+            import,
+            candidate,
+            views,
+            frames,
+            size,
+            screen_height,
+            samples,
+            clip,
+            json,
+        } = self;
+        let original = import.load()?;
+        let cand = frond_scene::import(
+            &candidate,
+            &ImportOptions {
+                allow_empty: true,
+                limits: import.limits.limits(),
+                ..Default::default()
+            },
+        )?;
+        let same_file = same_bytes(&import.input, &candidate);
+        let size = match (size, screen_height) {
+            (Some(s), _) => parse_size(&s)?,
+            (None, Some(h)) if h > 0 => image_for_screen_height(h),
+            (None, Some(_)) => anyhow::bail!("--screen-height must be at least 1"),
+            (None, None) => (800, 600),
+        };
+        let renderer = Renderer::new()?;
+        let req = EvalRequest {
+            views,
+            frames,
+            size,
+            samples,
+            clip,
+        };
+        let bar = Spinner::new();
+        bar.say(&format!("evaluating {}", candidate.display()));
+        let result = evaluate(&renderer, &original, &cand, same_file, &req);
+        drop(bar);
+        let report = result?;
+        if json {
+            print_json(&report)?;
+        } else {
+            let show = |name: &str, m: &crate::eval_cmd::Metric| match (m.mean, m.max) {
+                (Some(a), Some(b)) => println!("{name:26} mean {a:.5}  max {b:.5}"),
+                _ => println!(
+                    "{name:26} skipped: {}",
+                    m.skipped_reason.as_deref().unwrap_or("-")
+                ),
+            };
+            show("coverage (static)", &report.coverage.static_);
+            show("coverage (animated)", &report.coverage.animated);
+            show("colour difference", &report.colour_difference);
+            show("plane distance", &report.plane_distance);
+            show("projected distance", &report.projected_distance);
+            show("orientation", &report.orientation);
+            show("dominating axis", &report.dominating_axis);
+            show("dominating axis spectral", &report.dominating_axis_spectral);
+            println!(
+                "cost: {} → {} triangles, {} → {} billboards, {} → {} texture bytes",
+                report.cost.original.triangles,
+                report.cost.candidate.triangles,
+                report.cost.original.billboards,
+                report.cost.candidate.billboards,
+                report.cost.original.texture_bytes,
+                report.cost.candidate.texture_bytes
+            );
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,173 @@
+//! Run `frond lod` over a grid of screen heights (or fixed ε) × methods × seeds, evaluate
+//! every LOD (and external candidates) with `frond eval`, and write results.csv, the
+//! stability table, failures and charts (SVG + PNG).
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+
+use crate::cli::args::{BuildArgs, ImportArgs};
+use crate::cli::progress::{Progress, print_json};
+use crate::eval_cmd::EvalRequest;
+use crate::sweep::grid::{Grid, parse_epsilons};
+use crate::sweep::{SweepRequest, run_sweep};
+use frond_render::Renderer;
+
+/// `frond sweep`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct SweepArgs {
+    #[command(flatten)]
+    pub import: ImportArgs,
+    /// Output folder.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Methods to compare.
+    #[arg(long, value_delimiter = ',', default_value = "per-bone,static",
+          value_parser = clap::builder::PossibleValuesParser::new(frond_lod::METHOD_NAMES.iter().map(|(n, _)| *n)))]
+    pub method: Vec<String>,
+    /// Screen heights (pixels), one LOD each; ε follows the screen-space rule.
+    #[arg(long, value_delimiter = ',', default_value = "600,200,60")]
+    pub lods: Vec<f32>,
+    /// Fixed ε instead of screen heights: a range "A..B" (with --steps) or a list "A,B,C";
+    /// each a length or a percentage of the bounding-box diagonal.
+    #[arg(long)]
+    pub epsilon: Option<String>,
+    /// Values of an --epsilon range, both ends included.
+    #[arg(long, default_value_t = 6)]
+    pub steps: usize,
+    /// Screen height (pixels) the fixed-ε LODs are textured and evaluated at.
+    #[arg(long, default_value_t = 600.0)]
+    pub screen_height: f32,
+    /// Seeds per configuration (1..=N).
+    #[arg(long, default_value_t = 3)]
+    pub seeds: u64,
+    /// External candidate (any glTF) evaluated at every screen height (repeatable).
+    #[arg(long = "candidate", value_name = "FILE")]
+    pub candidates: Vec<PathBuf>,
+    /// Ring views of the colour metric.
+    #[arg(long, default_value_t = 5)]
+    pub views: u32,
+    /// Frames of the animated colour metric.
+    #[arg(long, default_value_t = 5)]
+    pub frames: u32,
+    /// Animation samples over the loop (build and trajectory metrics).
+    #[arg(long, default_value_t = 64)]
+    pub samples: usize,
+    /// Clip to sample (default: the first).
+    #[arg(long)]
+    pub clip: Option<String>,
+    #[command(flatten)]
+    pub build: BuildArgs,
+    /// Seconds one run's build (or evaluation) may take before it is stopped and recorded
+    /// as a timeout.
+    #[arg(long, default_value_t = 900)]
+    pub timeout: u64,
+    /// Keep every run's LOD files under runs/ (default: only their reports).
+    #[arg(long)]
+    pub keep: bool,
+    /// Print summary.json to stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl SweepArgs {
+    /// Runs the command.
+    pub fn run(self) -> Result<()> {
+        let SweepArgs {
+            import,
+            output,
+            method,
+            lods,
+            epsilon,
+            steps,
+            screen_height,
+            seeds,
+            candidates,
+            views,
+            frames,
+            samples,
+            clip,
+            build,
+            timeout,
+            keep,
+            json,
+        } = self;
+        let tree = import.load()?;
+        let diagonal = tree.bounds.diagonal();
+        let grid = match &epsilon {
+            Some(text) => {
+                if !(screen_height.is_finite() && screen_height >= 1.0) {
+                    anyhow::bail!("--screen-height must be at least 1 pixel");
+                }
+                Grid::Epsilons {
+                    values: parse_epsilons(text, steps, diagonal)?,
+                    screen_height,
+                }
+            }
+            None => {
+                if let Some(h) = lods.iter().find(|h| !(h.is_finite() && **h >= 1.0)) {
+                    anyhow::bail!("--lods: {h} is not a screen height of at least 1 pixel");
+                }
+                Grid::ScreenHeights(lods)
+            }
+        };
+        let mut import_args = vec![import.input.display().to_string()];
+        for m in &import.foliage_material {
+            import_args.extend(["--foliage-material".to_string(), m.clone()]);
+        }
+        for m in &import.wood_material {
+            import_args.extend(["--wood-material".to_string(), m.clone()]);
+        }
+        let mut lod_args = vec!["--samples".to_string(), samples.to_string()];
+        if let Some(c) = &clip {
+            lod_args.extend(["--clip".to_string(), c.clone()]);
+        }
+        lod_args.extend(build.to_args());
+        let eval = EvalRequest {
+            views,
+            frames,
+            size: (800, 600),
+            samples,
+            clip,
+        };
+        let req = SweepRequest {
+            exe: std::env::current_exe().context("locating the frond executable")?,
+            import_args,
+            methods: method,
+            grid,
+            seeds: (1..=seeds).collect(),
+            lod_args,
+            candidates,
+            timeout: std::time::Duration::from_secs(timeout.max(1)),
+            keep,
+            diagonal,
+        };
+        let renderer = Renderer::new()?;
+        let bar = Progress::new();
+        let result = run_sweep(&renderer, &tree, &req, &eval, &output, &|d, t, m| {
+            bar.step(d, t, m)
+        });
+        drop(bar);
+        let summary = result?;
+        if json {
+            print_json(&summary)?;
+        } else {
+            println!(
+                "{}: {} runs ({} failed); results.csv, stability.md, charts; {:.1} s",
+                output.display(),
+                summary.runs,
+                summary.failed,
+                summary.timings_s["total"].as_f64().unwrap_or(0.0)
+            );
+        }
+        if summary.failed > 0 {
+            eprintln!(
+                "{} of {} runs failed (listed in {})",
+                summary.failed,
+                summary.runs,
+                output.join("stability.md").display()
+            );
+        }
+        Ok(())
+    }
+}
