@@ -3,6 +3,9 @@
 //! sources and how to import).
 
 use anyhow::{Result, bail};
+
+use crate::cli::lod::LodArgs;
+use crate::cli::values::AnimationArg;
 use serde::Serialize;
 
 /// One engine's conventions.
@@ -82,23 +85,26 @@ impl EnginePreset {
         PRESETS.iter().copied().find(|p| p.name == name)
     }
 
-    /// The `frond lod` arguments of this preset for a tree animated with `animation`.
-    pub fn lod_args(&self, animation: &str) -> Result<Vec<String>> {
-        if animation == "vat-png16" && !self.png16_vat {
+    /// Refuses an animation mode this engine cannot play (16-bit PNG VAT in a browser).
+    pub fn check_animation(&self, animation: AnimationArg) -> Result<()> {
+        if animation == AnimationArg::VatPng16 && !self.png16_vat {
             bail!(
                 "preset {}: browsers decode 16-bit PNG textures to 8 bits; use --animation vat \
                  (EXR, three.js EXRLoader)",
                 self.name
             );
         }
-        let mut a = vec!["--max-atlas".to_string(), self.max_atlas.to_string()];
-        if self.external_textures {
-            a.push("--external-textures".into());
-        }
-        if self.msft_lod {
-            a.push("--msft-lod".into());
-        }
-        Ok(a)
+        Ok(())
+    }
+
+    /// Sets this preset's `frond lod` options on `args` (atlas size, external textures,
+    /// `MSFT_lod`), refusing an animation mode the engine cannot play.
+    pub fn apply(&self, args: &mut LodArgs) -> Result<()> {
+        self.check_animation(args.animation)?;
+        args.max_atlas = self.max_atlas;
+        args.external_textures |= self.external_textures;
+        args.msft_lod |= self.msft_lod;
+        Ok(())
     }
 
     /// What in a written glTF document breaks this engine's limits: the largest skin's joints,
@@ -142,6 +148,7 @@ impl EnginePreset {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::Path;
 
     #[test]
     fn names_args_and_checks() {
@@ -150,12 +157,23 @@ mod tests {
             PRESETS.iter().map(|p| p.name).collect::<Vec<_>>()
         );
         let web = EnginePreset::named("web").unwrap();
-        assert!(web.lod_args("vat-png16").is_err());
-        assert_eq!(web.lod_args("skin").unwrap(), ["--max-atlas", "4096"]);
-        let unity = EnginePreset::named("unity").unwrap();
+        let mut args = LodArgs::defaults(Path::new("t.glb"), Path::new("o"));
+        args.max_atlas = 8192;
+        args.animation = AnimationArg::VatPng16;
+        assert!(web.apply(&mut args.clone()).is_err());
+        args.animation = AnimationArg::Skin;
+        let mut on_web = args.clone();
+        web.apply(&mut on_web).unwrap();
         assert_eq!(
-            unity.lod_args("vat").unwrap(),
-            ["--max-atlas", "4096", "--external-textures", "--msft-lod"]
+            (on_web.max_atlas, on_web.external_textures, on_web.msft_lod),
+            (4096, false, false)
+        );
+        let unity = EnginePreset::named("unity").unwrap();
+        args.animation = AnimationArg::Vat;
+        unity.apply(&mut args).unwrap();
+        assert_eq!(
+            (args.max_atlas, args.external_textures, args.msft_lod),
+            (4096, true, true)
         );
         let unreal = EnginePreset::named("unreal").unwrap();
         let doc = |joints: usize, sets: &[&str]| {

@@ -10,13 +10,16 @@ use anyhow::{Context, Result};
 use sha2::{Digest, Sha256};
 
 use frond_scene::InputLimits;
-use frond_scene::input_file::{MAX_INPUT_OPTION, MAX_TEXTURE_OPTION, MAX_VERTICES_OPTION};
 
 use super::inputs::{Overrides, TreeInput, hex, input_hash};
 use super::preset::EnginePreset;
 use super::summary::{FileEntry, LodLine, Status, TreeEntry};
 use crate::child_job::{ChildSpec, JobEnd, run_child};
+use crate::cli::args::{BuildArgs, LimitArgs};
+use crate::cli::lod::LodArgs;
+use crate::cli::values::{AnimationArg, MethodArg};
 use crate::output::write_atomic;
+use clap::ValueEnum;
 
 /// Name of each tree's stamp, written last into its output folder.
 pub const STAMP: &str = "batch.json";
@@ -39,8 +42,9 @@ pub struct TreeContext {
     pub out_dir: PathBuf,
     /// Settings from the command line (a manifest's override them).
     pub defaults: Overrides,
-    /// Plane search and bake options passed to every `frond lod`.
-    pub build_args: Vec<String>,
+    /// Plane search and bake options passed to every `frond lod` (clouds and clusters come
+    /// from each tree's settings).
+    pub build: BuildArgs,
     pub preset: Option<EnginePreset>,
     pub eval: bool,
     pub timeout: Duration,
@@ -50,44 +54,49 @@ pub struct TreeContext {
     pub limits: InputLimits,
 }
 
-/// The `frond lod` arguments (input and output aside) of a tree with `o` as its settings.
+/// The `frond lod` arguments (input and output aside) of a tree with `o` as its settings: a
+/// [`LodArgs`] at `frond lod`'s defaults with the settings, the batch's build options and the
+/// engine preset applied, written back as arguments.
 pub fn lod_args(ctx: &TreeContext, o: &Overrides) -> Result<Vec<String>> {
-    let mut a: Vec<String> = Vec::new();
-    let mut opt = |flag: &str, v: Option<String>| {
-        if let Some(v) = v {
-            a.push(flag.to_string());
-            a.push(v);
-        }
-    };
-    opt("--method", o.method.clone());
-    opt(
-        "--lods",
-        o.lods.as_ref().map(|l| {
-            l.iter()
-                .map(|h| h.to_string())
-                .collect::<Vec<_>>()
-                .join(",")
-        }),
-    );
-    let animation = o.animation.clone().unwrap_or_else(|| "skin".into());
-    opt("--animation", Some(animation.clone()));
-    opt("--seed", o.seed.map(|s| s.to_string()));
-    opt("--pixel-error", o.pixel_error.map(|p| p.to_string()));
-    opt("--clouds", o.clouds.map(|c| c.to_string()));
-    opt("--clusters", o.clusters.map(|c| c.to_string()));
-    a.extend(reading_args(ctx, o));
-    a.extend(ctx.build_args.iter().cloned());
-    if let Some(p) = &ctx.preset {
-        a.extend(p.lod_args(&animation)?);
+    let mut l = LodArgs::defaults(Path::new("tree.glb"), Path::new("out"));
+    if let Some(m) = &o.method {
+        l.method = MethodArg::parse(m).with_context(|| format!("unknown method '{m}'"))?;
     }
-    Ok(a)
+    if let Some(h) = &o.lods {
+        l.lods = h.clone();
+    }
+    if let Some(a) = &o.animation {
+        l.animation = AnimationArg::from_str(a, false)
+            .map_err(|e| anyhow::anyhow!("unknown animation '{a}': {e}"))?;
+    }
+    if let Some(s) = o.seed {
+        l.run.seed = s;
+    }
+    if let Some(p) = o.pixel_error {
+        l.pixel_error = p;
+    }
+    if let Some(s) = o.samples {
+        l.run.samples = s;
+    }
+    l.run.clip = o.clip.clone();
+    l.import.foliage_material = o.foliage_material.clone().unwrap_or_default();
+    l.import.wood_material = o.wood_material.clone().unwrap_or_default();
+    l.import.limits = LimitArgs::of(&ctx.limits);
+    l.build = BuildArgs {
+        clouds: o.clouds,
+        clusters: o.clusters,
+        ..ctx.build.clone()
+    };
+    if let Some(p) = &ctx.preset {
+        p.apply(&mut l)?;
+    }
+    Ok(l.option_args())
 }
 
-/// How a tree is read and sampled, as arguments both `frond lod` and `frond eval` take:
-/// samples, clip, foliage and wood materials, input limits (when not the defaults, so the
-/// parameter hash of a default run stays as it was).
+/// How a tree is read and sampled, as arguments `frond eval` takes: samples, clip, foliage
+/// and wood materials, input limits (when not the defaults).
 fn reading_args(ctx: &TreeContext, o: &Overrides) -> Vec<String> {
-    let mut a = limit_args(&ctx.limits);
+    let mut a = LimitArgs::of(&ctx.limits).option_args();
     if let Some(s) = o.samples {
         a.extend(["--samples".to_string(), s.to_string()]);
     }
@@ -99,32 +108,6 @@ fn reading_args(ctx: &TreeContext, o: &Overrides) -> Vec<String> {
     }
     for m in o.wood_material.iter().flatten() {
         a.extend(["--wood-material".to_string(), m.clone()]);
-    }
-    a
-}
-
-/// `--max-input-size` / `--max-texture-memory` / `--max-vertices` as arguments, each only when
-/// not the default.
-pub fn limit_args(limits: &InputLimits) -> Vec<String> {
-    let defaults = InputLimits::default();
-    let mut a = Vec::new();
-    if limits.max_input_bytes != defaults.max_input_bytes {
-        a.extend([
-            MAX_INPUT_OPTION.to_string(),
-            limits.max_input_bytes.to_string(),
-        ]);
-    }
-    if limits.max_texture_bytes != defaults.max_texture_bytes {
-        a.extend([
-            MAX_TEXTURE_OPTION.to_string(),
-            limits.max_texture_bytes.to_string(),
-        ]);
-    }
-    if limits.max_vertices != defaults.max_vertices {
-        a.extend([
-            MAX_VERTICES_OPTION.to_string(),
-            limits.max_vertices.to_string(),
-        ]);
     }
     a
 }

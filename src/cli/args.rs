@@ -9,7 +9,7 @@ use crate::batch::parse_memory;
 use frond_lod::{SkeletonOptions, SpectralOptions};
 use frond_scene::{ImportOptions, Length, import};
 
-#[derive(clap::Args, Clone, Debug)]
+#[derive(clap::Args, Clone, Debug, PartialEq)]
 pub struct ImportArgs {
     /// Input tree (.glb or .gltf).
     pub input: PathBuf,
@@ -24,6 +24,20 @@ pub struct ImportArgs {
 }
 
 impl ImportArgs {
+    /// The options again (the input aside): the material overrides, the limits that are not
+    /// the defaults.
+    pub fn option_args(&self) -> Vec<String> {
+        let mut a = Vec::new();
+        for m in &self.foliage_material {
+            a.extend(["--foliage-material".to_string(), m.clone()]);
+        }
+        for m in &self.wood_material {
+            a.extend(["--wood-material".to_string(), m.clone()]);
+        }
+        a.extend(self.limits.option_args());
+        a
+    }
+
     pub fn load(&self) -> Result<frond_scene::Tree> {
         let options = ImportOptions {
             foliage_materials: self.foliage_material.clone(),
@@ -37,7 +51,7 @@ impl ImportArgs {
 
 /// What reading one input may cost (every command that reads a tree; `frond batch` passes
 /// them to each tree's run).
-#[derive(clap::Args, Clone, Debug)]
+#[derive(clap::Args, Clone, Debug, PartialEq)]
 pub struct LimitArgs {
     /// Refuse an input whose file plus external buffers exceed this size (K, M, G: binary
     /// units; 1G = 1 GiB).
@@ -54,6 +68,45 @@ pub struct LimitArgs {
 }
 
 impl LimitArgs {
+    /// The arguments of `limits`.
+    pub fn of(limits: &frond_scene::InputLimits) -> LimitArgs {
+        LimitArgs {
+            max_input_size: limits.max_input_bytes,
+            max_texture_memory: limits.max_texture_bytes,
+            max_vertices: limits.max_vertices,
+        }
+    }
+
+    /// The limits again as arguments, each only when not the default (so that a batch's
+    /// parameter hash of a default run does not depend on them).
+    pub fn option_args(&self) -> Vec<String> {
+        use frond_scene::input_file::{MAX_INPUT_OPTION, MAX_TEXTURE_OPTION, MAX_VERTICES_OPTION};
+        let defaults = frond_scene::InputLimits::default();
+        let mut a = Vec::new();
+        for (flag, value, default) in [
+            (
+                MAX_INPUT_OPTION,
+                self.max_input_size,
+                defaults.max_input_bytes,
+            ),
+            (
+                MAX_TEXTURE_OPTION,
+                self.max_texture_memory,
+                defaults.max_texture_bytes,
+            ),
+            (
+                MAX_VERTICES_OPTION,
+                self.max_vertices,
+                defaults.max_vertices,
+            ),
+        ] {
+            if value != default {
+                a.extend([flag.to_string(), value.to_string()]);
+            }
+        }
+        a
+    }
+
     pub fn limits(&self) -> frond_scene::InputLimits {
         frond_scene::InputLimits {
             max_input_bytes: self.max_input_size,
@@ -69,7 +122,7 @@ pub fn parse_size_arg(text: &str) -> std::result::Result<u64, String> {
 }
 
 /// Plane search and bake options of `frond lod`, which `frond sweep` passes to every build.
-#[derive(clap::Args, Clone, Debug)]
+#[derive(clap::Args, Clone, Debug, PartialEq)]
 pub struct BuildArgs {
     /// Candidate planes per iteration of the plane search.
     #[arg(long, default_value_t = 100)]
@@ -107,8 +160,8 @@ pub struct BuildArgs {
 impl BuildArgs {
     /// The spectral and skeleton methods' options (description types at their defaults: the
     /// method name sets them).
-    pub fn method_options(&self) -> Result<(SpectralOptions, SkeletonOptions)> {
-        Ok((
+    pub fn method_options(&self) -> (SpectralOptions, SkeletonOptions) {
+        (
             SpectralOptions {
                 clusters: self.clusters.map(|k| k as usize),
                 zone_size: self.zone_size,
@@ -120,7 +173,7 @@ impl BuildArgs {
                 average_bone: self.average_bone,
                 ..Default::default()
             },
-        ))
+        )
     }
 
     /// The same options as `frond lod` arguments.
@@ -156,8 +209,24 @@ impl BuildArgs {
     }
 }
 
+impl RunArgs {
+    /// The arguments again.
+    pub fn to_args(&self) -> Vec<String> {
+        let mut a = vec![
+            "--seed".to_string(),
+            self.seed.to_string(),
+            "--samples".to_string(),
+            self.samples.to_string(),
+        ];
+        if let Some(c) = &self.clip {
+            a.extend(["--clip".to_string(), c.clone()]);
+        }
+        a
+    }
+}
+
 /// Seed and loop sampling, shared by the commands that build billboards.
-#[derive(clap::Args, Clone, Debug)]
+#[derive(clap::Args, Clone, Debug, PartialEq)]
 pub struct RunArgs {
     /// Random seed: same input and seed, same files.
     #[arg(long, default_value_t = 1)]

@@ -6,13 +6,14 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use crate::batch::inputs::{ANIMATION_NAMES, Overrides};
-use crate::batch::preset::{EnginePreset, PRESET_NAMES};
+use crate::batch::inputs::Overrides;
+use crate::batch::preset::EnginePreset;
 use crate::batch::shard::Shard;
 use crate::batch::tree_job::TreeContext;
 use crate::batch::{BatchRequest, default_max_memory, parse_memory, run_batch};
 use crate::cli::args::{BuildArgs, LimitArgs};
 use crate::cli::progress::{BatchBar, finish_batch};
+use crate::cli::values::{AnimationArg, EngineArg, MethodArg};
 
 /// `frond batch`.
 #[derive(clap::Args, Clone, Debug)]
@@ -33,8 +34,8 @@ pub struct BatchArgs {
     pub shard: Option<String>,
     /// Engine conventions (texture limits, external textures, MSFT_lod, VAT format,
     /// joint and influence checks; docs/engines.md).
-    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(PRESET_NAMES))]
-    pub preset: Option<String>,
+    #[arg(long, value_enum)]
+    pub preset: Option<EngineArg>,
     /// Memory the running trees may use together, like 8G (default: 3/4 of what is
     /// available); a larger tree runs alone.
     #[arg(long, value_name = "SIZE")]
@@ -43,14 +44,14 @@ pub struct BatchArgs {
     #[arg(long)]
     pub eval: bool,
     /// Clustering method of every tree (default: frond lod's).
-    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(frond_lod::METHOD_NAMES.iter().map(|(n, _)| *n)))]
-    pub method: Option<String>,
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
     /// Screen heights in pixels, one LOD each (default: frond lod's).
     #[arg(long, value_delimiter = ',')]
     pub lods: Option<Vec<f32>>,
     /// skin, vat (EXR half), vat-png16 (refused by the web preset) or spectral.
-    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(ANIMATION_NAMES))]
-    pub animation: Option<String>,
+    #[arg(long, value_enum)]
+    pub animation: Option<AnimationArg>,
     /// Random seed of every tree.
     #[arg(long)]
     pub seed: Option<u64>,
@@ -108,9 +109,9 @@ impl BatchArgs {
             json,
         } = self;
         let defaults = Overrides {
-            method,
+            method: method.map(|m| m.text().to_string()),
             lods,
-            animation,
+            animation: animation.map(|a| a.text().to_string()),
             foliage_material: (!foliage_material.is_empty()).then_some(foliage_material),
             wood_material: (!wood_material.is_empty()).then_some(wood_material),
             clip,
@@ -121,9 +122,9 @@ impl BatchArgs {
             clusters: build.clusters,
         };
         defaults.check("command line")?;
-        let preset = preset.as_deref().and_then(EnginePreset::named);
-        if let (Some(p), Some(a)) = (&preset, &defaults.animation) {
-            p.lod_args(a)?;
+        let preset = preset.and_then(|p| EnginePreset::named(p.text()));
+        if let (Some(p), Some(a)) = (&preset, animation) {
+            p.check_animation(a)?;
         }
         let shard = match shard.as_deref() {
             None => None,
@@ -132,12 +133,11 @@ impl BatchArgs {
         };
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         let jobs = jobs.map_or(cores, |j| j as usize);
-        let build_args = BuildArgs {
+        let build = BuildArgs {
             clouds: None,
             clusters: None,
             ..build
-        }
-        .to_args();
+        };
         let req = BatchRequest {
             input,
             out_dir: output.clone(),
@@ -151,7 +151,7 @@ impl BatchArgs {
                 exe: std::env::current_exe().context("locating the frond executable")?,
                 out_dir: output.clone(),
                 defaults,
-                build_args,
+                build,
                 preset,
                 eval,
                 timeout: std::time::Duration::from_secs(timeout.max(1)),

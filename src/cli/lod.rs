@@ -7,19 +7,18 @@ use anyhow::Result;
 
 use crate::cli::args::{BuildArgs, ImportArgs, RunArgs};
 use crate::cli::progress::{Spinner, print_json};
+use crate::cli::values::{AnimationArg, MethodArg};
 use crate::lod_cmd::{LodRequest, run_lod};
-use frond_export::AnimationMode;
-use frond_export::vat::VatFormat;
 use frond_lod::method::ignored_options;
 use frond_lod::{
-    ChainRequest, CloudOptions, Method, MethodName, SkeletonOptions, SpectralOptions,
-    screen_height_at, tree_height,
+    ChainRequest, CloudOptions, Method, SkeletonOptions, SpectralOptions, screen_height_at,
+    tree_height,
 };
 use frond_render::Renderer;
 use frond_scene::Length;
 
 /// `frond lod`.
-#[derive(clap::Args, Clone, Debug)]
+#[derive(clap::Args, Clone, Debug, PartialEq)]
 pub struct LodArgs {
     #[command(flatten)]
     pub import: ImportArgs,
@@ -30,8 +29,8 @@ pub struct LodArgs {
     /// the axis-phase type; spectral-naive, spectral-dominating-axis and
     /// spectral-axis-phase name the type) or skeleton (SBCS with the rotation-spectral
     /// bone type; skeleton-axis-angle and skeleton-rotation-spectral name the type).
-    #[arg(long, default_value = "auto", value_parser = clap::builder::PossibleValuesParser::new(frond_lod::METHOD_NAMES.iter().map(|(n, _)| *n)))]
-    pub method: String,
+    #[arg(long, value_enum, default_value = "auto")]
+    pub method: MethodArg,
     /// Screen heights in pixels the whole tree covers, one LOD each, nearest first.
     #[arg(long, value_delimiter = ',', default_value = "600,200,60")]
     pub lods: Vec<f32>,
@@ -53,8 +52,8 @@ pub struct LodArgs {
     /// skin (glTF skin and channels), vat (vertex animation textures, EXR half), vat-png16,
     /// or spectral (skinned billboards + a small float texture of each billboard's cosine
     /// terms, with reference shaders; spectral and per-bone methods).
-    #[arg(long, default_value = "skin", value_parser = ["skin", "vat", "vat-png16", "spectral"])]
-    pub animation: String,
+    #[arg(long, value_enum, default_value = "skin")]
+    pub animation: AnimationArg,
     #[command(flatten)]
     pub run: RunArgs,
     #[command(flatten)]
@@ -78,51 +77,26 @@ pub struct LodArgs {
 }
 
 impl LodArgs {
-    /// Runs the command.
-    pub fn run(self) -> Result<()> {
-        let LodArgs {
-            import,
-            output,
-            method,
-            lods,
-            distances,
-            fov,
-            resolution,
-            pixel_error,
-            epsilon,
-            animation,
-            run:
-                RunArgs {
-                    seed,
-                    samples,
-                    clip,
-                },
-            build,
-            max_atlas,
-            padding,
-            msft_lod,
-            external_textures,
-            json,
-        } = self;
-        let tree = import.load()?;
-        let renderer = Renderer::new()?;
-        let screen_heights = match distances {
+    /// What the arguments ask of the library for `tree`: screen heights from `--lods` or from
+    /// `--distances`, the method with its options. Warns about options the method ignores.
+    pub fn request(&self, tree: &frond_scene::Tree) -> Result<LodRequest> {
+        let screen_heights = match &self.distances {
             Some(d) => {
-                let h = tree_height(&tree);
+                let h = tree_height(tree);
                 d.iter()
                     .map(|&z| {
                         if !(z.is_finite() && z > 0.0) {
                             anyhow::bail!("--distances: {z} is not a positive distance");
                         }
-                        Ok(screen_height_at(h, z, fov, resolution))
+                        Ok(screen_height_at(h, z, self.fov, self.resolution))
                     })
                     .collect::<Result<Vec<_>>>()?
             }
-            None => lods,
+            None => self.lods.clone(),
         };
-        let spectral_animation = animation == "spectral";
-        let name = MethodName::parse(&method).unwrap_or(MethodName::Auto);
-        let (spectral, skeleton) = build.method_options()?;
+        let spectral_animation = self.animation == AnimationArg::Spectral;
+        let name = self.method.method();
+        let (spectral, skeleton) = self.build.method_options();
         for w in ignored_options(
             name,
             spectral != SpectralOptions::default(),
@@ -131,40 +105,105 @@ impl LodArgs {
         ) {
             tracing::warn!("{w}");
         }
-        let req = LodRequest {
+        let build = &self.build;
+        Ok(LodRequest {
             chain: ChainRequest {
                 method: Method::new(name, spectral, skeleton),
                 screen_heights,
-                pixel_error,
-                epsilon,
+                pixel_error: self.pixel_error,
+                epsilon: self.epsilon,
                 spectral_animation,
-                seed,
-                samples,
-                clip,
+                seed: self.run.seed,
+                samples: self.run.samples,
+                clip: self.run.clip.clone(),
                 cloud: CloudOptions {
                     planes: build.planes,
                     view_penalty: build.view_penalty.map(f32::to_radians),
                     increased_density: build.increased_density,
-                    max_atlas,
+                    max_atlas: self.max_atlas,
                     supersample: build.supersample,
-                    padding,
+                    padding: self.padding,
                 },
             },
-            animation: match animation.as_str() {
-                "vat" => AnimationMode::Vat(VatFormat::ExrHalf),
-                "vat-png16" => AnimationMode::Vat(VatFormat::Png16),
-                "spectral" => AnimationMode::Spectral,
-                _ => AnimationMode::Skin,
-            },
-            msft_lod,
-            resolution,
-            external_textures,
-        };
+            animation: self.animation.mode(),
+            msft_lod: self.msft_lod,
+            resolution: self.resolution,
+            external_textures: self.external_textures,
+        })
+    }
+
+    /// The arguments again, as a `frond lod` command line parses them (the subcommand name
+    /// first): child runs of `frond sweep` and `frond batch` are built as a [`LodArgs`] and
+    /// written with this, so every option has one spelling.
+    pub fn to_args(&self) -> Vec<String> {
+        let mut a = vec![
+            "lod".to_string(),
+            self.import.input.display().to_string(),
+            "-o".into(),
+            self.output.display().to_string(),
+        ];
+        a.extend(self.option_args());
+        a
+    }
+
+    /// The options alone (input and output aside), as [`Self::to_args`] writes them.
+    pub fn option_args(&self) -> Vec<String> {
+        let list = |v: &[f32]| v.iter().map(f32::to_string).collect::<Vec<_>>().join(",");
+        let mut a = self.import.option_args();
+        a.extend(["--method".into(), self.method.text().into()]);
+        match &self.distances {
+            Some(d) => a.extend(["--distances".into(), list(d)]),
+            None => a.extend(["--lods".into(), list(&self.lods)]),
+        }
+        a.extend(["--fov".into(), self.fov.to_string()]);
+        a.extend(["--resolution".into(), self.resolution.to_string()]);
+        a.extend(["--pixel-error".into(), self.pixel_error.to_string()]);
+        if let Some(e) = self.epsilon {
+            a.extend(["--epsilon".into(), e.to_string()]);
+        }
+        a.extend(["--animation".into(), self.animation.text().into()]);
+        a.extend(self.run.to_args());
+        a.extend(self.build.to_args());
+        a.extend(["--max-atlas".into(), self.max_atlas.to_string()]);
+        a.extend(["--padding".into(), self.padding.to_string()]);
+        for (flag, on) in [
+            ("--msft-lod", self.msft_lod),
+            ("--external-textures", self.external_textures),
+            ("--json", self.json),
+        ] {
+            if on {
+                a.push(flag.into());
+            }
+        }
+        a
+    }
+
+    /// `frond lod`'s arguments for `input` into `output`, every option at its default.
+    pub fn defaults(input: &std::path::Path, output: &std::path::Path) -> LodArgs {
+        #[derive(clap::Parser)]
+        struct One {
+            #[command(flatten)]
+            lod: LodArgs,
+        }
+        <One as clap::Parser>::parse_from([
+            std::ffi::OsStr::new("lod"),
+            input.as_os_str(),
+            std::ffi::OsStr::new("-o"),
+            output.as_os_str(),
+        ])
+        .lod
+    }
+
+    /// Runs the command.
+    pub fn run(self) -> Result<()> {
+        let tree = self.import.load()?;
+        let renderer = Renderer::new()?;
+        let req = self.request(&tree)?;
         let bar = Spinner::new();
-        let result = run_lod(&renderer, &tree, &req, &output, &|m: &str| bar.say(m));
+        let result = run_lod(&renderer, &tree, &req, &self.output, &|m: &str| bar.say(m));
         drop(bar);
         let report = result?;
-        if json {
+        if self.json {
             print_json(&report)?;
         } else {
             for l in &report.lods {
@@ -182,5 +221,94 @@ impl LodArgs {
             );
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct One {
+        #[command(flatten)]
+        lod: LodArgs,
+    }
+
+    fn parse(args: &[&str]) -> LodArgs {
+        One::try_parse_from(args).expect("parses").lod
+    }
+
+    #[test]
+    fn arguments_round_trip() {
+        for line in [
+            vec!["lod", "t.glb", "-o", "out"],
+            vec![
+                "lod",
+                "t.glb",
+                "-o",
+                "out",
+                "--method",
+                "spectral",
+                "--lods",
+                "300,75",
+                "--epsilon",
+                "2%",
+                "--zone-size",
+                "0.5",
+                "--clusters",
+                "4",
+                "--no-shared-bone",
+                "--animation",
+                "vat-png16",
+                "--seed",
+                "7",
+                "--clip",
+                "Wind",
+                "--samples",
+                "32",
+                "--msft-lod",
+                "--external-textures",
+                "--json",
+                "--foliage-material",
+                "Leaf",
+                "--max-vertices",
+                "100",
+                "--view-penalty",
+                "15",
+                "--increased-density",
+            ],
+            vec![
+                "lod",
+                "t.glb",
+                "-o",
+                "out",
+                "--method",
+                "skeleton-rotation-spectral",
+                "--distances",
+                "5,20",
+                "--fov",
+                "45",
+                "--clouds",
+                "3",
+                "--average-bone",
+                "--max-atlas",
+                "2048",
+                "--padding",
+                "4",
+                "--supersample",
+                "2",
+                "--planes",
+                "50",
+            ],
+        ] {
+            let a = parse(&line);
+            let again = a.to_args();
+            let b = parse(&again.iter().map(String::as_str).collect::<Vec<_>>());
+            assert_eq!(a, b, "{line:?} -> {again:?}");
+        }
+        let d = LodArgs::defaults(std::path::Path::new("t.glb"), std::path::Path::new("o"));
+        assert_eq!(d, parse(&["lod", "t.glb", "-o", "o"]));
+        assert_eq!(d.method, MethodArg::AUTO);
     }
 }

@@ -2,12 +2,13 @@
 
 use std::path::PathBuf;
 
+use crate::cli::values::PartsArg;
 use anyhow::Result;
 
 use crate::cli::args::ImportArgs;
 use crate::output::write_atomic;
 use crate::render_cmd::{RenderRequest, frame_png, parse_size, render_tree};
-use frond_render::{Renderer, TreeParts};
+use frond_render::Renderer;
 
 /// `frond render`.
 #[derive(clap::Args, Clone, Debug)]
@@ -36,8 +37,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub ortho: bool,
     /// Draw only wood or only foliage.
-    #[arg(long, value_parser = ["all", "wood", "foliage"], default_value = "all")]
-    pub parts: String,
+    #[arg(long, value_enum, default_value = "all")]
+    pub parts: PartsArg,
     /// Output PNG path.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -70,11 +71,6 @@ impl RenderArgs {
         }
         let tree = import.load()?;
         let renderer = Renderer::new()?;
-        let parts = match parts.as_str() {
-            "wood" => TreeParts::Wood,
-            "foliage" => TreeParts::Foliage,
-            _ => TreeParts::All,
-        };
         let req = RenderRequest {
             clip,
             time,
@@ -84,7 +80,7 @@ impl RenderArgs {
             width,
             height,
             orthographic: ortho,
-            parts,
+            parts: parts.into(),
         };
         let frame = render_tree(&renderer, &tree, &req)?;
         write_atomic(&output, &frame_png(&frame)?)?;

@@ -4,15 +4,16 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
+use crate::cli::values::SampleSize;
 use crate::output::write_atomic;
-use frond_scene::generator::{Preset, generate};
+use frond_scene::generator::generate;
 
 /// `frond sample`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct SampleArgs {
     /// Size: small (~2k foliage triangles), medium (~20k), large (~200k), xlarge (~1M).
-    #[arg(long, default_value = "small", value_parser = ["small", "medium", "large", "xlarge"])]
-    pub preset: String,
+    #[arg(long, value_enum, default_value = "small")]
+    pub preset: SampleSize,
     /// Random seed: same preset and seed, same bytes.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -29,9 +30,7 @@ impl SampleArgs {
             seed,
             output,
         } = self;
-        let preset =
-            Preset::parse(&preset).with_context(|| format!("unknown preset '{preset}'"))?;
-        let tree = generate(preset, seed).context("generating the sample tree")?;
+        let tree = generate(preset.into(), seed).context("generating the sample tree")?;
         write_atomic(&output, &tree.glb)?;
         tracing::info!("wrote {} ({} bytes)", output.display(), tree.glb.len());
         Ok(())

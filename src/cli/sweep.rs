@@ -6,8 +6,10 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use crate::cli::args::{BuildArgs, ImportArgs};
+use crate::cli::args::{BuildArgs, ImportArgs, RunArgs};
+use crate::cli::lod::LodArgs;
 use crate::cli::progress::{Progress, print_json};
+use crate::cli::values::MethodArg;
 use crate::eval_cmd::EvalRequest;
 use crate::sweep::grid::{Grid, parse_epsilons};
 use crate::sweep::{SweepRequest, run_sweep};
@@ -22,9 +24,13 @@ pub struct SweepArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Methods to compare.
-    #[arg(long, value_delimiter = ',', default_value = "per-bone,static",
-          value_parser = clap::builder::PossibleValuesParser::new(frond_lod::METHOD_NAMES.iter().map(|(n, _)| *n)))]
-    pub method: Vec<String>,
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "per-bone,static"
+    )]
+    pub method: Vec<MethodArg>,
     /// Screen heights (pixels), one LOD each; ε follows the screen-space rule.
     #[arg(long, value_delimiter = ',', default_value = "600,200,60")]
     pub lods: Vec<f32>,
@@ -111,18 +117,16 @@ impl SweepArgs {
                 Grid::ScreenHeights(lods)
             }
         };
-        let mut import_args = vec![import.input.display().to_string()];
-        for m in &import.foliage_material {
-            import_args.extend(["--foliage-material".to_string(), m.clone()]);
-        }
-        for m in &import.wood_material {
-            import_args.extend(["--wood-material".to_string(), m.clone()]);
-        }
-        let mut lod_args = vec!["--samples".to_string(), samples.to_string()];
-        if let Some(c) = &clip {
-            lod_args.extend(["--clip".to_string(), c.clone()]);
-        }
-        lod_args.extend(build.to_args());
+        let lod = LodArgs {
+            import: import.clone(),
+            run: RunArgs {
+                samples,
+                clip: clip.clone(),
+                ..LodArgs::defaults(&import.input, &output).run
+            },
+            build,
+            ..LodArgs::defaults(&import.input, &output)
+        };
         let eval = EvalRequest {
             views,
             frames,
@@ -132,11 +136,10 @@ impl SweepArgs {
         };
         let req = SweepRequest {
             exe: std::env::current_exe().context("locating the frond executable")?,
-            import_args,
-            methods: method,
+            lod,
+            methods: method.iter().map(|m| m.text().to_string()).collect(),
             grid,
             seeds: (1..=seeds).collect(),
-            lod_args,
             candidates,
             timeout: std::time::Duration::from_secs(timeout.max(1)),
             keep,

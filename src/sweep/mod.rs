@@ -20,12 +20,15 @@ use serde::Serialize;
 use serde_json::Value;
 
 use crate::child_job::{JobEnd, run_job};
+use crate::cli::args::RunArgs;
+use crate::cli::lod::LodArgs;
+use crate::cli::values::MethodArg;
 use crate::eval_cmd::{EvalContext, EvalRequest, image_for_screen_height, same_bytes};
 use crate::lod_cmd::lod_name;
 use crate::output::write_atomic;
 use frond_lod::method::{MethodName, auto_method};
 use frond_render::Renderer;
-use frond_scene::{ImportOptions, Tree};
+use frond_scene::{ImportOptions, Length, Tree};
 use grid::{Grid, GridPoint};
 use results::{Row, Stability};
 
@@ -34,14 +37,13 @@ use results::{Row, Stability};
 pub struct SweepRequest {
     /// The `frond` executable each run starts.
     pub exe: PathBuf,
-    /// Arguments naming the input and its import options, passed to `lod` and `eval`.
-    pub import_args: Vec<String>,
+    /// Every run's `frond lod` arguments but output, method, screen height, seed and ε: the
+    /// input and how it is read, sampling, plane search and bake options.
+    pub lod: LodArgs,
     /// Methods of `frond lod --method`.
     pub methods: Vec<String>,
     pub grid: Grid,
     pub seeds: Vec<u64>,
-    /// Further `frond lod` arguments (planes, samples, view penalty, …), the same for every run.
-    pub lod_args: Vec<String>,
     /// External candidates (any glTF), evaluated at every grid point's screen height.
     pub candidates: Vec<PathBuf>,
     /// Wall-clock limit of one `lod` child (the evaluation runs in the sweep's process, which
@@ -292,22 +294,18 @@ fn lod_run(
         }
         _ => method.to_string(),
     };
-    let mut args = vec!["lod".to_string()];
-    args.extend(req.import_args.iter().cloned());
-    args.extend([
-        "-o".into(),
-        dir.join("lod").display().to_string(),
-        "--method".into(),
-        resolved,
-        "--lods".into(),
-        format!("{}", p.screen_height),
-        "--seed".into(),
-        seed.to_string(),
-    ]);
-    if let Some(e) = p.epsilon {
-        args.extend(["--epsilon".into(), format!("{e}")]);
+    let args = LodArgs {
+        output: dir.join("lod"),
+        method: MethodArg::parse(&resolved).unwrap_or(MethodArg::AUTO),
+        lods: vec![p.screen_height],
+        epsilon: p.epsilon.map(Length::World),
+        run: RunArgs {
+            seed,
+            ..req.lod.run.clone()
+        },
+        ..req.lod.clone()
     }
-    args.extend(req.lod_args.iter().cloned());
+    .to_args();
     let end = run_job(&req.exe, &args, dir, "lod", req.timeout)?;
     let report_path = dir
         .join("lod")

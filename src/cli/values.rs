@@ -1,0 +1,190 @@
+//! The command line's closed sets of names as `clap::ValueEnum`s: clustering methods, animation
+//! modes, drawn parts, sample sizes and engine presets. Each maps to the library's own type.
+
+use clap::ValueEnum;
+use clap::builder::PossibleValue;
+use frond_export::AnimationMode;
+use frond_export::vat::VatFormat;
+use frond_lod::{METHOD_NAMES, MethodName};
+use frond_render::TreeParts;
+use frond_scene::generator::Preset;
+
+/// A `--method` value: one entry of [`METHOD_NAMES`] (by index, so that `spectral` and
+/// `spectral-axis-phase` stay distinct values that name the same method).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MethodArg(usize);
+
+const METHOD_COUNT: usize = METHOD_NAMES.len();
+
+/// Every `--method` value, in [`METHOD_NAMES`] order.
+static METHOD_ARGS: [MethodArg; METHOD_COUNT] = {
+    let mut all = [MethodArg(0); METHOD_COUNT];
+    let mut i = 0;
+    while i < METHOD_COUNT {
+        all[i] = MethodArg(i);
+        i += 1;
+    }
+    all
+};
+
+impl MethodArg {
+    /// `auto`.
+    pub const AUTO: MethodArg = MethodArg(0);
+
+    /// The value as written (`spectral`, `per-bone`, ...).
+    pub fn text(self) -> &'static str {
+        METHOD_NAMES[self.0].0
+    }
+    /// The method it names.
+    pub fn method(self) -> MethodName {
+        METHOD_NAMES[self.0].1
+    }
+    /// The value written `text`, if any.
+    pub fn parse(text: &str) -> Option<MethodArg> {
+        METHOD_NAMES
+            .iter()
+            .position(|(n, _)| *n == text)
+            .map(MethodArg)
+    }
+}
+
+impl ValueEnum for MethodArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        &METHOD_ARGS
+    }
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(PossibleValue::new(self.text()))
+    }
+}
+
+/// An `--animation` value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum AnimationArg {
+    /// glTF skin and channels.
+    Skin,
+    /// Vertex animation textures, EXR half floats.
+    Vat,
+    /// Vertex animation textures, 16-bit PNG.
+    #[value(name = "vat-png16")]
+    VatPng16,
+    /// Skinned billboards plus a small float texture of each billboard's cosine terms.
+    Spectral,
+}
+
+impl AnimationArg {
+    /// How the files animate billboards.
+    pub fn mode(self) -> AnimationMode {
+        match self {
+            AnimationArg::Skin => AnimationMode::Skin,
+            AnimationArg::Vat => AnimationMode::Vat(VatFormat::ExrHalf),
+            AnimationArg::VatPng16 => AnimationMode::Vat(VatFormat::Png16),
+            AnimationArg::Spectral => AnimationMode::Spectral,
+        }
+    }
+    /// The value as written.
+    pub fn text(self) -> &'static str {
+        match self {
+            AnimationArg::Skin => "skin",
+            AnimationArg::Vat => "vat",
+            AnimationArg::VatPng16 => "vat-png16",
+            AnimationArg::Spectral => "spectral",
+        }
+    }
+}
+
+/// A `--parts` value of `frond render`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum PartsArg {
+    All,
+    Wood,
+    Foliage,
+}
+
+impl From<PartsArg> for TreeParts {
+    fn from(p: PartsArg) -> TreeParts {
+        match p {
+            PartsArg::All => TreeParts::All,
+            PartsArg::Wood => TreeParts::Wood,
+            PartsArg::Foliage => TreeParts::Foliage,
+        }
+    }
+}
+
+/// A `--preset` value of `frond sample`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SampleSize {
+    /// ~2k foliage triangles.
+    Small,
+    /// ~20k.
+    Medium,
+    /// ~200k.
+    Large,
+    /// ~1M.
+    Xlarge,
+}
+
+impl From<SampleSize> for Preset {
+    fn from(s: SampleSize) -> Preset {
+        match s {
+            SampleSize::Small => Preset::Small,
+            SampleSize::Medium => Preset::Medium,
+            SampleSize::Large => Preset::Large,
+            SampleSize::Xlarge => Preset::Xlarge,
+        }
+    }
+}
+
+/// A `--preset` value of `frond batch` (docs/engines.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum EngineArg {
+    Unity,
+    Unreal,
+    Godot,
+    Web,
+}
+
+impl EngineArg {
+    /// The preset's name in [`crate::batch::preset::PRESET_NAMES`].
+    pub fn text(self) -> &'static str {
+        match self {
+            EngineArg::Unity => "unity",
+            EngineArg::Unreal => "unreal",
+            EngineArg::Godot => "godot",
+            EngineArg::Web => "web",
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::batch::inputs::ANIMATION_NAMES;
+    use crate::batch::preset::{EnginePreset, PRESET_NAMES};
+
+    #[test]
+    fn every_value_names_what_the_library_knows() {
+        assert_eq!(MethodArg::value_variants().len(), METHOD_NAMES.len());
+        for m in MethodArg::value_variants() {
+            assert_eq!(MethodArg::parse(m.text()), Some(*m));
+            assert_eq!(MethodName::parse(m.text()), Some(m.method()));
+        }
+        assert_eq!(MethodArg::AUTO.method(), MethodName::Auto);
+        let animations: Vec<&str> = AnimationArg::value_variants()
+            .iter()
+            .map(|a| a.text())
+            .collect();
+        assert_eq!(animations, ANIMATION_NAMES);
+        for a in AnimationArg::value_variants() {
+            let v = a.to_possible_value().expect("value");
+            assert_eq!(v.get_name(), a.text());
+        }
+        let engines: Vec<&str> = EngineArg::value_variants()
+            .iter()
+            .map(|e| e.text())
+            .collect();
+        assert_eq!(engines, PRESET_NAMES);
+        for e in EngineArg::value_variants() {
+            assert!(EnginePreset::named(e.text()).is_some());
+        }
+    }
+}
