@@ -6,7 +6,7 @@
 use std::time::Instant;
 
 use frond_render::{TreeParts, scene_from_positions};
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -73,12 +73,73 @@ pub fn build_animated_cloud(
     clusters: &[FoliageCluster],
     method: &str,
 ) -> Result<(AnimatedBillboardCloud, BuildTimings), CloudError> {
-    let (renderer, tree, sampled, params, scale) =
-        (ctx.renderer, ctx.tree, ctx.sampled, ctx.cloud, ctx.scale);
+    let (renderer, tree, sampled, params) = (ctx.renderer, ctx.tree, ctx.sampled, ctx.cloud);
     let clock = ctx.clock.clone();
     let mut timings = BuildTimings::default();
     let t0 = Instant::now();
-    let worlds = sampled_worlds(&rig, &clock);
+    let soup = reference_soup(ctx, &rig, &clock, clusters);
+    let t1 = Instant::now();
+    timings.reference_pose = (t1 - t0).as_secs_f64();
+
+    let per_cluster = cluster_quads(ctx, &soup, clusters);
+    let t2 = Instant::now();
+    timings.plane_search = (t2 - t1).as_secs_f64();
+
+    let mut quads = Vec::new();
+    let mut owns = Vec::new();
+    let mut drawn = Vec::new();
+    let mut drivers = Vec::new();
+    for (cluster, list) in clusters.iter().zip(per_cluster) {
+        for (q, own, d) in list {
+            quads.push(q);
+            owns.push(own);
+            drawn.push(d);
+            drivers.push(cluster.driver);
+        }
+    }
+    if quads.is_empty() {
+        return Err(CloudError::Empty);
+    }
+    let draw = scene_from_positions(tree, &sampled.average, None, TreeParts::Foliage);
+    let baked = bake_cloud(
+        renderer,
+        &soup,
+        &draw.materials,
+        &draw.textures,
+        &quads,
+        &drawn,
+        &params.bake,
+    )?;
+    let t3 = Instant::now();
+    timings.bake = (t3 - t2).as_secs_f64();
+
+    let billboards = animated_billboards(ctx, &soup, &quads, &owns, &drivers, &baked.uv_rects);
+    timings.motion_fit = t3.elapsed().as_secs_f64();
+    let mut cloud = AnimatedBillboardCloud {
+        method: method.to_string(),
+        billboards,
+        atlas: baked.atlas,
+        texels_per_unit: baked.texels_per_unit,
+        density_reduced: baked.density_reduced,
+        rig,
+        rig_resampled,
+        clock,
+        playable_clips: Vec::new(),
+    };
+    cloud.update_playable_clips();
+    Ok((cloud, timings))
+}
+
+/// Every foliage triangle in its cluster's reference frame: the average pose for rigid-fit and
+/// assigned clusters, the loop's average in the node's rest frame for node-driven ones.
+fn reference_soup(
+    ctx: &BuildContext,
+    rig: &Rig,
+    clock: &LoopClock,
+    clusters: &[FoliageCluster],
+) -> TriangleSoup {
+    let (tree, sampled) = (ctx.tree, ctx.sampled);
+    let worlds = sampled_worlds(rig, clock);
     let rest = rig.rest_world();
     let n = sampled.samples();
     let nv = sampled.vertices;
@@ -121,7 +182,7 @@ pub fn build_animated_cloud(
             }
         }
     }
-    let soup = TriangleSoup {
+    TriangleSoup {
         positions: reference,
         uvs: sampled
             .foliage
@@ -133,12 +194,18 @@ pub fn build_animated_cloud(
             .iter()
             .map(|&t| tree.triangles[t].material)
             .collect(),
-    };
-    let t1 = Instant::now();
-    timings.reference_pose = (t1 - t0).as_secs_f64();
+    }
+}
 
-    // One plane search per cluster, each with its own seed derived from the cluster's index.
-    let per_cluster: Vec<Vec<ClusterQuad>> = clusters
+/// One plane search per cluster, each with its own seed derived from the cluster's index:
+/// every cluster's quads with the triangles they replace and those drawn on them.
+fn cluster_quads(
+    ctx: &BuildContext,
+    soup: &TriangleSoup,
+    clusters: &[FoliageCluster],
+) -> Vec<Vec<ClusterQuad>> {
+    let (params, scale) = (ctx.cloud, ctx.scale);
+    clusters
         .par_iter()
         .enumerate()
         .map(|(ci, cluster)| {
@@ -174,43 +241,27 @@ pub fn build_animated_cloud(
                 })
                 .collect()
         })
-        .collect();
-    let t2 = Instant::now();
-    timings.plane_search = (t2 - t1).as_secs_f64();
+        .collect()
+}
 
-    let mut quads = Vec::new();
-    let mut owns = Vec::new();
-    let mut drawn = Vec::new();
-    let mut drivers = Vec::new();
-    for (cluster, list) in clusters.iter().zip(per_cluster) {
-        for (q, own, d) in list {
-            quads.push(q);
-            owns.push(own);
-            drawn.push(d);
-            drivers.push(cluster.driver);
-        }
-    }
-    if quads.is_empty() {
-        return Err(CloudError::Empty);
-    }
-    let draw = scene_from_positions(tree, &sampled.average, None, TreeParts::Foliage);
-    let baked = bake_cloud(
-        renderer,
-        &soup,
-        &draw.materials,
-        &draw.textures,
-        &quads,
-        &drawn,
-        &params.bake,
-    )?;
-    let t3 = Instant::now();
-    timings.bake = (t3 - t2).as_secs_f64();
-
-    let billboards: Vec<AnimatedBillboard> = quads
+/// The billboards of `quads`: each follows its cluster's driver (a node, or the rigid fit of
+/// its own triangles' sampled motion) and samples the atlas at `uv_rects`.
+fn animated_billboards(
+    ctx: &BuildContext,
+    soup: &TriangleSoup,
+    quads: &[Quad],
+    owns: &[Vec<usize>],
+    drivers: &[Driver],
+    uv_rects: &[[Vec2; 4]],
+) -> Vec<AnimatedBillboard> {
+    let (tree, sampled) = (ctx.tree, ctx.sampled);
+    let n = sampled.samples();
+    let nv = sampled.vertices;
+    quads
         .par_iter()
         .zip(owns.par_iter())
         .zip(drivers.par_iter())
-        .zip(baked.uv_rects.par_iter())
+        .zip(uv_rects.par_iter())
         .map(|(((quad, own), driver), uv)| {
             let (follows, motion) = match *driver {
                 Driver::Node(node) => (Some(node), None),
@@ -241,19 +292,5 @@ pub fn build_animated_cloud(
                 triangles: own.iter().map(|&k| sampled.foliage[k]).collect(),
             }
         })
-        .collect();
-    timings.motion_fit = t3.elapsed().as_secs_f64();
-    let mut cloud = AnimatedBillboardCloud {
-        method: method.to_string(),
-        billboards,
-        atlas: baked.atlas,
-        texels_per_unit: baked.texels_per_unit,
-        density_reduced: baked.density_reduced,
-        rig,
-        rig_resampled,
-        clock,
-        playable_clips: Vec::new(),
-    };
-    cloud.update_playable_clips();
-    Ok((cloud, timings))
+        .collect()
 }

@@ -86,7 +86,8 @@ fn carry(node: Option<usize>, worlds: &[Vec<Mat4>], rest_inv: &[Mat4], s: usize)
 }
 
 /// Applies `budget` to `cloud` (built from `tree`, whose loop `sampled` is; the rig's node
-/// indices still those of the tree) and prunes its rig.
+/// indices still those of the tree) and prunes its rig, in the order of the steps below: what
+/// is not seen goes first, then motion that a bone (or an earlier billboard) already gives.
 /// Returns the old → new rig node map (for the caller's wood mesh) and what was dropped.
 pub fn apply_budget(
     cloud: &mut AnimatedBillboardCloud,
@@ -97,6 +98,33 @@ pub fn apply_budget(
 ) -> (Vec<Option<usize>>, Dropped) {
     let mut dropped = Dropped::default();
     let half = 0.5 * budget.pixel;
+    drop_unseen_billboards(cloud, budget, &mut dropped);
+    drop_unseen_motion(cloud, half, &mut dropped);
+    let worlds = sampled_worlds(&cloud.rig, &cloud.clock);
+    let rest_inv: Vec<Mat4> = cloud.rig.rest_world().iter().map(|m| m.inverse()).collect();
+    let rig = RigFrames {
+        worlds: &worlds,
+        rest_inv: &rest_inv,
+    };
+    attach_to_bones(cloud, tree, &rig, half, &mut dropped);
+    share_motions(cloud, half, &mut dropped);
+    rebind_to_ancestors(cloud, sampled, &rig, budget, &mut dropped);
+    let map = prune_rig(cloud, keep_nodes, &mut dropped);
+    (map, dropped)
+}
+
+/// The rig's world matrices at every clock sample and its inverse rest world matrices.
+struct RigFrames<'a> {
+    worlds: &'a [Vec<Mat4>],
+    rest_inv: &'a [Mat4],
+}
+
+/// Step 1: billboards too small to see.
+fn drop_unseen_billboards(
+    cloud: &mut AnimatedBillboardCloud,
+    budget: &ScreenBudget,
+    dropped: &mut Dropped,
+) {
     // 1. Billboards too small to see: smallest covered area first, as long as everything
     //    dropped together covers under half a pixel (alpha-tested quads smaller than a pixel
     //    still cover one now and then: dropping many would thin the foliage).
@@ -120,7 +148,10 @@ pub fn apply_budget(
     let mut it = keep.iter();
     cloud.billboards.retain(|_| *it.next().unwrap_or(&true));
     dropped.billboards_under_half_pixel = before - cloud.billboards.len();
+}
 
+/// Steps 1b and 2: spectral terms, then whole motions, too small to see.
+fn drop_unseen_motion(cloud: &mut AnimatedBillboardCloud, half: f32, dropped: &mut Dropped) {
     // 1b. Spectral terms too small to see.
     for b in &mut cloud.billboards {
         if let Some(RigidMotion::Spectral(m)) = &mut b.motion {
@@ -149,10 +180,18 @@ pub fn apply_budget(
             }
         }
     }
+}
 
+/// Step 2a: own motion within half a pixel of a bone's becomes following that bone.
+fn attach_to_bones(
+    cloud: &mut AnimatedBillboardCloud,
+    tree: &Tree,
+    rig: &RigFrames,
+    half: f32,
+    dropped: &mut Dropped,
+) {
+    let (worlds, rest_inv) = (rig.worlds, rig.rest_inv);
     // 2a. Own motion within half a pixel of a bone's: follow the bone.
-    let worlds = sampled_worlds(&cloud.rig, &cloud.clock);
-    let rest_inv: Vec<Mat4> = cloud.rig.rest_world().iter().map(|m| m.inverse()).collect();
     let nodes = &cloud.rig.nodes;
     let attach: Vec<Option<(usize, Affine3A)>> = cloud
         .billboards
@@ -185,7 +224,7 @@ pub fn apply_budget(
                 let mut from = Vec::with_capacity(4 * worlds.len());
                 let mut to = Vec::with_capacity(4 * worlds.len());
                 for s in 0..worlds.len() {
-                    let back = carry(Some(node), &worlds, &rest_inv, s).inverse();
+                    let back = carry(Some(node), worlds, rest_inv, s).inverse();
                     let own = m.at(s, n);
                     for c in &corners {
                         from.push(*c);
@@ -195,7 +234,7 @@ pub fn apply_budget(
                 let q = rigid_fit(&from, &to);
                 let mut worst = 0.0f32;
                 for s in 0..worlds.len() {
-                    let a = carry(Some(node), &worlds, &rest_inv, s);
+                    let a = carry(Some(node), worlds, rest_inv, s);
                     let own = m.at(s, n);
                     for c in &corners {
                         let p = a.transform_point3(q.transform_point3(*c));
@@ -220,7 +259,10 @@ pub fn apply_budget(
             dropped.attached_to_bone += 1;
         }
     }
+}
 
+/// Step 2b: motions within half a pixel of an earlier billboard's are shared.
+fn share_motions(cloud: &mut AnimatedBillboardCloud, half: f32, dropped: &mut Dropped) {
     // 2b. Motions within half a pixel of an earlier one are shared (greedy, in billboard
     //     order, so the result does not depend on threads).
     let mut reps: Vec<usize> = Vec::new();
@@ -252,7 +294,18 @@ pub fn apply_budget(
             None => reps.push(i),
         }
     }
+}
 
+/// Step 3: bone-bound billboards move up to the highest ancestor that carries them unseen.
+fn rebind_to_ancestors(
+    cloud: &mut AnimatedBillboardCloud,
+    sampled: &Sampled,
+    rig: &RigFrames,
+    budget: &ScreenBudget,
+    dropped: &mut Dropped,
+) {
+    let (worlds, rest_inv) = (rig.worlds, rig.rest_inv);
+    let half = 0.5 * budget.pixel;
     // 3. Bone-bound billboards move to the highest ancestor (or the world) that carries them
     //    within half a pixel and keeps their triangles' centres within ε of the plane.
     let centre_of: std::collections::HashMap<usize, usize> = sampled
@@ -276,8 +329,8 @@ pub fn apply_budget(
             let centre = b.quad.center;
             let fits = |cand: Option<usize>| {
                 (0..ns).all(|s| {
-                    let a = carry(Some(own), &worlds, &rest_inv, s);
-                    let c = carry(cand, &worlds, &rest_inv, s);
+                    let a = carry(Some(own), worlds, rest_inv, s);
+                    let c = carry(cand, worlds, rest_inv, s);
                     if corners
                         .iter()
                         .any(|p| a.transform_point3(*p).distance(c.transform_point3(*p)) >= half)
@@ -319,7 +372,14 @@ pub fn apply_budget(
             b.follows = target;
         }
     }
+}
 
+/// Step 4: rig nodes nothing follows (and the caller's meshes do not need) are removed.
+fn prune_rig(
+    cloud: &mut AnimatedBillboardCloud,
+    keep_nodes: &[usize],
+    dropped: &mut Dropped,
+) -> Vec<Option<usize>> {
     // 4. Prune rig nodes nothing needs.
     let mut needed = vec![false; cloud.rig.nodes.len()];
     for b in &cloud.billboards {
@@ -340,5 +400,5 @@ pub fn apply_budget(
     }
     cloud.clock.clip = cloud.clock.clip.filter(|&c| c < cloud.rig.clips.len());
     cloud.update_playable_clips();
-    (map, dropped)
+    map
 }

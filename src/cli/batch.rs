@@ -159,7 +159,7 @@ impl BatchArgs {
                 limits: limits.limits(),
             },
         };
-        let bar = BatchBar::new();
+        let bar = BatchBar::start();
         let result = run_batch(&req, &bar);
         drop(bar);
         let summary = result?;

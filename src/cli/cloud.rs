@@ -118,7 +118,7 @@ impl CloudArgs {
             coverage_views,
             coverage_size: parse_size(&coverage_size)?,
         };
-        let bar = Spinner::new();
+        let bar = Spinner::start();
         bar.say(&format!(
             "building the billboard cloud of {}",
             import.input.display()

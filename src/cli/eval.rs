@@ -81,7 +81,7 @@ impl EvalArgs {
             samples,
             clip,
         };
-        let bar = Spinner::new();
+        let bar = Spinner::start();
         bar.say(&format!("evaluating {}", candidate.display()));
         let result = evaluate(&renderer, &original, &cand, same_file, &req);
         drop(bar);

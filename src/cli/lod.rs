@@ -199,7 +199,7 @@ impl LodArgs {
         let tree = self.import.load()?;
         let renderer = Renderer::new()?;
         let req = self.request(&tree)?;
-        let bar = Spinner::new();
+        let bar = Spinner::start();
         let result = run_lod(&renderer, &tree, &req, &self.output, &|m: &str| bar.say(m));
         drop(bar);
         let report = result?;

@@ -10,7 +10,7 @@ use crate::batch::summary::{BatchSummary, Status, TreeEntry};
 pub struct Spinner(Option<indicatif::ProgressBar>);
 
 impl Spinner {
-    pub fn new() -> Self {
+    pub fn start() -> Self {
         Spinner(
             std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
                 let b = indicatif::ProgressBar::new_spinner();
@@ -39,7 +39,7 @@ impl Drop for Spinner {
 pub struct Progress(Option<indicatif::ProgressBar>);
 
 impl Progress {
-    pub fn new() -> Self {
+    pub fn start() -> Self {
         Progress(
             std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
                 let b = indicatif::ProgressBar::new(0);
@@ -101,7 +101,7 @@ pub struct BatchBar {
 }
 
 impl BatchBar {
-    pub fn new() -> Self {
+    pub fn start() -> Self {
         let bars = std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
             let multi = indicatif::MultiProgress::new();
             let b = multi.add(indicatif::ProgressBar::new(0));

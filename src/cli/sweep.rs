@@ -146,7 +146,7 @@ impl SweepArgs {
             diagonal,
         };
         let renderer = Renderer::new()?;
-        let bar = Progress::new();
+        let bar = Progress::start();
         let result = run_sweep(&renderer, &tree, &req, &eval, &output, &|d, t, m| {
             bar.step(d, t, m)
         });
