@@ -144,10 +144,8 @@ fn billboard_vertices(candidate: &Tree) -> Vec<u32> {
 fn billboard_base(candidate: &Tree, count: usize) -> Option<usize> {
     let v = billboard_vertices(candidate);
     let base = v.first().copied().unwrap_or(0) as usize;
-    let consistent = v.len() == 4 * count
-        && !v
-            .last()
-            .is_some_and(|&l| l as usize != base + 4 * count - 1);
+    let consistent =
+        v.len() == 4 * count && v.last().is_none_or(|&l| l as usize == base + 4 * count - 1);
     consistent.then_some(base)
 }
 

@@ -544,15 +544,14 @@ mod tests {
                     && *c != DISCARDED_PAIRS
             })
             .collect();
-        let want: Vec<&str> = MetricId::ALL
+        let mut want: Vec<&str> = MetricId::ALL
             .iter()
             .flat_map(|id| [id.column(), id.max_column()])
             .collect();
-        let sorted = |mut v: Vec<&'static str>| {
-            v.sort_unstable();
-            v
-        };
-        assert_eq!(sorted(metric_columns.clone()), sorted(want));
+        want.sort_unstable();
+        let mut got = metric_columns;
+        got.sort_unstable();
+        assert_eq!(got, want);
         // The file's layout is stable: sweeps are compared across versions.
         assert_eq!(
             header.join(","),
