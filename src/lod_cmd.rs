@@ -10,7 +10,7 @@ use frond_export::textures::sanitize;
 use frond_export::{AnimationMode, ChainFileOptions, chain_files, msft_coverages};
 use frond_lod::chain::chain_levels;
 use frond_lod::report::report_name;
-use frond_lod::{ChainRequest, LodReport, build_chain, tree_height};
+use frond_lod::{ChainRequest, LodReport, build_chain};
 use frond_render::Renderer;
 use frond_scene::Tree;
 
@@ -100,7 +100,7 @@ pub fn run_lod(
         seed: req.chain.seed,
         pixel_error: req.chain.pixel_error,
         animation: req.animation.report_name(),
-        tree_height: tree_height(tree),
+        tree_height: tree.height(),
         lods: written.entries,
         combined: written.combined,
         files: written.files.iter().map(|(p, _)| p.clone()).collect(),

@@ -17,7 +17,7 @@ use crate::error::LodError;
 use crate::method::{BuildContext, Foliage, Method, MethodReport};
 use crate::motion_budget::{ScreenBudget, apply_budget};
 use crate::report::{DroppedReport, LodEntry, LodTimings};
-use crate::screen_budget::{LodLevel, lod_levels, tree_height};
+use crate::screen_budget::{LodLevel, lod_levels};
 
 /// How the static clouds of every LOD are searched and baked (improved-billboard-cloud §2–4).
 #[derive(Clone, Debug, PartialEq)]
@@ -127,7 +127,7 @@ pub fn sample_foliage(
 pub fn chain_levels(tree: &Tree, req: &ChainRequest) -> Result<Vec<LodLevel>, LodError> {
     let eps = req.epsilon.map(|e| e.resolve(tree.bounds.diagonal()));
     Ok(lod_levels(
-        tree_height(tree),
+        tree.height(),
         &req.screen_heights,
         req.pixel_error,
         eps,

@@ -25,7 +25,7 @@ pub use method::{
     SkeletonOptions, SpectralOptions,
 };
 pub use report::{DroppedReport, LodEntry, LodReport, LodTimings};
-pub use screen_budget::{LodLevel, lod_levels, screen_height_at, tree_height};
+pub use screen_budget::{LodLevel, lod_levels, screen_height_at};
 
 /// The description type `--method spectral` uses.
 pub const DEFAULT_SPECTRAL: SpectralKind = SpectralKind::AxisPhase;

@@ -25,13 +25,6 @@ pub struct LodLevel {
     pub wood_error: f32,
 }
 
-/// The height a LOD's screen height refers to: the tree's rest-pose height along +Y, or its
-/// largest extent when it is flat.
-pub fn tree_height(tree: &frond_scene::Tree) -> f32 {
-    let h = tree.bounds.height();
-    if h > 0.0 { h } else { tree.bounds.size() }
-}
-
 /// Screen height (pixels) of an object of height `height` at `distance` with a vertical field
 /// of view `fov_deg` and `resolution` pixels of image height: Holst eq. 3,
 /// `s = l / z · (res / 2) · cot(fov / 2)`.

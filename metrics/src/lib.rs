@@ -1,19 +1,30 @@
-//! Fidelity metrics (spec animated-billboard-clouds §5).
+//! Fidelity metrics (spec animated-billboard-clouds §5) and `frond eval`'s evaluation of a
+//! candidate against the animated original.
 //!
 //! The coverage ("colour") metric of §5.4, with the thesis' experiment setup of §8.2
 //! and the checklist rules of §11 item 7, in [`coverage`]; App. A's normalisation in
-//! [`normalise`]; the dominating-axis animation metrics of §5.5 in [`animation`]; plane, projected,
-//! Euclidean distance and orientation metrics of §5.2–5.3 in [`triangle_metrics`]; the
-//! cost of a model (§5.7) in [`cost`]; run statistics (§5.8) and Pareto fronts in
+//! [`normalise`]; the dominating-axis animation metrics of §5.5 in [`dominating_axis`]; plane,
+//! projected, Euclidean distance and orientation metrics of §5.2–5.3 in [`triangle_metrics`];
+//! the cost of a model (§5.7) in [`cost`]; run statistics (§5.8) and Pareto fronts in
 //! [`statistics`].
+//!
+//! The evaluation: every metric's name, columns, label and definition in [`metric_id`]; how the
+//! original's foliage triangles are matched to a candidate in [`matching`]; per-triangle and
+//! per-pair values to report metrics in [`aggregate`]; the report in [`report`]; the whole
+//! evaluation (renders, matching, scores, cost) in [`eval`].
 
 #![warn(missing_docs)]
 
-pub mod animation;
+pub mod aggregate;
 pub mod cost;
 pub mod coverage;
+pub mod dominating_axis;
+pub mod eval;
+pub mod matching;
+pub mod metric_id;
 /// App. A's normalisation, shared with the spectral descriptions (which sit upstream).
 pub use frond_spectral::normalise;
+pub mod report;
 pub mod statistics;
 pub mod triangle_metrics;
 
@@ -21,3 +32,6 @@ pub use coverage::{
     CoverageMasks, CoverageParams, CoverageReport, MetricError, compare_masks, coverage_error,
     coverage_masks, ring_azimuth_deg, view_camera,
 };
+pub use eval::{EvalContext, EvalError, EvalRequest, evaluate, image_for_screen_height};
+pub use metric_id::MetricId;
+pub use report::{Costs, CoverageMetrics, EvalReport, Metric};

@@ -213,7 +213,7 @@ mod tests {
         for (a, b) in image.iter().zip(&centres) {
             assert!(a.distance(*b) < 1e-5);
         }
-        let m = crate::animation::axis_metrics(&centres, &image, 4);
+        let m = crate::dominating_axis::axis_metrics(&centres, &image, 4);
         assert!(
             m.dominating_axis < 1e-3 && m.dominating_axis_spectral < 1e-3,
             "{m:?}"

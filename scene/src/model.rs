@@ -180,6 +180,12 @@ pub struct Tree {
 }
 
 impl Tree {
+    /// The height a LOD's screen height refers to (and metrics' distances are scaled by): the
+    /// rest-pose height along +Y, or the largest extent when the tree is flat.
+    pub fn height(&self) -> f32 {
+        let h = self.bounds.height();
+        if h > 0.0 { h } else { self.bounds.size() }
+    }
     /// Skeleton depth: the longest chain of bones from a root bone.
     pub fn skeleton_depth(&self) -> u32 {
         self.bones.iter().map(|b| b.depth).max().unwrap_or(0)

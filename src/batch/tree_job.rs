@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result};
 use sha2::{Digest, Sha256};
 
+use frond_metrics::MetricId;
 use frond_scene::InputLimits;
 
 use super::inputs::{Overrides, TreeInput, hex, input_hash};
@@ -126,6 +127,25 @@ pub fn params_hash(args: &[String], eval: bool) -> String {
 /// `<key>%<pid>` and `<key>%old%<pid>`.
 fn tmp_key(output: &str) -> String {
     output.replace('%', "%25").replace('/', "%2F")
+}
+
+/// The `frond eval` metrics `--eval` puts in each LOD's summary line (their means; docs/batch.md).
+const SUMMARY_METRICS: [MetricId; 6] = [
+    MetricId::CoverageStatic,
+    MetricId::CoverageAnimated,
+    MetricId::ColourDifference,
+    MetricId::ProjectedDistance,
+    MetricId::Orientation,
+    MetricId::DominatingAxis,
+];
+
+/// A metric's key in the summary: its `results.csv` column, except the static colour metric,
+/// which the summary has always called `coverage`.
+fn summary_key(id: MetricId) -> &'static str {
+    match id {
+        MetricId::CoverageStatic => "coverage",
+        _ => id.column(),
+    }
 }
 
 /// Processes one tree; never fails: a failure is the entry's status and reason.
@@ -307,18 +327,9 @@ fn build_into(
                 &std::fs::read(&out).with_context(|| format!("{}: cannot read", out.display()))?,
             )
             .with_context(|| format!("frond eval of {} printed no JSON", l.file))?;
-            let mean = |v: &serde_json::Value| v["mean"].as_f64();
-            l.metrics
-                .insert("coverage".into(), mean(&r["coverage"]["static"]));
-            l.metrics
-                .insert("coverage_animated".into(), mean(&r["coverage"]["animated"]));
-            for name in [
-                "colour_difference",
-                "projected_distance",
-                "orientation",
-                "dominating_axis",
-            ] {
-                l.metrics.insert(name.into(), mean(&r[name]));
+            for id in SUMMARY_METRICS {
+                let m = id.json_path().iter().fold(&r, |v, p| &v[p]);
+                l.metrics.insert(summary_key(id).into(), m["mean"].as_f64());
             }
         }
         entry

@@ -89,21 +89,17 @@ impl EvalArgs {
         if json {
             print_json(&report)?;
         } else {
-            let show = |name: &str, m: &crate::eval_cmd::Metric| match (m.mean, m.max) {
-                (Some(a), Some(b)) => println!("{name:26} mean {a:.5}  max {b:.5}"),
-                _ => println!(
-                    "{name:26} skipped: {}",
-                    m.skipped_reason.as_deref().unwrap_or("-")
-                ),
-            };
-            show("coverage (static)", &report.coverage.static_);
-            show("coverage (animated)", &report.coverage.animated);
-            show("colour difference", &report.colour_difference);
-            show("plane distance", &report.plane_distance);
-            show("projected distance", &report.projected_distance);
-            show("orientation", &report.orientation);
-            show("dominating axis", &report.dominating_axis);
-            show("dominating axis spectral", &report.dominating_axis_spectral);
+            for id in frond_metrics::metric_id::MetricId::ALL {
+                let m = report.metric(id);
+                let name = id.label();
+                match (m.mean, m.max) {
+                    (Some(a), Some(b)) => println!("{name:36} mean {a:.5}  max {b:.5}"),
+                    _ => println!(
+                        "{name:36} skipped: {}",
+                        m.skipped_reason.as_deref().unwrap_or("-")
+                    ),
+                }
+            }
             println!(
                 "cost: {} → {} triangles, {} → {} billboards, {} → {} texture bytes",
                 report.cost.original.triangles,

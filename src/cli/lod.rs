@@ -12,7 +12,6 @@ use crate::lod_cmd::{LodRequest, run_lod};
 use frond_lod::method::ignored_options;
 use frond_lod::{
     ChainRequest, CloudOptions, Method, SkeletonOptions, SpectralOptions, screen_height_at,
-    tree_height,
 };
 use frond_render::Renderer;
 use frond_scene::Length;
@@ -82,7 +81,7 @@ impl LodArgs {
     pub fn request(&self, tree: &frond_scene::Tree) -> Result<LodRequest> {
         let screen_heights = match &self.distances {
             Some(d) => {
-                let h = tree_height(tree);
+                let h = tree.height();
                 d.iter()
                     .map(|&z| {
                         if !(z.is_finite() && z > 0.0) {

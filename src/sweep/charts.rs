@@ -5,6 +5,7 @@
 use std::collections::BTreeMap;
 
 use anyhow::{Context, Result, anyhow};
+use frond_metrics::MetricId;
 use frond_metrics::statistics::pareto_front;
 use plotters::prelude::*;
 use resvg::{tiny_skia, usvg};
@@ -59,23 +60,17 @@ const PALETTE: [RGBColor; 8] = [
 ];
 
 /// The accuracy the cost and time charts put on their y axis.
-pub const ACCURACY: &str = "coverage_animated";
-const ACCURACY_LABEL: &str = "animated colour error (lower is better)";
+pub const ACCURACY: MetricId = MetricId::CoverageAnimated;
 
-/// The metrics charted against ε, with their axis labels.
-pub const METRICS: &[(&str, &str)] = &[
-    ("coverage_static", "static colour error"),
-    ("coverage_animated", "animated colour error"),
-    ("colour_difference", "foreground colour difference"),
-    ("plane_distance", "plane distance (world)"),
-    ("projected_distance", "projected distance (world)"),
-    ("orientation", "orientation metric"),
-    ("dominating_axis", "dominating-axis metric"),
-    (
-        "dominating_axis_spectral",
-        "dominating-axis spectral metric",
-    ),
-];
+/// The y-axis label of the cost and time charts.
+fn accuracy_label() -> String {
+    format!("{} (lower is better)", ACCURACY.label())
+}
+
+/// The metrics charted against ε: all but the derived ones ([`MetricId::is_derived`]).
+pub fn charted_metrics() -> impl Iterator<Item = MetricId> {
+    MetricId::ALL.into_iter().filter(|id| !id.is_derived())
+}
 
 /// The runs on the Pareto front of build time against accuracy (both minimised), cheapest
 /// first; candidates (not built here) take no part.
@@ -83,7 +78,7 @@ pub fn front(rows: &[Row]) -> Vec<&Row> {
     let timed: Vec<&Row> = rows.iter().filter(|r| !r.is_candidate()).collect();
     let pts: Vec<(f64, f64)> = timed
         .iter()
-        .map(|r| (r.get("t_lod"), r.get(ACCURACY)))
+        .map(|r| (r.get("t_lod"), r.get(ACCURACY.column())))
         .collect();
     pareto_front(&pts).into_iter().map(|i| timed[i]).collect()
 }
@@ -192,9 +187,9 @@ pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
         panels: vec![Panel {
             title: format!("accuracy vs {label}"),
             x_label: label.into(),
-            y_label: ACCURACY_LABEL.into(),
+            y_label: accuracy_label(),
             x_log: wants_log(rows.iter().map(|r| r.get(x))),
-            series: series_for(rows, x, ACCURACY, false),
+            series: series_for(rows, x, ACCURACY.column(), false),
             front: Vec::new(),
         }],
     };
@@ -209,10 +204,10 @@ pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
     // Build time: every run a point; the front over all of them.
     let front = front(rows)
         .iter()
-        .map(|r| (r.get("t_lod"), r.get(ACCURACY)))
+        .map(|r| (r.get("t_lod"), r.get(ACCURACY.column())))
         .collect();
     // Candidates were not built here: their accuracy is a dashed level.
-    let mut series = series_for(rows, "t_lod", ACCURACY, true);
+    let mut series = series_for(rows, "t_lod", ACCURACY.column(), true);
     for s in &mut series {
         s.line.clear();
     }
@@ -222,7 +217,7 @@ pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
         panels: vec![Panel {
             title: "speed vs accuracy (Pareto front: no run both faster and more accurate)".into(),
             x_label: "build time of the LOD (s)".into(),
-            y_label: ACCURACY_LABEL.into(),
+            y_label: accuracy_label(),
             x_log: wants_log(
                 rows.iter()
                     .filter(|r| !r.is_candidate())
@@ -237,14 +232,13 @@ pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
     charts.push(Chart {
         file_stem: "metrics_vs_epsilon".into(),
         columns: 2,
-        panels: METRICS
-            .iter()
-            .map(|(m, label)| Panel {
-                title: format!("{label} vs ε"),
+        panels: charted_metrics()
+            .map(|id| Panel {
+                title: format!("{} vs ε", id.label()),
                 x_label: "ε (% of the bounding-box diagonal)".into(),
-                y_label: (*label).into(),
+                y_label: id.label().into(),
                 x_log: eps_log,
-                series: series_for(&eps_rows, "epsilon_pct", m, true),
+                series: series_for(&eps_rows, "epsilon_pct", id.column(), true),
                 front: Vec::new(),
             })
             .collect(),

@@ -253,7 +253,8 @@ fn evaluate_into(ctx: &mut EvalContext, row: &mut Row, candidate: &Path, dir: &P
     let report = match ctx.evaluate(&cand, same_file, size) {
         Ok(r) => r,
         Err(e) => {
-            row.failure = Some(format!("error: eval: {e:#}"));
+            // Through anyhow, whose `{:#}` prints the causes too.
+            row.failure = Some(format!("error: eval: {:#}", anyhow::Error::from(e)));
             return Ok(());
         }
     };

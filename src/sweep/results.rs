@@ -4,12 +4,13 @@
 use std::collections::BTreeMap;
 
 use anyhow::{Context, Result};
+use frond_metrics::MetricId;
 use frond_metrics::statistics::Spread;
 use serde::Serialize;
 use serde_json::Value;
 
-/// Numeric columns of `results.csv`, in order; a row lacks those that do not apply (empty cell).
-pub const COLUMNS: &[&str] = &[
+/// Cost columns of `results.csv`: from `frond lod`'s report, or `frond eval`'s for candidates.
+const COST_COLUMNS: &[&str] = &[
     "billboards",
     "triangles",
     "wood_triangles",
@@ -18,25 +19,10 @@ pub const COLUMNS: &[&str] = &[
     "billboard_area",
     "draw_calls",
     "file_bytes",
-    "coverage_static",
-    "coverage_animated",
-    "coverage_static_max",
-    "coverage_animated_max",
-    "discarded_pairs",
-    "colour_difference",
-    "colour_difference_max",
-    "plane_distance",
-    "plane_distance_max",
-    "projected_distance",
-    "projected_distance_max",
-    "euclidean_distance",
-    "euclidean_distance_max",
-    "orientation",
-    "orientation_max",
-    "dominating_axis",
-    "dominating_axis_max",
-    "dominating_axis_spectral",
-    "dominating_axis_spectral_max",
+];
+
+/// Time columns of `results.csv` (seconds): `frond lod`'s stages, its total and the evaluation.
+const TIME_COLUMNS: &[&str] = &[
     "t_sample",
     "t_reference_pose",
     "t_plane_search",
@@ -49,27 +35,64 @@ pub const COLUMNS: &[&str] = &[
     "t_eval",
 ];
 
+/// The colour metric's discarded (view, frame) pairs (spec §5.4).
+const DISCARDED_PAIRS: &str = "discarded_pairs";
+
+/// Key columns of `results.csv`, before [`columns`].
+const KEY_COLUMNS: [&str; 9] = [
+    "run",
+    "method",
+    "lod_method",
+    "screen_height",
+    "epsilon",
+    "epsilon_pct",
+    "seed",
+    "status",
+    "reason",
+];
+
+/// Numeric columns of `results.csv`, in order: cost, every metric's mean and max
+/// ([`MetricId`]), the discarded colour pairs, the times; a row lacks those that do not apply
+/// (empty cell). The two colour metrics come first with their maxima after both, then the
+/// discarded pairs, as the file always had them.
+pub fn columns() -> Vec<&'static str> {
+    let mut c = COST_COLUMNS.to_vec();
+    let [stat, anim] = [MetricId::CoverageStatic, MetricId::CoverageAnimated];
+    c.extend([
+        stat.column(),
+        anim.column(),
+        stat.max_column(),
+        anim.max_column(),
+        DISCARDED_PAIRS,
+    ]);
+    for id in MetricId::ALL
+        .into_iter()
+        .filter(|id| ![stat, anim].contains(id))
+    {
+        c.extend([id.column(), id.max_column()]);
+    }
+    c.extend_from_slice(TIME_COLUMNS);
+    c
+}
+
 /// Columns measured in seconds: they differ between otherwise identical runs.
 pub fn is_timing(column: &str) -> bool {
     column.starts_with("t_")
 }
 
-/// The quantities of the stability table.
-pub const STABILITY: &[&str] = &[
-    "billboards",
-    "billboard_area",
-    "texture_bytes",
-    "bones",
-    "coverage_static",
-    "coverage_animated",
-    "colour_difference",
-    "plane_distance",
-    "projected_distance",
-    "orientation",
-    "dominating_axis",
-    "dominating_axis_spectral",
-    "t_lod",
-];
+/// The quantities of the stability table: cost, every metric but the derived ones
+/// ([`MetricId::is_derived`]) and the build time.
+pub fn stability_quantities() -> Vec<&'static str> {
+    let mut q = vec!["billboards", "billboard_area", "texture_bytes", "bones"];
+    q.extend(
+        MetricId::ALL
+            .into_iter()
+            .filter(|id| !id.is_derived())
+            .map(MetricId::column),
+    );
+    q.push("t_lod");
+    q
+}
 
 /// One run of the sweep (or one evaluation of an external candidate).
 #[derive(Clone, Debug, Serialize)]
@@ -93,7 +116,7 @@ pub struct Row {
     /// Why the run failed (`timeout`, `error`, `empty output`, `error > 1`, `NaN`, with
     /// details); None when it did not.
     pub failure: Option<String>,
-    /// The numeric columns ([`COLUMNS`]) it has.
+    /// The numeric columns ([`columns`]) it has.
     pub values: BTreeMap<String, f64>,
 }
 
@@ -153,32 +176,20 @@ pub fn add_lod_report(row: &mut Row, report: &Value) {
     }
 }
 
-/// Fills a row's metrics (and, for candidates, cost) from `frond eval --json`.
+/// Fills a row's metrics (and, for candidates, cost) from `frond eval --json`: each metric's
+/// mean and max at its [`MetricId::json_path`] (absent when skipped).
 pub fn add_eval_report(row: &mut Row, eval: &Value) {
-    let metric = |row: &mut Row, col: &str, path: &[&str]| {
-        let m = path.iter().fold(eval, |v, p| &v[p]);
+    for id in MetricId::ALL {
+        let m = id.json_path().iter().fold(eval, |v, p| &v[p]);
         if let Some(x) = m["mean"].as_f64() {
-            row.values.insert(col.into(), x);
+            row.values.insert(id.column().into(), x);
         }
         if let Some(x) = m["max"].as_f64() {
-            row.values.insert(format!("{col}_max"), x);
+            row.values.insert(id.max_column().into(), x);
         }
-    };
-    metric(row, "coverage_static", &["coverage", "static"]);
-    metric(row, "coverage_animated", &["coverage", "animated"]);
-    for m in [
-        "colour_difference",
-        "plane_distance",
-        "projected_distance",
-        "euclidean_distance",
-        "orientation",
-        "dominating_axis",
-        "dominating_axis_spectral",
-    ] {
-        metric(row, m, &[m]);
     }
-    if let Some(x) = num(eval, &["coverage", "discarded_pairs"]) {
-        row.values.insert("discarded_pairs".into(), x);
+    if let Some(x) = num(eval, &["coverage", DISCARDED_PAIRS]) {
+        row.values.insert(DISCARDED_PAIRS.into(), x);
     }
     let c = &eval["cost"]["candidate"];
     for (col, key) in [
@@ -208,7 +219,7 @@ pub fn judge(row: &Row, eval: &Value) -> Option<String> {
     if !row.is_candidate() && row.get("billboards") == 0.0 {
         return Some("empty output: the LOD has no billboard".into());
     }
-    let discarded = row.get("discarded_pairs");
+    let discarded = row.get(DISCARDED_PAIRS);
     if discarded > 0.0 {
         let pairs = num(eval, &["coverage", "pairs"]).unwrap_or(f64::NAN);
         return Some(format!(
@@ -216,15 +227,11 @@ pub fn judge(row: &Row, eval: &Value) -> Option<String> {
              {discarded} of {pairs} (view, frame) pairs"
         ));
     }
-    for (col, path) in [
-        ("coverage_static", ["coverage", "static"]),
-        ("coverage_animated", ["coverage", "animated"]),
-    ] {
-        if !row.get(col).is_finite() {
-            let why = eval[path[0]][path[1]]["skipped_reason"]
-                .as_str()
-                .unwrap_or("no value");
-            return Some(format!("NaN: {col}: {why}"));
+    for id in [MetricId::CoverageStatic, MetricId::CoverageAnimated] {
+        if !row.get(id.column()).is_finite() {
+            let m = id.json_path().iter().fold(eval, |v, p| &v[p]);
+            let why = m["skipped_reason"].as_str().unwrap_or("no value");
+            return Some(format!("NaN: {}: {why}", id.column()));
         }
     }
     if let Some((k, _)) = row.values.iter().find(|(_, v)| !v.is_finite()) {
@@ -233,21 +240,12 @@ pub fn judge(row: &Row, eval: &Value) -> Option<String> {
     None
 }
 
-/// `results.csv`: key columns, then [`COLUMNS`].
+/// `results.csv`: key columns, then [`columns`].
 pub fn results_csv(rows: &[Row]) -> Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
-    let mut header: Vec<&str> = vec![
-        "run",
-        "method",
-        "lod_method",
-        "screen_height",
-        "epsilon",
-        "epsilon_pct",
-        "seed",
-        "status",
-        "reason",
-    ];
-    header.extend_from_slice(COLUMNS);
+    let columns = columns();
+    let mut header: Vec<&str> = KEY_COLUMNS.to_vec();
+    header.extend_from_slice(&columns);
     w.write_record(&header).context("writing results.csv")?;
     for r in rows {
         let mut rec = vec![
@@ -261,7 +259,7 @@ pub fn results_csv(rows: &[Row]) -> Result<Vec<u8>> {
             if r.failure.is_some() { "failed" } else { "ok" }.to_string(),
             r.failure.clone().unwrap_or_default(),
         ];
-        rec.extend(COLUMNS.iter().map(|c| opt(r.values.get(*c).copied())));
+        rec.extend(columns.iter().map(|c| opt(r.values.get(*c).copied())));
         w.write_record(&rec).context("writing results.csv")?;
     }
     w.into_inner().context("writing results.csv")
@@ -285,7 +283,7 @@ pub struct Stability {
     pub epsilon_pct: Option<f64>,
     pub runs: usize,
     pub failed: usize,
-    /// Spread of each [`STABILITY`] quantity over the runs that have it.
+    /// Spread of each [`stability_quantities`] quantity over the runs that have it.
     pub spread: BTreeMap<String, Spread>,
 }
 
@@ -300,12 +298,13 @@ pub fn stability(rows: &[Row]) -> Vec<Stability> {
         }
         groups.entry(key).or_default().push(r);
     }
+    let quantities = stability_quantities();
     order
         .into_iter()
         .map(|key| {
             let g = &groups[&key];
             let first = g[0];
-            let spread = STABILITY
+            let spread = quantities
                 .iter()
                 .filter_map(|q| {
                     let xs: Vec<f64> = g.iter().map(|r| r.get(q)).collect();
@@ -373,18 +372,18 @@ pub fn stability_csv(table: &[Stability]) -> Result<Vec<u8>> {
 /// `stability.md`: a Markdown table per configuration row, "mean (average absolute deviation,
 /// relative)" per quantity, then the failed runs with their reasons.
 pub fn stability_markdown(table: &[Stability], rows: &[Row]) -> String {
-    let cols = [
-        ("billboards", "billboards"),
-        ("billboard_area", "area"),
-        ("coverage_static", "static colour"),
-        ("coverage_animated", "animated colour"),
-        ("colour_difference", "colour diff"),
-        ("dominating_axis", "dom. axis"),
-        ("dominating_axis_spectral", "dom. axis spectral"),
-        ("t_lod", "build s"),
+    let metrics = [
+        MetricId::CoverageStatic,
+        MetricId::CoverageAnimated,
+        MetricId::ColourDifference,
+        MetricId::DominatingAxis,
+        MetricId::DominatingAxisSpectral,
     ];
+    let mut cols = vec![("billboards", "billboards"), ("billboard_area", "area")];
+    cols.extend(metrics.map(|id| (id.column(), id.short_label())));
+    cols.push(("t_lod", "build s"));
     let mut s = String::from("| method | screen px | ε | ε % diag | runs | failed |");
-    for (_, h) in cols {
+    for (_, h) in &cols {
         s.push_str(&format!(" {h} |"));
     }
     s.push_str("\n|---|---|---|---|---|---|");
@@ -400,8 +399,8 @@ pub fn stability_markdown(table: &[Stability], rows: &[Row]) -> String {
             t.runs,
             t.failed
         ));
-        for (q, _) in cols {
-            match t.spread.get(q) {
+        for (q, _) in &cols {
+            match t.spread.get(*q) {
                 Some(sp) => s.push_str(&format!(
                     " {} ({}, {:.1} %) |",
                     sig(sp.mean),
@@ -521,7 +520,7 @@ mod tests {
         let csv = String::from_utf8(results_csv(&[row("static", 1, 10.0, 0.25)]).unwrap()).unwrap();
         let mut lines = csv.lines();
         let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-        assert_eq!(header.len(), 9 + COLUMNS.len());
+        assert_eq!(header.len(), 9 + columns().len());
         let line: Vec<&str> = lines.next().unwrap().split(',').collect();
         assert_eq!(line.len(), header.len());
         let at = |c: &str| line[header.iter().position(|h| *h == c).unwrap()];
@@ -529,6 +528,66 @@ mod tests {
         assert_eq!(at("coverage_animated"), "0.25");
         assert_eq!(at("status"), "ok");
         assert_eq!(at("t_bake"), "");
+    }
+
+    #[test]
+    fn csv_header_uses_exactly_the_metric_ids_columns() {
+        let csv = String::from_utf8(results_csv(&[]).unwrap()).unwrap();
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let metric_columns: Vec<&str> = header
+            .iter()
+            .copied()
+            .filter(|c| {
+                !KEY_COLUMNS.contains(c)
+                    && !COST_COLUMNS.contains(c)
+                    && !TIME_COLUMNS.contains(c)
+                    && *c != DISCARDED_PAIRS
+            })
+            .collect();
+        let mut want: Vec<&str> = MetricId::ALL
+            .iter()
+            .flat_map(|id| [id.column(), id.max_column()])
+            .collect();
+        want.sort_unstable();
+        let mut got = metric_columns;
+        got.sort_unstable();
+        assert_eq!(got, want);
+        // The file's layout is stable: sweeps are compared across versions.
+        assert_eq!(
+            header.join(","),
+            "run,method,lod_method,screen_height,epsilon,epsilon_pct,seed,status,reason,\
+             billboards,triangles,wood_triangles,bones,texture_bytes,billboard_area,draw_calls,\
+             file_bytes,coverage_static,coverage_animated,coverage_static_max,\
+             coverage_animated_max,discarded_pairs,colour_difference,colour_difference_max,\
+             plane_distance,plane_distance_max,projected_distance,projected_distance_max,\
+             euclidean_distance,euclidean_distance_max,orientation,orientation_max,\
+             dominating_axis,dominating_axis_max,dominating_axis_spectral,\
+             dominating_axis_spectral_max,t_sample,t_reference_pose,t_plane_search,t_bake,\
+             t_motion_fit,t_budget,t_wood,t_export,t_lod,t_eval"
+        );
+        // Every metric but the derived one is in the stability table.
+        let q = stability_quantities();
+        for id in MetricId::ALL {
+            assert_eq!(q.contains(&id.column()), !id.is_derived(), "{id:?}");
+        }
+    }
+
+    #[test]
+    fn eval_reports_fill_every_metric_column() {
+        let mut eval = serde_json::json!({"coverage": {"discarded_pairs": 0}, "cost": {}});
+        for (k, id) in MetricId::ALL.into_iter().enumerate() {
+            let v = serde_json::json!({"mean": k as f64, "max": 10.0 + k as f64});
+            let (last, parents) = id.json_path().split_last().unwrap();
+            let parent = parents.iter().fold(&mut eval, |v, p| &mut v[p]);
+            parent[*last] = v;
+        }
+        let mut r = row("static", 1, 10.0, 0.2);
+        add_eval_report(&mut r, &eval);
+        for (k, id) in MetricId::ALL.into_iter().enumerate() {
+            assert_eq!(r.get(id.column()), k as f64, "{id:?}");
+            assert_eq!(r.get(id.max_column()), 10.0 + k as f64, "{id:?}");
+        }
+        assert_eq!(r.get(DISCARDED_PAIRS), 0.0);
     }
 
     #[test]
