@@ -6,12 +6,12 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use frond_billboard::TriangleSoup;
-use frond_billboard::cloud::{BillboardCloud, CloudParams, CloudStats, build_cloud, parse_epsilon};
+use frond_billboard::cloud::{BillboardCloud, CloudParams, CloudStats, build_cloud};
 use frond_export::textures::TextureSink;
 use frond_metrics::{CoverageParams, coverage_error};
 use frond_render::{Renderer, TreeParts, scene_from_positions};
 use frond_scene::gltf_writer::*;
-use frond_scene::{Part, Tree};
+use frond_scene::{Length, Part, Tree};
 use glam::Vec3;
 use serde::Serialize;
 
@@ -21,7 +21,7 @@ use crate::output_set::OutputSet;
 #[derive(Clone, Debug)]
 pub struct CloudRequest {
     /// ε as given: "5%" of the rest-pose bounding-box diagonal, or an absolute length.
-    pub epsilon: String,
+    pub epsilon: Length,
     pub params: CloudParams,
     pub samples: usize,
     pub clip: Option<String>,
@@ -60,12 +60,7 @@ pub fn make_cloud(
 ) -> Result<(BillboardCloud, Vec<Vec3>, CloudReport)> {
     let path = tree.source.display().to_string();
     let diag = tree.bounds.diagonal();
-    let epsilon = parse_epsilon(&req.epsilon, diag).with_context(|| {
-        format!(
-            "--epsilon '{}': expected a length or a percentage like 5%",
-            req.epsilon
-        )
-    })?;
+    let epsilon = req.epsilon.resolve(diag);
     let sampled = frond_lod::chain::sample_foliage(tree, req.clip.as_deref(), req.samples)?;
     let frond_scene::Sampled {
         average, foliage, ..
@@ -107,7 +102,7 @@ pub fn make_cloud(
     let report = CloudReport {
         input: path,
         epsilon,
-        epsilon_arg: req.epsilon.clone(),
+        epsilon_arg: req.epsilon.to_string(),
         diagonal: diag,
         planes: params.search.candidates,
         seed: params.search.seed,

@@ -140,9 +140,11 @@ fn bad_epsilon_is_a_clear_error_and_writes_nothing() {
     for eps in ["-1", "five", "-3%"] {
         let arg = format!("--epsilon={eps}");
         let run = cloud(&[&arg], &out);
-        assert_eq!(run.status.code(), Some(1), "{eps}");
+        // A length is parsed at the edge: a usage error (clap's exit code 2).
+        assert_eq!(run.status.code(), Some(2), "{eps}");
         let err = String::from_utf8_lossy(&run.stderr);
         assert!(err.contains("--epsilon"), "{err}");
+        assert!(err.contains("percentage"), "{err}");
         assert!(!out.exists(), "nothing written for a bad ε");
     }
 }
@@ -165,7 +167,7 @@ fn increased_density_keeps_the_planes_and_fills_the_cloud() {
         params.search.seed = 2;
         params.bake.texels_per_unit = 24.0;
         let req = CloudRequest {
-            epsilon: "5%".into(),
+            epsilon: frond_scene::Length::Percent(5.0),
             params,
             samples: 16,
             clip: None,

@@ -13,7 +13,7 @@ fn request(epsilon: &str, candidates: usize, seed: u64, texels_per_unit: f32) ->
     params.search.seed = seed;
     params.bake.texels_per_unit = texels_per_unit;
     CloudRequest {
-        epsilon: epsilon.into(),
+        epsilon: epsilon.parse().expect("a length"),
         params,
         samples: 64,
         clip: None,

@@ -231,20 +231,6 @@ impl BillboardCloud {
     }
 }
 
-/// Parses an ε given as a percentage of `diagonal` ("5%") or an absolute length ("0.3");
-/// 0 means coplanar up to float noise (1e-5 × diagonal).
-pub fn parse_epsilon(text: &str, diagonal: f32) -> Option<f32> {
-    let t = text.trim();
-    let value = match t.strip_suffix('%') {
-        Some(p) => p.trim().parse::<f32>().ok()? / 100.0 * diagonal,
-        None => t.parse::<f32>().ok()?,
-    };
-    if !value.is_finite() || value < 0.0 {
-        return None;
-    }
-    Some(if value == 0.0 { 1e-5 * diagonal } else { value })
-}
-
 /// Bounding-box diagonal of points.
 pub fn diagonal(points: impl Iterator<Item = Vec3>) -> f32 {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));

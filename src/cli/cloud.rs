@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
+use frond_scene::Length;
 
 use crate::cli::args::{ImportArgs, RunArgs};
 use crate::cli::progress::{Spinner, print_json};
@@ -20,7 +21,7 @@ pub struct CloudArgs {
     /// Largest vertex distance from a billboard: a length, or a percentage of the rest-pose
     /// bounding-box diagonal ("5%"); 0 = coplanar up to float noise.
     #[arg(long, default_value = "5%")]
-    pub epsilon: String,
+    pub epsilon: Length,
     /// Candidate planes per iteration (the thesis's S).
     #[arg(long, default_value_t = 500)]
     pub planes: usize,

@@ -2,7 +2,7 @@
 //! textures and the colour metric's images), or fixed plane tolerances that override the rule.
 
 use anyhow::{Context, Result, bail};
-use frond_billboard::cloud::parse_epsilon;
+use frond_scene::Length;
 
 /// What varies across the runs of one method and seed.
 #[derive(Clone, Debug, PartialEq)]
@@ -56,7 +56,10 @@ impl Grid {
 /// ("2%"), as in `frond cloud`/`frond lod`.
 pub fn parse_epsilons(text: &str, steps: usize, diagonal: f32) -> Result<Vec<f32>> {
     let one = |s: &str| -> Result<f32> {
-        let v = parse_epsilon(s.trim(), diagonal)
+        let v = s
+            .trim()
+            .parse::<Length>()
+            .map(|l| l.resolve(diagonal))
             .with_context(|| format!("--epsilon '{s}': expected a length or a percentage"))?;
         if !(v.is_finite() && v >= 0.0) {
             bail!("--epsilon '{s}': must be a non-negative length");
