@@ -18,7 +18,8 @@ use frond_scene::Rig;
 use frond_scene::rigid_fit::rigid_fit;
 
 use crate::contract::{AnimatedBillboard, AnimatedBillboardCloud, LoopClock, RigidMotion};
-use crate::method::BuildContext;
+use crate::error::LodError;
+use crate::method::{BuildContext, Foliage, MethodName, MethodOutput};
 
 /// How a cluster's billboards move.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,6 +61,22 @@ pub fn sampled_worlds(rig: &Rig, clock: &LoopClock) -> Vec<Vec<Mat4>> {
         .into_par_iter()
         .map(|s| rig.world_at(clock.clip, clock.time(s)))
         .collect()
+}
+
+/// The LOD of a method that only groups the foliage: `clusters` built over the tree's own rig
+/// (per-bone, static), with nothing else to report.
+pub fn clustered_foliage(
+    ctx: &BuildContext,
+    clusters: &[FoliageCluster],
+    method: MethodName,
+) -> Result<MethodOutput, LodError> {
+    let (cloud, timings) =
+        build_animated_cloud(ctx, ctx.tree.rig.clone(), false, clusters, method.name())?;
+    Ok(MethodOutput {
+        foliage: Foliage::Cloud(cloud),
+        timings,
+        report: Default::default(),
+    })
 }
 
 /// Builds the animated cloud of `clusters` for the LOD of `ctx`: one stochastic billboard

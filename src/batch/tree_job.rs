@@ -80,8 +80,8 @@ pub fn lod_args(ctx: &TreeContext, o: &Overrides) -> Result<Vec<String>> {
         l.run.samples = s;
     }
     l.run.clip = o.clip.clone();
-    l.import.foliage_material = o.foliage_material.clone().unwrap_or_default();
-    l.import.wood_material = o.wood_material.clone().unwrap_or_default();
+    l.import.materials.foliage_material = o.foliage_material.clone().unwrap_or_default();
+    l.import.materials.wood_material = o.wood_material.clone().unwrap_or_default();
     l.import.limits = LimitArgs::of(&ctx.limits);
     l.build = BuildArgs {
         clouds: o.clouds,

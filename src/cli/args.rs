@@ -9,23 +9,19 @@ use crate::batch::parse_memory;
 use frond_lod::{SkeletonOptions, SpectralOptions};
 use frond_scene::{ImportOptions, Length, import};
 
+/// Materials the user names as foliage or wood, over the classification heuristics.
 #[derive(clap::Args, Clone, Debug, PartialEq)]
-pub struct ImportArgs {
-    /// Input tree (.glb or .gltf).
-    pub input: PathBuf,
+pub struct MaterialArgs {
     /// Treat this material as foliage (repeatable).
     #[arg(long = "foliage-material", value_name = "NAME")]
     pub foliage_material: Vec<String>,
     /// Treat this material as wood (repeatable).
     #[arg(long = "wood-material", value_name = "NAME")]
     pub wood_material: Vec<String>,
-    #[command(flatten)]
-    pub limits: LimitArgs,
 }
 
-impl ImportArgs {
-    /// The options again (the input aside): the material overrides, the limits that are not
-    /// the defaults.
+impl MaterialArgs {
+    /// The arguments again.
     pub fn option_args(&self) -> Vec<String> {
         let mut a = Vec::new();
         for m in &self.foliage_material {
@@ -34,14 +30,35 @@ impl ImportArgs {
         for m in &self.wood_material {
             a.extend(["--wood-material".to_string(), m.clone()]);
         }
+        a
+    }
+}
+
+/// How a tree is read: the input, material overrides, what reading it may cost.
+#[derive(clap::Args, Clone, Debug, PartialEq)]
+pub struct ImportArgs {
+    /// Input tree (.glb or .gltf).
+    pub input: PathBuf,
+    #[command(flatten)]
+    pub materials: MaterialArgs,
+    #[command(flatten)]
+    pub limits: LimitArgs,
+}
+
+impl ImportArgs {
+    /// The options again (the input aside): the material overrides, the limits that are not
+    /// the defaults.
+    pub fn option_args(&self) -> Vec<String> {
+        let mut a = self.materials.option_args();
         a.extend(self.limits.option_args());
         a
     }
 
+    /// Reads the tree.
     pub fn load(&self) -> Result<frond_scene::Tree> {
         let options = ImportOptions {
-            foliage_materials: self.foliage_material.clone(),
-            wood_materials: self.wood_material.clone(),
+            foliage_materials: self.materials.foliage_material.clone(),
+            wood_materials: self.materials.wood_material.clone(),
             limits: self.limits.limits(),
             ..Default::default()
         };

@@ -1,5 +1,5 @@
 //! Run `frond lod` over a tree library: every .glb/.gltf below a folder, or a TOML
-//! manifest's trees with their own settings. OUTDIR/<path without extension>/ per tree,
+//! manifest's trees with their own settings. `OUTDIR/<path without extension>/` per tree,
 //! summary.json + summary.csv; up-to-date trees are skipped, failed ones recorded.
 
 use std::path::PathBuf;
@@ -11,14 +11,14 @@ use crate::batch::preset::EnginePreset;
 use crate::batch::shard::Shard;
 use crate::batch::tree_job::TreeContext;
 use crate::batch::{BatchRequest, default_max_memory, parse_memory, run_batch};
-use crate::cli::args::{BuildArgs, LimitArgs};
+use crate::cli::args::{BuildArgs, LimitArgs, MaterialArgs};
 use crate::cli::progress::{BatchBar, finish_batch};
 use crate::cli::values::{AnimationArg, EngineArg, MethodArg};
 
 /// `frond batch`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct BatchArgs {
-    /// A folder, or a .toml manifest ([defaults] and [[tree]] path = ... with method, lods,
+    /// A folder, or a .toml manifest (`[defaults]` and `[[tree]] path = ...` with method, lods,
     /// animation, foliage_material, ...; see docs/batch.md).
     pub input: PathBuf,
     /// Output folder (a shared volume for sharded runs).
@@ -64,12 +64,8 @@ pub struct BatchArgs {
     /// Screen-space error budget in pixels.
     #[arg(long)]
     pub pixel_error: Option<f32>,
-    /// Treat this material as foliage (repeatable).
-    #[arg(long = "foliage-material", value_name = "NAME")]
-    pub foliage_material: Vec<String>,
-    /// Treat this material as wood (repeatable).
-    #[arg(long = "wood-material", value_name = "NAME")]
-    pub wood_material: Vec<String>,
+    #[command(flatten)]
+    pub materials: MaterialArgs,
     #[command(flatten)]
     pub limits: LimitArgs,
     #[command(flatten)]
@@ -101,8 +97,11 @@ impl BatchArgs {
             samples,
             clip,
             pixel_error,
-            foliage_material,
-            wood_material,
+            materials:
+                MaterialArgs {
+                    foliage_material,
+                    wood_material,
+                },
             limits,
             build,
             timeout,

@@ -1,5 +1,5 @@
 //! Animated billboard LOD chain: LOD0 (the input) and one LOD per screen height, skinned
-//! or vertex-animated, with a combined file, mapping sidecars and <name>_report.json.
+//! or vertex-animated, with a combined file, mapping sidecars and `<name>_report.json`.
 
 use std::path::PathBuf;
 
@@ -70,7 +70,7 @@ pub struct LodArgs {
     /// Write textures as PNG files next to the GLBs instead of embedding them.
     #[arg(long)]
     pub external_textures: bool,
-    /// Print the report (<name>_report.json) to stdout.
+    /// Print the report (`<name>_report.json`) to stdout.
     #[arg(long)]
     pub json: bool,
 }
@@ -241,66 +241,15 @@ mod tests {
     #[test]
     fn arguments_round_trip() {
         for line in [
-            vec!["lod", "t.glb", "-o", "out"],
-            vec![
-                "lod",
-                "t.glb",
-                "-o",
-                "out",
-                "--method",
-                "spectral",
-                "--lods",
-                "300,75",
-                "--epsilon",
-                "2%",
-                "--zone-size",
-                "0.5",
-                "--clusters",
-                "4",
-                "--no-shared-bone",
-                "--animation",
-                "vat-png16",
-                "--seed",
-                "7",
-                "--clip",
-                "Wind",
-                "--samples",
-                "32",
-                "--msft-lod",
-                "--external-textures",
-                "--json",
-                "--foliage-material",
-                "Leaf",
-                "--max-vertices",
-                "100",
-                "--view-penalty",
-                "15",
-                "--increased-density",
-            ],
-            vec![
-                "lod",
-                "t.glb",
-                "-o",
-                "out",
-                "--method",
-                "skeleton-rotation-spectral",
-                "--distances",
-                "5,20",
-                "--fov",
-                "45",
-                "--clouds",
-                "3",
-                "--average-bone",
-                "--max-atlas",
-                "2048",
-                "--padding",
-                "4",
-                "--supersample",
-                "2",
-                "--planes",
-                "50",
-            ],
+            "lod t.glb -o out",
+            "lod t.glb -o out --method spectral --lods 300,75 --epsilon 2% --zone-size 0.5 \
+             --clusters 4 --no-shared-bone --animation vat-png16 --seed 7 --clip Wind \
+             --samples 32 --msft-lod --external-textures --json --foliage-material Leaf \
+             --max-vertices 100 --view-penalty 15 --increased-density",
+            "lod t.glb -o out --method skeleton-rotation-spectral --distances 5,20 --fov 45 \
+             --clouds 3 --average-bone --max-atlas 2048 --padding 4 --supersample 2 --planes 50",
         ] {
+            let line: Vec<&str> = line.split_whitespace().collect();
             let a = parse(&line);
             let again = a.to_args();
             let b = parse(&again.iter().map(String::as_str).collect::<Vec<_>>());

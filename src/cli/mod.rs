@@ -27,7 +27,7 @@ pub enum Command {
     /// Build a static billboard cloud of the foliage (average pose) with baked atlases.
     Cloud(cloud::CloudArgs),
     /// Animated billboard LOD chain: LOD0 (the input) and one LOD per screen height, skinned
-    /// or vertex-animated, with a combined file, mapping sidecars and <name>_report.json.
+    /// or vertex-animated, with a combined file, mapping sidecars and `<name>_report.json`.
     Lod(lod::LodArgs),
     /// Compare a candidate (a LOD, any glTF) with the original: colour (coverage), colour
     /// difference, distance, orientation and animation metrics, and cost.
@@ -37,7 +37,7 @@ pub enum Command {
     /// stability table, failures and charts (SVG + PNG).
     Sweep(sweep::SweepArgs),
     /// Run `frond lod` over a tree library: every .glb/.gltf below a folder, or a TOML
-    /// manifest's trees with their own settings. OUTDIR/<path without extension>/ per tree,
+    /// manifest's trees with their own settings. `OUTDIR/<path without extension>/` per tree,
     /// summary.json + summary.csv; up-to-date trees are skipped, failed ones recorded.
     Batch(batch::BatchArgs),
     /// Merge the summaries of a sharded batch (summary.shard-*.json in each folder) into one

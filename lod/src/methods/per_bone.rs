@@ -5,9 +5,9 @@
 
 use frond_scene::{Sampled, Tree};
 
-use crate::cloud_build::{Driver, FoliageCluster, build_animated_cloud};
+use crate::cloud_build::{Driver, FoliageCluster, clustered_foliage};
 use crate::error::LodError;
-use crate::method::{BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput};
+use crate::method::{BuildContext, ClusteringMethod, MethodName, MethodOutput};
 
 /// The `per-bone` method; it has no options.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -19,19 +19,7 @@ impl ClusteringMethod for PerBone {
     }
 
     fn build(&self, ctx: &BuildContext) -> Result<MethodOutput, LodError> {
-        let clusters = per_bone_clusters(ctx.tree, ctx.sampled);
-        let (cloud, timings) = build_animated_cloud(
-            ctx,
-            ctx.tree.rig.clone(),
-            false,
-            &clusters,
-            self.name().name(),
-        )?;
-        Ok(MethodOutput {
-            foliage: Foliage::Cloud(cloud),
-            timings,
-            report: Default::default(),
-        })
+        clustered_foliage(ctx, &per_bone_clusters(ctx.tree, ctx.sampled), self.name())
     }
 }
 

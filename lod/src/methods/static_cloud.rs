@@ -4,9 +4,9 @@
 
 use frond_scene::Sampled;
 
-use crate::cloud_build::{Driver, FoliageCluster, build_animated_cloud};
+use crate::cloud_build::{Driver, FoliageCluster, clustered_foliage};
 use crate::error::LodError;
-use crate::method::{BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput};
+use crate::method::{BuildContext, ClusteringMethod, MethodName, MethodOutput};
 
 /// The `static` method; it has no options.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -18,18 +18,7 @@ impl ClusteringMethod for StaticCloud {
     }
 
     fn build(&self, ctx: &BuildContext) -> Result<MethodOutput, LodError> {
-        let (cloud, timings) = build_animated_cloud(
-            ctx,
-            ctx.tree.rig.clone(),
-            false,
-            &static_clusters(ctx.sampled),
-            self.name().name(),
-        )?;
-        Ok(MethodOutput {
-            foliage: Foliage::Cloud(cloud),
-            timings,
-            report: Default::default(),
-        })
+        clustered_foliage(ctx, &static_clusters(ctx.sampled), self.name())
     }
 }
 
