@@ -63,13 +63,14 @@ pub fn run_lod(
         .collect();
     expected.push(format!("{name}_lods.glb"));
     set.check_names(&expected)?;
-    let chain = build_chain(renderer, tree, &req.chain, progress).map_err(|(lod, e)| {
-        let e = anyhow::Error::new(e);
-        match lod {
-            Some(k) => e.context(format!("{path}: building LOD{k}")),
-            None => e,
-        }
-    })?;
+    let chain =
+        build_chain(renderer, tree, &req.chain, &levels, progress).map_err(|(lod, e)| {
+            let e = anyhow::Error::new(e);
+            match lod {
+                Some(k) => e.context(format!("{path}: building LOD{k}")),
+                None => e,
+            }
+        })?;
     progress("writing files");
     let written = chain_files(
         tree,

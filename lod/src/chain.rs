@@ -134,21 +134,23 @@ pub fn chain_levels(tree: &Tree, req: &ChainRequest) -> Result<Vec<LodLevel>, Lo
     )?)
 }
 
-/// Builds the chain of `tree` in memory; `progress` hears each step. Errors name the LOD.
+/// Builds the chain of `tree` in memory at `levels` (from [`chain_levels`], which the caller
+/// needs first to name the files); `progress` hears each step. Errors name the LOD (None: the
+/// loop's sampling).
 pub fn build_chain(
     renderer: &Renderer,
     tree: &Tree,
     req: &ChainRequest,
+    levels: &[LodLevel],
     progress: &dyn Fn(&str),
 ) -> Result<Chain, (Option<usize>, LodError)> {
     let t_start = Instant::now();
-    let levels = chain_levels(tree, req).map_err(|e| (None, e))?;
     progress("sampling the animation");
     let sampled = sample_foliage(tree, req.clip.as_deref(), req.samples).map_err(|e| (None, e))?;
     let t_sampled = Instant::now();
     let clock = LoopClock::of(tree, &sampled);
-    let mut lods = vec![lod0(tree)];
     let wood = part_mesh(tree, Part::Wood);
+    let mut lods = vec![lod0(tree, &wood)];
     for (k, level) in levels.iter().enumerate() {
         progress(&format!(
             "LOD{}: {} px, ε = {:.4}",
@@ -232,10 +234,10 @@ fn entry(method: String, method_reason: String) -> LodEntry {
     }
 }
 
-/// LOD0: the input's wood and foliage as one skinned mesh over its bones, every clip.
-fn lod0(tree: &Tree) -> ChainLod {
+/// LOD0: the input's wood (`wood`, bones as tree nodes) and foliage as one skinned mesh over its bones, every clip.
+fn lod0(tree: &Tree, wood: &WoodMesh) -> ChainLod {
     let mut rig = tree.rig.clone();
-    let mut wood = part_mesh(tree, Part::Wood);
+    let mut wood = wood.clone();
     let mut foliage = part_mesh(tree, Part::Foliage);
     let mut keep = vec![false; rig.nodes.len()];
     for b in &tree.bones {

@@ -9,10 +9,10 @@ use frond_scene::input_file::{read_regular_file, resolve_uri};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+use clap::ValueEnum;
 use frond_lod::{METHOD_NAMES, MethodName};
 
-/// Animation modes `frond lod --animation` takes (`vat`: EXR half; the web preset refuses `vat-png16`).
-pub const ANIMATION_NAMES: &[&str] = &["skin", "vat", "vat-png16", "spectral"];
+use crate::cli::values::AnimationArg;
 
 /// Settings a manifest may give every tree (`[defaults]`) or one tree (`[[tree]]`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -73,11 +73,15 @@ impl Overrides {
             );
         }
         if let Some(a) = &self.animation
-            && !ANIMATION_NAMES.contains(&a.as_str())
+            && AnimationArg::from_str(a, false).is_err()
         {
+            let names: Vec<&str> = AnimationArg::value_variants()
+                .iter()
+                .map(|v| v.text())
+                .collect();
             bail!(
                 "{what}: unknown animation '{a}' (one of {})",
-                ANIMATION_NAMES.join(", ")
+                names.join(", ")
             );
         }
         if let Some(l) = &self.lods {

@@ -177,20 +177,34 @@ impl LodArgs {
         a
     }
 
-    /// `frond lod`'s arguments for `input` into `output`, every option at its default.
-    pub fn defaults(input: &std::path::Path, output: &std::path::Path) -> LodArgs {
+    /// Parses a `frond lod` command line (the subcommand name first), as [`Self::to_args`]
+    /// writes it.
+    pub fn parse_from<I, T>(args: I) -> Result<LodArgs, clap::Error>
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<std::ffi::OsString> + Clone,
+    {
         #[derive(clap::Parser)]
         struct One {
             #[command(flatten)]
             lod: LodArgs,
         }
-        <One as clap::Parser>::parse_from([
+        <One as clap::Parser>::try_parse_from(args).map(|one| one.lod)
+    }
+
+    /// `frond lod`'s arguments for `input` into `output`, every option at its default.
+    pub fn defaults(input: &std::path::Path, output: &std::path::Path) -> LodArgs {
+        let line = [
             std::ffi::OsStr::new("lod"),
             input.as_os_str(),
             std::ffi::OsStr::new("-o"),
             output.as_os_str(),
-        ])
-        .lod
+        ];
+        match LodArgs::parse_from(line) {
+            Ok(args) => args,
+            // Only a required argument could be missing, and both are given.
+            Err(e) => unreachable!("frond lod's defaults do not parse: {e}"),
+        }
     }
 
     /// Runs the command.
@@ -226,16 +240,9 @@ impl LodArgs {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::Parser;
-
-    #[derive(Parser)]
-    struct One {
-        #[command(flatten)]
-        lod: LodArgs,
-    }
 
     fn parse(args: &[&str]) -> LodArgs {
-        One::try_parse_from(args).expect("parses").lod
+        LodArgs::parse_from(args).expect("parses")
     }
 
     #[test]

@@ -39,6 +39,13 @@ impl MethodArg {
     pub fn method(self) -> MethodName {
         METHOD_NAMES[self.0].1
     }
+    /// The value that names `method` in full (`spectral-axis-phase`, not `spectral`).
+    pub fn named(method: MethodName) -> MethodArg {
+        METHOD_NAMES
+            .iter()
+            .position(|(n, _)| *n == method.name())
+            .map_or(MethodArg::AUTO, MethodArg)
+    }
     /// The value written `text`, if any.
     pub fn parse(text: &str) -> Option<MethodArg> {
         METHOD_NAMES
@@ -158,7 +165,6 @@ impl EngineArg {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::batch::inputs::ANIMATION_NAMES;
     use crate::batch::preset::{EnginePreset, PRESET_NAMES};
 
     #[test]
@@ -169,11 +175,10 @@ mod tests {
             assert_eq!(MethodName::parse(m.text()), Some(m.method()));
         }
         assert_eq!(MethodArg::AUTO.method(), MethodName::Auto);
-        let animations: Vec<&str> = AnimationArg::value_variants()
-            .iter()
-            .map(|a| a.text())
-            .collect();
-        assert_eq!(animations, ANIMATION_NAMES);
+        for (_, m) in METHOD_NAMES {
+            assert_eq!(MethodArg::named(*m).method(), *m);
+            assert_eq!(MethodArg::named(*m).text(), m.name());
+        }
         for a in AnimationArg::value_variants() {
             let v = a.to_possible_value().expect("value");
             assert_eq!(v.get_name(), a.text());

@@ -287,17 +287,18 @@ fn lod_run(
     }
     // `auto` picks by LOD rank: each run builds one LOD, so resolve the rule for this grid
     // point's rank among the grid's screen heights (nearest first), as `frond lod` would.
-    let resolved = match MethodName::parse(method) {
-        Some(MethodName::Auto) => {
+    let given = MethodArg::parse(method).with_context(|| format!("unknown method '{method}'"))?;
+    let resolved = match given.method() {
+        MethodName::Auto => {
             let heights = distinct_heights(&req.grid.points());
             let rank = heights.iter().filter(|&&h| h > p.screen_height).count();
-            auto_method(rank, false).0.name().to_string()
+            MethodArg::named(auto_method(rank, false).0)
         }
-        _ => method.to_string(),
+        _ => given,
     };
     let args = LodArgs {
         output: dir.join("lod"),
-        method: MethodArg::parse(&resolved).unwrap_or(MethodArg::AUTO),
+        method: resolved,
         lods: vec![p.screen_height],
         epsilon: p.epsilon.map(Length::World),
         run: RunArgs {
