@@ -34,7 +34,7 @@ impl Decoded {
     }
 }
 
-fn component_size(c: ComponentType) -> usize {
+pub(crate) fn component_size(c: ComponentType) -> usize {
     match c {
         ComponentType::I8 | ComponentType::U8 => 1,
         ComponentType::I16 | ComponentType::U16 => 2,
@@ -42,7 +42,7 @@ fn component_size(c: ComponentType) -> usize {
     }
 }
 
-fn type_width(t: Type) -> usize {
+pub(crate) fn type_width(t: Type) -> usize {
     match t {
         Type::Scalar => 1,
         Type::Vec2 => 2,

@@ -185,7 +185,7 @@ pub const MAX_ANIMATION_SECONDS: f32 = 3600.0;
 /// Refuses a node with two parents, a cycle, and a hierarchy deeper than [`MAX_NODE_DEPTH`]
 /// (naming the first node past the limit). Everything here is iterative, so no depth can
 /// overflow the stack before that check.
-fn read_nodes(src: &GltfSource) -> Result<(Vec<Node>, Vec<usize>)> {
+pub(crate) fn read_nodes(src: &GltfSource) -> Result<(Vec<Node>, Vec<usize>)> {
     let n = src.root.nodes.len();
     let mut nodes = Vec::with_capacity(n);
     for (i, jn) in src.root.nodes.iter().enumerate() {
@@ -1100,7 +1100,7 @@ fn drop_repeated_keys(
 }
 
 /// Triangle list from TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN indices.
-fn triangulate(idx: &[u32], mode: json::mesh::Mode) -> Vec<[u32; 3]> {
+pub(crate) fn triangulate(idx: &[u32], mode: json::mesh::Mode) -> Vec<[u32; 3]> {
     use json::mesh::Mode;
     match mode {
         Mode::TriangleStrip => (2..idx.len())

@@ -5,6 +5,7 @@ pub mod accessor;
 pub mod binding;
 pub mod classify;
 pub mod error;
+pub mod file_cost;
 pub mod generator;
 pub mod gltf_source;
 pub mod gltf_writer;
@@ -20,6 +21,7 @@ pub mod surface_distance;
 pub mod wood;
 
 pub use error::{Result, SceneError};
+pub use file_cost::{FileCost, ImageCost, file_cost, file_cost_bytes};
 pub use import::{ImportOptions, import, import_bytes};
 pub use input_file::InputLimits;
 pub use length::Length;
