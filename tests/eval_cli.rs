@@ -68,6 +68,46 @@ fn a_file_against_itself_scores_zero_everywhere() {
 }
 
 #[test]
+fn the_cost_is_read_from_the_files_and_agrees_with_inspect() {
+    let sapling = root().join("samples/sapling.glb");
+    let r = eval(&sapling, &sapling, &["--size", "80x60"]);
+    let (o, c) = (&r["cost"]["original"], &r["cost"]["candidate"]);
+    assert_eq!(o, c, "a file against itself costs the same");
+    let path = sapling.to_str().expect("utf-8");
+    let out = frond_ok(&["inspect", "--json", "--samples", "2", path]);
+    let inspect: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    // The importer reads every mesh instance once; the file cost counts the same triangles.
+    assert_eq!(c["triangles"], inspect["triangles"]["total"]);
+    assert_eq!(c["vertices"], inspect["vertices"]);
+    assert_eq!(c["joints_total"], inspect["bones"]);
+    let file_bytes = std::fs::metadata(&sapling).expect("sapling").len();
+    assert_eq!(c["file_bytes"], file_bytes, "a GLB without external files");
+    // Its leaves are alpha-tested, and the card area is the billboard area.
+    let area = c["alpha_tested_area"].as_f64().expect("area");
+    let cards = c["billboard_area"].as_f64().expect("billboard area");
+    assert!(
+        area > 0.0 && (area - cards).abs() <= 1e-3 * cards,
+        "{area} vs {cards}"
+    );
+    // The text report prints the ratio candidate/original of that area: 1 here.
+    let text = frond_ok(&[
+        "eval",
+        path,
+        path,
+        "--size",
+        "80x60",
+        "--views",
+        "1",
+        "--frames",
+        "1",
+        "--samples",
+        "8",
+    ]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("(ratio 1.000)"), "{text}");
+}
+
+#[test]
 fn a_per_bone_lod_stays_within_its_epsilon_and_a_foreign_copy_is_skipped_with_a_reason() {
     let dir = tempfile::tempdir().expect("tmp");
     let out = dir.path().join("lods");

@@ -1,55 +1,51 @@
-//! Cost of a model (spec animated-billboard-clouds §5.7): the thesis' hardware-independent
-//! pair ⟨billboard count, total billboard area⟩ plus what an engine pays for: triangles,
-//! texture bytes, bones, draw calls and file size.
+//! Cost of a model (spec animated-billboard-clouds §5.7) as `frond eval` reports it: the
+//! thesis' hardware-independent pair ⟨billboard count, total billboard area⟩ plus what an
+//! engine pays for.
+//!
+//! Two sources, one notion: the pair needs frond's foliage classification, so it is counted on
+//! the imported [`Tree`]; everything an engine pays for (triangles, draw calls, joints, keys,
+//! texture bytes, file bytes, alpha-tested area) is [`FileCost`], read from the written file by
+//! [`frond_scene::file_cost`], so a frond LOD, the input tree and a foreign file are measured
+//! by the same rules. There is no second triangle or texture count here.
 
-use frond_scene::{Part, Tree};
+use frond_scene::{FileCost, Part, Tree};
 use glam::Vec3;
 use serde::Serialize;
 
-/// What a model costs.
+/// What a model costs (in the JSON, the file's fields sit beside the billboard pair).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Cost {
-    /// Triangles drawn (non-degenerate, wood and foliage).
-    pub triangles: usize,
-    /// Foliage cards: foliage triangles / 2. For a `frond lod` LOD these are exactly its
-    /// billboards; for any other model, its leaf cards counted the same way.
+    /// Foliage cards: the imported tree's non-degenerate foliage triangles / 2. For a
+    /// `frond lod` LOD these are exactly its billboards; for any other model, its leaf cards
+    /// counted the same way.
     pub billboards: usize,
-    /// Summed rest-pose area of the foliage triangles (world units²), the thesis' resolution-
-    /// independent measure of texture memory.
+    /// Summed rest-pose area of those foliage triangles (world units²), the thesis'
+    /// resolution-independent measure of texture memory.
     pub billboard_area: f64,
-    /// Decoded bytes of every texture (RGBA8).
-    pub texture_bytes: usize,
-    /// Skin joints.
-    pub bones: usize,
-    /// Draw calls: one per primitive (mesh × material).
-    pub draw_calls: usize,
-    /// Size of the file on disk (0 when unknown).
-    pub file_bytes: u64,
+    /// What the file costs an engine ([`FileCost`]).
+    #[serde(flatten)]
+    pub file: FileCost,
 }
 
-/// The cost of `tree` (as imported), with `file_bytes` the size of its file.
-pub fn cost(tree: &Tree, file_bytes: u64) -> Cost {
+/// The cost of `tree` (as imported) whose file costs `file`.
+pub fn cost(tree: &Tree, file: FileCost) -> Cost {
     let p = &tree.vertices.position;
-    let mut triangles = 0;
     let mut foliage = 0;
     let mut area = 0.0f64;
-    for t in tree.triangles.iter().filter(|t| !t.degenerate) {
-        triangles += 1;
-        if t.part == Part::Foliage {
-            foliage += 1;
-            let [a, b, c] =
-                t.v.map(|i| p.get(i as usize).copied().unwrap_or(Vec3::ZERO));
-            area += f64::from(0.5 * (b - a).cross(c - a).length());
-        }
+    for t in tree
+        .triangles
+        .iter()
+        .filter(|t| !t.degenerate && t.part == Part::Foliage)
+    {
+        foliage += 1;
+        let [a, b, c] =
+            t.v.map(|i| p.get(i as usize).copied().unwrap_or(Vec3::ZERO));
+        area += f64::from(0.5 * (b - a).cross(c - a).length());
     }
     Cost {
-        triangles,
         billboards: foliage / 2,
         billboard_area: area,
-        texture_bytes: tree.textures.iter().map(|t| t.rgba.len()).sum(),
-        bones: tree.bones.len(),
-        draw_calls: tree.classification.len(),
-        file_bytes,
+        file,
     }
 }
 
@@ -57,28 +53,17 @@ pub fn cost(tree: &Tree, file_bytes: u64) -> Cost {
 mod tests {
     use super::*;
     use frond_scene::generator::{Preset, generate};
-    use frond_scene::{ImportOptions, import_bytes};
+    use frond_scene::{ImportOptions, InputLimits, file_cost_bytes, import_bytes};
 
     #[test]
     fn cost_of_a_generated_tree_matches_its_construction() {
         let g = generate(Preset::Small, 3).expect("generate");
-        let tree = import_bytes(
-            std::path::Path::new("small.glb"),
-            &g.glb,
-            &ImportOptions::default(),
-        )
-        .expect("import");
-        let c = cost(&tree, g.glb.len() as u64);
-        assert_eq!(c.billboards, tree.count(Part::Foliage) / 2);
-        assert_eq!(
-            c.triangles,
-            tree.triangles.iter().filter(|t| !t.degenerate).count()
-        );
-        assert_eq!(c.bones, tree.bones.len());
-        assert_eq!(c.file_bytes, g.glb.len() as u64);
-        // Two textures (bark and leaf) decoded as RGBA8, two primitives (wood, leaves).
-        assert_eq!(c.texture_bytes, 64 * 64 * 4 + 128 * 128 * 4);
-        assert_eq!(c.draw_calls, 2);
+        let path = std::path::Path::new("small.glb");
+        let tree = import_bytes(path, &g.glb, &ImportOptions::default()).expect("import");
+        let file = file_cost_bytes(path, &g.glb, &InputLimits::default()).expect("file cost");
+        let c = cost(&tree, file.clone());
+        assert_eq!(c.billboards, g.leaf_corners.len());
+        assert_eq!(c.file, file);
         // Every leaf card of the generator is a rectangle: area = Σ |corner₁ − corner₀|·|corner₃ − corner₀|.
         let want: f64 = g
             .leaf_corners
@@ -90,5 +75,12 @@ mod tests {
             "{} vs {want}",
             c.billboard_area
         );
+        // The leaves are the file's only alpha-tested triangles: both areas agree.
+        assert!((c.billboard_area - c.file.alpha_tested_area).abs() < 1e-3 * want);
+        // The JSON puts the file's fields beside the pair.
+        let json = serde_json::to_value(&c).expect("JSON");
+        assert_eq!(json["billboards"], g.leaf_corners.len());
+        assert_eq!(json["triangles"], file.triangles);
+        assert_eq!(json["texture_decoded_bytes"], (64 * 64 + 128 * 128) * 4);
     }
 }

@@ -9,7 +9,9 @@ use std::path::Path;
 use std::time::Instant;
 
 use frond_render::{DrawScene, Renderer, TreeParts, tree_scene};
-use frond_scene::{SampleOptions, Sampled, SceneError, Tree, sample};
+use frond_scene::{
+    FileCost, InputLimits, SampleOptions, Sampled, SceneError, Tree, file_cost, sample,
+};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -39,6 +41,8 @@ pub struct EvalRequest {
     pub samples: usize,
     /// Clip (default: the original's first); the candidate plays the clip of the same name.
     pub clip: Option<String>,
+    /// What reading a file for its cost may take (the limits the trees were imported with).
+    pub limits: InputLimits,
 }
 
 /// Why an evaluation failed.
@@ -47,6 +51,9 @@ pub enum EvalError {
     /// The original's loop could not be sampled.
     #[error(transparent)]
     Sample(#[from] SceneError),
+    /// A model's file could not be read for its cost (the error names the file).
+    #[error(transparent)]
+    Cost(SceneError),
     /// A colour-metric render or comparison failed (`what`: which one, of which `file`).
     #[error("{file}: {what}")]
     Colour {
@@ -79,10 +86,6 @@ fn candidate_clip(candidate: &Tree, name: Option<&str>) -> Option<usize> {
         .or_else(|| candidate.clip_index(None))
 }
 
-fn file_size(p: &Path) -> u64 {
-    std::fs::metadata(p).map(|m| m.len()).unwrap_or(0)
-}
-
 /// The original's half of an evaluation, computed once and reused for every candidate: its
 /// sampled loop, the frame times, and its coverage masks per image size (a sweep scores many
 /// candidates against one original).
@@ -93,6 +96,9 @@ pub struct EvalContext<'a> {
     frame_times: Vec<f32>,
     masks: HashMap<(u32, u32), CoverageMasks>,
     views: u32,
+    /// The original file's cost, read once.
+    original_file: FileCost,
+    limits: InputLimits,
 }
 
 impl<'a> EvalContext<'a> {
@@ -110,6 +116,7 @@ impl<'a> EvalContext<'a> {
                 samples: req.samples,
             },
         )?;
+        let original_file = file_cost(&original.source, &req.limits).map_err(EvalError::Cost)?;
         let start = sampled.times.first().copied().unwrap_or(0.0);
         let frames = req.frames.max(1);
         let frame_times: Vec<f32> = (0..frames)
@@ -122,6 +129,8 @@ impl<'a> EvalContext<'a> {
             frame_times,
             masks: Default::default(),
             views: req.views,
+            original_file,
+            limits: req.limits,
         })
     }
 
@@ -181,6 +190,7 @@ impl<'a> EvalContext<'a> {
         size: (u32, u32),
     ) -> Result<EvalReport, EvalError> {
         let t0 = Instant::now();
+        let candidate_file = file_cost(&candidate.source, &self.limits).map_err(EvalError::Cost)?;
         let cc = candidate_clip(candidate, self.sampled.clip.as_deref());
         let (lo, hi) = self.bounds();
         let cand_masks = coverage_masks(
@@ -215,6 +225,10 @@ impl<'a> EvalContext<'a> {
         report.views = self.views;
         report.frames = self.frame_times.len() as u32;
         report.size = [size.0, size.1];
+        report.cost = Costs {
+            original: cost(self.original, self.original_file.clone()),
+            candidate: cost(candidate, candidate_file),
+        };
         report.timings_s["colour"] = serde_json::json!((t1 - t0).as_secs_f64());
         report.timings_s["total"] = serde_json::json!(t0.elapsed().as_secs_f64());
         Ok(report)
@@ -233,9 +247,10 @@ pub fn evaluate(
     EvalContext::new(renderer, original, req)?.evaluate(candidate, same_file, req.size)
 }
 
-/// Everything of a report but the colour renders: the per-triangle and animation metrics
-/// (§5.2–5.5) and the cost (§5.7), given the static and animated colour reports (§5.4). The
-/// colour setup (views, frames, size) and the colour timings are the caller's to fill in.
+/// Everything of a report but the colour renders and the cost: the per-triangle and animation
+/// metrics (§5.2–5.5), given the static and animated colour reports (§5.4). The colour setup
+/// (views, frames, size), the colour timings and the cost (§5.7, which reads the files) are the
+/// caller's to fill in.
 fn score(
     original: &Tree,
     candidate: &Tree,
@@ -310,10 +325,8 @@ fn score(
             Ok(how) => how,
             Err(reason) => reason,
         },
-        cost: Costs {
-            original: cost(original, file_size(&original.source)),
-            candidate: cost(candidate, file_size(&candidate.source)),
-        },
+        // Set by the caller, which reads the files.
+        cost: Costs::default(),
         timings_s: serde_json::json!({
             "matching": (t2 - t1).as_secs_f64(),
             "trajectories": t2.elapsed().as_secs_f64(),

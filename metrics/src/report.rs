@@ -57,8 +57,9 @@ pub struct CoverageMetrics {
     pub pairs: usize,
 }
 
-/// Both models' cost (§5.7).
-#[derive(Clone, Debug, Serialize)]
+/// Both models' cost (§5.7): the billboard pair from the imported trees, the rest read from the
+/// two files ([`Cost`]).
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct Costs {
     /// The original's.
     pub original: Cost,
@@ -156,10 +157,7 @@ mod tests {
             dominating_axis: m(MetricId::DominatingAxis),
             dominating_axis_spectral: m(MetricId::DominatingAxisSpectral),
             matching: String::new(),
-            cost: Costs {
-                original: Cost::default(),
-                candidate: Cost::default(),
-            },
+            cost: Costs::default(),
             timings_s: serde_json::json!({}),
         }
     }

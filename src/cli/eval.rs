@@ -7,10 +7,11 @@ use anyhow::Result;
 
 use crate::cli::args::ImportArgs;
 use crate::cli::progress::{Spinner, print_json};
-use crate::eval_cmd::{EvalRequest, evaluate, image_for_screen_height, same_bytes};
+use crate::eval_cmd::{Costs, EvalRequest, evaluate, image_for_screen_height, same_bytes};
 use crate::render_cmd::parse_size;
 use frond_render::Renderer;
 use frond_scene::ImportOptions;
+use frond_scene::input_file::human_bytes;
 
 /// `frond eval`.
 #[derive(clap::Args, Clone, Debug)]
@@ -80,6 +81,7 @@ impl EvalArgs {
             size,
             samples,
             clip,
+            limits: import.limits.limits(),
         };
         let bar = Spinner::start();
         bar.say(&format!("evaluating {}", candidate.display()));
@@ -100,16 +102,69 @@ impl EvalArgs {
                     ),
                 }
             }
-            println!(
-                "cost: {} → {} triangles, {} → {} billboards, {} → {} texture bytes",
-                report.cost.original.triangles,
-                report.cost.candidate.triangles,
-                report.cost.original.billboards,
-                report.cost.candidate.billboards,
-                report.cost.original.texture_bytes,
-                report.cost.candidate.texture_bytes
-            );
+            print!("{}", cost_lines(&report.cost));
         }
         Ok(())
     }
+}
+
+/// The cost in a few lines, original → candidate: triangles, billboards, joints, channels,
+/// texture bytes (decoded, encoded), file bytes, and the alpha-tested area with the ratio
+/// candidate/original (the relative overdraw).
+fn cost_lines(c: &Costs) -> String {
+    let (o, k) = (&c.original, &c.candidate);
+    let (of, kf) = (&o.file, &k.file);
+    let ratio = if of.alpha_tested_area > 0.0 {
+        format!("{:.3}", kf.alpha_tested_area / of.alpha_tested_area)
+    } else {
+        "-".to_string()
+    };
+    let mut out = String::from("cost (original → candidate):\n");
+    let mut line = |what: &str, a: String, b: String| {
+        out.push_str(&format!("  {what:24} {a} → {b}\n"));
+    };
+    line(
+        "triangles",
+        of.triangles.to_string(),
+        kf.triangles.to_string(),
+    );
+    line(
+        "billboards",
+        o.billboards.to_string(),
+        k.billboards.to_string(),
+    );
+    line(
+        "joints",
+        of.joints_total.to_string(),
+        kf.joints_total.to_string(),
+    );
+    line(
+        "animated channels",
+        of.animated_channels.to_string(),
+        kf.animated_channels.to_string(),
+    );
+    line(
+        "texture decoded/encoded",
+        format!(
+            "{}/{}",
+            human_bytes(of.texture_decoded_bytes),
+            human_bytes(of.texture_encoded_bytes)
+        ),
+        format!(
+            "{}/{}",
+            human_bytes(kf.texture_decoded_bytes),
+            human_bytes(kf.texture_encoded_bytes)
+        ),
+    );
+    line(
+        "file bytes",
+        human_bytes(of.file_bytes),
+        human_bytes(kf.file_bytes),
+    );
+    line(
+        "alpha-tested area",
+        format!("{:.4}", of.alpha_tested_area),
+        format!("{:.4} (ratio {ratio})", kf.alpha_tested_area),
+    );
+    out
 }

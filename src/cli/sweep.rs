@@ -133,6 +133,7 @@ impl SweepArgs {
             size: (800, 600),
             samples,
             clip,
+            limits: import.limits.limits(),
         };
         let req = SweepRequest {
             exe: std::env::current_exe().context("locating the frond executable")?,

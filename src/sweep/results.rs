@@ -202,9 +202,16 @@ pub fn add_eval_report(row: &mut Row, eval: &Value) {
         }
     }
     if row.is_candidate() {
-        for key in ["billboards", "triangles", "bones", "texture_bytes"] {
+        // The file's joints and decoded texture bytes fill the columns `frond lod` names
+        // `bones` and `texture_bytes`.
+        for (col, key) in [
+            ("billboards", "billboards"),
+            ("triangles", "triangles"),
+            ("bones", "joints_total"),
+            ("texture_bytes", "texture_decoded_bytes"),
+        ] {
             if let Some(x) = num(c, &[key]) {
-                row.values.insert(key.into(), x);
+                row.values.insert(col.into(), x);
             }
         }
     }
