@@ -5,7 +5,7 @@
 //! Two sources, one notion: the pair needs frond's foliage classification, so it is counted on
 //! the imported [`Tree`]; everything an engine pays for (triangles, draw calls, joints, keys,
 //! texture bytes, file bytes, alpha-tested area) is [`FileCost`], read from the written file by
-//! [`frond_scene::file_cost`], so a frond LOD, the input tree and a foreign file are measured
+//! [`frond_scene::file_cost()`], so a frond LOD, the input tree and a foreign file are measured
 //! by the same rules. There is no second triangle or texture count here.
 
 use frond_scene::{FileCost, Part, Tree};
