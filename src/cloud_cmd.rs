@@ -161,8 +161,11 @@ pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Res
         let mat = sink
             .tree_material(&mut doc, tree, m)
             .context("writing a wood material")?;
+        // The input's own texture coordinate sets: its material is written as it was.
+        let sets = &tree.vertices.texcoords;
         let mut p = PrimitiveDesc {
             uvs: Some(Vec::new()),
+            extra_uvs: vec![Vec::new(); sets.len().saturating_sub(1)],
             material: Some(mat),
             ..Default::default()
         };
@@ -172,8 +175,16 @@ pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Res
                 let next = p.positions.len() as u32;
                 let id = *remap.entry(v).or_insert_with(|| {
                     p.positions.push(positions[v as usize].to_array());
+                    let vi = v as usize;
                     if let Some(u) = p.uvs.as_mut() {
-                        u.push(tree.vertices.uv[v as usize].to_array());
+                        let uv = match sets.first() {
+                            Some(set) => set.get(vi).copied().unwrap_or_default(),
+                            None => tree.vertices.uv[vi],
+                        };
+                        u.push(uv.to_array());
+                    }
+                    for (out, set) in p.extra_uvs.iter_mut().zip(sets.iter().skip(1)) {
+                        out.push(set.get(vi).copied().unwrap_or_default().to_array());
                     }
                     next
                 });

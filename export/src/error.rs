@@ -13,6 +13,10 @@ pub enum ExportError {
     },
     #[error("material {0} does not exist in the tree")]
     NoMaterial(usize),
+    #[error("source texture {0} (or its image) does not exist in the tree")]
+    NoTexture(usize),
+    #[error("a texture map of material '{0}' has no texture index")]
+    NoTextureIndex(String),
     #[error("nothing to write: no LOD")]
     NoLod,
     #[error(transparent)]

@@ -276,9 +276,13 @@ pub fn add_lod(
                 continue;
             }
             let mat = sink.tree_material(doc, lod.tree, prim.material)?;
+            // The input's texture coordinate sets as stored (its materials are written as they
+            // were, KHR_texture_transform and texCoord included); `uvs` when it carries none.
+            let sets = part.texcoords.len().max(1);
             let mut p = PrimitiveDesc {
                 normals: Some(Vec::new()),
                 uvs: Some(Vec::new()),
+                extra_uvs: vec![Vec::new(); sets - 1],
                 joints: Some(Vec::new()),
                 weights: Some(Vec::new()),
                 material: Some(mat),
@@ -307,7 +311,15 @@ pub fn add_lod(
                             n.push(part.normals[vi].to_array());
                         }
                         if let Some(u) = p.uvs.as_mut() {
-                            u.push(part.uvs[vi].to_array());
+                            let uv = match part.texcoords.first() {
+                                Some(set) => set.get(vi).copied().unwrap_or_default(),
+                                None => part.uvs[vi],
+                            };
+                            u.push(uv.to_array());
+                        }
+                        for (out, set) in p.extra_uvs.iter_mut().zip(part.texcoords.iter().skip(1))
+                        {
+                            out.push(set.get(vi).copied().unwrap_or_default().to_array());
                         }
                         if let Some(jj) = p.joints.as_mut() {
                             jj.push(j);

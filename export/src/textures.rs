@@ -1,10 +1,15 @@
-//! Where written textures go: embedded in the GLB, or PNG files next to it
+//! Where written textures go: embedded in the GLB, or files next to it
 //! (`--external-textures`), and the tree's materials written once per document.
+//!
+//! The tree's own materials are written as the input described them ([`MaterialSource`]):
+//! every map, factor, extension and extra, their textures' samplers, and their images' original
+//! bytes and MIME type (a JPEG stays the same JPEG), so LOD0 looks like the input. Only what
+//! frond makes (billboard atlases) is encoded, as PNG.
 
 use std::collections::HashMap;
 
 use frond_scene::gltf_writer::{GltfBuilder, MaterialDesc, WriteAlpha, encode_png};
-use frond_scene::{AlphaMode, Tree};
+use frond_scene::{AlphaMode, MaterialSource, Tree, visit_texture_infos};
 
 use crate::error::ExportError;
 
@@ -12,21 +17,46 @@ use crate::error::ExportError;
 pub struct TextureSink {
     /// File-name prefix of external PNGs (None: embed).
     external: Option<String>,
-    /// External PNG files to write next to the glTF: (file name, bytes).
+    /// External image files to write next to the glTF: (file name, bytes).
     pub files: Vec<(String, Vec<u8>)>,
+    /// Decoded tree texture → document texture (materials without a source).
     tree_textures: HashMap<usize, usize>,
+    /// `Tree::source_textures` entry → document texture.
+    source_textures: HashMap<usize, usize>,
+    /// `Tree::images` entry → document image.
+    source_images: HashMap<usize, usize>,
     tree_materials: HashMap<usize, usize>,
 }
 
 impl TextureSink {
-    /// Embedded textures, or external ones named `<prefix><texture>.png` when `external`.
+    /// Embedded textures, or external files named `<prefix><texture>.<png, jpg, ...>` when
+    /// `external`.
     pub fn new(external: Option<String>) -> Self {
         TextureSink {
             external,
             files: Vec::new(),
             tree_textures: HashMap::new(),
+            source_textures: HashMap::new(),
+            source_images: HashMap::new(),
             tree_materials: HashMap::new(),
         }
+    }
+
+    /// The file name for external image bytes `bytes` named `stem` with extension `ext`
+    /// (`<prefix><stem>.<ext>`, numbered when another file took that name with other bytes),
+    /// queued in [`TextureSink::files`] once.
+    fn external_file(&mut self, prefix: &str, stem: &str, ext: &str, bytes: &[u8]) -> String {
+        let stem = sanitize(stem);
+        let mut file = format!("{prefix}{stem}.{ext}");
+        let mut k = 1;
+        while self.files.iter().any(|(f, b)| *f == file && b != bytes) {
+            file = format!("{prefix}{stem}_{k}.{ext}");
+            k += 1;
+        }
+        if !self.files.iter().any(|(f, _)| *f == file) {
+            self.files.push((file.clone(), bytes.to_vec()));
+        }
+        file
     }
 
     /// Adds an RGBA8 image as a texture (clamped when `clamp`).
@@ -46,18 +76,10 @@ impl TextureSink {
         Ok(match &self.external {
             None => doc.add_texture(name, &png, clamp),
             Some(prefix) => {
-                // Same name, other pixels: number the file.
-                let mut file = format!("{prefix}{}.png", sanitize(name));
-                let mut k = 1;
-                while self.files.iter().any(|(f, b)| *f == file && *b != png) {
-                    file = format!("{prefix}{}_{k}.png", sanitize(name));
-                    k += 1;
-                }
-                let id = doc.add_texture_uri(name, &file, clamp);
-                if !self.files.iter().any(|(f, _)| *f == file) {
-                    self.files.push((file, png));
-                }
-                id
+                // Same name, other pixels: the file is numbered.
+                let prefix = prefix.clone();
+                let file = self.external_file(&prefix, name, "png", &png);
+                doc.add_texture_uri(name, &file, clamp)
             }
         })
     }
@@ -88,7 +110,74 @@ impl TextureSink {
         }))
     }
 
-    /// The document material for tree material `m` (written once, with its texture).
+    /// The document texture for `Tree::source_textures[t]`: its original image bytes and MIME
+    /// type (embedded, or a file with the type's extension), its sampler and its name/extras
+    /// as the input had them. Written once per document.
+    fn source_texture(
+        &mut self,
+        doc: &mut GltfBuilder,
+        tree: &Tree,
+        t: usize,
+    ) -> Result<usize, ExportError> {
+        if let Some(&id) = self.source_textures.get(&t) {
+            return Ok(id);
+        }
+        let texture = tree
+            .source_textures
+            .get(t)
+            .ok_or(ExportError::NoTexture(t))?;
+        let image = match self.source_images.get(&texture.image) {
+            Some(&id) => id,
+            None => {
+                let img = tree
+                    .images
+                    .get(texture.image)
+                    .ok_or(ExportError::NoTexture(t))?;
+                let id = match self.external.clone() {
+                    None => doc.add_image(img.name.as_deref(), &img.bytes, &img.mime_type),
+                    Some(prefix) => {
+                        let stem = img
+                            .name
+                            .clone()
+                            .unwrap_or_else(|| format!("image{}", texture.image));
+                        let file = self.external_file(&prefix, &stem, img.extension(), &img.bytes);
+                        doc.add_image_uri(img.name.as_deref(), &file, &img.mime_type)
+                    }
+                };
+                self.source_images.insert(texture.image, id);
+                id
+            }
+        };
+        let sampler = texture.sampler.clone().map(|s| doc.add_sampler(s));
+        let id = doc.add_texture_of(image, sampler, texture.json.clone());
+        self.source_textures.insert(t, id);
+        Ok(id)
+    }
+
+    /// The input's material `source` with its maps pointing at this document's textures.
+    fn source_material(
+        &mut self,
+        doc: &mut GltfBuilder,
+        tree: &Tree,
+        name: &str,
+        source: &MaterialSource,
+    ) -> Result<usize, ExportError> {
+        let mut json = source.json.clone();
+        visit_texture_infos(&mut json, &mut |_, info| {
+            let t = info
+                .get("index")
+                .and_then(serde_json::Value::as_u64)
+                .ok_or_else(|| ExportError::NoTextureIndex(name.to_string()))?
+                as usize;
+            let id = self.source_texture(doc, tree, t)?;
+            info.insert("index".into(), serde_json::json!(id));
+            Ok::<(), ExportError>(())
+        })?;
+        Ok(doc.add_material_json(json, &source.extensions))
+    }
+
+    /// The document material for tree material `m`, written once: an imported material exactly
+    /// as the input described it (see the module docs), one made by frond from its fields.
     pub fn tree_material(
         &mut self,
         doc: &mut GltfBuilder,
@@ -99,6 +188,11 @@ impl TextureSink {
             return Ok(id);
         }
         let material = tree.materials.get(m).ok_or(ExportError::NoMaterial(m))?;
+        if let Some(source) = &material.source {
+            let id = self.source_material(doc, tree, &material.name, source)?;
+            self.tree_materials.insert(m, id);
+            return Ok(id);
+        }
         let texture = match material.base_color_texture {
             Some(ti) => match self.tree_textures.get(&ti) {
                 Some(&t) => Some(t),

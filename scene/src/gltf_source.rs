@@ -32,6 +32,26 @@ pub struct GltfSource {
     pub buffers: Vec<Vec<u8>>,
     /// What reading this input may cost.
     pub limits: InputLimits,
+    /// Bytes of input read so far: the file and its external buffers (external images are
+    /// added by the importer, which reads them, against the same limit).
+    pub bytes_read: u64,
+    /// The parts of the document that are passed through unchanged, as raw JSON (the typed
+    /// `root` drops what it does not model, such as unknown material extensions).
+    pub raw: RawParts,
+}
+
+/// The input's materials, textures, samplers and images as raw JSON values, index-aligned with
+/// the document's arrays (a missing array is empty).
+#[derive(Clone, Debug, Default, serde::Deserialize)]
+pub struct RawParts {
+    #[serde(default)]
+    pub materials: Vec<serde_json::Value>,
+    #[serde(default)]
+    pub textures: Vec<serde_json::Value>,
+    #[serde(default)]
+    pub samplers: Vec<serde_json::Value>,
+    #[serde(default)]
+    pub images: Vec<serde_json::Value>,
 }
 
 impl GltfSource {
@@ -56,7 +76,13 @@ impl GltfSource {
             serde_json::from_slice(json_bytes)
                 .map_err(|e| err(format!("not a valid glTF JSON document ({e})")))
         };
-        let (root, glb_bin): (json::Root, Option<Vec<u8>>) = if bytes.starts_with(b"glTF") {
+        let parse_raw = |json_bytes: &[u8]| -> Result<RawParts> {
+            serde_json::from_slice(json_bytes)
+                .map_err(|e| err(format!("not a valid glTF JSON document ({e})")))
+        };
+        let (root, raw, glb_bin): (json::Root, RawParts, Option<Vec<u8>>) = if bytes
+            .starts_with(b"glTF")
+        {
             // gltf 1.4 subtracts the header's size from the declared length before checking
             // it (an overflow panic in debug builds): check the 12-byte header first.
             let declared = bytes
@@ -79,7 +105,11 @@ impl GltfSource {
             }
             let glb = gltf::binary::Glb::from_slice(bytes)
                 .map_err(|e| err(format!("truncated or malformed GLB container ({e})")))?;
-            (parse(&glb.json)?, glb.bin.map(|b| b.into_owned()))
+            (
+                parse(&glb.json)?,
+                parse_raw(&glb.json)?,
+                glb.bin.map(|b| b.into_owned()),
+            )
         } else {
             let first = bytes.iter().find(|b| !b.is_ascii_whitespace()).copied();
             if first != Some(b'{') {
@@ -87,7 +117,7 @@ impl GltfSource {
                     "not a glTF file (neither GLB magic nor a JSON object)".into()
                 ));
             }
-            (parse(bytes)?, None)
+            (parse(bytes)?, parse_raw(bytes)?, None)
         };
         for ext in &root.extensions_required {
             if !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext.as_str()) {
@@ -107,6 +137,8 @@ impl GltfSource {
             root,
             buffers: Vec::new(),
             limits: *limits,
+            bytes_read: 0,
+            raw,
         };
         let mut total = bytes.len() as u64;
         let mut glb_bin = glb_bin;
@@ -140,6 +172,7 @@ impl GltfSource {
             buffers.push(data);
         }
         src.buffers = buffers;
+        src.bytes_read = total;
         Ok(src)
     }
 

@@ -1,4 +1,5 @@
-//! The one glTF writer: nodes, meshes, skins, animations, materials and embedded PNG images
+//! The one glTF writer: nodes, meshes, skins, animations, materials and images (PNGs frond
+//! encodes, or the input's images passed through byte for byte)
 //! into a single `.glb` (the sample generator uses it now, `export/` later). Output is
 //! deterministic: same calls, same bytes. Follows the rules in spec gltf-and-toolchain.md.
 
@@ -290,6 +291,69 @@ impl GltfBuilder {
             "name": name, "source": self.images.len() - 1, "sampler": self.samplers.len() - 1
         }));
         self.textures.len() - 1
+    }
+
+    /// Embeds encoded image bytes as they are (no re-encoding) with their MIME type; returns the
+    /// image index. `name` None writes no name.
+    pub fn add_image(&mut self, name: Option<&str>, bytes: &[u8], mime_type: &str) -> usize {
+        let view = self.push_view(bytes, None, None);
+        let mut image = json!({ "mimeType": mime_type, "bufferView": view });
+        if let Some(n) = name {
+            image["name"] = json!(n);
+        }
+        self.images.push(image);
+        self.images.len() - 1
+    }
+
+    /// An image in a file referenced by relative `uri` (written next to the glTF); returns the
+    /// image index.
+    pub fn add_image_uri(&mut self, name: Option<&str>, uri: &str, mime_type: &str) -> usize {
+        let mut image = json!({ "mimeType": mime_type, "uri": uri });
+        if let Some(n) = name {
+            image["name"] = json!(n);
+        }
+        self.images.push(image);
+        self.images.len() - 1
+    }
+
+    /// Adds a sampler given as its JSON object (wrap modes, filters, name, extras: passed
+    /// through as they are); an equal sampler already added is reused. Returns its index.
+    pub fn add_sampler(&mut self, sampler: Value) -> usize {
+        match self.samplers.iter().position(|s| *s == sampler) {
+            Some(i) => i,
+            None => {
+                self.samplers.push(sampler);
+                self.samplers.len() - 1
+            }
+        }
+    }
+
+    /// Adds a texture of image `image` with sampler `sampler` (None: none, the glTF default);
+    /// `fields` holds any further members to keep (name, extras), `source`/`sampler` in it are
+    /// replaced. Returns the texture index.
+    pub fn add_texture_of(&mut self, image: usize, sampler: Option<usize>, fields: Value) -> usize {
+        let mut t = match fields {
+            Value::Object(m) => m,
+            _ => Map::new(),
+        };
+        t.insert("source".into(), json!(image));
+        match sampler {
+            Some(s) => t.insert("sampler".into(), json!(s)),
+            None => t.remove("sampler"),
+        };
+        self.textures.push(Value::Object(t));
+        self.textures.len() - 1
+    }
+
+    /// Adds a material given as its complete JSON object (passed through as it is: its texture
+    /// maps' `index` must already be this document's texture indices) and lists `extensions`
+    /// in `extensionsUsed`. Returns the material index.
+    pub fn add_material_json(&mut self, material: Value, extensions: &[String]) -> usize {
+        for e in extensions {
+            self.use_extension(e);
+        }
+        self.materials.push(material);
+        self.materials.len() - 1
     }
 
     /// Adds a metallic-roughness material.

@@ -18,7 +18,9 @@ use crate::binding::assign_foliage_bones;
 use crate::classify::{MaterialOverrides, PrimitiveInfo, classify_primitives};
 use crate::error::Result;
 use crate::gltf_source::GltfSource;
-use crate::input_file::{InputLimits, MAX_TEXTURE_OPTION, MAX_VERTICES_OPTION, human_bytes};
+use crate::input_file::{
+    InputLimits, MAX_INPUT_OPTION, MAX_TEXTURE_OPTION, MAX_VERTICES_OPTION, human_bytes,
+};
 use crate::model::*;
 use crate::rig::{Channel, Clip, Interpolation, Property, world_matrices};
 use crate::rig::{Node, Rig, Trs};
@@ -61,7 +63,7 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
         nodes[bone.node].bone = Some(b);
     }
     let mut bindings: Vec<Binding> = skin_bindings;
-    let materials = read_materials(src)?;
+    let materials = read_materials(src, &mut warnings)?;
     let (vertices, prims) = read_meshes(
         src,
         &node_order,
@@ -76,9 +78,11 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
     }
     // Clips before textures: a broken animation is reported without decoding any image.
     let clips = read_clips(src, nodes.len(), &mut warnings)?;
-    let (textures, texture_images) = read_textures(src, &materials.1)?;
-    let mut materials_out = materials.0;
-    for (m, info) in materials_out.iter_mut().zip(&materials.1) {
+    let (source_textures, images, slot_of_image) =
+        read_source_textures(src, &materials, &mut warnings)?;
+    let (textures, texture_images) = read_textures(src, &materials.base, &images, &slot_of_image)?;
+    let mut materials_out = materials.materials;
+    for (m, info) in materials_out.iter_mut().zip(&materials.base) {
         m.base_color_texture =
             info.and_then(|(img, _, _)| texture_images.iter().position(|&i| i == img));
     }
@@ -104,6 +108,8 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
         triangles: Vec::new(),
         materials,
         textures,
+        source_textures,
+        images,
         classification: Vec::new(),
         foliage_reassigned: 0,
         warnings: Vec::new(),
@@ -135,6 +141,7 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: 0.5,
             double_sided: false,
+            source: None,
         });
     }
     tree.bounds = Bounds::of(
@@ -542,12 +549,45 @@ fn check_rest_positions(
     Ok(())
 }
 
-/// Materials plus, per material, (image index, texcoord set, uv transform) of its base colour.
-type MaterialInfo = (Vec<Material>, Vec<Option<(usize, u32, glam::Affine2)>>);
+/// What [`read_materials`] found.
+struct MaterialInfo {
+    materials: Vec<Material>,
+    /// Per material: (input image index, texcoord set, uv transform) of its base colour.
+    base: Vec<Option<(usize, u32, glam::Affine2)>>,
+    /// The input texture index of every [`Tree::source_textures`] entry, in that order.
+    textures: Vec<usize>,
+    /// How many texture coordinate sets the maps use (1 ..= [`MAX_TEXCOORD_SETS`]).
+    texcoord_sets: usize,
+}
 
-fn read_materials(src: &GltfSource) -> Result<MaterialInfo> {
+/// The names under every `extensions` object of `value`, at any depth (sorted, unique).
+fn extension_names(value: &serde_json::Value, out: &mut Vec<String>) {
+    if let serde_json::Value::Object(map) = value {
+        for (key, v) in map {
+            if key == "extensions"
+                && let serde_json::Value::Object(ext) = v
+            {
+                out.extend(ext.keys().cloned());
+            }
+            extension_names(v, out);
+        }
+    }
+    out.sort();
+    out.dedup();
+}
+
+/// Reads the materials: what billboards need (base colour and its texture, alpha, sides) and the
+/// whole input description ([`MaterialSource`]) for writing them back unchanged.
+///
+/// Refused: a texture map naming a texture that does not exist (or whose texture names a
+/// missing image or sampler), with the material and map named. Accepted with a warning: a map
+/// using a texture coordinate set past `TEXCOORD_1` (written with `texCoord` 0: frond carries
+/// [`MAX_TEXCOORD_SETS`] sets).
+fn read_materials(src: &GltfSource, warnings: &mut Vec<String>) -> Result<MaterialInfo> {
     let mut mats = Vec::new();
     let mut texinfo = Vec::new();
+    let mut textures: Vec<usize> = Vec::new();
+    let mut texcoord_sets = 1usize;
     for (i, m) in src.root.materials.iter().enumerate() {
         let pbr = &m.pbr_metallic_roughness;
         let tex = match &pbr.base_color_texture {
@@ -590,6 +630,80 @@ fn read_materials(src: &GltfSource) -> Result<MaterialInfo> {
             Checked::Valid(json::material::AlphaMode::Blend) => AlphaMode::Blend,
             _ => AlphaMode::Opaque,
         };
+        let mut json = src
+            .raw
+            .materials
+            .get(i)
+            .cloned()
+            .unwrap_or_else(|| serde_json::json!({}));
+        visit_texture_infos(&mut json, &mut |key, info| {
+            let index = info
+                .get("index")
+                .and_then(serde_json::Value::as_u64)
+                .map(|t| t as usize)
+                .ok_or_else(|| {
+                    src.invalid(format!("material {i}: {key} has no valid texture index"))
+                })?;
+            let texture = src.root.textures.get(index).ok_or_else(|| {
+                src.invalid(format!(
+                    "material {i}: {key} names texture {index}, which does not exist"
+                ))
+            })?;
+            let image = texture.source.value();
+            if image >= src.root.images.len() {
+                return Err(src.invalid(format!(
+                    "texture {index} (material {i} {key}): image {image} does not exist"
+                )));
+            }
+            if let Some(s) = texture.sampler.map(|s| s.value())
+                && s >= src.raw.samplers.len()
+            {
+                return Err(src.invalid(format!(
+                    "texture {index} (material {i} {key}): sampler {s} does not exist"
+                )));
+            }
+            let slot = match textures.iter().position(|&t| t == index) {
+                Some(slot) => slot,
+                None => {
+                    textures.push(index);
+                    textures.len() - 1
+                }
+            };
+            info.insert("index".into(), serde_json::json!(slot));
+            // The set the map samples: its own texCoord, or KHR_texture_transform's override.
+            let overridden = info
+                .get("extensions")
+                .and_then(|e| e.get("KHR_texture_transform"))
+                .is_some_and(|t| t.get("texCoord").is_some());
+            let (holder, whose) = if overridden {
+                match info
+                    .get_mut("extensions")
+                    .and_then(|e| e.get_mut("KHR_texture_transform"))
+                    .and_then(serde_json::Value::as_object_mut)
+                {
+                    Some(t) => (t, format!("{key}'s KHR_texture_transform")),
+                    None => return Ok(()),
+                }
+            } else {
+                (info, key.to_string())
+            };
+            let set = holder
+                .get("texCoord")
+                .and_then(serde_json::Value::as_u64)
+                .unwrap_or(0);
+            if set as usize >= MAX_TEXCOORD_SETS {
+                warnings.push(format!(
+                    "material {i} ('{}'): {whose} uses TEXCOORD_{set}; frond carries TEXCOORD_0 and TEXCOORD_1 only, so it is written with TEXCOORD_0",
+                    m.name.as_deref().unwrap_or("")
+                ));
+                holder.insert("texCoord".into(), serde_json::json!(0));
+            } else {
+                texcoord_sets = texcoord_sets.max(set as usize + 1);
+            }
+            Ok(())
+        })?;
+        let mut extensions = Vec::new();
+        extension_names(&json, &mut extensions);
         mats.push(Material {
             name: m.name.clone().unwrap_or_else(|| format!("material{i}")),
             base_color: pbr.base_color_factor.0,
@@ -597,35 +711,155 @@ fn read_materials(src: &GltfSource) -> Result<MaterialInfo> {
             alpha_mode,
             alpha_cutoff: m.alpha_cutoff.map(|c| c.0).unwrap_or(0.5),
             double_sided: m.double_sided,
+            source: Some(MaterialSource { json, extensions }),
         });
         texinfo.push(tex);
     }
-    Ok((mats, texinfo))
+    Ok(MaterialInfo {
+        materials: mats,
+        base: texinfo,
+        textures,
+        texcoord_sets,
+    })
 }
 
-/// Decodes the base-colour images materials use (in parallel) and links them to materials.
+/// The MIME type of an encoded image recognised from its first bytes (PNG or JPEG).
+fn sniff_mime(bytes: &[u8]) -> Option<&'static str> {
+    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+        Some("image/png")
+    } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+        Some("image/jpeg")
+    } else {
+        None
+    }
+}
+
+/// What [`read_source_textures`] read: the textures, the images, and per input image index its
+/// slot in the images.
+type SourceParts = (Vec<SourceTexture>, Vec<SourceImage>, HashMap<usize, usize>);
+
+/// Reads the textures the materials' maps name and their images' original bytes (not decoded;
+/// written back byte for byte). External image files count towards
+/// [`InputLimits::max_input_bytes`] together with the file and its buffers.
+///
+/// Returns the source textures (in [`MaterialInfo::textures`] order), the images and, per
+/// input image index read, its slot in the images. A texture's own `extensions` (say
+/// `EXT_texture_webp` naming another image) are dropped with a warning: the texture is written
+/// with its core `source` image.
+fn read_source_textures(
+    src: &GltfSource,
+    info: &MaterialInfo,
+    warnings: &mut Vec<String>,
+) -> Result<SourceParts> {
+    let mut images: Vec<SourceImage> = Vec::new();
+    let mut slot_of_image: HashMap<usize, usize> = HashMap::new();
+    let mut total = src.bytes_read;
+    let mut read_image = |img: usize, images: &mut Vec<SourceImage>| -> Result<usize> {
+        if let Some(&slot) = slot_of_image.get(&img) {
+            return Ok(slot);
+        }
+        let bytes = src.image_bytes(img)?;
+        let raw = src.raw.images.get(img);
+        let external = src.root.images[img]
+            .uri
+            .as_deref()
+            .is_some_and(|u| !u.starts_with("data:"))
+            && src.root.images[img].buffer_view.is_none();
+        if external {
+            total = total.saturating_add(bytes.len() as u64);
+            if total > src.limits.max_input_bytes {
+                return Err(src.invalid(format!(
+                    "image {img}: the file, its external buffers and images add up to {}, over the input size limit of {} (raise it with {MAX_INPUT_OPTION})",
+                    human_bytes(total),
+                    human_bytes(src.limits.max_input_bytes)
+                )));
+            }
+        }
+        let mime = raw
+            .and_then(|r| r.get("mimeType"))
+            .and_then(serde_json::Value::as_str)
+            .map(str::to_string)
+            .or_else(|| sniff_mime(&bytes).map(str::to_string))
+            .ok_or_else(|| {
+                src.invalid(format!(
+                    "image {img}: neither PNG nor JPEG, and no mimeType says what it is"
+                ))
+            })?;
+        images.push(SourceImage {
+            name: src.root.images[img].name.clone(),
+            mime_type: mime,
+            bytes,
+        });
+        slot_of_image.insert(img, images.len() - 1);
+        Ok(images.len() - 1)
+    };
+    let mut textures = Vec::with_capacity(info.textures.len());
+    for &t in &info.textures {
+        let texture = &src.root.textures[t];
+        let image = read_image(texture.source.value(), &mut images)?;
+        let mut json = src
+            .raw
+            .textures
+            .get(t)
+            .cloned()
+            .unwrap_or_else(|| serde_json::json!({}));
+        if let serde_json::Value::Object(map) = &mut json {
+            map.remove("source");
+            map.remove("sampler");
+            if let Some(serde_json::Value::Object(ext)) = map.remove("extensions") {
+                let names: Vec<&str> = ext.keys().map(String::as_str).collect();
+                warnings.push(format!(
+                    "texture {t}: extensions {} not passed through; written with its core source image",
+                    names.join(", ")
+                ));
+            }
+        }
+        let sampler = texture
+            .sampler
+            .and_then(|s| src.raw.samplers.get(s.value()).cloned());
+        textures.push(SourceTexture {
+            json,
+            image,
+            sampler,
+        });
+    }
+    // Base-colour images are decoded from these bytes too.
+    for img in info.base.iter().flatten().map(|b| b.0) {
+        read_image(img, &mut images)?;
+    }
+    Ok((textures, images, slot_of_image))
+}
+
+/// Decodes the base-colour images materials use (in parallel) from their bytes in `images`.
 ///
 /// The decoded size of every image is read from its header first and the total checked
 /// against [`InputLimits::max_texture_bytes`] before anything is decoded, so a small file that
 /// declares huge images (a "texture bomb") is refused without the memory being taken; each
-/// decoder is also held to the budget, in case a header lies.
+/// decoder is also held to the budget, in case a header lies. Images only normal, occlusion,
+/// metallic-roughness or emissive maps use are not decoded at all (they are passed through).
 fn read_textures(
     src: &GltfSource,
-    texinfo: &[Option<(usize, u32, glam::Affine2)>],
+    base: &[Option<(usize, u32, glam::Affine2)>],
+    images: &[SourceImage],
+    slot_of_image: &HashMap<usize, usize>,
 ) -> Result<(Vec<Texture>, Vec<usize>)> {
-    let mut images: Vec<usize> = texinfo.iter().flatten().map(|t| t.0).collect();
-    images.sort_unstable();
-    images.dedup();
-    let encoded = images
+    let mut used: Vec<usize> = base.iter().flatten().map(|t| t.0).collect();
+    used.sort_unstable();
+    used.dedup();
+    let encoded = used
         .iter()
         .map(|&img| {
-            let bytes = src.image_bytes(img)?;
-            let (w, h) = image::ImageReader::new(std::io::Cursor::new(&bytes))
+            let slot = slot_of_image
+                .get(&img)
+                .copied()
+                .ok_or_else(|| src.invalid(format!("image {img} was not read")))?;
+            let bytes = &images[slot].bytes;
+            let (w, h) = image::ImageReader::new(std::io::Cursor::new(bytes))
                 .with_guessed_format()
                 .map_err(|e| src.invalid(format!("image {img}: cannot read ({e})")))?
                 .into_dimensions()
                 .map_err(|e| src.invalid(format!("image {img}: cannot decode ({e})")))?;
-            Ok((img, bytes, u64::from(w) * u64::from(h) * 4))
+            Ok((img, slot, u64::from(w) * u64::from(h) * 4))
         })
         .collect::<Result<Vec<_>>>()?;
     let budget = src.limits.max_texture_bytes;
@@ -641,9 +875,8 @@ fn read_textures(
     }
     let textures = encoded
         .par_iter()
-        .map(|(img, bytes, size)| {
-            let img = *img;
-            let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .map(|&(img, slot, size)| {
+            let mut reader = image::ImageReader::new(std::io::Cursor::new(&images[slot].bytes))
                 .with_guessed_format()
                 .map_err(|e| src.invalid(format!("image {img}: cannot read ({e})")))?;
             let mut limits = image::Limits::default();
@@ -663,10 +896,11 @@ fn read_textures(
                 width: decoded.width(),
                 height: decoded.height(),
                 rgba: decoded.into_raw(),
+                image: Some(slot),
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    Ok((textures, images))
+    Ok((textures, used))
 }
 
 /// Reads every mesh instance (in parents-first node order) into the flattened vertex arrays and
@@ -809,20 +1043,36 @@ fn read_meshes(
             };
             let material = p.material.map(|m| m.value());
             if let Some(m) = material
-                && m >= materials.0.len()
+                && m >= materials.materials.len()
             {
                 return Err(src.invalid(format!("{what}: material {m} does not exist")));
             }
-            let tex = material.and_then(|m| materials.1[m]);
+            let tex = material.and_then(|m| materials.base[m]);
             let uv_set = tex.map(|t| t.1).unwrap_or(0);
-            let uvs = match attr(json::mesh::Semantic::TexCoords(uv_set)) {
-                Some(a) => {
-                    let d = src.read_floats(a, &format!("{what} TEXCOORD_{uv_set}"))?;
-                    check_count(&d, "TEXCOORD")?;
-                    Some(d)
+            let read_set = |set: u32| -> Result<Option<crate::accessor::Decoded>> {
+                match attr(json::mesh::Semantic::TexCoords(set)) {
+                    Some(a) => {
+                        let d = src.read_floats(a, &format!("{what} TEXCOORD_{set}"))?;
+                        check_count(&d, &format!("TEXCOORD_{set}"))?;
+                        Ok(Some(d))
+                    }
+                    None => Ok(None),
                 }
-                None => None,
             };
+            let uvs = read_set(uv_set)?;
+            // The input's own sets, untransformed, for writing its materials back unchanged.
+            let raw_sets = (0..materials.texcoord_sets as u32)
+                .map(|set| {
+                    if set == uv_set {
+                        Ok(None)
+                    } else {
+                        read_set(set)
+                    }
+                })
+                .collect::<Result<Vec<_>>>()?;
+            if verts.texcoords.len() < materials.texcoord_sets {
+                verts.texcoords.resize(materials.texcoord_sets, Vec::new());
+            }
             // Influence sets JOINTS_n/WEIGHTS_n for n = 0, 1, ... while both are present:
             // (joint ids, weights), 4 per vertex each.
             let mut influence_sets: Vec<(Vec<u32>, Vec<f32>)> = Vec::new();
@@ -886,6 +1136,15 @@ fn read_meshes(
                 verts
                     .uv
                     .push(tex.map(|t| t.2.transform_point2(uv)).unwrap_or(uv));
+                for (set, raw) in raw_sets.iter().enumerate() {
+                    let d = if set as u32 == uv_set {
+                        uvs.as_ref()
+                    } else {
+                        raw.as_ref()
+                    };
+                    verts.texcoords[set]
+                        .push(d.map(|d| Vec2::from(d.get::<2>(i))).unwrap_or(Vec2::ZERO));
+                }
                 verts.binding.push(binding);
                 let (joints, weights) = if influence_sets.is_empty() {
                     ([0; 4], [1.0, 0.0, 0.0, 0.0])

@@ -20,8 +20,8 @@ use std::path::{Component, Path, PathBuf};
 /// How much reading one input may cost. Each limit has a command-line option to raise it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct InputLimits {
-    /// Bytes of input files read for one tree: the file itself plus every external buffer
-    /// (each external image is capped at this too). Default 1 GiB (`--max-input-size`): the
+    /// Bytes of input files read for one tree: the file itself plus every external buffer and
+    /// every external image a material uses (all passed through, decoded or not). Default 1 GiB (`--max-input-size`): the
     /// 1 M-foliage-triangle `xlarge` sample preset (131 MB) is an eighth of it, and a GLB cannot
     /// exceed 4 GiB anyway.
     pub max_input_bytes: u64,

@@ -57,7 +57,14 @@ pub struct Classification {
 pub struct Vertices {
     pub position: Vec<Vec3>,
     pub normal: Vec<Vec3>,
+    /// The base-colour map's coordinates: the texCoord set its material names, with its
+    /// `KHR_texture_transform` applied (what baking and rendering sample the decoded texture at).
     pub uv: Vec<Vec2>,
+    /// The input's own `TEXCOORD_0`, `TEXCOORD_1` as stored (no transform applied), for writing
+    /// the tree back with its materials unchanged: set `n` is `texcoords[n]`, one entry per
+    /// vertex (zeros where a primitive lacks the set). Sets past `TEXCOORD_0` are kept only when
+    /// some material's texture map uses them; at most [`MAX_TEXCOORD_SETS`] sets.
+    pub texcoords: Vec<Vec<Vec2>>,
     /// Index into `Tree::bindings`.
     pub binding: Vec<u32>,
     /// Palette entries of the binding (skin-local joint indices); unused slots weigh 0.
@@ -98,7 +105,13 @@ pub enum AlphaMode {
     Blend,
 }
 
-/// A material as far as billboards care: colour, texture, cut-out.
+/// How many texture coordinate sets ([`Vertices::texcoords`]) a tree carries at most:
+/// `TEXCOORD_0` and `TEXCOORD_1` (a second set for lightmaps or occlusion is common; more are
+/// rare). A material map naming a later set is written with `texCoord` 0 and a warning.
+pub const MAX_TEXCOORD_SETS: usize = 2;
+
+/// A material as far as billboards care: colour, texture, cut-out; plus, for an imported
+/// material, the input's whole description ([`Material::source`]) so it is written back as is.
 #[derive(Clone, Debug)]
 pub struct Material {
     pub name: String,
@@ -108,6 +121,90 @@ pub struct Material {
     pub alpha_mode: AlphaMode,
     pub alpha_cutoff: f32,
     pub double_sided: bool,
+    /// The input's material, for writing it back unchanged (None: made by frond, such as the
+    /// default material of primitives without one; written from the fields above).
+    pub source: Option<MaterialSource>,
+}
+
+/// A material exactly as the input described it: every field, texture map, extension and
+/// extra. Output materials are written from this, so LOD0 looks like the input (metallic,
+/// roughness, normal, occlusion and emissive maps included), not like frond's summary of it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialSource {
+    /// The material's JSON object as read. In every texture map (each object under a key that
+    /// ends in `Texture`, at any depth: `baseColorTexture`, `normalTexture`, an extension's
+    /// `clearcoatTexture`, ...) `index` is an index into [`Tree::source_textures`], not the
+    /// input's texture index; `texCoord` is at most [`MAX_TEXCOORD_SETS`] − 1.
+    pub json: serde_json::Value,
+    /// Extension names the material uses (its own `extensions` and its maps'), for the output's
+    /// `extensionsUsed`.
+    pub extensions: Vec<String>,
+}
+
+/// A JSON object (a glTF material, texture map, sampler, ...).
+pub type JsonObject = serde_json::Map<String, serde_json::Value>;
+
+/// Calls `f` on every texture map (glTF textureInfo) of a material's JSON, with the key it is
+/// under: each object under a key ending in `Texture`, at any depth, that has an `index` (the
+/// core maps and extensions' maps such as `clearcoatTexture` alike: glTF names them all so).
+/// Stops at the first error.
+pub fn visit_texture_infos<E>(
+    value: &mut serde_json::Value,
+    f: &mut dyn FnMut(&str, &mut JsonObject) -> Result<(), E>,
+) -> Result<(), E> {
+    let serde_json::Value::Object(map) = value else {
+        return Ok(());
+    };
+    for (key, v) in map.iter_mut() {
+        match v {
+            serde_json::Value::Object(info)
+                if key.ends_with("Texture") && info.contains_key("index") =>
+            {
+                f(key, info)?;
+            }
+            serde_json::Value::Object(_) => visit_texture_infos(v, f)?,
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// A texture a material map names, as the input described it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SourceTexture {
+    /// The texture's name and extras as read (`source`, `sampler` and `extensions` left out:
+    /// they are written from the fields below).
+    pub json: serde_json::Value,
+    /// Index into [`Tree::images`].
+    pub image: usize,
+    /// The sampler's JSON object as read (wrap modes, filters, name, extras); None: the input's
+    /// texture had no sampler (repeat, filtering up to the client).
+    pub sampler: Option<serde_json::Value>,
+}
+
+/// An image exactly as the input stored it, written back byte for byte (no re-encoding).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SourceImage {
+    /// The image's name (None when the input gave none).
+    pub name: Option<String>,
+    /// MIME type: the input's `mimeType`, else recognised from the bytes (`image/png`,
+    /// `image/jpeg`).
+    pub mime_type: String,
+    /// The encoded file bytes.
+    pub bytes: Vec<u8>,
+}
+
+impl SourceImage {
+    /// The usual file extension of this image's type (`png`, `jpg`, ...; `bin` when unknown).
+    pub fn extension(&self) -> &'static str {
+        match self.mime_type.as_str() {
+            "image/png" => "png",
+            "image/jpeg" => "jpg",
+            "image/webp" => "webp",
+            "image/ktx2" => "ktx2",
+            _ => "bin",
+        }
+    }
 }
 
 /// A decoded RGBA8 texture (sRGB, straight alpha).
@@ -117,6 +214,8 @@ pub struct Texture {
     pub width: u32,
     pub height: u32,
     pub rgba: Vec<u8>,
+    /// The encoded image it was decoded from (index into [`Tree::images`]), if imported.
+    pub image: Option<usize>,
 }
 
 /// Axis-aligned bounds.
@@ -169,7 +268,12 @@ pub struct Tree {
     pub vertices: Vertices,
     pub triangles: Vec<Triangle>,
     pub materials: Vec<Material>,
+    /// Decoded base-colour textures (what baking, rendering and metrics sample).
     pub textures: Vec<Texture>,
+    /// The textures imported materials' maps name ([`MaterialSource`]), as in the input.
+    pub source_textures: Vec<SourceTexture>,
+    /// The encoded images of [`Tree::source_textures`], as in the input.
+    pub images: Vec<SourceImage>,
     pub classification: Vec<Classification>,
     /// Foliage triangles whose vertices were not all rigidly bound to their chosen bone.
     pub foliage_reassigned: usize,

@@ -83,7 +83,12 @@ pub struct WoodMesh {
     pub positions: Vec<Vec3>,
     /// Rest-pose world normals (unit).
     pub normals: Vec<Vec3>,
+    /// The base-colour map's coordinates ([`crate::Vertices::uv`]: transform applied).
     pub uvs: Vec<Vec2>,
+    /// The input's own texture coordinate sets ([`crate::Vertices::texcoords`], untransformed):
+    /// `texcoords[n]` is `TEXCOORD_n`, one entry per vertex, what the tree's materials are
+    /// written back with. Empty for a tree that carries none (then `uvs` is `TEXCOORD_0`).
+    pub texcoords: Vec<Vec<Vec2>>,
     /// Up to 4 influences per vertex as indices into `Tree::bones` ([`NO_BONE`] only when the
     /// weights are `[1, 0, 0, 0]` and the vertex has no bone), sorted by decreasing weight (ties:
     /// lower bone first); unused slots: bone of slot 0 and weight 0.
@@ -203,6 +208,16 @@ impl WoodMesh {
             positions: Vec::with_capacity(n_out),
             normals: Vec::with_capacity(n_out),
             uvs: Vec::with_capacity(n_out),
+            texcoords: v
+                .texcoords
+                .iter()
+                .map(|set| {
+                    source
+                        .iter()
+                        .map(|&i| set.get(i as usize).copied().unwrap_or(Vec2::ZERO))
+                        .collect()
+                })
+                .collect(),
             bones: Vec::with_capacity(n_out),
             weights: Vec::with_capacity(n_out),
             primitives,
@@ -317,8 +332,8 @@ impl WoodMesh {
     /// search on meshoptimizer's triangle target (the whole piece always passes).
     ///
     /// Guarantees: the result's vertices are a subset of this mesh's vertices with unchanged
-    /// position, normal, UV and skin (so its used bones are a subset of these); every triangle
-    /// keeps its primitive's material; collapsed (repeated-vertex or zero-area) triangles are
+    /// position, normal, UVs (every texture coordinate set) and skin (so its used bones are a
+    /// subset of these); every triangle keeps its primitive's material; collapsed (repeated-vertex or zero-area) triangles are
     /// dropped, empty primitives removed, unused vertices removed and indices compacted
     /// (vertices in order of first use); the distance checks above hold (within 1e-6 × the
     /// mesh extent for rounding); the returned error is the largest of meshoptimizer's
@@ -402,7 +417,10 @@ impl WoodMesh {
         }
         // Compact: vertices in order of first use.
         let mut remap = vec![u32::MAX; nv];
-        let mut out = WoodMesh::default();
+        let mut out = WoodMesh {
+            texcoords: vec![Vec::new(); self.texcoords.len()],
+            ..WoodMesh::default()
+        };
         for (pi, idx) in per_prim.into_iter().enumerate() {
             if idx.is_empty() {
                 continue;
@@ -417,6 +435,9 @@ impl WoodMesh {
                         out.positions.push(self.positions[i]);
                         out.normals.push(self.normals[i]);
                         out.uvs.push(self.uvs[i]);
+                        for (o, set) in out.texcoords.iter_mut().zip(&self.texcoords) {
+                            o.push(set.get(i).copied().unwrap_or(Vec2::ZERO));
+                        }
                         out.bones.push(self.bones[i]);
                         out.weights.push(self.weights[i]);
                     }

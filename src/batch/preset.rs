@@ -14,7 +14,8 @@ pub struct EnginePreset {
     pub name: &'static str,
     /// Largest atlas side written (`--max-atlas`).
     pub max_atlas: u32,
-    /// Textures as PNG files beside the GLBs (`--external-textures`) rather than embedded.
+    /// Textures as files beside the GLBs (`--external-textures`) rather than embedded (atlases
+    /// as PNG, the input's images as they were).
     pub external_textures: bool,
     /// `MSFT_lod` + `MSFT_screencoverage` on the combined file (`--msft-lod`).
     pub msft_lod: bool,

@@ -67,7 +67,8 @@ pub struct LodArgs {
     /// Add MSFT_lod (with MSFT_screencoverage) to the combined file.
     #[arg(long)]
     pub msft_lod: bool,
-    /// Write textures as PNG files next to the GLBs instead of embedding them.
+    /// Write textures as files next to the GLBs instead of embedding them: the atlases as PNG,
+    /// the input's own images with their original bytes and type (`.jpg`, `.png`, ...).
     #[arg(long)]
     pub external_textures: bool,
     /// Print the report (`<name>_report.json`) to stdout.
