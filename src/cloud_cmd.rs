@@ -159,7 +159,7 @@ pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Res
             continue;
         }
         let mat = sink
-            .tree_material(&mut doc, tree, m)
+            .tree_material(&mut doc, tree, m, &Default::default())
             .context("writing a wood material")?;
         // The input's own texture coordinate sets: its material is written as it was.
         let sets = &tree.vertices.texcoords;

@@ -117,7 +117,41 @@ pub fn run_lod(
     for (rel, bytes) in &written.files {
         set.stage(rel, bytes)?;
     }
+    read_back_costs(&set, &mut report)?;
     let json = serde_json::to_vec_pretty(&report).context("serialising the report")?;
     set.commit(&json)?;
     Ok(report)
+}
+
+/// Fills each LOD's cost from its written file (staged, with its external textures), as an
+/// engine would count it (`frond_scene::file_cost`), and its alpha-tested area relative to
+/// LOD0's (the input's leaf cards): the overdraw its foliage asks for.
+fn read_back_costs(set: &OutputSet, report: &mut LodReport) -> Result<()> {
+    // Our own files: no limit is a safety matter here (the input passed its limits).
+    let limits = frond_scene::InputLimits {
+        max_input_bytes: u64::MAX,
+        max_texture_bytes: u64::MAX,
+        max_vertices: u64::MAX,
+    };
+    for entry in &mut report.lods {
+        let path = set
+            .staged_path(&entry.file)
+            .with_context(|| format!("{}: not among the files written", entry.file))?;
+        let cost = frond_scene::file_cost(&path, &limits)
+            .with_context(|| format!("{}: reading back what was written", entry.file))?;
+        entry.cost = Some(cost);
+    }
+    let leaf_area = report
+        .lods
+        .first()
+        .and_then(|l| l.cost.as_ref())
+        .map_or(0.0, |c| c.alpha_tested_area);
+    for entry in &mut report.lods {
+        entry.alpha_tested_area_ratio = entry
+            .cost
+            .as_ref()
+            .filter(|_| leaf_area > 0.0)
+            .map(|c| c.alpha_tested_area / leaf_area);
+    }
+    Ok(())
 }

@@ -169,6 +169,14 @@ impl OutputSet {
         Ok(())
     }
 
+    /// Where a staged file lies until the set is committed (to read back what was written).
+    pub fn staged_path(&self, rel: &str) -> Option<PathBuf> {
+        self.staged
+            .iter()
+            .any(|s| s == rel)
+            .then(|| self.staging.join(rel))
+    }
+
     /// Stages the report (`report_bytes`, the set's last file) and installs the whole set.
     pub fn commit(mut self, report_bytes: &[u8]) -> Result<()> {
         let report = self.report.clone();

@@ -112,7 +112,11 @@ fn a_per_bone_lod_stays_within_its_epsilon_and_a_foreign_copy_is_skipped_with_a_
     let dir = tempfile::tempdir().expect("tmp");
     let out = dir.path().join("lods");
     let sapling = root().join("samples/sapling.glb");
-    let lods = frond_lod(&sapling, &out, &["--lods", "300", "--method", "per-bone"]);
+    let lods = frond_lod(
+        &sapling,
+        &out,
+        &["--lods", "300", "--method", "per-bone", "--no-cost-budgets"],
+    );
     let lod1 = out.join("sapling_LOD1.glb");
     let r = eval(&sapling, &lod1, &["--screen-height", "120"]);
     let eps = lods["lods"][1]["epsilon"].as_f64().expect("epsilon");

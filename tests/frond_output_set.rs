@@ -34,6 +34,9 @@ fn lod(out: &Path, lods: &str, seed: &str, fault: Option<&str>) -> Output {
             lods,
             "--seed",
             seed,
+            // Billboards: their LODs have the most files (mappings beside the GLBs).
+            "--method",
+            "static",
         ])
         .current_dir(root())
         .env("XDG_RUNTIME_DIR", std::env::temp_dir())

@@ -13,6 +13,7 @@ use frond_export::LodInput;
 use frond_export::lod_file::{FileOptions, write_glb};
 use frond_export::vat::{VatFormat, decode_rigid};
 use frond_lod::cloud_build::{build_animated_cloud, sampled_worlds};
+use frond_lod::joint_budget::{BillboardAnimation, JointCap};
 use frond_lod::methods::per_bone::per_bone_clusters;
 use frond_lod::methods::skeleton::build_skeleton_cloud;
 use frond_lod::methods::spectral::{SpectralParams, build_spectral_cloud};
@@ -20,6 +21,7 @@ use frond_lod::methods::static_cloud::static_clusters;
 use frond_lod::motion_budget::{ScreenBudget, apply_budget};
 use frond_lod::{AnimatedBillboardCloud, BuildContext, LodLevel, LoopClock, RigidMotion};
 use frond_render::Renderer;
+use frond_scene::wood::WoodMesh;
 use frond_scene::{ImportOptions, SampleOptions, Sampled, Tree, import, import_bytes, sample};
 use frond_skeleton::{BoneDescriptionKind, SkeletonParams};
 use frond_spectral::description::SpectralKind;
@@ -44,11 +46,57 @@ fn assert_valid(file: &Path) {
     assert_eq!(v["warnings"], 0, "{}: {}", file.display(), v["messages"]);
 }
 
+/// Validator message codes (the first word of each message) of `file`.
+fn message_codes(v: &serde_json::Value) -> Vec<String> {
+    v["messages"]
+        .as_array()
+        .map(|m| {
+            m.iter()
+                .filter_map(|x| x.as_str()?.split_whitespace().next().map(str::to_string))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// No error, and no warning the input itself does not have: LOD files pass the input's
+/// materials through, so a warning about them (a normal map without tangents) is the input's.
+fn assert_valid_like(file: &Path, input: &Path) {
+    let v = validate(file);
+    assert_eq!(v["errors"], 0, "{}: {}", file.display(), v["messages"]);
+    let inherited = message_codes(&validate(input));
+    for code in message_codes(&v) {
+        assert!(
+            inherited.contains(&code),
+            "{}: {code} not in the input's messages: {}",
+            file.display(),
+            v["messages"]
+        );
+    }
+}
+
+/// A joint budget that never binds (the half-pixel merges still apply).
+const UNLIMITED_JOINTS: JointCap = JointCap {
+    joints: usize::MAX,
+    channels: usize::MAX,
+};
+
 #[test]
 fn skin_lods_are_valid_and_reported() {
     let dir = tempfile::tempdir().expect("tmp");
     let out = dir.path().join("o");
-    let report = frond_lod(&sapling(), &out, &["--lods", "300,60"]);
+    // Billboards, at the sizes' ε and texel density (the sample's textures are too small for a
+    // billboard atlas within the cost budgets: the default chain is cards, checked elsewhere).
+    let report = frond_lod(
+        &sapling(),
+        &out,
+        &[
+            "--lods",
+            "300,60",
+            "--method",
+            "skeleton",
+            "--no-cost-budgets",
+        ],
+    );
     let lods = report["lods"].as_array().expect("lods");
     assert_eq!(lods.len(), 3, "LOD0 plus one per --lods entry");
     for (k, l) in lods.iter().enumerate() {
@@ -70,9 +118,8 @@ fn skin_lods_are_valid_and_reported() {
             assert!(l["billboards"].as_u64().expect("count") > 0);
         }
     }
-    // The rule of --method auto.
     assert_eq!(lods[1]["method"], "skeleton-axis-angle");
-    assert_eq!(lods[2]["method"], "static");
+    assert_eq!(lods[2]["method"], "skeleton-axis-angle");
     // Nearer LODs cost more: ε grows and billboards shrink in number with distance.
     let num = |k: usize, key: &str| lods[k][key].as_f64().expect(key);
     assert!(num(2, "epsilon") > num(1, "epsilon"));
@@ -294,13 +341,15 @@ fn spectral_skin_round_trip() {
     .expect("spectral cloud");
     apply_budget(
         &mut cloud,
+        &mut WoodMesh::default(),
         &tree,
         &sampled,
         &ScreenBudget {
             pixel,
             epsilon: pixel,
+            joints: UNLIMITED_JOINTS,
         },
-        &[],
+        BillboardAnimation::Joints,
     );
     assert!(
         cloud
@@ -405,6 +454,8 @@ fn with_context<R>(
         cloud: params,
         scale: tree.bounds.size(),
         seed: params.search.seed,
+        max_billboards: None,
+        max_foliage_triangles: None,
     })
 }
 
@@ -423,13 +474,15 @@ fn build(path: &Path, per_bone: bool, screen: f32) -> Built {
     .expect("cloud");
     apply_budget(
         &mut cloud,
+        &mut WoodMesh::default(),
         &tree,
         &sampled,
         &ScreenBudget {
             pixel,
             epsilon: pixel,
+            joints: UNLIMITED_JOINTS,
         },
-        &[],
+        BillboardAnimation::Joints,
     );
     Built {
         tree,
@@ -450,6 +503,7 @@ fn round_trip(b: &Built) {
             parts: Vec::new(),
             cloud: Some(&b.cloud),
             clips: b.cloud.playable_clips.clone(),
+            image_sizes: &Default::default(),
             vat_uvs: None,
             spectral_uvs: None,
         }],
@@ -608,7 +662,10 @@ fn every_method_and_mode_validates(trees: &[PathBuf], first: usize) {
                 "{name} LOD0"
             );
             for l in &lods[1..] {
-                assert!(l["billboards"].as_u64().expect("billboards") > 0, "{name}");
+                assert!(
+                    l["method"] == "cards" || l["billboards"].as_u64().expect("billboards") > 0,
+                    "{name}"
+                );
                 assert!(
                     l["triangles"].as_u64().expect("triangles")
                         < lods[0]["triangles"].as_u64().expect("triangles"),
@@ -616,7 +673,7 @@ fn every_method_and_mode_validates(trees: &[PathBuf], first: usize) {
                 );
             }
             for f in glbs(&out) {
-                assert_valid(&f);
+                assert_valid_like(&f, input);
             }
         }
     }
@@ -669,7 +726,37 @@ fn bone_bound_lods_keep_every_clip_and_rigid_fit_lods_say_what_they_drop() {
     let dir = tempfile::tempdir().expect("tmp");
     let input = two_clip_sapling(dir.path());
     let out = dir.path().join("o");
-    let report = frond_lod(&input, &out, &["--lods", "300,60"]);
+    // The default chain of a card tree: cards follow their bones, so every clip plays.
+    let cards = frond_lod(&input, &dir.path().join("c"), &["--lods", "300,60"]);
+    for k in 0..3 {
+        assert_eq!(
+            cards["lods"][k]["clips"],
+            serde_json::json!(["Wind", "Gust"]),
+            "LOD{k}"
+        );
+    }
+    // Skeleton at 300 px merges nothing unseen on the sapling: per-bone clouds on the input's
+    // bones, so every clip plays.
+    let skeleton = frond_lod(
+        &input,
+        &dir.path().join("s"),
+        &["--lods", "300", "--method", "skeleton", "--no-cost-budgets"],
+    );
+    assert_eq!(
+        skeleton["lods"][1]["clips"],
+        serde_json::json!(["Wind", "Gust"])
+    );
+    let report = frond_lod(
+        &input,
+        &out,
+        &[
+            "--lods",
+            "300,60",
+            "--method",
+            "static",
+            "--no-cost-budgets",
+        ],
+    );
     let clips = |k: usize| -> Vec<String> {
         report["lods"][k]["clips"]
             .as_array()
@@ -679,10 +766,7 @@ fn bone_bound_lods_keep_every_clip_and_rigid_fit_lods_say_what_they_drop() {
             .collect()
     };
     assert_eq!(clips(0), ["Wind", "Gust"]);
-    // LOD1 is skeleton (auto), which at 300 px merges nothing unseen on the sapling: per-bone
-    // clouds on the input's bones, so every clip plays.
-    assert_eq!(clips(1), ["Wind", "Gust"]);
-    // LOD2 is static: billboards carry motion sampled from the first clip only.
+    // Static billboards carry motion sampled from the first clip only.
     assert_eq!(clips(2), ["Wind"]);
     let dropped = report["lods"][2]["dropped"]["clips"]
         .as_array()
@@ -841,13 +925,15 @@ fn skeleton_round_trip_with_a_resampled_and_collapsed_rig() {
         assert_eq!(report.trunk_on_original_skeleton, clouds.is_some());
         apply_budget(
             &mut b.cloud,
+            &mut WoodMesh::default(),
             &b.tree,
             &b.sampled,
             &ScreenBudget {
                 pixel: b.epsilon,
                 epsilon: b.epsilon,
+                joints: UNLIMITED_JOINTS,
             },
-            &[],
+            BillboardAnimation::Joints,
         );
         assert_eq!(b.cloud.playable_clips, vec![0], "the resampled clip only");
         round_trip(&b);

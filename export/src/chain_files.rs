@@ -228,6 +228,7 @@ fn lod_input<'a>(tree: &'a Tree, lod: &'a ChainLod, m: &Motion, name: String) ->
         parts: lod.parts.iter().collect(),
         cloud: lod.cloud(),
         clips: lod.clips.clone(),
+        image_sizes: &lod.image_sizes,
         vat_uvs: m.vat.as_ref().map(|v| {
             vec![
                 v.piece_uv.clone(),

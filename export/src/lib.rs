@@ -3,6 +3,7 @@
 
 pub mod chain_files;
 pub mod cloud_motion;
+pub mod downscale;
 pub mod error;
 pub mod lod_file;
 pub mod lod_scene;

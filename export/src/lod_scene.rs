@@ -11,6 +11,7 @@
 use std::collections::HashMap;
 
 use frond_lod::AnimatedBillboardCloud;
+use frond_lod::texture_budget::ImageSizes;
 use frond_scene::Rig;
 use frond_scene::Tree;
 use frond_scene::gltf_writer::*;
@@ -36,6 +37,8 @@ pub struct LodInput<'a> {
     pub cloud: Option<&'a AnimatedBillboardCloud>,
     /// Rig clips to write (indices into `rig.clips`).
     pub clips: Vec<usize>,
+    /// Sizes the parts' images are written at, where smaller than the input's.
+    pub image_sizes: &'a ImageSizes,
     /// Billboards leave the skinned mesh and go to a separate unskinned node `<name>_vat`
     /// whose `TEXCOORD_{1+k}` holds `vat_uvs[k][billboard]` on all four corners (vertex
     /// animation textures play them: piece coordinate, pivot).
@@ -275,7 +278,7 @@ pub fn add_lod(
             if prim.indices.is_empty() {
                 continue;
             }
-            let mat = sink.tree_material(doc, lod.tree, prim.material)?;
+            let mat = sink.tree_material(doc, lod.tree, prim.material, lod.image_sizes)?;
             // The input's texture coordinate sets as stored (its materials are written as they
             // were, KHR_texture_transform and texCoord included); `uvs` when it carries none.
             let sets = part.texcoords.len().max(1);

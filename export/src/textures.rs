@@ -11,7 +11,14 @@ use std::collections::HashMap;
 use frond_scene::gltf_writer::{GltfBuilder, MaterialDesc, WriteAlpha, encode_png};
 use frond_scene::{AlphaMode, MaterialSource, Tree, visit_texture_infos};
 
+use frond_lod::texture_budget::{ImageSizes, material_images};
+
+use crate::downscale::downscaled_png;
 use crate::error::ExportError;
+
+/// A tree material as written into one LOD: its index and the sizes of those of its images
+/// that LOD downscales.
+type MaterialKey = (usize, Vec<(usize, [u32; 2])>);
 
 /// Collects textures and materials of one document.
 pub struct TextureSink {
@@ -21,11 +28,12 @@ pub struct TextureSink {
     pub files: Vec<(String, Vec<u8>)>,
     /// Decoded tree texture → document texture (materials without a source).
     tree_textures: HashMap<usize, usize>,
-    /// `Tree::source_textures` entry → document texture.
-    source_textures: HashMap<usize, usize>,
-    /// `Tree::images` entry → document image.
-    source_images: HashMap<usize, usize>,
-    tree_materials: HashMap<usize, usize>,
+    /// (`Tree::source_textures` entry, size written) → document texture.
+    source_textures: HashMap<(usize, Option<[u32; 2]>), usize>,
+    /// (`Tree::images` entry, size written) → document image.
+    source_images: HashMap<(usize, Option<[u32; 2]>), usize>,
+    /// (tree material, sizes of its images) → document material.
+    tree_materials: HashMap<MaterialKey, usize>,
 }
 
 impl TextureSink {
@@ -118,39 +126,57 @@ impl TextureSink {
         doc: &mut GltfBuilder,
         tree: &Tree,
         t: usize,
+        sizes: &ImageSizes,
+        cutoff: Option<f32>,
     ) -> Result<usize, ExportError> {
-        if let Some(&id) = self.source_textures.get(&t) {
-            return Ok(id);
-        }
         let texture = tree
             .source_textures
             .get(t)
             .ok_or(ExportError::NoTexture(t))?;
-        let image = match self.source_images.get(&texture.image) {
+        let size = sizes.get(&texture.image).copied();
+        if let Some(&id) = self.source_textures.get(&(t, size)) {
+            return Ok(id);
+        }
+        let image = match self.source_images.get(&(texture.image, size)) {
             Some(&id) => id,
             None => {
                 let img = tree
                     .images
                     .get(texture.image)
                     .ok_or(ExportError::NoTexture(t))?;
+                // A downscaled image is frond's own PNG; the input's is written as it was.
+                let (bytes, mime, ext, suffix) = match size {
+                    Some(s) => (
+                        downscaled_png(tree, texture.image, s, cutoff)?,
+                        "image/png".to_string(),
+                        "png",
+                        format!("_{}x{}", s[0], s[1]),
+                    ),
+                    None => (
+                        img.bytes.clone(),
+                        img.mime_type.clone(),
+                        img.extension(),
+                        String::new(),
+                    ),
+                };
+                let name = img.name.as_ref().map(|n| format!("{n}{suffix}"));
                 let id = match self.external.clone() {
-                    None => doc.add_image(img.name.as_deref(), &img.bytes, &img.mime_type),
+                    None => doc.add_image(name.as_deref(), &bytes, &mime),
                     Some(prefix) => {
-                        let stem = img
-                            .name
+                        let stem = name
                             .clone()
-                            .unwrap_or_else(|| format!("image{}", texture.image));
-                        let file = self.external_file(&prefix, &stem, img.extension(), &img.bytes);
-                        doc.add_image_uri(img.name.as_deref(), &file, &img.mime_type)
+                            .unwrap_or_else(|| format!("image{}{suffix}", texture.image));
+                        let file = self.external_file(&prefix, &stem, ext, &bytes);
+                        doc.add_image_uri(name.as_deref(), &file, &mime)
                     }
                 };
-                self.source_images.insert(texture.image, id);
+                self.source_images.insert((texture.image, size), id);
                 id
             }
         };
         let sampler = texture.sampler.clone().map(|s| doc.add_sampler(s));
         let id = doc.add_texture_of(image, sampler, texture.json.clone());
-        self.source_textures.insert(t, id);
+        self.source_textures.insert((t, size), id);
         Ok(id)
     }
 
@@ -161,15 +187,19 @@ impl TextureSink {
         tree: &Tree,
         name: &str,
         source: &MaterialSource,
+        sizes: &ImageSizes,
+        cutoff: Option<f32>,
     ) -> Result<usize, ExportError> {
         let mut json = source.json.clone();
-        visit_texture_infos(&mut json, &mut |_, info| {
+        visit_texture_infos(&mut json, &mut |key, info| {
             let t = info
                 .get("index")
                 .and_then(serde_json::Value::as_u64)
                 .ok_or_else(|| ExportError::NoTextureIndex(name.to_string()))?
                 as usize;
-            let id = self.source_texture(doc, tree, t)?;
+            // Only the base colour carries the alpha the material tests.
+            let cutoff = cutoff.filter(|_| key == "baseColorTexture");
+            let id = self.source_texture(doc, tree, t, sizes, cutoff)?;
             info.insert("index".into(), serde_json::json!(id));
             Ok::<(), ExportError>(())
         })?;
@@ -183,14 +213,23 @@ impl TextureSink {
         doc: &mut GltfBuilder,
         tree: &Tree,
         m: usize,
+        sizes: &ImageSizes,
     ) -> Result<usize, ExportError> {
-        if let Some(&id) = self.tree_materials.get(&m) {
+        let key = (
+            m,
+            material_images(tree, m)
+                .into_iter()
+                .filter_map(|j| sizes.get(&j).map(|s| (j, *s)))
+                .collect::<Vec<_>>(),
+        );
+        if let Some(&id) = self.tree_materials.get(&key) {
             return Ok(id);
         }
         let material = tree.materials.get(m).ok_or(ExportError::NoMaterial(m))?;
+        let cutoff = (material.alpha_mode == AlphaMode::Mask).then_some(material.alpha_cutoff);
         if let Some(source) = &material.source {
-            let id = self.source_material(doc, tree, &material.name, source)?;
-            self.tree_materials.insert(m, id);
+            let id = self.source_material(doc, tree, &material.name, source, sizes, cutoff)?;
+            self.tree_materials.insert(key, id);
             return Ok(id);
         }
         let texture = match material.base_color_texture {
@@ -219,7 +258,7 @@ impl TextureSink {
             metallic: 0.0,
             roughness: 1.0,
         });
-        self.tree_materials.insert(m, id);
+        self.tree_materials.insert(key, id);
         Ok(id)
     }
 }

@@ -11,13 +11,18 @@ use frond_billboard::plane_search::SearchParams;
 use frond_render::Renderer;
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{Length, Part, Rig, SampleOptions, Sampled, Tree, sample};
+use glam::Vec3;
+use serde::Serialize;
 
 use crate::contract::{AnimatedBillboardCloud, LoopClock};
 use crate::error::LodError;
+use crate::joint_budget::{AnimationCount, BillboardAnimation, JointCap, count};
 use crate::method::{BuildContext, Foliage, Method, MethodReport};
+use crate::methods::cards::is_card_foliage;
 use crate::motion_budget::{ScreenBudget, apply_budget};
 use crate::report::{DroppedReport, LodEntry, LodTimings};
 use crate::screen_budget::{LodLevel, lod_levels};
+use crate::texture_budget::{ImageSizes, lod_image_sizes, parts_image_bytes};
 
 /// How the static clouds of every LOD are searched and baked (improved-billboard-cloud §2–4).
 #[derive(Clone, Debug, PartialEq)]
@@ -46,10 +51,16 @@ pub struct ChainRequest {
     pub pixel_error: f32,
     /// ε override for experiments (default: the pixel budget in world units).
     pub epsilon: Option<Length>,
-    /// The files animate billboards with spectral coefficients (the auto rule picks spectral
-    /// motion for farther LODs then).
-    pub spectral_animation: bool,
+    /// How the files animate billboards (spectral coefficients: the auto rule picks spectral
+    /// motion for farther LODs; own motions cost joints only as skin joints).
+    pub animation: BillboardAnimation,
     pub seed: u64,
+    /// Most triangles a LOD keeps of the one before it (0.5: half).
+    pub triangle_ratio: f32,
+    /// Hold every LOD to the cost budgets (the monotone rule and the screen-size budgets);
+    /// false builds each at its screen size's ε and texel density alone, for experiments,
+    /// within the hard limits only.
+    pub cost_budgets: bool,
     /// Samples over the loop.
     pub samples: usize,
     /// Clip to sample (None: the first).
@@ -74,6 +85,8 @@ pub struct ChainLod {
     pub parts: Vec<WoodMesh>,
     /// Rig clips to write.
     pub clips: Vec<usize>,
+    /// Sizes the parts' images are written at, where smaller than the input's.
+    pub image_sizes: ImageSizes,
     /// The report line; export fills in the files.
     pub entry: LodEntry,
 }
@@ -83,7 +96,7 @@ impl ChainLod {
     pub fn cloud(&self) -> Option<&AnimatedBillboardCloud> {
         match &self.content {
             LodContent::Foliage(Foliage::Cloud(c)) => Some(c),
-            LodContent::Input(_) => None,
+            LodContent::Input(_) | LodContent::Foliage(Foliage::Cards(_)) => None,
         }
     }
     /// The skeleton the LOD's parts and billboards refer to.
@@ -91,6 +104,7 @@ impl ChainLod {
         match &self.content {
             LodContent::Input(rig) => rig,
             LodContent::Foliage(Foliage::Cloud(c)) => &c.rig,
+            LodContent::Foliage(Foliage::Cards(c)) => &c.rig,
         }
     }
 }
@@ -150,7 +164,9 @@ pub fn build_chain(
     let t_sampled = Instant::now();
     let clock = LoopClock::of(tree, &sampled);
     let wood = part_mesh(tree, Part::Wood);
-    let mut lods = vec![lod0(tree, &wood)];
+    let lod0 = lod0(tree, &wood);
+    let mut spent = Spent::of_lod0(tree, &lod0);
+    let mut lods = vec![lod0];
     for (k, level) in levels.iter().enumerate() {
         progress(&format!(
             "LOD{}: {} px, ε = {:.4}",
@@ -158,8 +174,16 @@ pub fn build_chain(
             level.screen_height,
             level.epsilon
         ));
-        let lod = billboard_lod(renderer, tree, &sampled, &clock, &wood, req, level, k)
-            .map_err(|e| (Some(k + 1), e))?;
+        let budget = if req.cost_budgets {
+            spent.budget_for(level, req.triangle_ratio)
+        } else {
+            LodBudget::hard_limits_only(spent.animation.joints)
+        };
+        let lod = billboard_lod(
+            renderer, tree, &sampled, &clock, &wood, req, level, k, &budget,
+        )
+        .map_err(|e| (Some(k + 1), e))?;
+        spent = spent.after(&lod, req.animation);
         lods.push(lod);
     }
     let t_built = Instant::now();
@@ -171,8 +195,134 @@ pub fn build_chain(
     })
 }
 
+/// Most skin joints of any LOD: 8-bit joint indices (Unreal) and three.js's WebGPU renderer
+/// and Bevy draw no more.
+pub const MAX_JOINTS: usize = 256;
+
+/// Joint budget of a LOD `screen_height` pixels high: one joint per two pixels of height
+/// (60 px: 30 joints, 200 px: 100), the constant chosen so that oak_dense's far LODs meet 32 and
+/// 128 joints (issue 17) while every motion that moves a leaf half a pixel still had a joint
+/// of its own at 600 px on the shared trees. A cap over the half-pixel rule, not a promise.
+pub fn joints_for_screen(screen_height: f32) -> usize {
+    (screen_height / 2.0).ceil().max(1.0) as usize
+}
+
+/// What the previous LOD cost: no later LOD may cost more (the monotone rule; issue 17).
+#[derive(Clone, Copy, Debug)]
+struct Spent {
+    /// LOD0's share of wood in its triangles: each LOD's triangle budget is split so.
+    wood_share: f64,
+    triangles: usize,
+    /// Decoded bytes of every texture the LOD draws with (atlas and wood maps).
+    texture_bytes: usize,
+    animation: AnimationCount,
+}
+
+/// What one billboard LOD may spend, from the hard limits, the previous LOD and its screen
+/// height (in that order of precedence).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct LodBudget {
+    pub triangles: usize,
+    /// Wood triangles (LOD0's share of wood in its triangles).
+    pub wood_triangles: usize,
+    pub joints: usize,
+    pub channels: usize,
+    /// Decoded texture bytes (atlas and wood maps).
+    pub texture_bytes: usize,
+}
+
+/// Atlas texels per squared pixel of screen height: a tree `H` pixels high covers about
+/// `0.6·H²` pixels, and its billboards overlap (depth complexity 5 to 25 on the shared trees at
+/// 200 px), so 16 texels per `H²` is about one texel per pixel of every layer.
+pub const ATLAS_TEXELS_PER_SQUARED_PIXEL: f32 = 16.0;
+
+impl LodBudget {
+    /// No budget but the hard limits (at most `joints` per skin).
+    fn hard_limits_only(joints: usize) -> LodBudget {
+        LodBudget {
+            triangles: usize::MAX,
+            wood_triangles: usize::MAX,
+            joints,
+            channels: usize::MAX,
+            texture_bytes: usize::MAX,
+        }
+    }
+}
+
+impl Spent {
+    fn of_lod0(tree: &Tree, lod0: &ChainLod) -> Spent {
+        let mut animation = meshes_count(lod0);
+        // Hard limit: no engine we target skins more than 256 joints (Unreal's 8-bit indices).
+        animation.joints = animation.joints.min(MAX_JOINTS);
+        Spent {
+            wood_share: lod0.entry.wood_triangles as f64 / lod0.entry.triangles.max(1) as f64,
+            triangles: lod0.entry.triangles,
+            texture_bytes: parts_image_bytes(tree, &lod0.parts, &lod0.image_sizes),
+            animation,
+        }
+    }
+
+    /// The budget of the next LOD at `level`; `ratio` is the most triangles it may keep of
+    /// this one's.
+    fn budget_for(&self, level: &LodLevel, ratio: f32) -> LodBudget {
+        let triangles =
+            ((self.triangles as f64) * f64::from(ratio.clamp(0.0, 1.0))).floor() as usize;
+        let h = level.screen_height;
+        let texels = (ATLAS_TEXELS_PER_SQUARED_PIXEL * h * h) as usize;
+        LodBudget {
+            triangles,
+            wood_triangles: (triangles as f64 * self.wood_share).floor() as usize,
+            joints: self.animation.joints.min(joints_for_screen(h)),
+            channels: self.animation.channels,
+            texture_bytes: self.texture_bytes.min(4 * texels),
+        }
+    }
+
+    /// What has been spent once `lod` is built.
+    fn after(&self, lod: &ChainLod, animation: BillboardAnimation) -> Spent {
+        let mut next = Spent {
+            wood_share: self.wood_share,
+            triangles: lod.entry.triangles,
+            texture_bytes: lod.entry.texture_bytes,
+            animation: self.animation,
+        };
+        let n = match (lod.cloud(), lod.parts.first()) {
+            (Some(c), Some(wood)) => Some(count(c, wood, animation)),
+            _ => Some(meshes_count(lod)),
+        };
+        if let Some(n) = n {
+            next.animation = AnimationCount {
+                joints: self.animation.joints.min(n.joints),
+                channels: self.animation.channels.min(n.channels),
+            };
+        }
+        next
+    }
+}
+
+/// Joints and channels of a LOD drawn with meshes alone (LOD0, a card LOD): one joint per rig
+/// node a vertex follows (and the static joint when a vertex follows none), every clip's
+/// channels on the nodes kept.
+fn meshes_count(lod0: &ChainLod) -> AnimationCount {
+    let rig = lod0.rig();
+    let mut joint = vec![false; rig.nodes.len()];
+    let mut static_joint = false;
+    for p in &lod0.parts {
+        for b in p.used_bones() {
+            match joint.get_mut(b as usize) {
+                Some(j) if b != NO_BONE => *j = true,
+                _ => static_joint = true,
+            }
+        }
+    }
+    AnimationCount {
+        joints: joint.iter().filter(|&&j| j).count() + usize::from(static_joint),
+        channels: rig.clips.iter().map(|c| c.channels.len()).sum(),
+    }
+}
+
 /// The tree's wood or foliage with bones as rig node indices.
-fn part_mesh(tree: &Tree, part: Part) -> WoodMesh {
+pub(crate) fn part_mesh(tree: &Tree, part: Part) -> WoodMesh {
     let mut m = WoodMesh::from_tree_part(tree, part);
     for b in m.bones.iter_mut().flatten() {
         if *b != NO_BONE {
@@ -195,15 +345,6 @@ fn remap(m: &mut WoodMesh, map: &[Option<usize>]) {
     }
 }
 
-/// Rig nodes a mesh needs.
-fn used_nodes(m: &WoodMesh) -> Vec<usize> {
-    m.used_bones()
-        .into_iter()
-        .filter(|&b| b != NO_BONE)
-        .map(|b| b as usize)
-        .collect()
-}
-
 /// An empty report line for a LOD.
 fn entry(method: String, method_reason: String) -> LodEntry {
     LodEntry {
@@ -222,6 +363,9 @@ fn entry(method: String, method_reason: String) -> LodEntry {
         atlas: None,
         texels_per_unit: None,
         density_reduced: false,
+        cost: None,
+        alpha_tested_area_ratio: None,
+        budget: None,
         clips: Vec::new(),
         dropped: DroppedReport::default(),
         vat: None,
@@ -230,6 +374,7 @@ fn entry(method: String, method_reason: String) -> LodEntry {
         vat_equivalent_bytes: None,
         spectral: None,
         skeleton: None,
+        cards: None,
         timings_s: LodTimings::default(),
     }
 }
@@ -249,12 +394,14 @@ fn lod0(tree: &Tree, wood: &WoodMesh) -> ChainLod {
     let mut e = entry("input".into(), "LOD0 is the input tree, rewritten".into());
     e.triangles = wood.triangles() + foliage.triangles();
     e.wood_triangles = wood.triangles();
-    e.texture_bytes = tree.textures.iter().map(|t| t.rgba.len()).sum::<usize>();
+    let parts = vec![wood, foliage];
+    e.texture_bytes = parts_image_bytes(tree, &parts, &ImageSizes::new());
     e.clips = rig.clips.iter().map(|c| c.name.clone()).collect();
     ChainLod {
         clips: (0..rig.clips.len()).collect(),
         content: LodContent::Input(rig),
-        parts: vec![wood, foliage],
+        parts,
+        image_sizes: ImageSizes::new(),
         entry: e,
     }
 }
@@ -300,7 +447,42 @@ fn dropped_clip_reason(cloud: &AnimatedBillboardCloud, tree: &Tree, c: usize) ->
     )
 }
 
-/// Billboard LOD `k + 1`: the method's foliage, the wood simplified, the motion budget applied.
+/// The side of a square atlas of at most `texels` texels (a multiple of 4, at least 64).
+fn atlas_side(texels: usize) -> u32 {
+    let side = (texels as f64).sqrt().floor() as u32;
+    (side / 4 * 4).clamp(64, frond_billboard::bake::MAX_ATLAS_SIDE)
+}
+
+/// Atlas texels a billboard needs at least: an 8×8 texture with 2 texels of padding around
+/// it (144) less what packing shares (the rule keeps a far LOD's atlas from being nothing but
+/// padding).
+const TEXELS_PER_BILLBOARD: usize = 128;
+
+/// Steps of a doubling wood error tried before the wood is left over its share.
+const WOOD_TRIES: usize = 16;
+
+/// `wood` simplified within `max_error`, then with a doubling error while it has more than
+/// `max_triangles`. Returns the mesh and the error it was simplified with.
+fn simplify_wood(wood: &WoodMesh, max_error: f32, max_triangles: usize) -> (WoodMesh, f32) {
+    let mut error = max_error;
+    let (mut mesh, _) = wood.simplify(error);
+    let extent = wood.positions.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let diagonal = (extent.1 - extent.0).length();
+    for _ in 0..WOOD_TRIES {
+        if mesh.triangles() <= max_triangles || diagonal.is_nan() || diagonal <= 0.0 {
+            break;
+        }
+        error = (error.max(1e-4 * diagonal) * 2.0).min(diagonal);
+        mesh = wood.simplify(error).0;
+    }
+    (mesh, error)
+}
+
+/// Billboard LOD `k + 1`: the wood simplified to its share of the budget, the method's
+/// foliage within the rest, the motion budget applied within its joints and channels.
 #[expect(
     clippy::too_many_arguments,
     reason = "the chain's shared state (tree, its loop, clock, wood) and the LOD's own"
@@ -314,9 +496,24 @@ fn billboard_lod(
     req: &ChainRequest,
     level: &LodLevel,
     k: usize,
+    lod_budget: &LodBudget,
 ) -> Result<ChainLod, LodError> {
-    let (method, reason) = req.method.pick(k, req.spectral_animation);
-    let params = cloud_params(req, level, k);
+    let (method, reason) = req.method.pick(
+        k,
+        req.animation == BillboardAnimation::Spectral,
+        is_card_foliage(tree),
+    );
+    let t0 = Instant::now();
+    let (wood_lod, wood_error) = simplify_wood(wood, level.wood_error, lod_budget.wood_triangles);
+    let t1 = Instant::now();
+    let wood_sizes = lod_image_sizes(tree, std::slice::from_ref(&wood_lod), level.texels_per_unit);
+    let wood_texture_bytes = parts_image_bytes(tree, std::slice::from_ref(&wood_lod), &wood_sizes);
+    let mut params = cloud_params(req, level, k);
+    let atlas_bytes = lod_budget.texture_bytes.saturating_sub(wood_texture_bytes);
+    params.bake.max_atlas = params.bake.max_atlas.min(atlas_side(atlas_bytes / 4));
+    // Two triangles per billboard, and room in the atlas for each (a small texture, padded).
+    let max_billboards = (lod_budget.triangles.saturating_sub(wood_lod.triangles()) / 2)
+        .min(atlas_bytes / 4 / TEXELS_PER_BILLBOARD);
     let ctx = BuildContext {
         renderer,
         tree,
@@ -327,28 +524,150 @@ fn billboard_lod(
         cloud: &params,
         scale: tree.bounds.diagonal(),
         seed: req.seed.wrapping_add(k as u64),
+        max_billboards: Some(max_billboards.max(1)),
+        max_foliage_triangles: Some(lod_budget.triangles.saturating_sub(wood_lod.triangles())),
     };
     let built = method.build(&ctx)?;
-    let Foliage::Cloud(mut cloud) = built.foliage;
-    let t0 = Instant::now();
-    let (mut wood_lod, _achieved) = wood.simplify(level.wood_error);
-    let t1 = Instant::now();
-    let budget = ScreenBudget {
-        pixel: level.pixel,
-        epsilon: level.epsilon,
-    };
-    let (map, dropped) = apply_budget(&mut cloud, tree, sampled, &budget, &used_nodes(&wood_lod));
-    remap(&mut wood_lod, &map);
-    let t2 = Instant::now();
-    let clips = cloud.playable_clips.clone();
     let mut e = entry(method.name().name().into(), reason.into());
     e.screen_height = Some(level.screen_height);
     e.pixel = Some(level.pixel);
     e.epsilon = Some(level.epsilon);
+    e.budget = Some(*lod_budget);
+    e.timings_s.wood = (t1 - t0).as_secs_f64();
+    e.dropped.wood_triangles = wood.triangles() - wood_lod.triangles().min(wood.triangles());
+    e.dropped.wood_error = wood_error;
+    let budget = ScreenBudget {
+        pixel: level.pixel,
+        epsilon: level.epsilon,
+        joints: JointCap {
+            joints: lod_budget.joints,
+            channels: lod_budget.channels,
+        },
+    };
+    let shared = LodShared {
+        tree,
+        level,
+        sampled,
+        clock,
+        animation: req.animation,
+    };
+    match built.foliage {
+        Foliage::Cloud(cloud) => Ok(cloud_lod(
+            &shared,
+            cloud,
+            wood_lod,
+            budget,
+            built.timings,
+            built.report,
+            e,
+        )),
+        Foliage::Cards(cards) => Ok(card_lod(&shared, cards, wood_lod, &budget, e)),
+    }
+}
+
+/// What every LOD of a chain shares.
+struct LodShared<'a> {
+    tree: &'a Tree,
+    level: &'a LodLevel,
+    sampled: &'a Sampled,
+    clock: &'a LoopClock,
+    animation: BillboardAnimation,
+}
+
+/// A card LOD: the thinned cards and the wood in one skinned mesh, the joint budget applied.
+fn card_lod(
+    shared: &LodShared,
+    mut cards: crate::methods::cards::CardFoliage,
+    wood_lod: WoodMesh,
+    budget: &ScreenBudget,
+    mut e: LodEntry,
+) -> ChainLod {
+    let t0 = Instant::now();
+    let wood_triangles = wood_lod.triangles();
+    let mut mesh = wood_lod;
+    mesh.append(&cards.mesh);
+    // The budget works on a cloud: one without billboards carries the rig and the clock.
+    let mut carrier = AnimatedBillboardCloud {
+        method: "cards".into(),
+        epsilon: budget.epsilon,
+        billboards: Vec::new(),
+        atlas: Default::default(),
+        texels_per_unit: 0.0,
+        density_reduced: false,
+        rig: std::mem::take(&mut cards.rig),
+        rig_resampled: false,
+        clock: shared.clock.clone(),
+        playable_clips: Vec::new(),
+    };
+    carrier.update_playable_clips();
+    let dropped = apply_budget(
+        &mut carrier,
+        &mut mesh,
+        shared.tree,
+        shared.sampled,
+        budget,
+        shared.animation,
+    );
+    cards.rig = carrier.rig;
+    let clips = carrier.playable_clips;
+    e.triangles = mesh.triangles();
+    e.wood_triangles = wood_triangles;
+    let image_sizes = lod_image_sizes(
+        shared.tree,
+        std::slice::from_ref(&mesh),
+        shared.level.texels_per_unit,
+    );
+    e.texture_bytes = parts_image_bytes(shared.tree, std::slice::from_ref(&mesh), &image_sizes);
+    e.clips = clips
+        .iter()
+        .map(|&c| cards.rig.clips[c].name.clone())
+        .collect();
+    e.dropped.budget = dropped;
+    e.cards = Some(cards.report.clone());
+    e.timings_s.budget = t0.elapsed().as_secs_f64();
+    ChainLod {
+        content: LodContent::Foliage(Foliage::Cards(cards)),
+        parts: vec![mesh],
+        clips,
+        image_sizes,
+        entry: e,
+    }
+}
+
+/// A billboard LOD: the method's cloud with the motion budget applied, and the wood.
+fn cloud_lod(
+    shared: &LodShared,
+    mut cloud: AnimatedBillboardCloud,
+    mut wood_lod: WoodMesh,
+    mut budget: ScreenBudget,
+    timings: crate::cloud_build::BuildTimings,
+    report: MethodReport,
+    mut e: LodEntry,
+) -> ChainLod {
+    let (tree, sampled) = (shared.tree, shared.sampled);
+    let t2 = Instant::now();
+    budget.epsilon = cloud.epsilon;
+    let dropped = apply_budget(
+        &mut cloud,
+        &mut wood_lod,
+        tree,
+        sampled,
+        &budget,
+        shared.animation,
+    );
+    let t3 = Instant::now();
+    let clips = cloud.playable_clips.clone();
+    let image_sizes = lod_image_sizes(
+        tree,
+        std::slice::from_ref(&wood_lod),
+        shared.level.texels_per_unit,
+    );
+    e.epsilon = Some(cloud.epsilon);
     e.triangles = wood_lod.triangles() + 2 * cloud.billboards.len();
     e.wood_triangles = wood_lod.triangles();
     e.billboards = cloud.billboards.len();
-    e.texture_bytes = cloud.atlas.color.len();
+    e.texture_bytes = cloud.atlas.color.len()
+        + parts_image_bytes(tree, std::slice::from_ref(&wood_lod), &image_sizes);
     e.atlas = Some([cloud.atlas.width, cloud.atlas.height]);
     e.texels_per_unit = Some(cloud.texels_per_unit);
     e.density_reduced = cloud.density_reduced;
@@ -356,30 +675,23 @@ fn billboard_lod(
         .iter()
         .map(|&c| cloud.rig.clips[c].name.clone())
         .collect();
-    e.dropped = DroppedReport {
-        budget: dropped,
-        wood_triangles: wood.triangles() - wood_lod.triangles().min(wood.triangles()),
-        wood_error: level.wood_error,
-        clips: (0..cloud.rig.clips.len())
-            .filter(|c| !clips.contains(c))
-            .map(|c| dropped_clip_reason(&cloud, tree, c))
-            .collect(),
-    };
-    match built.report {
+    e.dropped.budget = dropped;
+    e.dropped.clips = (0..cloud.rig.clips.len())
+        .filter(|c| !clips.contains(c))
+        .map(|c| dropped_clip_reason(&cloud, tree, c))
+        .collect();
+    match report {
         MethodReport::None => {}
         MethodReport::Spectral(r) => e.spectral = Some(r),
         MethodReport::Skeleton(r) => e.skeleton = Some(r),
     }
-    e.timings_s = LodTimings {
-        build: built.timings,
-        budget: (t2 - t1).as_secs_f64(),
-        wood: (t1 - t0).as_secs_f64(),
-        export: 0.0,
-    };
-    Ok(ChainLod {
+    e.timings_s.build = timings;
+    e.timings_s.budget = (t3 - t2).as_secs_f64();
+    ChainLod {
         content: LodContent::Foliage(Foliage::Cloud(cloud)),
         parts: vec![wood_lod],
         clips,
+        image_sizes,
         entry: e,
-    })
+    }
 }

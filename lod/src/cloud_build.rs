@@ -10,9 +10,9 @@ use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use frond_billboard::bake::bake_cloud;
+use frond_billboard::bake::{BakeError, MAX_ATLAS_SIDE, bake_cloud};
 use frond_billboard::cloud::{CloudError, fit_quad};
-use frond_billboard::plane_search::{search_planes, valid_for_plane};
+use frond_billboard::plane_search::{PlaneSearch, search_planes, valid_for_plane};
 use frond_billboard::{Quad, TriangleSoup};
 use frond_scene::Rig;
 use frond_scene::rigid_fit::rigid_fit;
@@ -98,7 +98,7 @@ pub fn build_animated_cloud(
     let t1 = Instant::now();
     timings.reference_pose = (t1 - t0).as_secs_f64();
 
-    let per_cluster = cluster_quads(ctx, &soup, clusters);
+    let (per_cluster, epsilon) = cluster_quads(ctx, &soup, clusters);
     let t2 = Instant::now();
     timings.plane_search = (t2 - t1).as_secs_f64();
 
@@ -118,15 +118,26 @@ pub fn build_animated_cloud(
         return Err(CloudError::Empty);
     }
     let draw = scene_from_positions(tree, &sampled.average, None, TreeParts::Foliage);
-    let baked = bake_cloud(
-        renderer,
-        &soup,
-        &draw.materials,
-        &draw.textures,
-        &quads,
-        &drawn,
-        &params.bake,
-    )?;
+    // The atlas budget holds as many billboards as the chain allowed for it; one that a
+    // method could not fit (too few texels even at the smallest texture per quad) doubles
+    // until it fits, and the report shows it over its texture budget.
+    let mut bake_params = params.bake.clone();
+    let baked = loop {
+        match bake_cloud(
+            renderer,
+            &soup,
+            &draw.materials,
+            &draw.textures,
+            &quads,
+            &drawn,
+            &bake_params,
+        ) {
+            Err(BakeError::AtlasTooSmall { .. }) if bake_params.max_atlas < MAX_ATLAS_SIDE => {
+                bake_params.max_atlas = (bake_params.max_atlas * 2).min(MAX_ATLAS_SIDE);
+            }
+            other => break other?,
+        }
+    };
     let t3 = Instant::now();
     timings.bake = (t3 - t2).as_secs_f64();
 
@@ -134,6 +145,7 @@ pub fn build_animated_cloud(
     timings.motion_fit = t3.elapsed().as_secs_f64();
     let mut cloud = AnimatedBillboardCloud {
         method: method.to_string(),
+        epsilon,
         billboards,
         atlas: baked.atlas,
         texels_per_unit: baked.texels_per_unit,
@@ -216,12 +228,14 @@ fn reference_soup(
 
 /// One plane search per cluster, each with its own seed derived from the cluster's index:
 /// every cluster's quads with the triangles they replace and those drawn on them.
-fn cluster_quads(
+/// Searches the planes of every cluster at `epsilon` (in parallel).
+fn search_clusters(
     ctx: &BuildContext,
     soup: &TriangleSoup,
     clusters: &[FoliageCluster],
-) -> Vec<Vec<ClusterQuad>> {
-    let (params, scale) = (ctx.cloud, ctx.scale);
+    epsilon: f32,
+    max_planes: &(dyn Fn(usize) -> Option<usize> + Sync),
+) -> Vec<(TriangleSoup, PlaneSearch)> {
     clusters
         .par_iter()
         .enumerate()
@@ -231,19 +245,134 @@ fn cluster_quads(
                 uvs: cluster.members.iter().map(|&k| soup.uvs[k]).collect(),
                 material: cluster.members.iter().map(|&k| soup.material[k]).collect(),
             };
-            let mut sp = params.search.clone();
+            let mut sp = ctx.cloud.search.clone();
+            sp.epsilon = epsilon;
+            sp.max_planes = max_planes(ci);
             sp.seed = sp
                 .seed
                 .wrapping_add((ci as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-            let search = search_planes(&sub, &sp, scale);
+            let search = search_planes(&sub, &sp, ctx.scale);
+            (sub, search)
+        })
+        .collect()
+}
+
+/// Plane searches tried to fit the billboard budget before the plane count is capped outright.
+const EPSILON_TRIES: usize = 6;
+
+/// The planes of every cluster within the LOD's billboard budget
+/// ([`BuildContext::max_billboards`]): searched at the LOD's ε; while there are too many, ε
+/// grows by `(planes / budget)^1.5` (the plane count falls roughly as ε^-⅔ on the shared
+/// trees) until they fit, then is bisected (geometrically) between the last ε with too many
+/// planes and the smallest that fits, for [`EPSILON_TRIES`] searches in all: the smallest ε
+/// found that fits wins. If none fits, each cluster keeps its share of the budget (largest
+/// remainders, at least one plane) and joins its leftovers to its nearest plane. Returns the
+/// searches and the ε they used.
+fn budgeted_search(
+    ctx: &BuildContext,
+    soup: &TriangleSoup,
+    clusters: &[FoliageCluster],
+) -> (Vec<(TriangleSoup, PlaneSearch)>, f32) {
+    let epsilon = ctx.cloud.search.epsilon;
+    let planes =
+        |r: &[(TriangleSoup, PlaneSearch)]| r.iter().map(|(_, s)| s.clusters.len()).sum::<usize>();
+    let first = search_clusters(ctx, soup, clusters, epsilon, &|_| None);
+    let Some(budget) = ctx.max_billboards else {
+        return (first, epsilon);
+    };
+    let budget = budget.max(clusters.len());
+    let mut over = (epsilon, planes(&first));
+    if over.1 <= budget {
+        return (first, epsilon);
+    }
+    let mut fits: Option<(f32, Vec<(TriangleSoup, PlaneSearch)>)> = None;
+    let mut last = first;
+    for _ in 1..EPSILON_TRIES {
+        let next = match &fits {
+            None => {
+                let grow = (over.1 as f32 / budget as f32).powf(1.5).max(1.05);
+                (over.0.max(1e-6 * ctx.scale) * grow).min(ctx.scale)
+            }
+            Some((hi, _)) => (over.0 * hi).sqrt(),
+        };
+        let result = search_clusters(ctx, soup, clusters, next, &|_| None);
+        let n = planes(&result);
+        if n <= budget {
+            fits = Some((next, result));
+        } else {
+            over = (next, n);
+            last = result;
+        }
+    }
+    if let Some((e, result)) = fits {
+        return (result, e);
+    }
+    let counts: Vec<usize> = last.iter().map(|(_, s)| s.clusters.len()).collect();
+    let shares = proportional_shares(&counts, budget);
+    let e = over.0;
+    (
+        search_clusters(ctx, soup, clusters, e, &|ci| Some(shares[ci])),
+        e,
+    )
+}
+
+/// Splits `budget` over clusters in proportion to `counts` (largest remainders), each at least
+/// one and at most its count.
+fn proportional_shares(counts: &[usize], budget: usize) -> Vec<usize> {
+    let total: usize = counts.iter().sum();
+    let spare = budget.saturating_sub(counts.len());
+    let exact: Vec<f64> = counts
+        .iter()
+        .map(|&c| {
+            (c.saturating_sub(1)) as f64 * spare as f64
+                / total.saturating_sub(counts.len()).max(1) as f64
+        })
+        .collect();
+    let mut share: Vec<usize> = exact.iter().map(|e| 1 + e.floor() as usize).collect();
+    let mut left = budget.saturating_sub(share.iter().sum());
+    let mut order: Vec<usize> = (0..counts.len()).collect();
+    order.sort_by(|&a, &b| {
+        (exact[b] - exact[b].floor())
+            .total_cmp(&(exact[a] - exact[a].floor()))
+            .then(a.cmp(&b))
+    });
+    for i in order {
+        if left == 0 {
+            break;
+        }
+        if share[i] < counts[i] {
+            share[i] += 1;
+            left -= 1;
+        }
+    }
+    share
+        .iter()
+        .zip(counts)
+        .map(|(&s, &c)| s.min(c.max(1)))
+        .collect()
+}
+
+/// The quads of every cluster within the billboard budget, each with the triangles it
+/// replaces and those it bakes; and the ε the planes were searched with.
+fn cluster_quads(
+    ctx: &BuildContext,
+    soup: &TriangleSoup,
+    clusters: &[FoliageCluster],
+) -> (Vec<Vec<ClusterQuad>>, f32) {
+    let (searches, epsilon) = budgeted_search(ctx, soup, clusters);
+    let increased_density = ctx.cloud.increased_density;
+    let quads = clusters
+        .par_iter()
+        .zip(searches.par_iter())
+        .map(|(cluster, (sub, search))| {
             search
                 .clusters
                 .iter()
                 .map(|c| {
-                    let quad = fit_quad(&sub, &c.plane, &c.triangles);
+                    let quad = fit_quad(sub, &c.plane, &c.triangles);
                     let own: Vec<usize> = c.triangles.iter().map(|&t| cluster.members[t]).collect();
-                    let drawn = if params.increased_density {
-                        let mut m: Vec<usize> = valid_for_plane(&sub, &c.plane, sp.epsilon)
+                    let drawn = if increased_density {
+                        let mut m: Vec<usize> = valid_for_plane(sub, &c.plane, epsilon)
                             .into_iter()
                             .map(|t| cluster.members[t])
                             .collect();
@@ -258,7 +387,8 @@ fn cluster_quads(
                 })
                 .collect()
         })
-        .collect()
+        .collect();
+    (quads, epsilon)
 }
 
 /// The billboards of `quads`: each follows its cluster's driver (a node, or the rigid fit of

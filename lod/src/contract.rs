@@ -195,6 +195,9 @@ pub struct AnimatedBillboard {
 pub struct AnimatedBillboardCloud {
     /// How the billboards were made (`per-bone`, `static`, ...).
     pub method: String,
+    /// Plane tolerance its planes were searched with (world units): the LOD's ε, or wider
+    /// when its billboard budget asked for fewer planes.
+    pub epsilon: f32,
     pub billboards: Vec<AnimatedBillboard>,
     /// Colour (and normal) atlas all billboards sample.
     pub atlas: Atlas,

@@ -8,11 +8,13 @@ pub mod chain;
 pub mod cloud_build;
 pub mod contract;
 pub mod error;
+pub mod joint_budget;
 pub mod method;
 pub mod methods;
 pub mod motion_budget;
 pub mod report;
 pub mod screen_budget;
+pub mod texture_budget;
 
 use frond_skeleton::BoneDescriptionKind;
 use frond_spectral::description::SpectralKind;

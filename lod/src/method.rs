@@ -19,6 +19,7 @@ use frond_spectral::description::SpectralKind;
 use crate::cloud_build::BuildTimings;
 use crate::contract::{AnimatedBillboardCloud, LoopClock};
 use crate::error::LodError;
+use crate::methods::cards::Cards;
 use crate::methods::per_bone::PerBone;
 use crate::methods::static_cloud::StaticCloud;
 use crate::screen_budget::LodLevel;
@@ -42,6 +43,11 @@ pub struct BuildContext<'a> {
     pub scale: f32,
     /// This LOD's seed (the run's seed plus the LOD index).
     pub seed: u64,
+    /// Most billboards the LOD may have (its triangle budget less the wood's, halved): the
+    /// plane search widens ε until its planes fit ([`crate::cloud_build`]).
+    pub max_billboards: Option<usize>,
+    /// Most foliage triangles the LOD may have (its triangle budget less the wood's).
+    pub max_foliage_triangles: Option<usize>,
 }
 
 /// A LOD's foliage as a method built it. Today every method bakes an animated billboard cloud;
@@ -51,6 +57,8 @@ pub struct BuildContext<'a> {
 pub enum Foliage {
     /// Billboards baked into one atlas, each moving rigidly (spec §1.4).
     Cloud(AnimatedBillboardCloud),
+    /// The input's own leaf cards, thinned and skinned as in the input.
+    Cards(crate::methods::cards::CardFoliage),
 }
 
 /// What the method did, for the report.
@@ -136,6 +144,7 @@ pub enum Method {
     Static(StaticCloud),
     Spectral(SpectralOptions),
     Skeleton(SkeletonOptions),
+    Cards(Cards),
 }
 
 impl Method {
@@ -149,6 +158,7 @@ impl Method {
             MethodName::Skeleton(kind) => Method::Skeleton(SkeletonOptions { kind, ..skeleton }),
             MethodName::PerBone => Method::PerBone(PerBone),
             MethodName::Static => Method::Static(StaticCloud),
+            MethodName::Cards => Method::Cards(Cards),
         }
     }
 
@@ -160,22 +170,27 @@ impl Method {
             Method::Static(m) => m.name(),
             Method::Spectral(m) => m.name(),
             Method::Skeleton(m) => m.name(),
+            Method::Cards(m) => m.name(),
         }
     }
 
     /// The method that builds LOD `lod_index` (0 = LOD1) and why: itself, or what the auto
-    /// rule picks. `spectral_animation`: the files animate with spectral coefficients.
+    /// rule picks. `spectral_animation`: the files animate with spectral coefficients;
+    /// `card_foliage`: the tree's foliage is single leaf cards
+    /// ([`crate::methods::cards::is_card_foliage`]).
     pub fn pick(
         &self,
         lod_index: usize,
         spectral_animation: bool,
+        card_foliage: bool,
     ) -> (&dyn ClusteringMethod, &'static str) {
         match self {
             Method::Auto { spectral, skeleton } => {
-                let (name, reason) = auto_method(lod_index, spectral_animation);
+                let (name, reason) = auto_method(lod_index, spectral_animation, card_foliage);
                 let m: &dyn ClusteringMethod = match name {
                     MethodName::Skeleton(_) => skeleton,
                     MethodName::Spectral(_) => spectral,
+                    MethodName::Cards => &Cards,
                     _ => &StaticCloud,
                 };
                 (m, reason)
@@ -184,6 +199,7 @@ impl Method {
             Method::Static(m) => (m, GIVEN),
             Method::Spectral(m) => (m, GIVEN),
             Method::Skeleton(m) => (m, GIVEN),
+            Method::Cards(m) => (m, GIVEN),
         }
     }
 }
@@ -226,6 +242,8 @@ pub enum MethodName {
     Auto,
     PerBone,
     Static,
+    /// The input's own cards, thinned (not a clustering: no billboards).
+    Cards,
     /// Spectral clustering (SCA) with one description type.
     Spectral(SpectralKind),
     /// Skeleton simplification (SBCS) with one bone description type.
@@ -238,6 +256,7 @@ pub const METHOD_NAMES: &[(&str, MethodName)] = &[
     ("auto", MethodName::Auto),
     ("per-bone", MethodName::PerBone),
     ("static", MethodName::Static),
+    ("cards", MethodName::Cards),
     ("spectral", MethodName::Spectral(crate::DEFAULT_SPECTRAL)),
     ("spectral-naive", MethodName::Spectral(SpectralKind::Naive)),
     (
@@ -270,6 +289,7 @@ impl MethodName {
             MethodName::Auto => "auto",
             MethodName::PerBone => "per-bone",
             MethodName::Static => "static",
+            MethodName::Cards => "cards",
             MethodName::Spectral(SpectralKind::Naive) => "spectral-naive",
             MethodName::Spectral(SpectralKind::DominatingAxis) => "spectral-dominating-axis",
             MethodName::Spectral(SpectralKind::AxisPhase) => "spectral-axis-phase",
@@ -281,17 +301,31 @@ impl MethodName {
     }
 }
 
-/// The fixed rule of `--method auto`, from the issue-5, -6 and -7 sweeps (docs/experiments.md
-/// §6–8): the nearest LOD gets `skeleton` (per-bone clouds, sibling bones merged only where
-/// no leaf moves a pixel and none leaves its branch by half a pixel: per-bone's exact-looking
-/// motion with fewer clouds, and the same LOD as per-bone where nothing merges unseen);
-/// every farther LOD `static` (one cloud, fewest billboards: at matched billboard counts
-/// its animated colour error beat every spectral type on the shared trees), except under
-/// `--animation spectral`, whose compact coefficient texture only spectral motion has: there
-/// farther LODs get `spectral-axis-phase` (of the three types, the lowest colour and motion
-/// errors). Returns the method and the reason written to the report.
-pub fn auto_method(lod_index: usize, spectral_animation: bool) -> (MethodName, &'static str) {
-    if lod_index == 0 {
+/// The fixed rule of `--method auto`. A tree whose foliage is single leaf cards gets `cards`
+/// at every LOD (issue 17: the input's own cards, thinned to the LOD's triangle budget, on its
+/// leaf texture downscaled to the LOD's texel density). Measured with the cost budgets on
+/// (`frond lod TREE --method M`, `frond eval TREE LODk --screen-height H`, coverage error
+/// at 600/200/60 px): sapling cards 0.15/0.24/0.29 against billboards (skeleton, static)
+/// 0.27/0.23/0.83; oak_dense cards 0.15/0.23/0.45 against 0.04/0.63/0.65, the 600 px
+/// billboards at 19.4 MB of texture and a file larger than the input's where the cards take
+/// 0.07 MB. Other foliage (leaf clusters, where thinning would punch holes) keeps the rule of
+/// the issue-5 to -7 sweeps (docs/experiments.md §6–8): the nearest LOD `skeleton`, every
+/// farther one `static`, or `spectral-axis-phase` under `--animation spectral`, whose
+/// coefficient texture only spectral motion has. Under `--animation spectral` or VAT cards are
+/// still picked: they carry no motion of their own. Returns the method and the reason written
+/// to the report.
+pub fn auto_method(
+    lod_index: usize,
+    spectral_animation: bool,
+    card_foliage: bool,
+) -> (MethodName, &'static str) {
+    if card_foliage {
+        (
+            MethodName::Cards,
+            "auto: foliage of single leaf cards -> cards (the input's cards thinned to the \
+             triangle budget, its leaf texture at the LOD's texel density: no atlas)",
+        )
+    } else if lod_index == 0 {
         (
             MethodName::Skeleton(crate::DEFAULT_SKELETON),
             "auto: nearest LOD -> skeleton (per-bone clouds; sibling bones share a rotation only \
@@ -344,9 +378,13 @@ mod tests {
         assert!(ignored_options(MethodName::Auto, true, false, true).is_empty());
         let m = Method::new(MethodName::Auto, spectral, SkeletonOptions::default());
         assert_eq!(m.name(), MethodName::Auto);
-        let (picked, _) = m.pick(1, true);
+        let (picked, _) = m.pick(1, true, false);
         assert_eq!(picked.name(), MethodName::Spectral(SpectralKind::AxisPhase));
-        let (picked, _) = m.pick(0, false);
+        let (picked, _) = m.pick(0, false, false);
         assert_eq!(picked.name(), MethodName::Skeleton(crate::DEFAULT_SKELETON));
+        for k in 0..3 {
+            let (picked, _) = m.pick(k, k == 1, true);
+            assert_eq!(picked.name(), MethodName::Cards);
+        }
     }
 }

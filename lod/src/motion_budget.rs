@@ -11,7 +11,10 @@ use serde::Serialize;
 
 use crate::cloud_build::sampled_worlds;
 use crate::contract::{AnimatedBillboardCloud, RigidMotion};
-use frond_scene::rigid_fit::rigid_fit;
+use crate::joint_budget::{
+    BillboardAnimation, JointCap, JointMerges, RigFrames, apply_joint_budget, fit_to_node,
+};
+use frond_scene::wood::{NO_BONE, WoodMesh};
 
 /// What one LOD can show.
 #[derive(Clone, Copy, Debug)]
@@ -21,6 +24,8 @@ pub struct ScreenBudget {
     /// Plane tolerance ε of the LOD (world units): a triangle's centre must stay within it of
     /// its billboard's plane in every sample.
     pub epsilon: f32,
+    /// Joints and channels the LOD may have.
+    pub joints: JointCap,
 }
 
 /// What was removed, and why (reported per LOD).
@@ -46,6 +51,8 @@ pub struct Dropped {
     /// Cosine terms of spectral motions whose amplitudes sum to under a quarter pixel per
     /// billboard (applied first, so with the half-pixel rules no corner strays a pixel).
     pub frequencies_under_quarter_pixel: usize,
+    /// Rig nodes collapsed and own motions attached to rig nodes by the joint budget.
+    pub joints: JointMerges,
 }
 
 /// Covered fraction of a billboard's texture (texels passing the alpha test).
@@ -76,26 +83,20 @@ fn covered_fraction(cloud: &AnimatedBillboardCloud, i: usize) -> f32 {
     covered as f32 / ((x1 - x0) * (y1 - y0)) as f32
 }
 
-/// The transform that carries reference-pose points of a billboard following `node` (None:
-/// the world) to sample `s`.
-fn carry(node: Option<usize>, worlds: &[Vec<Mat4>], rest_inv: &[Mat4], s: usize) -> Mat4 {
-    match node {
-        Some(b) => worlds[s][b] * rest_inv[b],
-        None => Mat4::IDENTITY,
-    }
-}
-
 /// Applies `budget` to `cloud` (built from `tree`, whose loop `sampled` is; the rig's node
-/// indices still those of the tree) and prunes its rig, in the order of the steps below: what
-/// is not seen goes first, then motion that a bone (or an earlier billboard) already gives.
-/// Returns the old → new rig node map (for the caller's wood mesh) and what was dropped.
+/// indices still those of the tree) and to `wood` (the LOD's simplified wood, bones as rig
+/// nodes), in the order of the steps below: what is not seen goes first, then motion that a
+/// bone (or an earlier billboard) already gives, then the joint budget
+/// ([`apply_joint_budget`]); finally the rig is pruned to what is still used and `wood`'s
+/// bones re-mapped to it. `animation` says how the billboards' motion is written.
 pub fn apply_budget(
     cloud: &mut AnimatedBillboardCloud,
+    wood: &mut WoodMesh,
     tree: &Tree,
     sampled: &Sampled,
     budget: &ScreenBudget,
-    keep_nodes: &[usize],
-) -> (Vec<Option<usize>>, Dropped) {
+    animation: BillboardAnimation,
+) -> Dropped {
     let mut dropped = Dropped::default();
     let half = 0.5 * budget.pixel;
     drop_unseen_billboards(cloud, budget, &mut dropped);
@@ -109,14 +110,24 @@ pub fn apply_budget(
     attach_to_bones(cloud, tree, &rig, half, &mut dropped);
     share_motions(cloud, half, &mut dropped);
     rebind_to_ancestors(cloud, sampled, &rig, budget, &mut dropped);
-    let map = prune_rig(cloud, keep_nodes, &mut dropped);
-    (map, dropped)
-}
-
-/// The rig's world matrices at every clock sample and its inverse rest world matrices.
-struct RigFrames<'a> {
-    worlds: &'a [Vec<Mat4>],
-    rest_inv: &'a [Mat4],
+    dropped.joints = apply_joint_budget(cloud, wood, tree, &rig, budget.joints, half, animation);
+    let keep: Vec<usize> = wood
+        .used_bones()
+        .into_iter()
+        .filter(|&b| b != NO_BONE)
+        .map(|b| b as usize)
+        .collect();
+    let map = prune_rig(cloud, &keep, &mut dropped);
+    for b in wood.bones.iter_mut().flatten() {
+        if *b != NO_BONE {
+            *b = map
+                .get(*b as usize)
+                .copied()
+                .flatten()
+                .map_or(NO_BONE, |n| n as u32);
+        }
+    }
+    dropped
 }
 
 /// Step 1: billboards too small to see.
@@ -190,7 +201,7 @@ fn attach_to_bones(
     half: f32,
     dropped: &mut Dropped,
 ) {
-    let (worlds, rest_inv) = (rig.worlds, rig.rest_inv);
+    let worlds = rig.worlds;
     // 2a. Own motion within half a pixel of a bone's: follow the bone.
     let nodes = &cloud.rig.nodes;
     let attach: Vec<Option<(usize, Affine3A)>> = cloud
@@ -217,32 +228,11 @@ fn attach_to_bones(
             }
             candidates.sort_unstable();
             let corners = b.quad.corners();
-            let n = m.len();
+            let ns = worlds.len();
             // Following `node` puts the quad at Q·corners in the node's rest frame, Q the rigid
             // fit of Rest·W(s)⁻¹·M(s) over the loop; the deviation is what that costs on screen.
-            let fit = |node: usize| -> (f32, Affine3A) {
-                let mut from = Vec::with_capacity(4 * worlds.len());
-                let mut to = Vec::with_capacity(4 * worlds.len());
-                for s in 0..worlds.len() {
-                    let back = carry(Some(node), worlds, rest_inv, s).inverse();
-                    let own = m.at(s, n);
-                    for c in &corners {
-                        from.push(*c);
-                        to.push(back.transform_point3(own.transform_point3(*c)));
-                    }
-                }
-                let q = rigid_fit(&from, &to);
-                let mut worst = 0.0f32;
-                for s in 0..worlds.len() {
-                    let a = carry(Some(node), worlds, rest_inv, s);
-                    let own = m.at(s, n);
-                    for c in &corners {
-                        let p = a.transform_point3(q.transform_point3(*c));
-                        worst = worst.max(p.distance(own.transform_point3(*c)));
-                    }
-                }
-                (worst, q)
-            };
+            let target = |s: usize, c: Vec3| m.at(s, ns).transform_point3(c);
+            let fit = |node: usize| fit_to_node(rig, Some(node), &corners, &target);
             candidates
                 .into_iter()
                 .map(|c| (fit(c), c))
@@ -304,7 +294,7 @@ fn rebind_to_ancestors(
     budget: &ScreenBudget,
     dropped: &mut Dropped,
 ) {
-    let (worlds, rest_inv) = (rig.worlds, rig.rest_inv);
+    let worlds = rig.worlds;
     let half = 0.5 * budget.pixel;
     // 3. Bone-bound billboards move to the highest ancestor (or the world) that carries them
     //    within half a pixel and keeps their triangles' centres within ε of the plane.
@@ -329,8 +319,8 @@ fn rebind_to_ancestors(
             let centre = b.quad.center;
             let fits = |cand: Option<usize>| {
                 (0..ns).all(|s| {
-                    let a = carry(Some(own), worlds, rest_inv, s);
-                    let c = carry(cand, worlds, rest_inv, s);
+                    let a = rig.carry(Some(own), s);
+                    let c = rig.carry(cand, s);
                     if corners
                         .iter()
                         .any(|p| a.transform_point3(*p).distance(c.transform_point3(*p)) >= half)

@@ -30,6 +30,13 @@ pub struct LodEntry {
     pub atlas: Option<[u32; 2]>,
     pub texels_per_unit: Option<f32>,
     pub density_reduced: bool,
+    /// What the written file costs an engine (read back from it; see `frond_scene::file_cost`).
+    pub cost: Option<frond_scene::FileCost>,
+    /// Alpha-tested (leaf card or billboard) area relative to LOD0's: the overdraw the foliage
+    /// asks for.
+    pub alpha_tested_area_ratio: Option<f64>,
+    /// What the LOD was allowed to spend (None for LOD0).
+    pub budget: Option<crate::chain::LodBudget>,
     pub clips: Vec<String>,
     pub dropped: DroppedReport,
     pub vat: Option<Vec<String>>,
@@ -44,6 +51,8 @@ pub struct LodEntry {
     pub spectral: Option<SpectralReport>,
     /// What skeleton simplification did (skeleton LODs only).
     pub skeleton: Option<SkeletonReport>,
+    /// What thinning did (card LODs only).
+    pub cards: Option<crate::methods::cards::CardReport>,
     pub timings_s: LodTimings,
 }
 

@@ -82,6 +82,8 @@ fn build(
         cloud: &cloud,
         scale,
         seed: sp.seed,
+        max_billboards: None,
+        max_foliage_triangles: None,
     };
     build_spectral_cloud(&ctx, sp).expect("spectral cloud")
 }

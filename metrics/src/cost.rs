@@ -64,12 +64,8 @@ mod tests {
         let c = cost(&tree, file.clone());
         assert_eq!(c.billboards, g.leaf_corners.len());
         assert_eq!(c.file, file);
-        // Every leaf card of the generator is a rectangle: area = Σ |corner₁ − corner₀|·|corner₃ − corner₀|.
-        let want: f64 = g
-            .leaf_corners
-            .iter()
-            .map(|q| f64::from((q[1] - q[0]).length() * (q[3] - q[0]).length()))
-            .sum();
+        // The leaf cards are the billboards: their summed area.
+        let want = g.leaf_card_area();
         assert!(
             (c.billboard_area - want).abs() < 1e-3 * want,
             "{} vs {want}",

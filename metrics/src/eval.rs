@@ -102,6 +102,11 @@ pub struct EvalContext<'a> {
 }
 
 impl<'a> EvalContext<'a> {
+    /// The original tree the candidates are compared with.
+    pub fn original(&self) -> &'a Tree {
+        self.original
+    }
+
     /// Samples `original`'s loop for `req` (views, frames, samples, clip; the size is per
     /// evaluation).
     pub fn new(

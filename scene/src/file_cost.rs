@@ -610,11 +610,7 @@ mod tests {
         assert!(encoded > 100 && encoded < g.glb.len() as u64, "{encoded}");
         assert_eq!(c.file_bytes, g.glb.len() as u64);
         // The leaves (MASK) are the generator's rectangles; the wood is opaque.
-        let want: f64 = g
-            .leaf_corners
-            .iter()
-            .map(|q| f64::from((q[1] - q[0]).length() * (q[3] - q[0]).length()))
-            .sum();
+        let want = g.leaf_card_area();
         assert!(
             (c.alpha_tested_area - want).abs() < 1e-3 * want,
             "{} vs {want}",

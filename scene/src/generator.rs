@@ -84,6 +84,14 @@ pub struct GeneratedTree {
 }
 
 impl GeneratedTree {
+    /// Summed area of the leaf cards (each a rectangle: |corner₁ − corner₀|·|corner₃ − corner₀|).
+    pub fn leaf_card_area(&self) -> f64 {
+        self.leaf_corners
+            .iter()
+            .map(|q| f64::from((q[1] - q[0]).length() * (q[3] - q[0]).length()))
+            .sum()
+    }
+
     /// Rotation of bone `b` at time `t`: the keys interpolated as glTF LINEAR specifies
     /// (shortest-path slerp between the surrounding keys).
     pub fn rotation(&self, b: usize, t: f32) -> Quat {

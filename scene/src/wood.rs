@@ -277,6 +277,76 @@ impl WoodMesh {
         (mesh, source)
     }
 
+    /// The mesh without the vertices no triangle uses, vertices in order of first use
+    /// (primitive by primitive), everything else unchanged.
+    pub fn compacted(&self) -> WoodMesh {
+        self.with_primitives(self.primitives.iter().cloned())
+    }
+
+    /// A mesh of `primitives` (indices into this mesh's vertices) holding only the vertices
+    /// they use, in order of first use; a missing texture coordinate is zero.
+    fn with_primitives(&self, primitives: impl Iterator<Item = WoodPrimitive>) -> WoodMesh {
+        let mut remap = vec![u32::MAX; self.positions.len()];
+        let mut out = WoodMesh {
+            texcoords: vec![Vec::new(); self.texcoords.len()],
+            ..WoodMesh::default()
+        };
+        for p in primitives {
+            let indices = p
+                .indices
+                .iter()
+                .map(|&i| {
+                    let r = &mut remap[i as usize];
+                    if *r == u32::MAX {
+                        *r = out.positions.len() as u32;
+                        let i = i as usize;
+                        out.positions.push(self.positions[i]);
+                        out.normals.push(self.normals[i]);
+                        out.uvs.push(self.uvs[i]);
+                        for (o, set) in out.texcoords.iter_mut().zip(&self.texcoords) {
+                            o.push(set.get(i).copied().unwrap_or(Vec2::ZERO));
+                        }
+                        out.bones.push(self.bones[i]);
+                        out.weights.push(self.weights[i]);
+                    }
+                    *r
+                })
+                .collect();
+            out.primitives.push(WoodPrimitive {
+                material: p.material,
+                indices,
+            });
+        }
+        out
+    }
+
+    /// Appends `other`'s vertices and primitives (its indices shifted past this mesh's
+    /// vertices): one mesh, several materials.
+    pub fn append(&mut self, other: &WoodMesh) {
+        let base = self.positions.len() as u32;
+        // Texture coordinate sets: as many as either has; a set one mesh lacks is zero there.
+        let sets = self.texcoords.len().max(other.texcoords.len());
+        self.texcoords.resize(sets, Vec::new());
+        for (k, set) in self.texcoords.iter_mut().enumerate() {
+            set.resize(self.positions.len(), Vec2::ZERO);
+            match other.texcoords.get(k) {
+                Some(o) if o.len() == other.positions.len() => set.extend_from_slice(o),
+                _ => set.resize(self.positions.len() + other.positions.len(), Vec2::ZERO),
+            }
+        }
+        self.positions.extend_from_slice(&other.positions);
+        self.normals.extend_from_slice(&other.normals);
+        self.uvs.extend_from_slice(&other.uvs);
+        self.bones.extend_from_slice(&other.bones);
+        self.weights.extend_from_slice(&other.weights);
+        for p in &other.primitives {
+            self.primitives.push(WoodPrimitive {
+                material: p.material,
+                indices: p.indices.iter().map(|&i| i + base).collect(),
+            });
+        }
+    }
+
     /// Number of triangles over all primitives.
     pub fn triangles(&self) -> usize {
         self.primitives.iter().map(|p| p.indices.len() / 3).sum()
@@ -416,39 +486,16 @@ impl WoodMesh {
             }
         }
         // Compact: vertices in order of first use.
-        let mut remap = vec![u32::MAX; nv];
-        let mut out = WoodMesh {
-            texcoords: vec![Vec::new(); self.texcoords.len()],
-            ..WoodMesh::default()
-        };
-        for (pi, idx) in per_prim.into_iter().enumerate() {
-            if idx.is_empty() {
-                continue;
-            }
-            let indices = idx
+        let out = self.with_primitives(
+            per_prim
                 .into_iter()
-                .map(|i| {
-                    let r = &mut remap[i as usize];
-                    if *r == u32::MAX {
-                        *r = out.positions.len() as u32;
-                        let i = i as usize;
-                        out.positions.push(self.positions[i]);
-                        out.normals.push(self.normals[i]);
-                        out.uvs.push(self.uvs[i]);
-                        for (o, set) in out.texcoords.iter_mut().zip(&self.texcoords) {
-                            o.push(set.get(i).copied().unwrap_or(Vec2::ZERO));
-                        }
-                        out.bones.push(self.bones[i]);
-                        out.weights.push(self.weights[i]);
-                    }
-                    *r
-                })
-                .collect();
-            out.primitives.push(WoodPrimitive {
-                material: self.primitives[pi].material,
-                indices,
-            });
-        }
+                .enumerate()
+                .filter(|(_, idx)| !idx.is_empty())
+                .map(|(pi, indices)| WoodPrimitive {
+                    material: self.primitives[pi].material,
+                    indices,
+                }),
+        );
         (out, error.min(max_error))
     }
 

@@ -48,6 +48,15 @@ pub struct LodArgs {
     /// Override the derived ε: a length, or a percentage of the bounding-box diagonal.
     #[arg(long)]
     pub epsilon: Option<Length>,
+    /// Most triangles each LOD keeps of the one before it (0.5: at most half). The plane
+    /// search widens ε and the wood is simplified further until a LOD fits.
+    #[arg(long, default_value_t = 0.5, value_parser = parse_ratio)]
+    pub triangle_ratio: f32,
+    /// Build each LOD at its screen size's ε and texel density alone, without the cost budgets
+    /// (for experiments: such LODs may cost more than the input). The hard limits (at most 256
+    /// joints per skin, no more than the input's) still hold.
+    #[arg(long)]
+    pub no_cost_budgets: bool,
     /// skin (glTF skin and channels), vat (vertex animation textures, EXR half), vat-png16,
     /// or spectral (skinned billboards + a small float texture of each billboard's cosine
     /// terms, with reference shaders; spectral and per-bone methods).
@@ -112,8 +121,10 @@ impl LodArgs {
                 screen_heights,
                 pixel_error: self.pixel_error,
                 epsilon: self.epsilon,
-                spectral_animation,
+                animation: self.animation.billboards(),
                 seed: self.run.seed,
+                triangle_ratio: self.triangle_ratio,
+                cost_budgets: !self.no_cost_budgets,
                 samples: self.run.samples,
                 clip: self.run.clip.clone(),
                 cloud: CloudOptions {
@@ -160,6 +171,10 @@ impl LodArgs {
         a.extend(["--pixel-error".into(), self.pixel_error.to_string()]);
         if let Some(e) = self.epsilon {
             a.extend(["--epsilon".into(), e.to_string()]);
+        }
+        a.extend(["--triangle-ratio".into(), self.triangle_ratio.to_string()]);
+        if self.no_cost_budgets {
+            a.push("--no-cost-budgets".into());
         }
         a.extend(["--animation".into(), self.animation.text().into()]);
         a.extend(self.run.to_args());
@@ -235,6 +250,18 @@ impl LodArgs {
             );
         }
         Ok(())
+    }
+}
+
+/// A ratio in (0, 1].
+fn parse_ratio(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .parse()
+        .map_err(|_| format!("expected a number in (0, 1], got '{s}'"))?;
+    if v > 0.0 && v <= 1.0 {
+        Ok(v)
+    } else {
+        Err(format!("expected a number in (0, 1], got {v}"))
     }
 }
 

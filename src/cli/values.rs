@@ -79,6 +79,16 @@ pub enum AnimationArg {
 }
 
 impl AnimationArg {
+    /// How the chain builder counts the billboards' joints.
+    pub fn billboards(self) -> frond_lod::joint_budget::BillboardAnimation {
+        use frond_lod::joint_budget::BillboardAnimation as B;
+        match self {
+            AnimationArg::Skin => B::Joints,
+            AnimationArg::Vat | AnimationArg::VatPng16 => B::Vat,
+            AnimationArg::Spectral => B::Spectral,
+        }
+    }
+
     /// How the files animate billboards.
     pub fn mode(self) -> AnimationMode {
         match self {

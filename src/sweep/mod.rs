@@ -292,7 +292,8 @@ fn lod_run(
         MethodName::Auto => {
             let heights = distinct_heights(&req.grid.points());
             let rank = heights.iter().filter(|&&h| h > p.screen_height).count();
-            MethodArg::named(auto_method(rank, false).0)
+            let cards = frond_lod::methods::cards::is_card_foliage(ctx.original());
+            MethodArg::named(auto_method(rank, false, cards).0)
         }
         _ => given,
     };
@@ -301,6 +302,9 @@ fn lod_run(
         method: resolved,
         lods: vec![p.screen_height],
         epsilon: p.epsilon.map(Length::World),
+        // A grid point measures the method at the ε and size asked for: the chain's cost
+        // budgets would widen ε to half the input's triangles.
+        no_cost_budgets: true,
         run: RunArgs {
             seed,
             ..req.lod.run.clone()

@@ -1,0 +1,646 @@
+//! The joint budget of a LOD: at most `joints` skin joints and `channels` animated channels,
+//! reached by merging motion where it shows least (spec view-dependent-hierarchies-gpu
+//! §2.3–2.4: error measured in pixels at the LOD's size).
+//!
+//! A LOD's joints are the rig nodes its wood vertices and billboards follow, one joint per
+//! distinct own motion of a billboard, and one static joint for what follows nothing (what
+//! `frond-export` writes, counted by [`count`]). Two merges lower that count:
+//! - **collapse** a rig node into its nearest surviving ancestor: everything it carried (wood
+//!   vertices, billboards) becomes rigid with that ancestor;
+//! - **attach** a group of billboards sharing one own motion to the surviving node whose motion
+//!   fits theirs best (a rigid re-fit of the quad in that node's frame): the skeleton's motions
+//!   are the shared motions own motions cluster onto, and need no channel of their own.
+//!
+//! Each merge has an error: the farthest any carried point (corners of the carried points'
+//! bounding box, which bound an affine map's displacement) moves over the loop's samples,
+//! in world units. Merges are applied smallest error first (a lazy priority queue: errors only
+//! grow as nodes absorb others), every merge under half a pixel regardless of the budget (motion
+//! nobody can see is not worth a joint), then more until the budget holds. The order does not
+//! depend on the budget, so a smaller budget merges a superset of what a larger one does.
+
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, HashMap};
+
+use frond_scene::rigid_fit::rigid_fit;
+use frond_scene::wood::{NO_BONE, WoodMesh};
+use frond_scene::{Rig, Tree};
+use glam::{Affine3A, Mat4, Vec3};
+use serde::Serialize;
+
+use crate::contract::{AnimatedBillboardCloud, RigidMotion};
+
+/// What a LOD may spend on animation.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct JointCap {
+    /// Skin joints (rig joints, motion joints and the static joint together).
+    pub joints: usize,
+    /// Animated channels written over all clips.
+    pub channels: usize,
+}
+
+/// How the billboards' motion is written, which decides what joints they need.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BillboardAnimation {
+    /// Skinned; each distinct own motion is a joint of its own (with a translation and a
+    /// rotation channel), motionless billboards use the joint of the node they follow.
+    Joints,
+    /// Skinned to the node each follows; own motion comes from a coefficient texture.
+    Spectral,
+    /// Off the skin: vertex animation textures play them.
+    Vat,
+}
+
+/// What the joint budget merged.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct JointMerges {
+    /// Rig nodes collapsed into an ancestor because their motion moved nothing half a pixel.
+    pub nodes_collapsed_unseen: usize,
+    /// Rig nodes collapsed to meet the budget.
+    pub nodes_collapsed_for_budget: usize,
+    /// Own motions replaced by following a rig node (each group of billboards sharing one).
+    pub motions_attached: usize,
+    /// Largest error of a merge (world units): how far a carried point strays from where its
+    /// own motion put it.
+    pub max_error: f32,
+}
+
+/// The skin joints and animated channels a LOD would be written with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct AnimationCount {
+    pub joints: usize,
+    pub channels: usize,
+}
+
+/// Key of an own motion: its exact bits (what export groups joints by).
+fn motion_key(m: &RigidMotion) -> Vec<u32> {
+    match m {
+        RigidMotion::Sampled(frames) => frames
+            .iter()
+            .flat_map(|a| a.to_cols_array())
+            .map(f32::to_bits)
+            .collect(),
+        RigidMotion::Spectral(s) => {
+            let mut k = vec![s.samples as u32];
+            for a in &s.axes {
+                k.push(a.amplitudes.len() as u32);
+                k.extend(a.frequencies.iter().map(|&f| f as u32));
+                k.extend(a.amplitudes.iter().map(|f| f.to_bits()));
+                k.extend(a.phases.iter().map(|f| f.to_bits()));
+            }
+            k
+        }
+    }
+}
+
+/// Groups of billboards sharing one own motion (and the node it is relative to), in order of
+/// their first billboard.
+fn motion_groups(cloud: &AnimatedBillboardCloud) -> Vec<Vec<usize>> {
+    let mut index: HashMap<(Option<usize>, Vec<u32>), usize> = HashMap::new();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (i, b) in cloud.billboards.iter().enumerate() {
+        if let Some(m) = &b.motion {
+            let g = *index.entry((b.follows, motion_key(m))).or_insert_with(|| {
+                groups.push(Vec::new());
+                groups.len() - 1
+            });
+            groups[g].push(i);
+        }
+    }
+    groups
+}
+
+/// Joints and channels of `cloud` with `wood` as `frond-export` writes them, billboards written
+/// as `mode` says.
+pub fn count(
+    cloud: &AnimatedBillboardCloud,
+    wood: &WoodMesh,
+    mode: BillboardAnimation,
+) -> AnimationCount {
+    let n = cloud.rig.nodes.len();
+    let mut joint = vec![false; n];
+    let mut hierarchy = vec![false; n];
+    let mut static_joint = false;
+    for b in wood.used_bones() {
+        match (b as usize) < n && b != NO_BONE {
+            true => joint[b as usize] = true,
+            false => static_joint = true,
+        }
+    }
+    let groups = match mode {
+        BillboardAnimation::Joints => motion_groups(cloud),
+        _ => Vec::new(),
+    };
+    for b in cloud
+        .billboards
+        .iter()
+        .filter(|_| mode != BillboardAnimation::Vat)
+    {
+        match (
+            b.follows,
+            mode == BillboardAnimation::Joints && b.motion.is_some(),
+        ) {
+            (Some(f), false) => joint[f] = true,
+            (None, false) => static_joint = true,
+            (Some(f), true) => hierarchy[f] = true,
+            (None, true) => {}
+        }
+    }
+    let joints = joint.iter().filter(|&&j| j).count() + groups.len() + usize::from(static_joint);
+    let kept = ancestors_closure(&cloud.rig, |i| joint[i] || hierarchy[i]);
+    let clips: Vec<usize> = if !groups.is_empty() || cloud.rig_resampled {
+        cloud.clock.clip.into_iter().collect()
+    } else {
+        (0..cloud.rig.clips.len()).collect()
+    };
+    let rig_channels: usize = clips
+        .iter()
+        .filter_map(|&c| cloud.rig.clips.get(c))
+        .map(|c| c.channels.iter().filter(|ch| kept[ch.node]).count())
+        .sum();
+    AnimationCount {
+        joints,
+        channels: rig_channels + 2 * groups.len(),
+    }
+}
+
+/// Nodes that `wanted` selects and all their ancestors.
+fn ancestors_closure(rig: &Rig, wanted: impl Fn(usize) -> bool) -> Vec<bool> {
+    let mut kept = vec![false; rig.nodes.len()];
+    for i in 0..rig.nodes.len() {
+        if wanted(i) {
+            let mut cur = Some(i);
+            while let Some(c) = cur {
+                if kept[c] {
+                    break;
+                }
+                kept[c] = true;
+                cur = rig.nodes[c].parent;
+            }
+        }
+    }
+    kept
+}
+
+/// The rig's motion at the loop's samples: `carry(n, s)` takes rest-pose points following
+/// node `n` (None: the world) to sample `s`.
+pub struct RigFrames<'a> {
+    pub worlds: &'a [Vec<Mat4>],
+    pub rest_inv: &'a [Mat4],
+}
+
+impl RigFrames<'_> {
+    /// `W_n(s) · Rest_n⁻¹`, or the identity for the world.
+    pub fn carry(&self, node: Option<usize>, s: usize) -> Mat4 {
+        match node {
+            Some(b) => self.worlds[s][b] * self.rest_inv[b],
+            None => Mat4::IDENTITY,
+        }
+    }
+}
+
+/// How well following `node` reproduces an own motion: the rigid placement `Q` (in the node's
+/// rest frame) that best fits `corners` carried by `target(s)`, and the farthest a corner then
+/// strays over the samples (world units).
+pub fn fit_to_node(
+    rig: &RigFrames,
+    node: Option<usize>,
+    corners: &[Vec3],
+    target: &dyn Fn(usize, Vec3) -> Vec3,
+) -> (f32, Affine3A) {
+    let ns = rig.worlds.len();
+    let mut from = Vec::with_capacity(corners.len() * ns);
+    let mut to = Vec::with_capacity(corners.len() * ns);
+    for s in 0..ns {
+        let back = rig.carry(node, s).inverse();
+        for c in corners {
+            from.push(*c);
+            to.push(back.transform_point3(target(s, *c)));
+        }
+    }
+    let q = rigid_fit(&from, &to);
+    let mut worst = 0.0f32;
+    for s in 0..ns {
+        let a = rig.carry(node, s);
+        for c in corners {
+            let p = a.transform_point3(q.transform_point3(*c));
+            worst = worst.max(p.distance(target(s, *c)));
+        }
+    }
+    (worst, q)
+}
+
+/// Axis-aligned box of carried points (empty: nothing carried).
+#[derive(Clone, Copy, Debug)]
+struct Box3 {
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Box3 {
+    const EMPTY: Box3 = Box3 {
+        lo: Vec3::splat(f32::INFINITY),
+        hi: Vec3::splat(f32::NEG_INFINITY),
+    };
+    fn add(&mut self, p: Vec3) {
+        self.lo = self.lo.min(p);
+        self.hi = self.hi.max(p);
+    }
+    fn union(&mut self, o: &Box3) {
+        self.lo = self.lo.min(o.lo);
+        self.hi = self.hi.max(o.hi);
+    }
+    fn is_empty(&self) -> bool {
+        self.lo.x > self.hi.x
+    }
+    fn corners(&self) -> [Vec3; 8] {
+        std::array::from_fn(|k| {
+            Vec3::new(
+                if k & 1 == 0 { self.lo.x } else { self.hi.x },
+                if k & 2 == 0 { self.lo.y } else { self.hi.y },
+                if k & 4 == 0 { self.lo.z } else { self.hi.z },
+            )
+        })
+    }
+}
+
+/// A merge waiting in the queue.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Merge {
+    Collapse(usize),
+    Attach(usize),
+}
+
+/// State of the merging.
+struct Merger<'a> {
+    rig: &'a Rig,
+    frames: &'a RigFrames<'a>,
+    tree: &'a Tree,
+    /// Surviving node of each rig node (itself while it survives; None: the world).
+    target: Vec<Option<usize>>,
+    /// Points each surviving node carries.
+    carried: Vec<Box3>,
+    /// Whether each node is a joint (carries something directly).
+    joint: Vec<bool>,
+    groups: Vec<Vec<usize>>,
+    attached: Vec<Option<(Option<usize>, Affine3A)>>,
+    /// Something follows the world (the static joint is written).
+    static_used: bool,
+    /// Channels of each node in each clip.
+    channels: Vec<Vec<usize>>,
+}
+
+impl Merger<'_> {
+    /// The node `n` resolves to after collapses.
+    fn resolve(&self, mut n: Option<usize>) -> Option<usize> {
+        while let Some(c) = n {
+            if self.target[c] == Some(c) {
+                return Some(c);
+            }
+            n = self.target[c];
+        }
+        None
+    }
+
+    /// Nearest surviving strict ancestor of `n` (None: the world).
+    fn surviving_parent(&self, n: usize) -> Option<usize> {
+        self.resolve(self.rig.nodes[n].parent)
+    }
+
+    /// Error of collapsing surviving node `n` into its surviving parent.
+    fn collapse_error(&self, n: usize) -> f32 {
+        let b = &self.carried[n];
+        if b.is_empty() {
+            return 0.0;
+        }
+        let p = self.surviving_parent(n);
+        let pts = b.corners();
+        let mut worst = 0.0f32;
+        for s in 0..self.frames.worlds.len() {
+            let (a, c) = (self.frames.carry(Some(n), s), self.frames.carry(p, s));
+            for x in &pts {
+                worst = worst.max(a.transform_point3(*x).distance(c.transform_point3(*x)));
+            }
+        }
+        worst
+    }
+
+    /// The joints and channels with the merges so far (see [`count`]).
+    fn count(&self, cloud: &AnimatedBillboardCloud) -> AnimationCount {
+        let n = self.target.len();
+        let survivor = |i: usize| self.joint[i] && self.target[i] == Some(i);
+        let mut hierarchy = vec![false; n];
+        let mut groups_left = 0;
+        for (g, members) in self.groups.iter().enumerate() {
+            if self.attached[g].is_none() {
+                groups_left += 1;
+                if let Some(f) = self.resolve(cloud.billboards[members[0]].follows) {
+                    hierarchy[f] = true;
+                }
+            }
+        }
+        let joints =
+            (0..n).filter(|&i| survivor(i)).count() + groups_left + usize::from(self.static_used);
+        let kept = ancestors_closure(self.rig, |i| survivor(i) || hierarchy[i]);
+        let clips: Vec<usize> = if groups_left > 0 || cloud.rig_resampled {
+            cloud.clock.clip.into_iter().collect()
+        } else {
+            (0..self.channels.len()).collect()
+        };
+        let rig_channels: usize = clips
+            .iter()
+            .filter_map(|&c| self.channels.get(c))
+            .map(|per_node| {
+                (0..n)
+                    .filter(|&i| kept[i])
+                    .map(|i| per_node[i])
+                    .sum::<usize>()
+            })
+            .sum();
+        AnimationCount {
+            joints,
+            channels: rig_channels + 2 * groups_left,
+        }
+    }
+
+    /// Best surviving node for motion group `g` to follow, with the error and placement.
+    fn attach_choice(
+        &self,
+        cloud: &AnimatedBillboardCloud,
+        g: usize,
+    ) -> (f32, Option<usize>, Affine3A) {
+        let members = &self.groups[g];
+        let first = &cloud.billboards[members[0]];
+        let follows = self.resolve(first.follows);
+        let Some(m) = &first.motion else {
+            return (0.0, follows, Affine3A::IDENTITY);
+        };
+        let mut corners: Vec<Vec3> = Vec::new();
+        let mut candidates: Vec<Option<usize>> = vec![follows];
+        for &i in members {
+            let b = &cloud.billboards[i];
+            corners.extend(b.quad.corners());
+            for &t in &b.triangles {
+                let Some(bone) = self.tree.triangles.get(t).and_then(|t| t.bone) else {
+                    continue;
+                };
+                let node = self.tree.bones.get(bone as usize).map(|b| b.node);
+                let mut cur = self.resolve(node.filter(|&x| x < self.target.len()));
+                while let Some(c) = cur {
+                    if candidates.contains(&Some(c)) {
+                        break;
+                    }
+                    candidates.push(Some(c));
+                    cur = self.surviving_parent(c);
+                }
+            }
+        }
+        let base = first.follows;
+        let ns = self.frames.worlds.len();
+        let target = |s: usize, x: Vec3| {
+            self.frames
+                .carry(base, s)
+                .transform_point3(m.at(s, ns).transform_point3(x))
+        };
+        candidates.sort_unstable();
+        candidates
+            .into_iter()
+            .map(|c| {
+                let (e, q) = fit_to_node(self.frames, c, &corners, &target);
+                (e, c, q)
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+            .unwrap_or((f32::INFINITY, follows, Affine3A::IDENTITY))
+    }
+}
+
+/// Merges motion in `cloud` (billboards and rig with the tree's node indices, as after the
+/// motion budget's steps) and `wood` (bones as rig node indices) until the LOD has at most
+/// `cap` joints and channels, applying every merge under `half` world units (half a pixel) on
+/// the way. `frames` is the cloud rig's motion at the loop's samples; `mode` says how the
+/// billboards are written (own motions are attached to nodes only when they are joints).
+/// Returns what it merged.
+pub fn apply_joint_budget(
+    cloud: &mut AnimatedBillboardCloud,
+    wood: &mut WoodMesh,
+    tree: &Tree,
+    frames: &RigFrames,
+    cap: JointCap,
+    half: f32,
+    mode: BillboardAnimation,
+) -> JointMerges {
+    let n = cloud.rig.nodes.len();
+    let mut carried = vec![Box3::EMPTY; n];
+    let mut joint = vec![false; n];
+    let mut static_used = false;
+    let mut used = vec![false; wood.positions.len()];
+    for p in &wood.primitives {
+        for &i in &p.indices {
+            if let Some(u) = used.get_mut(i as usize) {
+                *u = true;
+            }
+        }
+    }
+    for (v, (bones, w)) in wood.bones.iter().zip(&wood.weights).enumerate() {
+        if !used.get(v).copied().unwrap_or(false) {
+            continue;
+        }
+        for (b, w) in bones.iter().zip(w) {
+            if *w <= 0.0 {
+                continue;
+            }
+            if *b != NO_BONE && (*b as usize) < n {
+                carried[*b as usize].add(wood.positions[v]);
+                joint[*b as usize] = true;
+            } else {
+                static_used = true;
+            }
+        }
+    }
+    let per_motion = mode == BillboardAnimation::Joints;
+    for b in &cloud.billboards {
+        if per_motion && b.motion.is_some() {
+            continue;
+        }
+        match b.follows {
+            Some(f) => {
+                for c in b.quad.corners() {
+                    carried[f].add(c);
+                }
+                joint[f] |= mode != BillboardAnimation::Vat;
+            }
+            None => static_used |= mode != BillboardAnimation::Vat,
+        }
+    }
+    let groups = if per_motion {
+        motion_groups(cloud)
+    } else {
+        Vec::new()
+    };
+    let channels: Vec<Vec<usize>> = cloud
+        .rig
+        .clips
+        .iter()
+        .map(|clip| {
+            let mut per_node = vec![0; n];
+            for ch in &clip.channels {
+                if let Some(c) = per_node.get_mut(ch.node) {
+                    *c += 1;
+                }
+            }
+            per_node
+        })
+        .collect();
+    // The merger reads the rig while the billboards change: its own copy.
+    let rig = cloud.rig.clone();
+    let mut merger = Merger {
+        rig: &rig,
+        frames,
+        tree,
+        target: (0..n).map(Some).collect(),
+        carried,
+        joint,
+        attached: vec![None; groups.len()],
+        groups,
+        static_used,
+        channels,
+    };
+    let mut merges = JointMerges::default();
+    let mut heap: BinaryHeap<Reverse<(u32, Merge)>> = BinaryHeap::new();
+    let key = |e: f32| {
+        if e.is_finite() {
+            e.max(0.0).to_bits()
+        } else {
+            f32::INFINITY.to_bits()
+        }
+    };
+    for i in 0..n {
+        if merger.joint[i] {
+            heap.push(Reverse((key(merger.collapse_error(i)), Merge::Collapse(i))));
+        }
+    }
+    for g in 0..merger.groups.len() {
+        let (e, _, _) = merger.attach_choice(cloud, g);
+        heap.push(Reverse((key(e), Merge::Attach(g))));
+    }
+    let mut current = merger.count(cloud);
+    while let Some(Reverse((k, m))) = heap.pop() {
+        let over = current.joints > cap.joints || current.channels > cap.channels;
+        if !over && f32::from_bits(k) >= half {
+            break;
+        }
+        // Recompute: earlier merges may have grown this one's error.
+        let (e, choice) = match m {
+            Merge::Collapse(i) => {
+                if merger.target[i] != Some(i) || !merger.joint[i] {
+                    continue;
+                }
+                (merger.collapse_error(i), None)
+            }
+            Merge::Attach(g) => {
+                if merger.attached[g].is_some() {
+                    continue;
+                }
+                let (e, c, q) = merger.attach_choice(cloud, g);
+                (e, Some((c, q)))
+            }
+        };
+        if key(e) > k {
+            heap.push(Reverse((key(e), m)));
+            continue;
+        }
+        if !over && e >= half {
+            break;
+        }
+        match (m, choice) {
+            (Merge::Collapse(i), _) => {
+                let p = merger.surviving_parent(i);
+                merger.target[i] = p;
+                let b = merger.carried[i];
+                if p.is_none() && !b.is_empty() {
+                    merger.static_used = true;
+                }
+                if let Some(p) = p {
+                    merger.carried[p].union(&b);
+                    if !merger.joint[p] {
+                        merger.joint[p] = true;
+                        heap.push(Reverse((key(merger.collapse_error(p)), Merge::Collapse(p))));
+                    }
+                }
+                merger.joint[i] = false;
+                if e < half {
+                    merges.nodes_collapsed_unseen += 1;
+                } else {
+                    merges.nodes_collapsed_for_budget += 1;
+                }
+            }
+            (Merge::Attach(g), Some((c, q))) => {
+                merger.attached[g] = Some((c, q));
+                if c.is_none() {
+                    merger.static_used = true;
+                }
+                if let Some(c) = c {
+                    let mut b = Box3::EMPTY;
+                    for &i in &merger.groups[g] {
+                        for x in cloud.billboards[i].quad.corners() {
+                            b.add(q.transform_point3(x));
+                        }
+                    }
+                    merger.carried[c].union(&b);
+                    if !merger.joint[c] {
+                        merger.joint[c] = true;
+                        heap.push(Reverse((key(merger.collapse_error(c)), Merge::Collapse(c))));
+                    }
+                }
+                merges.motions_attached += 1;
+            }
+            (Merge::Attach(_), None) => continue,
+        }
+        merges.max_error = merges.max_error.max(e);
+        current = merger.count(cloud);
+    }
+    apply(&merger, cloud, wood);
+    merges
+}
+
+/// Writes the merges into the billboards and the wood's skin.
+fn apply(merger: &Merger, cloud: &mut AnimatedBillboardCloud, wood: &mut WoodMesh) {
+    for (g, members) in merger.groups.iter().enumerate() {
+        if let Some((c, q)) = merger.attached[g] {
+            for &i in members {
+                let b = &mut cloud.billboards[i];
+                b.quad = b.quad.transformed(q);
+                b.follows = c;
+                b.motion = None;
+            }
+        }
+    }
+    for b in &mut cloud.billboards {
+        b.follows = merger.resolve(b.follows);
+    }
+    for (bones, weights) in wood.bones.iter_mut().zip(wood.weights.iter_mut()) {
+        let mut merged: Vec<(u32, f32)> = Vec::with_capacity(4);
+        for (b, w) in bones.iter().zip(weights.iter()) {
+            if *w <= 0.0 {
+                continue;
+            }
+            let nb = if *b == NO_BONE || (*b as usize) >= merger.target.len() {
+                NO_BONE
+            } else {
+                merger
+                    .resolve(Some(*b as usize))
+                    .map_or(NO_BONE, |x| x as u32)
+            };
+            match merged.iter_mut().find(|(x, _)| *x == nb) {
+                Some(slot) => slot.1 += *w,
+                None => merged.push((nb, *w)),
+            }
+        }
+        merged.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        let first = merged.first().map_or(NO_BONE, |m| m.0);
+        for k in 0..4 {
+            let (b, w) = merged.get(k).copied().unwrap_or((first, 0.0));
+            bones[k] = b;
+            weights[k] = w;
+        }
+    }
+}

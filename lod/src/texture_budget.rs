@@ -1,0 +1,182 @@
+//! Texture sizes of a LOD (issue 17 item 4): every image the LOD's meshes draw with (wood maps,
+//! a card LOD's leaf texture) is written no larger than the LOD's texel density asks for: one
+//! texel per screen pixel at the LOD's screen height (spec view-dependent-hierarchies-gpu
+//! §2.4, Holst's texture budget), where the density a map has on the mesh is measured from the
+//! mesh's UVs. Sizes stay powers of two when the input's were, and never grow.
+
+use std::collections::BTreeMap;
+
+use frond_scene::wood::WoodMesh;
+use frond_scene::{Tree, visit_texture_infos};
+
+/// Size each image (index into `Tree::images`) is written at in a LOD, where smaller than the
+/// input's; images not listed are written as the input had them.
+pub type ImageSizes = BTreeMap<usize, [u32; 2]>;
+
+/// Smallest side a downscaled image keeps.
+pub const MIN_IMAGE_SIDE: u32 = 4;
+
+/// Images (indices into `Tree::images`) material `m` draws with: every map of its source
+/// description, or the image of its decoded base colour.
+pub fn material_images(tree: &Tree, m: usize) -> Vec<usize> {
+    let Some(material) = tree.materials.get(m) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    match &material.source {
+        Some(source) => {
+            let mut json = source.json.clone();
+            let _ = visit_texture_infos(&mut json, &mut |_, info| {
+                if let Some(t) = info
+                    .get("index")
+                    .and_then(serde_json::Value::as_u64)
+                    .and_then(|t| tree.source_textures.get(t as usize))
+                {
+                    out.push(t.image);
+                }
+                Ok::<(), ()>(())
+            });
+        }
+        None => {
+            if let Some(j) = material
+                .base_color_texture
+                .and_then(|t| tree.textures.get(t))
+                .and_then(|t| t.image)
+            {
+                out.push(j);
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// Width and height of image `j` as the input stored it (from its header).
+pub fn image_dimensions(tree: &Tree, j: usize) -> Option<[u32; 2]> {
+    if let Some(t) = tree.textures.iter().find(|t| t.image == Some(j)) {
+        return Some([t.width, t.height]);
+    }
+    let img = tree.images.get(j)?;
+    image::ImageReader::new(std::io::Cursor::new(&img.bytes))
+        .with_guessed_format()
+        .ok()?
+        .into_dimensions()
+        .ok()
+        .map(|(w, h)| [w, h])
+}
+
+/// Texels per world unit a `width`×`height` texture has on the triangles `indices` of `mesh`
+/// (through its base-colour UVs): the area-weighted 90th percentile over triangles, so that
+/// nine tenths of the surface get at least the density asked for. None without area.
+fn texel_density(mesh: &WoodMesh, indices: &[u32], width: u32, height: u32) -> Option<f32> {
+    let mut samples: Vec<(f32, f32)> = Vec::new();
+    let texels = (width as f32) * (height as f32);
+    for t in indices.chunks_exact(3) {
+        let [a, b, c] = [0, 1, 2].map(|k| t[k] as usize);
+        let (Some(pa), Some(pb), Some(pc)) = (
+            mesh.positions.get(a),
+            mesh.positions.get(b),
+            mesh.positions.get(c),
+        ) else {
+            continue;
+        };
+        let (Some(ua), Some(ub), Some(uc)) = (mesh.uvs.get(a), mesh.uvs.get(b), mesh.uvs.get(c))
+        else {
+            continue;
+        };
+        let world = 0.5 * (*pb - *pa).cross(*pc - *pa).length();
+        let uv = 0.5 * (*ub - *ua).perp_dot(*uc - *ua).abs();
+        if world > 0.0 && uv > 0.0 && world.is_finite() && uv.is_finite() {
+            samples.push(((uv * texels / world).sqrt(), world));
+        }
+    }
+    if samples.is_empty() {
+        return None;
+    }
+    samples.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let total: f32 = samples.iter().map(|s| s.1).sum();
+    let mut acc = 0.0;
+    for (d, w) in &samples {
+        acc += w;
+        if acc >= 0.9 * total {
+            return Some(*d);
+        }
+    }
+    samples.last().map(|s| s.0)
+}
+
+/// `side` scaled by `s` (≤ 1), at least [`MIN_IMAGE_SIDE`], a power of two when `side` was.
+fn shrink(side: u32, s: f32) -> u32 {
+    let want = ((side as f32) * s).ceil().max(MIN_IMAGE_SIDE as f32) as u32;
+    let want = if side.is_power_of_two() {
+        want.next_power_of_two()
+    } else {
+        want
+    };
+    want.min(side)
+}
+
+/// The image sizes of a LOD drawing `parts` at `texels_per_unit` (see the module docs): per
+/// primitive, the base-colour map's density on its triangles gives a scale ≤ 1 that every map
+/// of its material takes (they share the UV layout in practice); an image several primitives
+/// use gets the largest size any asks for.
+pub fn lod_image_sizes(tree: &Tree, parts: &[WoodMesh], texels_per_unit: f32) -> ImageSizes {
+    let mut scale: BTreeMap<usize, f32> = BTreeMap::new();
+    for mesh in parts {
+        for p in &mesh.primitives {
+            let Some(material) = tree.materials.get(p.material) else {
+                continue;
+            };
+            let base = material
+                .base_color_texture
+                .and_then(|t| tree.textures.get(t));
+            let s = base
+                .and_then(|t| texel_density(mesh, &p.indices, t.width, t.height))
+                .map_or(1.0, |d| (texels_per_unit / d).min(1.0));
+            for j in material_images(tree, p.material) {
+                let e = scale.entry(j).or_insert(0.0);
+                *e = e.max(s);
+            }
+        }
+    }
+    scale
+        .into_iter()
+        .filter_map(|(j, s)| {
+            let [w, h] = image_dimensions(tree, j)?;
+            let size = [shrink(w, s), shrink(h, s)];
+            (size != [w, h]).then_some((j, size))
+        })
+        .collect()
+}
+
+/// Decoded bytes (RGBA8, 4 a texel) of every image `parts` draw with, at `sizes`.
+pub fn parts_image_bytes(tree: &Tree, parts: &[WoodMesh], sizes: &ImageSizes) -> usize {
+    let mut images: Vec<usize> = parts
+        .iter()
+        .flat_map(|m| &m.primitives)
+        .flat_map(|p| material_images(tree, p.material))
+        .collect();
+    images.sort_unstable();
+    images.dedup();
+    images
+        .iter()
+        .filter_map(|j| sizes.get(j).copied().or_else(|| image_dimensions(tree, *j)))
+        .map(|[w, h]| 4 * w as usize * h as usize)
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sides_shrink_to_powers_of_two_and_never_grow() {
+        assert_eq!(shrink(1024, 1.0), 1024);
+        assert_eq!(shrink(1024, 0.3), 512);
+        assert_eq!(shrink(1024, 0.01), 16);
+        assert_eq!(shrink(1024, 0.0), MIN_IMAGE_SIDE);
+        assert_eq!(shrink(300, 0.5), 150);
+        assert_eq!(shrink(2, 0.1), 2);
+    }
+}

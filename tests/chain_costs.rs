@@ -1,0 +1,158 @@
+//! Every LOD cheaper than the one before it (issue 17), judged as an engine programmer would:
+//! from the written files (`frond_scene::file_cost`), not from what the pipeline meant to do.
+//! The default chain of the sample, the committed fixtures and the smaller shared trees must
+//! have every requested LOD, the hard limits (joints per skin ≤ min(256, the input's), ≤ 4
+//! influences) and the monotone rule (each LOD ≤ the one before in triangles, at most half of
+//! them, joints, animated channels, draw calls, materials, decoded texture bytes and file
+//! bytes).
+
+mod common;
+
+use std::path::Path;
+
+use common::*;
+use frond_scene::{FileCost, InputLimits, file_cost};
+
+/// The files' costs of the default chain of `tree` written into `out`, LOD0 first.
+fn chain_costs(tree: &Path, out: &Path, extra: &[&str]) -> Vec<(String, FileCost)> {
+    let report = frond_lod(tree, out, extra);
+    let lods = report["lods"].as_array().expect("lods");
+    assert_eq!(lods.len(), 4, "LOD0 and the three default LODs are written");
+    lods.iter()
+        .map(|l| {
+            let file = l["file"].as_str().expect("file").to_string();
+            let cost = file_cost(&out.join(&file), &InputLimits::default()).expect("file cost");
+            // The report carries the same cost, read back from the same file.
+            let reported: FileCost =
+                serde_json::from_value(l["cost"].clone()).expect("the report's cost");
+            assert_eq!(reported.triangles, cost.triangles, "{file}");
+            assert_eq!(reported.file_bytes, cost.file_bytes, "{file}");
+            (file, cost)
+        })
+        .collect()
+}
+
+/// The hard limits and the monotone rule over `costs` (LOD0 first), against the input's
+/// `input` cost.
+fn assert_cheaper_each_step(input: &FileCost, costs: &[(String, FileCost)]) {
+    let joint_limit = input.joints_per_skin_max.min(256);
+    for (file, c) in &costs[1..] {
+        assert!(
+            c.joints_per_skin_max <= joint_limit,
+            "{file}: {} joints",
+            c.joints_per_skin_max
+        );
+        assert!(
+            c.max_influences <= 4,
+            "{file}: {} influences",
+            c.max_influences
+        );
+    }
+    for w in costs.windows(2) {
+        let ((pf, p), (f, c)) = (&w[0], &w[1]);
+        let pairs: [(&str, u64, u64); 7] = [
+            ("triangles", p.triangles, c.triangles),
+            ("joints", p.joints_per_skin_max, c.joints_per_skin_max),
+            (
+                "animated channels",
+                p.animated_channels,
+                c.animated_channels,
+            ),
+            ("draw calls", p.draw_calls, c.draw_calls),
+            ("materials", p.materials, c.materials),
+            (
+                "decoded texture bytes",
+                p.texture_decoded_bytes,
+                c.texture_decoded_bytes,
+            ),
+            ("file bytes", p.file_bytes, c.file_bytes),
+        ];
+        for (what, before, after) in pairs {
+            assert!(
+                after <= before,
+                "{f} has more {what} ({after}) than {pf} ({before})"
+            );
+        }
+        assert!(
+            c.triangles <= p.triangles / 2 + 1,
+            "{f}: {} triangles, more than half of {pf}'s {}",
+            c.triangles,
+            p.triangles
+        );
+    }
+}
+
+fn check(tree: &Path, name: &str) {
+    let out = tempfile::tempdir().expect("tempdir");
+    let input = file_cost(tree, &InputLimits::default()).expect("input cost");
+    let costs = chain_costs(tree, out.path(), &[]);
+    // LOD0 is the input rewritten: degenerate triangles (which draw nothing) are dropped.
+    let lod0 = &costs[0].1;
+    assert!(
+        lod0.triangles <= input.triangles && 100 * lod0.triangles >= 99 * input.triangles,
+        "{name}: LOD0 has {} triangles, the input {}",
+        lod0.triangles,
+        input.triangles
+    );
+    assert_cheaper_each_step(&input, &costs);
+    for (file, c) in &costs {
+        eprintln!(
+            "{file}: {} triangles, {} joints, {} channels, {} B texture, {} B file",
+            c.triangles,
+            c.joints_per_skin_max,
+            c.animated_channels,
+            c.texture_decoded_bytes,
+            c.file_bytes
+        );
+    }
+}
+
+#[test]
+fn the_sample_chain_gets_cheaper_at_every_step() {
+    check(&root().join("samples/sapling.glb"), "sapling");
+}
+
+#[test]
+fn the_fixtures_chains_get_cheaper_at_every_step() {
+    for f in ["bush_1.glb", "sapling_blender.glb"] {
+        check(&fixture(f), f);
+    }
+}
+
+#[test]
+fn the_smaller_shared_trees_chains_get_cheaper_at_every_step() {
+    let names = ["oak_medium.glb", "pine_medium_blender.glb"];
+    frond_testdata::require_trees!(names);
+    for n in names {
+        check(&shared_tree(n), n);
+    }
+}
+
+/// The benchmark tree's far LODs (issue 17): 60 px ≤ 32 joints, ≤ 1 MB decoded texture, and
+/// 200 px ≤ 128 joints. (`cargo test --test chain_costs -- --ignored`.)
+#[test]
+#[ignore = "oak_dense: about a minute in a debug build"]
+fn oak_dense_far_lods_fit_their_targets() {
+    let tree = frond_testdata::require_tree!("oak_dense.glb");
+    let out = tempfile::tempdir().expect("tempdir");
+    let input = file_cost(&tree, &InputLimits::default()).expect("input cost");
+    let costs = chain_costs(&tree, out.path(), &[]);
+    assert_cheaper_each_step(&input, &costs);
+    let (lod2, lod3) = (&costs[2].1, &costs[3].1);
+    assert!(
+        lod2.joints_per_skin_max <= 128,
+        "{}",
+        lod2.joints_per_skin_max
+    );
+    assert!(
+        lod3.joints_per_skin_max <= 32,
+        "{}",
+        lod3.joints_per_skin_max
+    );
+    assert!(
+        lod3.texture_decoded_bytes <= 1 << 20,
+        "{}",
+        lod3.texture_decoded_bytes
+    );
+    assert!(lod3.alpha_tested_area <= 2.0 * input.alpha_tested_area);
+}
