@@ -24,10 +24,12 @@ pub struct LodArgs {
     /// Output folder.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Clustering: auto (see the README's rule), per-bone, static, spectral (SCA with
-    /// the axis-phase type; spectral-naive, spectral-dominating-axis and
-    /// spectral-axis-phase name the type) or skeleton (SBCS with the rotation-spectral
-    /// bone type; skeleton-axis-angle and skeleton-rotation-spectral name the type).
+    /// How each LOD's foliage is built: auto (cards for a tree of single leaf cards, else
+    /// skeleton then static; see the README's rule), cards (the input's own leaf cards,
+    /// thinned to the triangle budget), per-bone, static, spectral (SCA with the axis-phase
+    /// type; spectral-naive, spectral-dominating-axis and spectral-axis-phase name the type)
+    /// or skeleton (SBCS with the axis-angle bone type; skeleton-axis-angle and
+    /// skeleton-rotation-spectral name the type).
     #[arg(long, value_enum, default_value = "auto")]
     pub method: MethodArg,
     /// Screen heights in pixels the whole tree covers, one LOD each, nearest first.
