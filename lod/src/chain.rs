@@ -10,8 +10,7 @@ use frond_billboard::cloud::CloudParams;
 use frond_billboard::plane_search::SearchParams;
 use frond_render::Renderer;
 use frond_scene::wood::{NO_BONE, WoodMesh};
-use frond_scene::{Length, Part, Rig, SampleOptions, Sampled, Tree, sample};
-use glam::Vec3;
+use frond_scene::{Bounds, Length, Part, Rig, SampleOptions, Sampled, Tree, sample};
 use serde::Serialize;
 
 use crate::contract::{AnimatedBillboardCloud, LoopClock};
@@ -164,6 +163,7 @@ pub fn build_chain(
     let t_sampled = Instant::now();
     let clock = LoopClock::of(tree, &sampled);
     let wood = part_mesh(tree, Part::Wood);
+    let card_foliage = is_card_foliage(tree);
     let lod0 = lod0(tree, &wood);
     let mut spent = Spent::of_lod0(tree, &lod0);
     let mut lods = vec![lod0];
@@ -180,7 +180,16 @@ pub fn build_chain(
             LodBudget::hard_limits_only(spent.animation.joints)
         };
         let lod = billboard_lod(
-            renderer, tree, &sampled, &clock, &wood, req, level, k, &budget,
+            renderer,
+            tree,
+            &sampled,
+            &clock,
+            &wood,
+            req,
+            level,
+            k,
+            &budget,
+            card_foliage,
         )
         .map_err(|e| (Some(k + 1), e))?;
         spent = spent.after(&lod, req.animation);
@@ -287,15 +296,13 @@ impl Spent {
             animation: self.animation,
         };
         let n = match (lod.cloud(), lod.parts.first()) {
-            (Some(c), Some(wood)) => Some(count(c, wood, animation)),
-            _ => Some(meshes_count(lod)),
+            (Some(c), Some(wood)) => count(c, wood, animation),
+            _ => meshes_count(lod),
         };
-        if let Some(n) = n {
-            next.animation = AnimationCount {
-                joints: self.animation.joints.min(n.joints),
-                channels: self.animation.channels.min(n.channels),
-            };
-        }
+        next.animation = AnimationCount {
+            joints: self.animation.joints.min(n.joints),
+            channels: self.animation.channels.min(n.channels),
+        };
         next
     }
 }
@@ -466,11 +473,7 @@ const WOOD_TRIES: usize = 16;
 fn simplify_wood(wood: &WoodMesh, max_error: f32, max_triangles: usize) -> (WoodMesh, f32) {
     let mut error = max_error;
     let (mut mesh, _) = wood.simplify(error);
-    let extent = wood.positions.iter().fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    );
-    let diagonal = (extent.1 - extent.0).length();
+    let diagonal = Bounds::of(wood.positions.iter().copied()).diagonal();
     for _ in 0..WOOD_TRIES {
         if mesh.triangles() <= max_triangles || diagonal.is_nan() || diagonal <= 0.0 {
             break;
@@ -497,11 +500,12 @@ fn billboard_lod(
     level: &LodLevel,
     k: usize,
     lod_budget: &LodBudget,
+    card_foliage: bool,
 ) -> Result<ChainLod, LodError> {
     let (method, reason) = req.method.pick(
         k,
         req.animation == BillboardAnimation::Spectral,
-        is_card_foliage(tree),
+        card_foliage,
     );
     let t0 = Instant::now();
     let (wood_lod, wood_error) = simplify_wood(wood, level.wood_error, lod_budget.wood_triangles);

@@ -146,7 +146,7 @@ pub fn count(
         }
     }
     let joints = joint.iter().filter(|&&j| j).count() + groups.len() + usize::from(static_joint);
-    let kept = ancestors_closure(&cloud.rig, |i| joint[i] || hierarchy[i]);
+    let kept = cloud.rig.with_ancestors(|i| joint[i] || hierarchy[i]);
     let clips: Vec<usize> = if !groups.is_empty() || cloud.rig_resampled {
         cloud.clock.clip.into_iter().collect()
     } else {
@@ -161,24 +161,6 @@ pub fn count(
         joints,
         channels: rig_channels + 2 * groups.len(),
     }
-}
-
-/// Nodes that `wanted` selects and all their ancestors.
-fn ancestors_closure(rig: &Rig, wanted: impl Fn(usize) -> bool) -> Vec<bool> {
-    let mut kept = vec![false; rig.nodes.len()];
-    for i in 0..rig.nodes.len() {
-        if wanted(i) {
-            let mut cur = Some(i);
-            while let Some(c) = cur {
-                if kept[c] {
-                    break;
-                }
-                kept[c] = true;
-                cur = rig.nodes[c].parent;
-            }
-        }
-    }
-    kept
 }
 
 /// The rig's motion at the loop's samples: `carry(n, s)` takes rest-pose points following
@@ -340,7 +322,7 @@ impl Merger<'_> {
         }
         let joints =
             (0..n).filter(|&i| survivor(i)).count() + groups_left + usize::from(self.static_used);
-        let kept = ancestors_closure(self.rig, |i| survivor(i) || hierarchy[i]);
+        let kept = self.rig.with_ancestors(|i| survivor(i) || hierarchy[i]);
         let clips: Vec<usize> = if groups_left > 0 || cloud.rig_resampled {
             cloud.clock.clip.into_iter().collect()
         } else {

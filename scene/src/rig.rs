@@ -205,24 +205,28 @@ impl Rig {
         self.clips.iter().position(|c| c.name == name)
     }
 
+    /// The nodes `wanted` selects and all their ancestors, as a flag per node.
+    pub fn with_ancestors(&self, wanted: impl Fn(usize) -> bool) -> Vec<bool> {
+        let mut kept = vec![false; self.nodes.len()];
+        for i in (0..self.nodes.len()).filter(|&i| wanted(i)) {
+            let mut cur = Some(i);
+            while let Some(c) = cur {
+                if kept[c] {
+                    break;
+                }
+                kept[c] = true;
+                cur = self.nodes[c].parent;
+            }
+        }
+        kept
+    }
+
     /// Keeps only `keep` (and their ancestors), remapping indices; returns old → new index.
     /// Channels of removed nodes are dropped; clips are kept (names and lengths), even when
     /// left without channels. Kept nodes lose their `bone` (a LOD's skin is its own).
     pub fn retain(&mut self, keep: &[bool]) -> Vec<Option<usize>> {
         let n = self.nodes.len();
-        let mut kept = vec![false; n];
-        for (i, &k) in keep.iter().enumerate().take(n) {
-            if k {
-                let mut cur = Some(i);
-                while let Some(c) = cur {
-                    if kept[c] {
-                        break;
-                    }
-                    kept[c] = true;
-                    cur = self.nodes[c].parent;
-                }
-            }
-        }
+        let kept = self.with_ancestors(|i| keep.get(i).copied().unwrap_or(false));
         let mut map = vec![None; n];
         let mut next = 0;
         for (i, k) in kept.iter().enumerate() {
