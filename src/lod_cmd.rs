@@ -9,10 +9,12 @@ use anyhow::{Context, Result};
 use frond_export::textures::sanitize;
 use frond_export::{AnimationMode, ChainFileOptions, chain_files, msft_coverages};
 use frond_lod::chain::chain_levels;
+use frond_lod::report::MeasuredError;
 use frond_lod::report::report_name;
 use frond_lod::{ChainRequest, LodReport, build_chain};
+use frond_metrics::{EvalContext, EvalRequest, image_for_screen_height};
 use frond_render::Renderer;
-use frond_scene::Tree;
+use frond_scene::{ImportOptions, Tree};
 
 use crate::output_set::OutputSet;
 
@@ -21,6 +23,8 @@ use crate::output_set::OutputSet;
 pub struct LodRequest {
     pub chain: ChainRequest,
     pub animation: AnimationMode,
+    /// Measure each LOD's coverage error on its written file against this target (None: skip).
+    pub measure: Option<f64>,
     /// Add MSFT_lod to the combined file, with coverages for an image `resolution` high.
     pub msft_lod: bool,
     pub resolution: f32,
@@ -118,21 +122,101 @@ pub fn run_lod(
         set.stage(rel, bytes)?;
     }
     read_back_costs(&set, &mut report)?;
+    if let Some(max_error) = req.measure {
+        progress("measuring each LOD's error");
+        let t = Instant::now();
+        measure_errors(renderer, tree, &set, &mut report, max_error)?;
+        report.timings_s["measure"] = serde_json::json!(t.elapsed().as_secs_f64());
+    }
     let json = serde_json::to_vec_pretty(&report).context("serialising the report")?;
     set.commit(&json)?;
     Ok(report)
+}
+
+/// Views and frames of the measured error: `frond eval`'s defaults, so the report's number is
+/// the one `frond eval INPUT LOD --screen-height H` prints.
+const MEASURE_VIEWS: u32 = 5;
+const MEASURE_FRAMES: u32 = 5;
+
+/// Fills each billboard or card LOD's `error` with its animated coverage error at its own
+/// screen height, read from its staged file as `frond eval` reads a candidate, and warns (in
+/// the log and the report) about every LOD over `max_error`.
+fn measure_errors(
+    renderer: &Renderer,
+    tree: &Tree,
+    set: &OutputSet,
+    report: &mut LodReport,
+    max_error: f64,
+) -> Result<()> {
+    let path = tree.source.display().to_string();
+    let unlimited = unlimited();
+    let req = EvalRequest {
+        views: MEASURE_VIEWS,
+        frames: MEASURE_FRAMES,
+        size: (0, 0),
+        // Only the loop's start and period are used: the frames' times.
+        samples: 2,
+        clip: report.clip.clone(),
+        limits: unlimited,
+    };
+    let mut ctx = EvalContext::new(renderer, tree, &req)
+        .with_context(|| format!("{path}: sampling the input to measure the LODs"))?;
+    for entry in &mut report.lods {
+        let Some(h) = entry.screen_height else {
+            continue;
+        };
+        let staged = set
+            .staged_path(&entry.file)
+            .with_context(|| format!("{}: not among the files written", entry.file))?;
+        let lod = frond_scene::import(
+            &staged,
+            &ImportOptions {
+                allow_empty: true,
+                limits: unlimited,
+                ..Default::default()
+            },
+        )
+        .with_context(|| format!("{}: reading back what was written", entry.file))?;
+        let size = image_for_screen_height(h.round().max(1.0) as u32);
+        let coverage = ctx
+            .coverage(&lod, size)
+            .with_context(|| format!("{}: measuring its error", entry.file))?;
+        let within_target = coverage.mean <= max_error;
+        if !within_target {
+            let w = format!(
+                "{}: coverage error {:.3} at {h} px is over the target {max_error} (--max-error): \
+                 written at its budget",
+                entry.file, coverage.mean
+            );
+            tracing::warn!("{w}");
+            report.warnings.push(w);
+        }
+        entry.error = Some(MeasuredError {
+            coverage: coverage.mean,
+            max_error,
+            within_target,
+            image: [size.0, size.1],
+            views: MEASURE_VIEWS,
+            frames: MEASURE_FRAMES,
+        });
+    }
+    Ok(())
+}
+
+/// Limits for reading frond's own files: none is a safety matter (the input passed its own).
+fn unlimited() -> frond_scene::InputLimits {
+    frond_scene::InputLimits {
+        max_input_bytes: u64::MAX,
+        max_texture_bytes: u64::MAX,
+        max_vertices: u64::MAX,
+    }
 }
 
 /// Fills each LOD's cost from its written file (staged, with its external textures), as an
 /// engine would count it (`frond_scene::file_cost`), and its alpha-tested area relative to
 /// LOD0's (the input's leaf cards): the overdraw its foliage asks for.
 fn read_back_costs(set: &OutputSet, report: &mut LodReport) -> Result<()> {
-    // Our own files: no limit is a safety matter here (the input passed its limits).
-    let limits = frond_scene::InputLimits {
-        max_input_bytes: u64::MAX,
-        max_texture_bytes: u64::MAX,
-        max_vertices: u64::MAX,
-    };
+    let limits = unlimited();
     for entry in &mut report.lods {
         let path = set
             .staged_path(&entry.file)

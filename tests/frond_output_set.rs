@@ -30,6 +30,7 @@ fn lod(out: &Path, lods: &str, seed: &str, fault: Option<&str>) -> Output {
             "8",
             "--planes",
             "30",
+            "--no-measure",
             "--lods",
             lods,
             "--seed",
@@ -291,7 +292,15 @@ fn two_trees_share_a_folder_and_a_rerun_keeps_the_other_tree() {
             .arg(input)
             .arg("-o")
             .arg(&work)
-            .args(["--samples", "8", "--planes", "30", "--lods", lods])
+            .args([
+                "--samples",
+                "8",
+                "--planes",
+                "30",
+                "--no-measure",
+                "--lods",
+                lods,
+            ])
             .args(["--animation", "vat"])
             .env("XDG_RUNTIME_DIR", std::env::temp_dir())
             .output()

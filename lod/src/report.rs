@@ -37,6 +37,9 @@ pub struct LodEntry {
     pub alpha_tested_area_ratio: Option<f64>,
     /// What the LOD was allowed to spend (None for LOD0).
     pub budget: Option<crate::chain::LodBudget>,
+    /// The LOD's coverage error at its own screen height, measured on the written file (None
+    /// for LOD0, or when `frond lod --no-measure` skipped it).
+    pub error: Option<MeasuredError>,
     pub clips: Vec<String>,
     pub dropped: DroppedReport,
     pub vat: Option<Vec<String>>,
@@ -56,13 +59,35 @@ pub struct LodEntry {
     pub timings_s: LodTimings,
 }
 
+/// A LOD's animated coverage error (spec animated-billboard-clouds §5.4) at its own screen
+/// height: the same number `frond eval INPUT LOD --screen-height H` prints as
+/// `coverage.animated.mean` (same views, frames and image size).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MeasuredError {
+    /// Mean over views and frames of (pixels covered by exactly one of the two) / (pixels
+    /// the input covers); 0 is perfect.
+    pub coverage: f64,
+    /// The target it was measured against (`--max-error`).
+    pub max_error: f64,
+    /// Whether `coverage ≤ max_error`; a LOD over its target is still written, at its budget,
+    /// with a warning (issue 17: budgets take precedence over the error target).
+    pub within_target: bool,
+    /// Image size of the metric: the screen height, 4:3.
+    pub image: [u32; 2],
+    pub views: u32,
+    pub frames: u32,
+}
+
 /// What a LOD left out, and why.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct DroppedReport {
     #[serde(flatten)]
     pub budget: Dropped,
-    /// Wood triangles removed by simplification within `wood_error` world units.
+    /// Wood triangles removed, by simplification within `wood_error` world units and with
+    /// the pieces dropped.
     pub wood_triangles: usize,
+    /// Wood pieces (branch tubes) dropped for being narrower than `wood_error`.
+    pub wood_pieces: usize,
     pub wood_error: f32,
     /// Input clips not written, with the reason.
     pub clips: Vec<String>,

@@ -2,16 +2,25 @@
 //! a card LOD's leaf texture) is written no larger than the LOD's texel density asks for: one
 //! texel per screen pixel at the LOD's screen height (spec view-dependent-hierarchies-gpu
 //! §2.4, Holst's texture budget), where the density a map has on the mesh is measured from the
-//! mesh's UVs. Sizes stay powers of two when the input's were, and never grow.
+//! mesh's UVs; alpha-tested maps keep [`ALPHA_TESTED_TEXELS_PER_PIXEL`] texels per pixel.
+//! Sizes stay powers of two when the input's were, and never grow.
 
 use std::collections::BTreeMap;
 
 use frond_scene::wood::WoodMesh;
-use frond_scene::{Tree, visit_texture_infos};
+use frond_scene::{AlphaMode, Tree, visit_texture_infos};
 
 /// Size each image (index into `Tree::images`) is written at in a LOD, where smaller than the
 /// input's; images not listed are written as the input had them.
 pub type ImageSizes = BTreeMap<usize, [u32; 2]>;
+
+/// Texels per screen pixel an alpha-tested (`MASK`) material's maps keep: the alpha test turns
+/// the texture's outline into the leaf's, and at one texel per pixel filtering moves that
+/// outline by a pixel. Measured on pine_medium's card LODs (coverage error at 600/200/60 px,
+/// issue 17): 0.107/0.214/0.83 at 1 texel per pixel, 0.043/0.127/0.60 at 4, for 82 KB of
+/// texture at most against the input's 20 MB; the sample's did not change (its leaf map is
+/// already small).
+pub const ALPHA_TESTED_TEXELS_PER_PIXEL: f32 = 4.0;
 
 /// Smallest side a downscaled image keeps.
 pub const MIN_IMAGE_SIDE: u32 = 4;
@@ -117,10 +126,11 @@ fn shrink(side: u32, s: f32) -> u32 {
     want.min(side)
 }
 
-/// The image sizes of a LOD drawing `parts` at `texels_per_unit` (see the module docs): per
-/// primitive, the base-colour map's density on its triangles gives a scale ≤ 1 that every map
-/// of its material takes (they share the UV layout in practice); an image several primitives
-/// use gets the largest size any asks for.
+/// The image sizes of a LOD drawing `parts` at `texels_per_unit` (see the module docs;
+/// [`ALPHA_TESTED_TEXELS_PER_PIXEL`] times that for alpha-tested materials): per primitive, the
+/// base-colour map's density on its triangles gives a scale ≤ 1 that every map of its material
+/// takes (they share the UV layout in practice); an image several primitives use gets the
+/// largest size any asks for.
 pub fn lod_image_sizes(tree: &Tree, parts: &[WoodMesh], texels_per_unit: f32) -> ImageSizes {
     let mut scale: BTreeMap<usize, f32> = BTreeMap::new();
     for mesh in parts {
@@ -131,9 +141,13 @@ pub fn lod_image_sizes(tree: &Tree, parts: &[WoodMesh], texels_per_unit: f32) ->
             let base = material
                 .base_color_texture
                 .and_then(|t| tree.textures.get(t));
+            let wanted = match material.alpha_mode {
+                AlphaMode::Mask => ALPHA_TESTED_TEXELS_PER_PIXEL * texels_per_unit,
+                AlphaMode::Opaque | AlphaMode::Blend => texels_per_unit,
+            };
             let s = base
                 .and_then(|t| texel_density(mesh, &p.indices, t.width, t.height))
-                .map_or(1.0, |d| (texels_per_unit / d).min(1.0));
+                .map_or(1.0, |d| (wanted / d).min(1.0));
             for j in material_images(tree, p.material) {
                 let e = scale.entry(j).or_insert(0.0);
                 *e = e.max(s);

@@ -186,6 +186,43 @@ impl<'a> EvalContext<'a> {
         Ok(&self.masks[&size])
     }
 
+    /// `candidate`'s coverage masks at `size`, playing its clip `clip`.
+    fn candidate_masks(
+        &self,
+        candidate: &Tree,
+        clip: Option<usize>,
+        size: (u32, u32),
+    ) -> Result<CoverageMasks, EvalError> {
+        let (lo, hi) = self.bounds();
+        coverage_masks(
+            self.renderer,
+            &self.scenes(candidate, clip),
+            lo,
+            hi,
+            &self.params(size),
+        )
+        .map_err(EvalError::colour(&candidate.source, "colour metric"))
+    }
+
+    /// The animated coverage error of `candidate` with images of `size` (spec
+    /// animated-billboard-clouds §5.4): the animated colour metric [`EvalContext::evaluate`]
+    /// reports, alone — no per-triangle metrics, no file cost. `frond lod` measures each LOD's
+    /// error with it.
+    pub fn coverage(
+        &mut self,
+        candidate: &Tree,
+        size: (u32, u32),
+    ) -> Result<CoverageReport, EvalError> {
+        let cc = candidate_clip(candidate, self.sampled.clip.as_deref());
+        let cand_masks = self.candidate_masks(candidate, cc, size)?;
+        let all: Vec<usize> = (0..self.frame_times.len()).collect();
+        let original = self.original_masks(size)?;
+        compare_masks(original, &cand_masks, &all).map_err(EvalError::colour(
+            &candidate.source,
+            "animated colour metric",
+        ))
+    }
+
     /// Evaluates `candidate` with images of `size`; `same_file` (the two files have the same
     /// bytes) matches every triangle to itself.
     pub fn evaluate(
@@ -197,15 +234,7 @@ impl<'a> EvalContext<'a> {
         let t0 = Instant::now();
         let candidate_file = file_cost(&candidate.source, &self.limits).map_err(EvalError::Cost)?;
         let cc = candidate_clip(candidate, self.sampled.clip.as_deref());
-        let (lo, hi) = self.bounds();
-        let cand_masks = coverage_masks(
-            self.renderer,
-            &self.scenes(candidate, cc),
-            lo,
-            hi,
-            &self.params(size),
-        )
-        .map_err(EvalError::colour(&candidate.source, "colour metric"))?;
+        let cand_masks = self.candidate_masks(candidate, cc, size)?;
         let all: Vec<usize> = (0..self.frame_times.len()).collect();
         let original: &'a Tree = self.original;
         let orig_masks = self.original_masks(size)?;

@@ -347,6 +347,99 @@ impl WoodMesh {
         }
     }
 
+    /// The connected pieces of the mesh's triangles (over shared vertex indices: a leaf card,
+    /// a branch tube), each as `(primitive, triangle)` pairs, in order of first triangle.
+    pub fn pieces(&self) -> Vec<Vec<(usize, usize)>> {
+        let mut parent: Vec<usize> = (0..self.positions.len()).collect();
+        fn find(p: &mut [usize], mut i: usize) -> usize {
+            while p[i] != i {
+                p[i] = p[p[i]];
+                i = p[i];
+            }
+            i
+        }
+        let n = parent.len();
+        let valid = |t: &[u32]| t.iter().all(|&v| (v as usize) < n);
+        for p in &self.primitives {
+            for t in p.indices.chunks_exact(3).filter(|t| valid(t)) {
+                let a = find(&mut parent, t[0] as usize);
+                for &v in &t[1..] {
+                    let b = find(&mut parent, v as usize);
+                    if a != b {
+                        parent[b] = a;
+                    }
+                }
+            }
+        }
+        let mut index: HashMap<usize, usize> = HashMap::new();
+        let mut out: Vec<Vec<(usize, usize)>> = Vec::new();
+        for (pi, p) in self.primitives.iter().enumerate() {
+            for (ti, t) in p
+                .indices
+                .chunks_exact(3)
+                .enumerate()
+                .filter(|(_, t)| valid(t))
+            {
+                let root = find(&mut parent, t[0] as usize);
+                let k = *index.entry(root).or_insert_with(|| {
+                    out.push(Vec::new());
+                    out.len() - 1
+                });
+                out[k].push((pi, ti));
+            }
+        }
+        out
+    }
+
+    /// The mesh without its pieces ([`WoodMesh::pieces`]) thinner than `min_thickness`, and how
+    /// many were dropped. A piece's thickness is estimated as a tube's diameter,
+    /// `area / (π · length)`, its length the diagonal of its bounds: exact for a straight tube,
+    /// larger (so kept) for a curved one or a piece that is not a tube (a whole connected
+    /// tree). A far LOD drops branches narrower than a pixel this way: simplification cannot
+    /// collapse a closed tube, and a sub-pixel branch only aliases.
+    pub fn without_thin_pieces(&self, min_thickness: f32) -> (WoodMesh, usize) {
+        let pieces = self.pieces();
+        let mut primitives: Vec<WoodPrimitive> = self
+            .primitives
+            .iter()
+            .map(|p| WoodPrimitive {
+                material: p.material,
+                indices: Vec::new(),
+            })
+            .collect();
+        let mut dropped = 0;
+        for piece in &pieces {
+            let corners = |&(p, t): &(usize, usize)| {
+                let i = &self.primitives[p].indices[3 * t..3 * t + 3];
+                [0, 1, 2].map(|k| self.positions[i[k] as usize])
+            };
+            let area: f32 = piece
+                .iter()
+                .map(|pt| {
+                    let [a, b, c] = corners(pt);
+                    0.5 * (b - a).cross(c - a).length()
+                })
+                .sum();
+            let length = crate::model::Bounds::of(piece.iter().flat_map(corners)).diagonal();
+            let thickness = if length > 0.0 {
+                area / (std::f32::consts::PI * length)
+            } else {
+                0.0
+            };
+            if thickness < min_thickness {
+                dropped += 1;
+                continue;
+            }
+            for &(p, t) in piece {
+                primitives[p]
+                    .indices
+                    .extend_from_slice(&self.primitives[p].indices[3 * t..3 * t + 3]);
+            }
+        }
+        primitives.retain(|p| !p.indices.is_empty());
+        (self.with_primitives(primitives.into_iter()), dropped)
+    }
+
     /// Number of triangles over all primitives.
     pub fn triangles(&self) -> usize {
         self.primitives.iter().map(|p| p.indices.len() / 3).sum()
@@ -921,6 +1014,24 @@ mod tests {
             indices,
         });
         m
+    }
+
+    #[test]
+    fn thin_pieces_are_dropped_and_thick_ones_kept() {
+        // A trunk of diameter 0.4 and a twig of diameter 0.02, both 2 long, apart.
+        let mut m = tube(8, 12, 0.2, |t| Vec3::new(0.0, 2.0 * t, 0.0));
+        let twig = tube(8, 6, 0.01, |t| Vec3::new(1.0, 1.0, 2.0 * t));
+        m.append(&twig);
+        assert_eq!(m.pieces().len(), 2);
+        let (kept, dropped) = m.without_thin_pieces(0.1);
+        assert_eq!(dropped, 1);
+        assert_eq!(kept.triangles(), 7 * 12 * 2, "the trunk's triangles");
+        assert!(kept.positions.iter().all(|p| p.x.abs() <= 0.2 + 1e-6));
+        // The estimate is a straight tube's diameter, a little under it for a polygon.
+        let (_, none) = m.without_thin_pieces(0.015);
+        assert_eq!(none, 0);
+        let (empty, both) = m.without_thin_pieces(0.5);
+        assert_eq!((empty.triangles(), both), (0, 2));
     }
 
     /// Largest distance from the original's vertices to the simplified surface.

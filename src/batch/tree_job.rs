@@ -60,6 +60,9 @@ pub struct TreeContext {
 /// engine preset applied, written back as arguments.
 pub fn lod_args(ctx: &TreeContext, o: &Overrides) -> Result<Vec<String>> {
     let mut l = LodArgs::defaults(Path::new("tree.glb"), Path::new("out"));
+    // The batch measures with its own `eval` children when asked (`--eval`): the full report,
+    // not the error alone.
+    l.no_measure = true;
     if let Some(m) = &o.method {
         l.method = MethodArg::parse(m).with_context(|| format!("unknown method '{m}'"))?;
     }

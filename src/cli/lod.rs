@@ -16,6 +16,9 @@ use frond_lod::{
 use frond_render::Renderer;
 use frond_scene::Length;
 
+/// `--max-error`'s default.
+pub const DEFAULT_MAX_ERROR: f32 = 0.15;
+
 /// `frond lod`.
 #[derive(clap::Args, Clone, Debug, PartialEq)]
 pub struct LodArgs {
@@ -54,6 +57,17 @@ pub struct LodArgs {
     /// search widens ε and the wood is simplified further until a LOD fits.
     #[arg(long, default_value_t = 0.5, value_parser = parse_ratio)]
     pub triangle_ratio: f32,
+    /// Coverage error each LOD should stay within, seen at its own screen height (frond eval's
+    /// `coverage.animated.mean` at `--screen-height H`). Measured on the written files and
+    /// reported per LOD; a LOD over it is still written, at its budget, with a warning (budgets
+    /// come first). The default is the worst the default card LODs reach at 200 px on the
+    /// shared trees (0.14).
+    #[arg(long, default_value_t = DEFAULT_MAX_ERROR, value_parser = parse_ratio)]
+    pub max_error: f32,
+    /// Skip measuring each LOD's error after writing it (the measurement renders the input and
+    /// every LOD from five views over five frames at the LOD's size).
+    #[arg(long)]
+    pub no_measure: bool,
     /// Build each LOD at its screen size's ε and texel density alone, without the cost budgets
     /// (for experiments: such LODs may cost more than the input). The hard limits (at most 256
     /// joints per skin, no more than the input's) still hold.
@@ -139,6 +153,7 @@ impl LodArgs {
                 },
             },
             animation: self.animation.mode(),
+            measure: (!self.no_measure).then_some(f64::from(self.max_error)),
             msft_lod: self.msft_lod,
             resolution: self.resolution,
             external_textures: self.external_textures,
@@ -175,8 +190,14 @@ impl LodArgs {
             a.extend(["--epsilon".into(), e.to_string()]);
         }
         a.extend(["--triangle-ratio".into(), self.triangle_ratio.to_string()]);
-        if self.no_cost_budgets {
-            a.push("--no-cost-budgets".into());
+        a.extend(["--max-error".into(), self.max_error.to_string()]);
+        for (flag, on) in [
+            ("--no-measure", self.no_measure),
+            ("--no-cost-budgets", self.no_cost_budgets),
+        ] {
+            if on {
+                a.push(flag.into());
+            }
         }
         a.extend(["--animation".into(), self.animation.text().into()]);
         a.extend(self.run.to_args());

@@ -305,6 +305,8 @@ fn lod_run(
         // A grid point measures the method at the ε and size asked for: the chain's cost
         // budgets would widen ε to half the input's triangles.
         no_cost_budgets: true,
+        // The sweep evaluates every point itself.
+        no_measure: true,
         run: RunArgs {
             seed,
             ..req.lod.run.clone()

@@ -54,8 +54,8 @@ pub fn frond_ok(args: &[&str]) -> Output {
     out
 }
 
-/// Runs `frond lod INPUT -o OUT` with small test settings (16 samples, 60 candidate planes)
-/// plus `extra`, asserts it succeeded and returns its report (`<input stem>_report.json`).
+/// Runs `frond lod INPUT -o OUT` with small test settings (16 samples, 60 candidate planes, no
+/// error measurement: `tests/lod_error.rs` tests that) plus `extra`, asserts it succeeded and returns its report (`<input stem>_report.json`).
 pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
     let mut args = vec![
         "lod",
@@ -66,6 +66,7 @@ pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value 
         "16",
         "--planes",
         "60",
+        "--no-measure",
     ];
     args.extend_from_slice(extra);
     frond_ok(&args);

@@ -1,10 +1,9 @@
 //! `cards`: the input's own leaf cards, thinned (issue 17 item 6, the *card LOD*; SpeedTree's
-//! leaf reduction and ez-tree's LODs do the same): a seeded random subset of the cards is
-//! kept within the LOD's triangle budget and each survivor is scaled about its centre so that
-//! the cards together keep the input's leaf area, and so roughly its coverage. The cards stay
+//! leaf reduction and ez-tree's LODs do the same): the cards that add least to the tree's
+//! silhouette at the LOD's pixel size are dropped until the rest fit the LOD's triangle
+//! budget ([`crate::methods::card_coverage`]), and the survivors are grown about their centres
+//! by the scale that brings their coverage closest to the input's. The cards stay
 //! skinned as in the input and share its leaf material and texture: no bake, no atlas.
-
-use std::collections::HashMap;
 
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
@@ -13,11 +12,11 @@ use serde::Serialize;
 
 use frond_scene::wood::WoodMesh;
 use frond_scene::{Part, Rig, Tree};
-use glam::Vec3;
 
 use crate::chain::part_mesh;
 use crate::error::LodError;
 use crate::method::{BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput};
+use crate::methods::card_coverage::{CardCoverage, card_centre};
 
 /// The `cards` method; it has no options.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -54,7 +53,7 @@ impl ClusteringMethod for Cards {
             return Err(LodError::NoFoliage(ctx.tree.source.display().to_string()));
         }
         let max_triangles = ctx.max_foliage_triangles.unwrap_or(usize::MAX);
-        let mut cards = thin_cards(&foliage, max_triangles, ctx.seed);
+        let mut cards = thin_cards(ctx.tree, &foliage, max_triangles, ctx.level.pixel, ctx.seed);
         cards.rig = ctx.tree.rig.clone();
         Ok(MethodOutput {
             foliage: Foliage::Cards(cards),
@@ -62,43 +61,6 @@ impl ClusteringMethod for Cards {
             report: Default::default(),
         })
     }
-}
-
-/// The connected pieces of `mesh`'s triangles (over shared vertex indices), as lists of
-/// (primitive, triangle) in order of first triangle.
-fn pieces(mesh: &WoodMesh) -> Vec<Vec<(usize, usize)>> {
-    let mut parent: Vec<usize> = (0..mesh.positions.len()).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
-    for p in &mesh.primitives {
-        for t in p.indices.chunks_exact(3) {
-            let a = find(&mut parent, t[0] as usize);
-            for &v in &t[1..] {
-                let b = find(&mut parent, v as usize);
-                if a != b {
-                    parent[b] = a;
-                }
-            }
-        }
-    }
-    let mut index: HashMap<usize, usize> = HashMap::new();
-    let mut out: Vec<Vec<(usize, usize)>> = Vec::new();
-    for (pi, p) in mesh.primitives.iter().enumerate() {
-        for (ti, t) in p.indices.chunks_exact(3).enumerate() {
-            let root = find(&mut parent, t[0] as usize);
-            let k = *index.entry(root).or_insert_with(|| {
-                out.push(Vec::new());
-                out.len() - 1
-            });
-            out[k].push((pi, ti));
-        }
-    }
-    out
 }
 
 /// Triangles a foliage piece may have and still count as one card: a quad (2), or a quad cut
@@ -110,7 +72,7 @@ pub const CARD_TRIANGLES: usize = 4;
 /// thinning a mesh of leaf clusters would punch holes in them.
 pub fn is_card_foliage(tree: &Tree) -> bool {
     let mesh = WoodMesh::from_tree_part(tree, Part::Foliage);
-    let pieces = pieces(&mesh);
+    let pieces = mesh.pieces();
     if pieces.is_empty() {
         return false;
     }
@@ -125,27 +87,40 @@ fn triangle_area(mesh: &WoodMesh, p: usize, t: usize) -> f32 {
     0.5 * (b - a).cross(c - a).length()
 }
 
-/// Keeps a seeded random subset of `foliage`'s cards with at most `max_triangles` triangles
-/// (at least one card), each scaled about its centre by `√(all cards' area / kept area)`.
-pub fn thin_cards(foliage: &WoodMesh, max_triangles: usize, seed: u64) -> CardFoliage {
-    let cards = pieces(foliage);
+/// Scales tried for the kept cards, from 1 to `√(all cards' area / kept area)` (the scale that
+/// keeps the leaf area): where cards overlap, growing them by the full ratio covers pixels the
+/// input left open.
+const SCALE_STEPS: usize = 5;
+
+/// Keeps the cards of `foliage` that matter most to its silhouette at `pixel` world units per
+/// pixel, at most `max_triangles` triangles of them (at least one card; see
+/// [`CardCoverage::thin`]), each scaled about its centre by the scale whose coverage is
+/// closest to the input's ([`CardCoverage::best_scale`]). `seed` orders cards that are equally
+/// redundant.
+pub fn thin_cards(
+    tree: &Tree,
+    foliage: &WoodMesh,
+    max_triangles: usize,
+    pixel: f32,
+    seed: u64,
+) -> CardFoliage {
+    let cards = foliage.pieces();
     let area: Vec<f32> = cards
         .iter()
         .map(|c| c.iter().map(|&(p, t)| triangle_area(foliage, p, t)).sum())
         .collect();
-    let mut order: Vec<usize> = (0..cards.len()).collect();
+    let mut order: Vec<u32> = (0..cards.len() as u32).collect();
     order.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
-    let mut keep = vec![false; cards.len()];
-    let mut triangles = 0;
-    let mut kept = 0;
-    for &c in &order {
-        if kept > 0 && triangles + cards[c].len() > max_triangles {
-            continue;
-        }
-        keep[c] = true;
-        triangles += cards[c].len();
-        kept += 1;
+    let mut tie = vec![0u32; cards.len()];
+    for (rank, &c) in order.iter().enumerate() {
+        tie[c as usize] = rank as u32;
     }
+    let triangles: Vec<usize> = cards.iter().map(Vec::len).collect();
+    let t0 = std::time::Instant::now();
+    let coverage = CardCoverage::new(tree, foliage, &cards, &tree.bounds, pixel);
+    let keep = coverage.thin(&triangles, max_triangles, &tie);
+    let t1 = std::time::Instant::now();
+    let kept = keep.iter().filter(|k| **k).count();
     let total: f32 = area.iter().sum();
     let kept_area: f32 = area
         .iter()
@@ -153,27 +128,38 @@ pub fn thin_cards(foliage: &WoodMesh, max_triangles: usize, seed: u64) -> CardFo
         .filter(|(_, k)| **k)
         .map(|(a, _)| a)
         .sum();
-    let scale = if kept_area > 0.0 {
-        (total / kept_area).sqrt()
-    } else {
+    let scale = if kept == cards.len() {
         1.0
+    } else {
+        let most = if kept_area > 0.0 {
+            (total / kept_area).sqrt()
+        } else {
+            1.0
+        };
+        let steps: Vec<f32> = (0..SCALE_STEPS)
+            .map(|k| 1.0 + (most - 1.0) * k as f32 / (SCALE_STEPS - 1) as f32)
+            .collect();
+        coverage.best_scale(&keep, &steps)
     };
+    tracing::debug!(
+        "cards: {} of {} kept in {:.2} s, scale {scale} chosen in {:.2} s",
+        kept,
+        cards.len(),
+        (t1 - t0).as_secs_f64(),
+        t1.elapsed().as_secs_f64()
+    );
     let mut mesh = foliage.clone();
     for p in &mut mesh.primitives {
         p.indices.clear();
     }
     for (_, tris) in cards.iter().enumerate().filter(|(c, _)| keep[*c]) {
+        let centre = card_centre(foliage, tris);
         let mut verts: Vec<u32> = tris
             .iter()
             .flat_map(|&(p, t)| foliage.primitives[p].indices[3 * t..3 * t + 3].to_vec())
             .collect();
         verts.sort_unstable();
         verts.dedup();
-        let centre: Vec3 = verts
-            .iter()
-            .map(|&v| foliage.positions[v as usize])
-            .sum::<Vec3>()
-            / verts.len() as f32;
         for &v in &verts {
             let p = &mut mesh.positions[v as usize];
             *p = centre + (*p - centre) * scale;

@@ -1,5 +1,6 @@
 //! The clustering methods, one file each (see [`crate::method`]).
 
+pub mod card_coverage;
 pub mod cards;
 pub mod per_bone;
 pub mod skeleton;

@@ -1,0 +1,79 @@
+//! Each LOD's error at its own size (issue 17 item 5): `frond lod` measures it on the written
+//! files and reports the number `frond eval INPUT LOD --screen-height H` gives, warns about a
+//! LOD over `--max-error` and writes it all the same; the card LODs of the sample stay within
+//! the errors their coverage-driven thinning reached when it was written.
+
+mod common;
+
+use common::*;
+
+/// Runs `frond lod` on the sample at `lods` with the error measured against `max_error`;
+/// returns the report.
+fn measured_chain(out: &std::path::Path, lods: &str, max_error: &str) -> serde_json::Value {
+    let sample = root().join("samples/sapling.glb");
+    frond_ok(&[
+        "lod",
+        sample.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+        "--samples",
+        "16",
+        "--lods",
+        lods,
+        "--max-error",
+        max_error,
+    ]);
+    let report = std::fs::read(out.join("sapling_report.json")).expect("report");
+    serde_json::from_slice(&report).expect("JSON")
+}
+
+#[test]
+fn the_report_gives_each_lods_error_as_frond_eval_measures_it() {
+    let out = tempfile::tempdir().expect("tempdir");
+    let report = measured_chain(out.path(), "200,60", "0.15");
+    let lods = report["lods"].as_array().expect("lods");
+    assert_eq!(lods.len(), 3);
+    assert!(lods[0]["error"].is_null(), "LOD0 is the input");
+    let sample = root().join("samples/sapling.glb");
+    // The card LODs' errors when coverage-driven thinning was written: 0.093 and 0.216.
+    for (lod, (h, bound)) in lods[1..].iter().zip([(200u32, 0.12), (60, 0.26)]) {
+        let file = lod["file"].as_str().expect("file");
+        let e = &lod["error"];
+        let coverage = e["coverage"].as_f64().expect("coverage");
+        let eval = frond_ok(&[
+            "eval",
+            sample.to_str().expect("utf-8"),
+            out.path().join(file).to_str().expect("utf-8"),
+            "--screen-height",
+            &h.to_string(),
+            "--json",
+        ]);
+        let eval: serde_json::Value = serde_json::from_slice(&eval.stdout).expect("eval JSON");
+        let measured = eval["coverage"]["animated"]["mean"].as_f64().expect("mean");
+        assert!(
+            (coverage - measured).abs() < 1e-9,
+            "{file}: report {coverage}, frond eval {measured}"
+        );
+        assert_eq!(e["image"], serde_json::json!([(h * 4).div_ceil(3), h]));
+        assert_eq!(e["within_target"], coverage <= 0.15);
+        assert_eq!(lod["method"], "cards");
+        assert!(coverage <= bound, "{file}: error {coverage} at {h} px");
+    }
+}
+
+#[test]
+fn a_lod_over_its_error_target_is_written_with_a_warning() {
+    let out = tempfile::tempdir().expect("tempdir");
+    let report = measured_chain(out.path(), "40", "0.01");
+    let lod = &report["lods"][1];
+    let file = lod["file"].as_str().expect("file");
+    assert!(out.path().join(file).is_file(), "{file} is written");
+    assert_eq!(lod["error"]["within_target"], false);
+    let warnings = report["warnings"].as_array().expect("warnings");
+    assert!(
+        warnings.iter().any(|w| w
+            .as_str()
+            .is_some_and(|w| w.contains(file) && w.contains("--max-error"))),
+        "{warnings:?}"
+    );
+}
