@@ -20,24 +20,19 @@ use common::*;
 
 const SAMPLE: &str = "samples/sapling.glb";
 
+/// Small settings for every `frond lod` here: few samples and planes, no error measurement.
+const QUICK: [&str; 5] = ["--samples", "8", "--planes", "30", "--no-measure"];
+
 /// `frond lod` of the sample into `out` with small settings, `FROND_FAULT` as given.
 fn lod(out: &Path, lods: &str, seed: &str, fault: Option<&str>) -> Output {
     let mut c = Command::new(env!("CARGO_BIN_EXE_frond"));
     c.args(["lod", SAMPLE, "-o"])
         .arg(out)
+        .args(QUICK)
         .args([
-            "--samples",
-            "8",
-            "--planes",
-            "30",
-            "--no-measure",
-            "--lods",
-            lods,
-            "--seed",
-            seed,
+            "--lods", lods, "--seed", seed,
             // Billboards: their LODs have the most files (mappings beside the GLBs).
-            "--method",
-            "static",
+            "--method", "static",
         ])
         .current_dir(root())
         .env("XDG_RUNTIME_DIR", std::env::temp_dir())
@@ -292,15 +287,8 @@ fn two_trees_share_a_folder_and_a_rerun_keeps_the_other_tree() {
             .arg(input)
             .arg("-o")
             .arg(&work)
-            .args([
-                "--samples",
-                "8",
-                "--planes",
-                "30",
-                "--no-measure",
-                "--lods",
-                lods,
-            ])
+            .args(QUICK)
+            .args(["--lods", lods])
             .args(["--animation", "vat"])
             .env("XDG_RUNTIME_DIR", std::env::temp_dir())
             .output()

@@ -429,14 +429,20 @@ fn card(tree: &Tree, foliage: &WoodMesh, tris: &[(usize, usize)]) -> Card {
     }
 }
 
-/// The mean of the distinct vertices of card `tris` of `foliage`: what a card is scaled about.
-pub fn card_centre(foliage: &WoodMesh, tris: &[(usize, usize)]) -> Vec3 {
+/// The distinct vertices (ascending) of card `tris` of `foliage`.
+pub fn card_vertices(foliage: &WoodMesh, tris: &[(usize, usize)]) -> Vec<u32> {
     let mut verts: Vec<u32> = tris
         .iter()
         .flat_map(|&(p, t)| foliage.primitives[p].indices[3 * t..3 * t + 3].to_vec())
         .collect();
     verts.sort_unstable();
     verts.dedup();
+    verts
+}
+
+/// The mean of the distinct vertices of card `tris` of `foliage`: what a card is scaled about.
+pub fn card_centre(foliage: &WoodMesh, tris: &[(usize, usize)]) -> Vec3 {
+    let verts = card_vertices(foliage, tris);
     verts
         .iter()
         .map(|&v| foliage.positions[v as usize])

@@ -16,7 +16,7 @@ use frond_scene::{Part, Rig, Tree};
 use crate::chain::part_mesh;
 use crate::error::LodError;
 use crate::method::{BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput};
-use crate::methods::card_coverage::{CardCoverage, card_centre};
+use crate::methods::card_coverage::{CardCoverage, card_centre, card_vertices};
 
 /// The `cards` method; it has no options.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -154,13 +154,7 @@ pub fn thin_cards(
     }
     for (_, tris) in cards.iter().enumerate().filter(|(c, _)| keep[*c]) {
         let centre = card_centre(foliage, tris);
-        let mut verts: Vec<u32> = tris
-            .iter()
-            .flat_map(|&(p, t)| foliage.primitives[p].indices[3 * t..3 * t + 3].to_vec())
-            .collect();
-        verts.sort_unstable();
-        verts.dedup();
-        for &v in &verts {
+        for v in card_vertices(foliage, tris) {
             let p = &mut mesh.positions[v as usize];
             *p = centre + (*p - centre) * scale;
         }
