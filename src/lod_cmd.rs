@@ -153,6 +153,7 @@ fn measure_errors(
     let req = EvalRequest {
         views: MEASURE_VIEWS,
         frames: MEASURE_FRAMES,
+        // Unused here: each LOD is measured at its own size (`EvalContext::coverage`).
         size: (0, 0),
         // Only the loop's start and period are used: the frames' times.
         samples: 2,

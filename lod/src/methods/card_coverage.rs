@@ -13,6 +13,7 @@
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
+use std::sync::OnceLock;
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -91,21 +92,23 @@ impl AlphaMap {
 }
 
 /// The input's cards seen from the views, with the samples' cover counts.
-pub struct CardCoverage<'a> {
+pub struct CardCoverage {
     /// Per texture of the tree, its alpha map when some card samples it.
     alpha_maps: Vec<Option<AlphaMap>>,
-    _tree: std::marker::PhantomData<&'a Tree>,
+    /// Every view's coverage by all cards, unscaled: what thinning is judged against. Read off
+    /// [`CardCoverage::thin`]'s cover counts when it ran, else rasterised on first use.
+    original: OnceLock<Vec<Vec<bool>>>,
     views: Vec<View>,
     /// World units per sample.
     spacing: f32,
     cards: Vec<Card>,
 }
 
-impl<'a> CardCoverage<'a> {
+impl CardCoverage {
     /// The cards `pieces` of `foliage` (as `(primitive, triangle)` lists) seen at `pixel` world
     /// units per pixel; `bounds` frames every view.
     pub fn new(
-        tree: &'a Tree,
+        tree: &Tree,
         foliage: &WoodMesh,
         pieces: &[Vec<(usize, usize)>],
         bounds: &Bounds,
@@ -134,7 +137,7 @@ impl<'a> CardCoverage<'a> {
         }
         CardCoverage {
             alpha_maps,
-            _tree: std::marker::PhantomData,
+            original: OnceLock::new(),
             views,
             spacing,
             cards,
@@ -236,14 +239,19 @@ impl<'a> CardCoverage<'a> {
                 (count, xor)
             })
             .collect();
+        let _ = self.original.set(
+            buffers
+                .iter()
+                .map(|(count, _)| count.iter().map(|&k| k > 0).collect())
+                .collect(),
+        );
         let mut unique = vec![0u64; n];
-        for (v, (count, xor)) in self.views.iter().zip(&buffers) {
+        for (count, xor) in &buffers {
             for (s, &k) in count.iter().enumerate() {
                 if k == 1 {
                     unique[xor[s] as usize] += 1;
                 }
             }
-            debug_assert_eq!(count.len(), v.width * v.height);
         }
         // Lazy min-heap on samples lost per triangle freed; a card's own count only grows as
         // others go, so an entry is current when it matches.
@@ -283,10 +291,12 @@ impl<'a> CardCoverage<'a> {
     /// centre, cover samples closest to all cards' coverage ([`CardCoverage::differing`]),
     /// searched upwards until the count rises; ties go to the earlier scale.
     pub fn best_scale(&self, keep: &[bool], candidates: &[f32]) -> f32 {
-        let original = self.masks(&vec![true; self.cards.len()], 1.0);
+        let original = self
+            .original
+            .get_or_init(|| self.masks(&vec![true; self.cards.len()], 1.0));
         let mut best = (u64::MAX, 1.0);
         for &s in candidates {
-            let differing = self.differing(&original, keep, s);
+            let differing = self.differing(original, keep, s);
             if differing >= best.0 {
                 // Growing the cards first fills the holes thinning left, then covers what the
                 // input left open: the count falls, then rises, so the first rise ends it.
@@ -490,6 +500,8 @@ mod tests {
         order[..kept].iter().for_each(|&c| random[c] = true);
 
         let original = coverage.masks(&vec![true; n], 1.0);
+        // Thinning read the same coverage off its cover counts.
+        assert_eq!(coverage.original.get(), Some(&original));
         assert_eq!(coverage.differing(&original, &vec![true; n], 1.0), 0);
         let greedy = coverage.differing(&original, &keep, 1.0);
         let random = coverage.differing(&original, &random, 1.0);
