@@ -9,21 +9,9 @@ use std::path::Path;
 use common::*;
 
 fn eval(original: &Path, candidate: &Path, extra: &[&str]) -> serde_json::Value {
-    let mut args = vec![
-        "eval",
-        original.to_str().expect("utf-8"),
-        candidate.to_str().expect("utf-8"),
-        "--json",
-        "--samples",
-        "16",
-        "--views",
-        "3",
-        "--frames",
-        "3",
-    ];
+    let mut args = vec!["--samples", "16", "--views", "3", "--frames", "3"];
     args.extend_from_slice(extra);
-    let out = frond_ok(&args);
-    serde_json::from_slice(&out.stdout).expect("JSON report")
+    frond_eval(original, candidate, &args)
 }
 
 const METRICS: [&str; 8] = [

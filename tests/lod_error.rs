@@ -11,20 +11,7 @@ use common::*;
 /// returns the report.
 fn measured_chain(out: &std::path::Path, lods: &str, max_error: &str) -> serde_json::Value {
     let sample = root().join("samples/sapling.glb");
-    frond_ok(&[
-        "lod",
-        sample.to_str().expect("utf-8"),
-        "-o",
-        out.to_str().expect("utf-8"),
-        "--samples",
-        "16",
-        "--lods",
-        lods,
-        "--max-error",
-        max_error,
-    ]);
-    let report = std::fs::read(out.join("sapling_report.json")).expect("report");
-    serde_json::from_slice(&report).expect("JSON")
+    frond_lod_measured(&sample, out, &["--lods", lods, "--max-error", max_error])
 }
 
 #[test]
@@ -40,15 +27,11 @@ fn the_report_gives_each_lods_error_as_frond_eval_measures_it() {
         let file = lod["file"].as_str().expect("file");
         let e = &lod["error"];
         let coverage = e["coverage"].as_f64().expect("coverage");
-        let eval = frond_ok(&[
-            "eval",
-            sample.to_str().expect("utf-8"),
-            out.path().join(file).to_str().expect("utf-8"),
-            "--screen-height",
-            &h.to_string(),
-            "--json",
-        ]);
-        let eval: serde_json::Value = serde_json::from_slice(&eval.stdout).expect("eval JSON");
+        let eval = frond_eval(
+            &sample,
+            &out.path().join(file),
+            &["--screen-height", &h.to_string()],
+        );
         let measured = eval["coverage"]["animated"]["mean"].as_f64().expect("mean");
         assert!(
             (coverage - measured).abs() < 1e-9,

@@ -261,7 +261,9 @@ fn screen_height_grid_and_a_run_past_its_limit() {
     assert!(num(far, "billboards") < num(near, "billboards"));
     assert_eq!(summary["failed"], 0);
 
-    // A build that cannot finish in a second is stopped and listed with its reason.
+    // A build that cannot finish in a second is stopped and listed with its reason (billboards
+    // merging several cards, baked at 16×16 supersampling: at ε = 0 every billboard copies its
+    // card and nothing is baked).
     let slow = dir.path().join("slow");
     let summary = sweep(
         &slow,
@@ -269,7 +271,7 @@ fn screen_height_grid_and_a_run_past_its_limit() {
             "--method",
             "per-bone",
             "--epsilon",
-            "0",
+            "2%",
             "--supersample",
             "16",
             "--seeds",

@@ -429,6 +429,12 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
         .iter()
         .map(|l| usize_of(&l["billboards"]).expect("billboard count"))
         .collect();
+    // Billboards that copy an input card (the hybrid cloud) are drawn by a primitive of their
+    // own, after the baked ones'.
+    let copies: Vec<usize> = lods
+        .iter()
+        .map(|l| usize_of(&l["input_textured_billboards"]).unwrap_or(0))
+        .collect();
     let mut files: Vec<PathBuf> = lods
         .iter()
         .map(|l| out.join(l["file"].as_str().expect("file name")))
@@ -503,7 +509,8 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
             a.max_distance
         );
 
-        // Billboards: the first primitive of each billboard LOD's mesh node, 4 vertices each.
+        // Billboards: the first primitives of each billboard LOD's mesh node (the baked ones',
+        // then the copies' on the sample's one leaf material), 4 vertices each.
         let json = gltf_json(file);
         let nodes = json["nodes"].as_array().expect("nodes");
         for (k, &count) in billboards.iter().enumerate().skip(1) {
@@ -514,18 +521,30 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
             else {
                 continue;
             };
-            let mesh = play
-                .meshes
-                .iter()
-                .find(|m| m.node == Some(ni) && m.primitive == Some(0))
-                .unwrap_or_else(|| panic!("{label}: three.js has no primitive 0 of {name}"));
-            assert!(mesh.skinned, "{label}: {name}'s billboards are skinned");
+            let primitives = usize::from(count > copies[k]) + usize::from(copies[k] > 0);
+            let meshes: Vec<&ThreeMesh> = (0..primitives)
+                .map(|p| {
+                    play.meshes
+                        .iter()
+                        .find(|m| m.node == Some(ni) && m.primitive == Some(p))
+                        .unwrap_or_else(|| {
+                            panic!("{label}: three.js has no primitive {p} of {name}")
+                        })
+                })
+                .collect();
+            assert!(
+                meshes.iter().all(|m| m.skinned),
+                "{label}: {name}'s billboards are skinned"
+            );
             assert_eq!(
-                mesh.positions[0].len(),
+                meshes.iter().map(|m| m.positions[0].len()).sum::<usize>(),
                 4 * count,
                 "{label}: {name} has 4 vertices per billboard"
             );
-            let d = max_displacement(mesh);
+            let d = meshes
+                .iter()
+                .map(|m| max_displacement(m))
+                .fold(0.0, f32::max);
             eprintln!("{label}: {name} billboards ({count}) move up to {d:.3e} in three.js");
             // Far above float noise (the wind moves them by ~2 m; 100 × tolerance is 0.1 m).
             assert!(

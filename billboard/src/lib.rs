@@ -11,9 +11,11 @@ pub mod plane_search;
 pub mod quad;
 pub mod rectangle;
 pub mod soup;
+pub mod source_copy;
 
 pub use atlas::{Packing, pack};
 pub use bake::{Atlas, BakeError, BakeParams, BakedCloud, Cell, bake_cloud};
 pub use plane::Plane;
 pub use quad::Quad;
 pub use soup::TriangleSoup;
+pub use source_copy::{SourceCopy, source_copy};

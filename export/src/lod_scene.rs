@@ -10,8 +10,8 @@
 
 use std::collections::HashMap;
 
-use frond_lod::AnimatedBillboardCloud;
 use frond_lod::texture_budget::ImageSizes;
+use frond_lod::{AnimatedBillboardCloud, BillboardTexture};
 use frond_scene::Rig;
 use frond_scene::Tree;
 use frond_scene::gltf_writer::*;
@@ -63,6 +63,16 @@ pub struct LodNodes {
     pub rig_root: usize,
     pub clips: Vec<ClipChannels>,
     pub joints: usize,
+}
+
+/// The billboards of one texture: the atlas (`key` None) or an input material.
+struct TextureGroup {
+    key: Option<usize>,
+    prim: PrimitiveDesc,
+    /// Per vertex.
+    joints: Vec<[u16; 4]>,
+    /// Indices into the cloud's billboards, in order.
+    billboards: Vec<usize>,
 }
 
 fn interpolation(i: Interpolation) -> WriteInterpolation {
@@ -149,17 +159,11 @@ pub fn add_lod(
     };
 
     let mut prims = Vec::new();
-    let mut vat_prim = None;
-    // Billboards.
+    let mut vat_prims = Vec::new();
+    // Billboards: one primitive for those baked into the atlas, one per input material for
+    // those that copy an input card (the hybrid cloud), in order of first use.
     if let Some(cloud) = lod.cloud {
-        let mat = sink.billboard_material(doc, &lod.name, &cloud.atlas)?;
-        let mut p = PrimitiveDesc {
-            normals: Some(Vec::new()),
-            uvs: Some(Vec::new()),
-            material: Some(mat),
-            ..Default::default()
-        };
-        let mut js = Vec::new();
+        let mut groups: Vec<TextureGroup> = Vec::new();
         let clock = &cloud.clock;
         let n = clock.samples.max(1);
         for (bi, b) in cloud.billboards.iter().enumerate() {
@@ -243,7 +247,45 @@ pub fn add_lod(
                     }
                 }
             };
-            for (c, uv) in b.quad.corners().iter().zip(&b.uv) {
+            let (key, texcoords) = match &b.texture {
+                BillboardTexture::Atlas => (None, None),
+                BillboardTexture::Input {
+                    material,
+                    texcoords,
+                } => (Some(*material), Some(texcoords)),
+            };
+            let g = match groups.iter().position(|g| g.key == key) {
+                Some(g) => g,
+                None => {
+                    let material = match key {
+                        None => sink.billboard_material(doc, &lod.name, &cloud.atlas)?,
+                        Some(m) => sink.tree_material(doc, lod.tree, m, lod.image_sizes)?,
+                    };
+                    groups.push(TextureGroup {
+                        key,
+                        prim: PrimitiveDesc {
+                            normals: Some(Vec::new()),
+                            uvs: Some(Vec::new()),
+                            material: Some(material),
+                            ..Default::default()
+                        },
+                        joints: Vec::new(),
+                        billboards: Vec::new(),
+                    });
+                    groups.len() - 1
+                }
+            };
+            let TextureGroup {
+                prim: p,
+                joints: js,
+                billboards: members,
+                ..
+            } = &mut groups[g];
+            let base = p.positions.len() as u32;
+            // The input's own TEXCOORD_0 where the copy has one (its material is written as
+            // the input had it), else the UVs the billboard samples.
+            let uvs = texcoords.and_then(|t| t.first()).unwrap_or(&b.uv);
+            for (c, uv) in b.quad.corners().iter().zip(uvs) {
                 p.positions.push(c.to_array());
                 if let Some(nrm) = p.normals.as_mut() {
                     nrm.push(b.quad.plane.normal.to_array());
@@ -253,23 +295,35 @@ pub fn add_lod(
                 }
                 js.push([joint, 0, 0, 0]);
             }
-            let base = (bi * 4) as u32;
             p.indices
                 .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+            members.push(bi);
         }
-        if let Some(sets) = &lod.vat_uvs {
-            p.extra_uvs = sets
-                .iter()
-                .map(|set| set.iter().flat_map(|uv| [*uv; 4]).collect())
-                .collect();
-            vat_prim = Some(p);
-        } else if !p.positions.is_empty() {
-            if let Some(rows) = &lod.spectral_uvs {
-                p.extra_uvs = vec![rows.iter().flat_map(|uv| [*uv; 4]).collect()];
+        for TextureGroup {
+            prim: mut p,
+            joints: js,
+            billboards: members,
+            ..
+        } in groups
+        {
+            // Per-billboard animation coordinates, on all four corners.
+            let per_corner = |rows: &[[f32; 2]]| -> Vec<[f32; 2]> {
+                members
+                    .iter()
+                    .flat_map(|&i| [rows.get(i).copied().unwrap_or_default(); 4])
+                    .collect()
+            };
+            if let Some(sets) = &lod.vat_uvs {
+                p.extra_uvs = sets.iter().map(|set| per_corner(set)).collect();
+                vat_prims.push(p);
+            } else if !p.positions.is_empty() {
+                if let Some(rows) = &lod.spectral_uvs {
+                    p.extra_uvs = vec![per_corner(rows)];
+                }
+                p.weights = Some(vec![[1.0, 0.0, 0.0, 0.0]; js.len()]);
+                p.joints = Some(js);
+                prims.push(p);
             }
-            p.weights = Some(vec![[1.0, 0.0, 0.0, 0.0]; js.len()]);
-            p.joints = Some(js);
-            prims.push(p);
         }
     }
     // Skinned parts with the tree's materials.
@@ -356,8 +410,8 @@ pub fn add_lod(
             ..Default::default()
         }));
     }
-    if let Some(p) = vat_prim {
-        let mesh = doc.add_mesh(&format!("{}_vat", lod.name), &[p]);
+    if !vat_prims.is_empty() {
+        let mesh = doc.add_mesh(&format!("{}_vat", lod.name), &vat_prims);
         mesh_nodes.push(doc.add_node(NodeDesc {
             name: format!("{}_vat", lod.name),
             mesh: Some(mesh),

@@ -8,8 +8,9 @@ use serde::{Deserialize, Serialize};
 /// One billboard's entry.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct BillboardMapping {
-    /// Billboard index: quads appear in this order in the LOD's billboard primitive (4 vertices
-    /// and 6 indices each).
+    /// Billboard index: quads appear in this order in the LOD's billboard primitives (4
+    /// vertices and 6 indices each; the baked billboards' primitive first, then one per input
+    /// material for billboards that copy an input card).
     pub billboard: usize,
     /// Input triangle indices (the input file's triangle order, as `frond inspect` counts them).
     pub triangles: Vec<usize>,

@@ -373,6 +373,7 @@ fn entry(method: String, method_reason: String) -> LodEntry {
         triangles: 0,
         wood_triangles: 0,
         billboards: 0,
+        input_textured_billboards: 0,
         bones: 0,
         texture_bytes: 0,
         atlas: None,
@@ -464,7 +465,7 @@ fn dropped_clip_reason(cloud: &AnimatedBillboardCloud, tree: &Tree, c: usize) ->
 }
 
 /// The side of a square atlas of at most `texels` texels (a multiple of 4, at least 64).
-fn atlas_side(texels: usize) -> u32 {
+pub(crate) fn atlas_side(texels: usize) -> u32 {
     let side = (texels as f64).sqrt().floor() as u32;
     (side / 4 * 4).clamp(64, frond_billboard::bake::MAX_ATLAS_SIDE)
 }
@@ -675,18 +676,17 @@ fn cloud_lod(
     );
     let t3 = Instant::now();
     let clips = cloud.playable_clips.clone();
-    let image_sizes = lod_image_sizes(
-        tree,
-        std::slice::from_ref(&wood_lod),
-        shared.level.texels_per_unit,
-    );
+    // The wood and the billboards that copy input cards draw with the input's images.
+    let input_textured = [wood_lod.clone(), cloud.input_textured_mesh()];
+    let image_sizes = lod_image_sizes(tree, &input_textured, shared.level.texels_per_unit);
     e.epsilon = Some(cloud.epsilon);
     e.triangles = wood_lod.triangles() + 2 * cloud.billboards.len();
     e.wood_triangles = wood_lod.triangles();
     e.billboards = cloud.billboards.len();
-    e.texture_bytes = cloud.atlas.color.len()
-        + parts_image_bytes(tree, std::slice::from_ref(&wood_lod), &image_sizes);
-    e.atlas = Some([cloud.atlas.width, cloud.atlas.height]);
+    e.input_textured_billboards = cloud.input_textured();
+    e.texture_bytes =
+        cloud.atlas.color.len() + parts_image_bytes(tree, &input_textured, &image_sizes);
+    e.atlas = (cloud.atlas.width > 0).then_some([cloud.atlas.width, cloud.atlas.height]);
     e.texels_per_unit = Some(cloud.texels_per_unit);
     e.density_reduced = cloud.density_reduced;
     e.clips = clips

@@ -13,13 +13,18 @@ use serde::Serialize;
 use frond_billboard::bake::{BakeError, MAX_ATLAS_SIDE, bake_cloud};
 use frond_billboard::cloud::{CloudError, fit_quad};
 use frond_billboard::plane_search::{PlaneSearch, search_planes, valid_for_plane};
-use frond_billboard::{Quad, TriangleSoup};
+use frond_billboard::{Plane, Quad, TriangleSoup, source_copy};
 use frond_scene::Rig;
 use frond_scene::rigid_fit::rigid_fit;
 
-use crate::contract::{AnimatedBillboard, AnimatedBillboardCloud, LoopClock, RigidMotion};
+use crate::chain::atlas_side;
+use crate::contract::{
+    AnimatedBillboard, AnimatedBillboardCloud, BillboardTexture, LoopClock, RigidMotion,
+    input_textured_mesh,
+};
 use crate::error::LodError;
 use crate::method::{BuildContext, Foliage, MethodName, MethodOutput};
+use crate::texture_budget::{lod_image_sizes, parts_image_bytes};
 
 /// How a cluster's billboards move.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -117,39 +122,93 @@ pub fn build_animated_cloud(
     if quads.is_empty() {
         return Err(CloudError::Empty);
     }
-    let draw = scene_from_positions(tree, &sampled.average, None, TreeParts::Foliage);
-    // The atlas budget holds as many billboards as the chain allowed for it; one that a
-    // method could not fit (too few texels even at the smallest texture per quad) doubles
-    // until it fits, and the report shows it over its texture budget.
+    // A billboard that its own triangles tile (one leaf card) keeps the card's texture; only
+    // the others are baked (the hybrid cloud).
+    let copies = source_copies(ctx, &soup, &mut quads, &owns);
+    let bake: Vec<usize> = (0..quads.len()).filter(|&i| copies[i].is_none()).collect();
     let mut bake_params = params.bake.clone();
-    let baked = loop {
-        match bake_cloud(
-            renderer,
-            &soup,
-            &draw.materials,
-            &draw.textures,
-            &quads,
-            &drawn,
-            &bake_params,
-        ) {
-            Err(BakeError::AtlasTooSmall { .. }) if bake_params.max_atlas < MAX_ATLAS_SIDE => {
-                bake_params.max_atlas = (bake_params.max_atlas * 2).min(MAX_ATLAS_SIDE);
+    let copied_bytes = {
+        let mesh = input_textured_mesh(
+            quads
+                .iter()
+                .zip(&copies)
+                .filter_map(|(q, c)| c.as_ref().map(|(uv, t)| (q, uv, t))),
+        );
+        let parts = std::slice::from_ref(&mesh);
+        parts_image_bytes(
+            tree,
+            parts,
+            &lod_image_sizes(tree, parts, ctx.level.texels_per_unit),
+        )
+    };
+    if copied_bytes > 0 {
+        // The copies' textures come out of the atlas's share of the texture budget.
+        let texels = (bake_params.max_atlas as usize).pow(2);
+        bake_params.max_atlas = bake_params
+            .max_atlas
+            .min(atlas_side(texels.saturating_sub(copied_bytes / 4)));
+    }
+    let baked = if bake.is_empty() {
+        None
+    } else {
+        let draw = scene_from_positions(tree, &sampled.average, None, TreeParts::Foliage);
+        let pick = |v: &[Quad]| bake.iter().map(|&i| v[i]).collect::<Vec<_>>();
+        let bake_quads = pick(&quads);
+        let bake_drawn: Vec<Vec<usize>> = bake.iter().map(|&i| drawn[i].clone()).collect();
+        // The atlas budget holds as many billboards as the chain allowed for it; one that a
+        // method could not fit (too few texels even at the smallest texture per quad) doubles
+        // until it fits, and the report shows it over its texture budget.
+        Some(loop {
+            match bake_cloud(
+                renderer,
+                &soup,
+                &draw.materials,
+                &draw.textures,
+                &bake_quads,
+                &bake_drawn,
+                &bake_params,
+            ) {
+                Err(BakeError::AtlasTooSmall { .. }) if bake_params.max_atlas < MAX_ATLAS_SIDE => {
+                    bake_params.max_atlas = (bake_params.max_atlas * 2).min(MAX_ATLAS_SIDE);
+                }
+                other => break other?,
             }
-            other => break other?,
-        }
+        })
     };
     let t3 = Instant::now();
     timings.bake = (t3 - t2).as_secs_f64();
 
-    let billboards = animated_billboards(ctx, &soup, &quads, &owns, &drivers, &baked.uv_rects);
+    let mut baked_uvs = baked.iter().flat_map(|b| b.uv_rects.iter().copied());
+    let textures: Vec<([Vec2; 4], BillboardTexture)> = copies
+        .into_iter()
+        .map(|c| {
+            c.unwrap_or_else(|| {
+                (
+                    baked_uvs.next().unwrap_or_default(),
+                    BillboardTexture::Atlas,
+                )
+            })
+        })
+        .collect();
+    let mut billboards = animated_billboards(ctx, &soup, &quads, &owns, &drivers, textures);
+    // Baked billboards first, then the copies by material: the order export writes them in
+    // (one primitive per texture), so the mapping sidecar's billboard k is the file's quad k.
+    billboards.sort_by_key(|b| match b.texture {
+        BillboardTexture::Atlas => 0,
+        BillboardTexture::Input { material, .. } => 1 + material,
+    });
     timings.motion_fit = t3.elapsed().as_secs_f64();
+    let (atlas, texels_per_unit, density_reduced) = match baked {
+        Some(b) => (b.atlas, b.texels_per_unit, b.density_reduced),
+        None => (Default::default(), params.bake.texels_per_unit, false),
+    };
     let mut cloud = AnimatedBillboardCloud {
         method: method.to_string(),
         epsilon,
         billboards,
-        atlas: baked.atlas,
-        texels_per_unit: baked.texels_per_unit,
-        density_reduced: baked.density_reduced,
+        atlas,
+        texels_per_unit,
+        density_reduced,
         rig,
         rig_resampled,
         clock,
@@ -391,15 +450,67 @@ fn cluster_quads(
     (quads, epsilon)
 }
 
+/// Per quad, the input card it copies, if any ([`source_copy`]): its UVs and texture. A copy
+/// whose card faces away from its quad turns the quad round (its texture is the card's front).
+/// None everywhere when the tree's materials use a second texture coordinate set (the
+/// animation's own sets take `TEXCOORD_1` on).
+fn source_copies(
+    ctx: &BuildContext,
+    soup: &TriangleSoup,
+    quads: &mut [Quad],
+    owns: &[Vec<usize>],
+) -> Vec<Option<([Vec2; 4], BillboardTexture)>> {
+    let (tree, sampled) = (ctx.tree, ctx.sampled);
+    if tree.vertices.texcoords.len() > 1 {
+        return vec![None; quads.len()];
+    }
+    quads
+        .par_iter_mut()
+        .zip(owns.par_iter())
+        .map(|(quad, own)| {
+            let copy = source_copy(soup, quad, own)?;
+            let mut weights = copy.weights;
+            if !copy.same_facing {
+                // Negating axis_v flips the normal and reverses the corner order.
+                quad.axis_v = -quad.axis_v;
+                quad.plane = Plane {
+                    normal: -quad.plane.normal,
+                    offset: -quad.plane.offset,
+                };
+                weights.reverse();
+            }
+            let at = |values: [Vec2; 3]| {
+                weights.map(|w| values[0] * w[0] + values[1] * w[1] + values[2] * w[2])
+            };
+            let v = tree.triangles[sampled.foliage[copy.triangle]]
+                .v
+                .map(|v| v as usize);
+            let texcoords = tree
+                .vertices
+                .texcoords
+                .iter()
+                .map(|set| at(v.map(|i| set.get(i).copied().unwrap_or_default())))
+                .collect();
+            Some((
+                at(soup.uvs[copy.triangle]),
+                BillboardTexture::Input {
+                    material: copy.material as usize,
+                    texcoords,
+                },
+            ))
+        })
+        .collect()
+}
+
 /// The billboards of `quads`: each follows its cluster's driver (a node, or the rigid fit of
-/// its own triangles' sampled motion) and samples the atlas at `uv_rects`.
+/// its own triangles' sampled motion) and shows `textures` (its UVs and what they index).
 fn animated_billboards(
     ctx: &BuildContext,
     soup: &TriangleSoup,
     quads: &[Quad],
     owns: &[Vec<usize>],
     drivers: &[Driver],
-    uv_rects: &[[Vec2; 4]],
+    textures: Vec<([Vec2; 4], BillboardTexture)>,
 ) -> Vec<AnimatedBillboard> {
     let (tree, sampled) = (ctx.tree, ctx.sampled);
     let n = sampled.samples();
@@ -408,8 +519,8 @@ fn animated_billboards(
         .par_iter()
         .zip(owns.par_iter())
         .zip(drivers.par_iter())
-        .zip(uv_rects.par_iter())
-        .map(|(((quad, own), driver), uv)| {
+        .zip(textures.into_par_iter())
+        .map(|(((quad, own), driver), (uv, texture))| {
             let (follows, motion) = match *driver {
                 Driver::Node(node) => (Some(node), None),
                 Driver::Assigned => (None, None),
@@ -433,7 +544,8 @@ fn animated_billboards(
             };
             AnimatedBillboard {
                 quad: *quad,
-                uv: *uv,
+                uv,
+                texture,
                 follows,
                 motion,
                 triangles: own.iter().map(|&k| sampled.foliage[k]).collect(),

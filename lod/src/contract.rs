@@ -9,6 +9,7 @@
 //! Quads never deform: `M` is rotation plus translation only.
 
 use frond_billboard::{Atlas, Quad};
+use frond_scene::wood::{NO_BONE, WoodMesh, WoodPrimitive};
 use frond_scene::{Rig, Tree};
 use frond_spectral::description::Components;
 use glam::{Affine3A, Mat4, Vec2, Vec3};
@@ -175,13 +176,31 @@ fn interpolate(a: Affine3A, b: Affine3A, u: f32) -> Affine3A {
     Affine3A::from_rotation_translation(ra.slerp(rb, u), ta.lerp(tb, u))
 }
 
+/// What a billboard's texture is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BillboardTexture {
+    /// Baked into the cloud's atlas.
+    Atlas,
+    /// The input's own material (index into `Tree::materials`): the billboard is one input card,
+    /// copied with its texture mapping instead of baked (the hybrid cloud,
+    /// [`frond_billboard::source_copy()`]). `texcoords[n]` holds the corners' `TEXCOORD_n` as the
+    /// input stores them (no transform applied; empty for a tree without texture coordinates).
+    Input {
+        material: usize,
+        texcoords: Vec<[Vec2; 4]>,
+    },
+}
+
 /// One billboard of the cloud.
 #[derive(Clone, Debug)]
 pub struct AnimatedBillboard {
     /// The quad in the reference pose (see the module docs).
     pub quad: Quad,
-    /// Atlas UVs of the corners in [`Quad::corners`] order.
+    /// UVs of the corners in [`Quad::corners`] order: in the atlas, or the input's base-colour
+    /// map coordinates (its `KHR_texture_transform` applied) for a [`BillboardTexture::Input`].
     pub uv: [Vec2; 4],
+    /// Where `uv` points.
+    pub texture: BillboardTexture,
     /// Rig node it follows, if any.
     pub follows: Option<usize>,
     /// Its own rigid motion relative to what it follows, if any.
@@ -257,6 +276,21 @@ impl AnimatedBillboardCloud {
         self.rig.rest_world().iter().map(|m| m.inverse()).collect()
     }
 
+    /// Billboards that copy an input card with its own texture ([`BillboardTexture::Input`]).
+    pub fn input_textured(&self) -> usize {
+        self.billboards
+            .iter()
+            .filter(|b| b.texture != BillboardTexture::Atlas)
+            .count()
+    }
+
+    /// The billboards that copy input cards as one unskinned mesh with the input's materials
+    /// (corners in the reference pose): what their textures cost is sized and counted with it
+    /// ([`crate::texture_budget`]), like the wood's.
+    pub fn input_textured_mesh(&self) -> WoodMesh {
+        input_textured_mesh(self.billboards.iter().map(|b| (&b.quad, &b.uv, &b.texture)))
+    }
+
     /// Recomputes which clips are playable from the billboards' motions.
     pub fn update_playable_clips(&mut self) {
         let own_motion = self.billboards.iter().any(|b| b.motion.is_some());
@@ -266,4 +300,48 @@ impl AnimatedBillboardCloud {
             (0..self.rig.clips.len()).collect()
         };
     }
+}
+
+/// The quads of `billboards` (quad, UVs, texture) that carry an input texture, as one unskinned
+/// mesh: four corners and two triangles each, one primitive per material (ascending).
+pub fn input_textured_mesh<'a>(
+    billboards: impl Iterator<Item = (&'a Quad, &'a [Vec2; 4], &'a BillboardTexture)>,
+) -> WoodMesh {
+    let mut mesh = WoodMesh::default();
+    let mut by_material: std::collections::BTreeMap<usize, Vec<u32>> = Default::default();
+    for (quad, uv, texture) in billboards {
+        let BillboardTexture::Input {
+            material,
+            texcoords,
+        } = texture
+        else {
+            continue;
+        };
+        let base = mesh.positions.len() as u32;
+        if mesh.texcoords.len() < texcoords.len() {
+            mesh.texcoords
+                .resize(texcoords.len(), vec![Vec2::ZERO; mesh.positions.len()]);
+        }
+        for (k, set) in mesh.texcoords.iter_mut().enumerate() {
+            set.extend(texcoords.get(k).map_or([Vec2::ZERO; 4], |c| *c));
+        }
+        mesh.positions.extend(quad.corners());
+        mesh.normals.extend([quad.plane.normal; 4]);
+        mesh.uvs.extend(uv);
+        mesh.bones.extend([[NO_BONE, NO_BONE, NO_BONE, NO_BONE]; 4]);
+        mesh.weights.extend([[1.0, 0.0, 0.0, 0.0]; 4]);
+        by_material.entry(*material).or_default().extend([
+            base,
+            base + 1,
+            base + 2,
+            base,
+            base + 2,
+            base + 3,
+        ]);
+    }
+    mesh.primitives = by_material
+        .into_iter()
+        .map(|(material, indices)| WoodPrimitive { material, indices })
+        .collect();
+    mesh
 }

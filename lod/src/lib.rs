@@ -20,7 +20,9 @@ use frond_skeleton::BoneDescriptionKind;
 use frond_spectral::description::SpectralKind;
 
 pub use chain::{Chain, ChainLod, ChainRequest, CloudOptions, LodContent, build_chain};
-pub use contract::{AnimatedBillboard, AnimatedBillboardCloud, LoopClock, RigidMotion};
+pub use contract::{
+    AnimatedBillboard, AnimatedBillboardCloud, BillboardTexture, LoopClock, RigidMotion,
+};
 pub use error::LodError;
 pub use method::{
     BuildContext, ClusteringMethod, Foliage, METHOD_NAMES, Method, MethodName, MethodOutput,

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::cloud_build::sampled_worlds;
-use crate::contract::{AnimatedBillboardCloud, RigidMotion};
+use crate::contract::{AnimatedBillboardCloud, BillboardTexture, RigidMotion};
 use crate::joint_budget::{
     BillboardAnimation, JointCap, JointMerges, RigFrames, apply_joint_budget, fit_to_node,
 };
@@ -55,8 +55,12 @@ pub struct Dropped {
     pub joints: JointMerges,
 }
 
-/// Covered fraction of a billboard's texture (texels passing the alpha test).
+/// Covered fraction of a billboard's texture (texels passing the alpha test); 1 for one that
+/// copies an input card (an upper bound: such a billboard is only ever kept for it).
 fn covered_fraction(cloud: &AnimatedBillboardCloud, i: usize) -> f32 {
+    if cloud.billboards[i].texture != BillboardTexture::Atlas {
+        return 1.0;
+    }
     let atlas = &cloud.atlas;
     let uv = &cloud.billboards[i].uv;
     let (w, h) = (atlas.width as f32, atlas.height as f32);

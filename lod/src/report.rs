@@ -24,6 +24,9 @@ pub struct LodEntry {
     pub triangles: usize,
     pub wood_triangles: usize,
     pub billboards: usize,
+    /// Billboards that copy one input card with its own texture instead of a baked one (the
+    /// hybrid cloud: only planes that merge several cards are baked).
+    pub input_textured_billboards: usize,
     /// Joints of the LOD's skin.
     pub bones: usize,
     pub texture_bytes: usize,

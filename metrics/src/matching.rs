@@ -119,19 +119,15 @@ fn read_mapping(path: &Path) -> Option<Mapping> {
         .and_then(|b| serde_json::from_slice(&b).ok())
 }
 
-/// The vertices of the candidate's billboard primitive, sorted: those of the foliage triangles
-/// whose material `frond lod` names "<lod>_billboards".
+/// The vertices of the candidate's billboard primitives, sorted: those of its foliage
+/// triangles. A LOD with a mapping draws its foliage as billboards only: baked ones with the
+/// material `frond lod` names "<lod>_billboards", then those that copy an input card with the
+/// input's leaf material, in mapping order.
 fn billboard_vertices(candidate: &Tree) -> Vec<u32> {
     let mut v: Vec<u32> = candidate
         .triangles
         .iter()
-        .filter(|t| {
-            t.part == Part::Foliage
-                && candidate
-                    .materials
-                    .get(t.material as usize)
-                    .is_some_and(|m| m.name.ends_with("_billboards"))
-        })
+        .filter(|t| t.part == Part::Foliage)
         .flat_map(|t| t.v)
         .collect();
     v.sort_unstable();

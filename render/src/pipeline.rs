@@ -295,8 +295,24 @@ fn preserve_coverage(rgba: &[u8], target: f32) -> Vec<u8> {
     out
 }
 
+/// The full mip chain the renderer samples an RGBA8 sRGB image with, level 0 first, each level
+/// `(width, height, rgba)`: box-filtered (`downsample`), alpha rescaled to keep level 0's
+/// alpha-tested coverage (`preserve_coverage`). Public so that CPU models of what the
+/// renderer shows (card thinning's coverage) sample the same levels.
+pub fn mip_chain(width: u32, height: u32, rgba: &[u8]) -> Vec<(u32, u32, Vec<u8>)> {
+    let levels = 32 - width.max(height).max(1).leading_zeros();
+    let coverage0 = alpha_coverage(rgba);
+    let mut out = vec![(width, height, rgba.to_vec())];
+    let (mut w, mut h, mut data) = (width, height, rgba.to_vec());
+    for _ in 1..levels {
+        (w, h, data) = downsample(w, h, &data);
+        out.push((w, h, preserve_coverage(&data, coverage0)));
+    }
+    out
+}
+
 /// Uploads a validated RGBA8 sRGB image as a sampled texture; with `mipmaps`, with a full
-/// coverage-preserving mip chain (see [`downsample`], [`preserve_coverage`]).
+/// coverage-preserving mip chain ([`mip_chain`]).
 pub(crate) fn upload_texture(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -325,38 +341,31 @@ pub(crate) fn upload_texture(
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    let (mut w, mut h) = (width, height);
-    let mut data = rgba.to_vec();
-    let coverage0 = alpha_coverage(&data);
-    for level in 0..levels {
-        let upload = if level == 0 {
-            data.clone()
-        } else {
-            preserve_coverage(&data, coverage0)
-        };
+    let chain = if mipmaps {
+        mip_chain(width, height, rgba)
+    } else {
+        vec![(width, height, rgba.to_vec())]
+    };
+    for (level, (w, h, upload)) in chain.iter().enumerate() {
         queue.write_texture(
             wgpu::TexelCopyTextureInfo {
                 texture: &texture,
-                mip_level: level,
+                mip_level: level as u32,
                 origin: wgpu::Origin3d::ZERO,
                 aspect: wgpu::TextureAspect::All,
             },
-            &upload,
+            upload,
             wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(w * 4),
-                rows_per_image: Some(h),
+                rows_per_image: Some(*h),
             },
             wgpu::Extent3d {
-                width: w,
-                height: h,
+                width: *w,
+                height: *h,
                 depth_or_array_layers: 1,
             },
         );
-        if level + 1 < levels {
-            let next = downsample(w, h, &data);
-            (w, h, data) = next;
-        }
     }
     texture.create_view(&Default::default())
 }

@@ -55,8 +55,17 @@ pub fn frond_ok(args: &[&str]) -> Output {
 }
 
 /// Runs `frond lod INPUT -o OUT` with small test settings (16 samples, 60 candidate planes, no
-/// error measurement: `tests/lod_error.rs` tests that) plus `extra`, asserts it succeeded and returns its report (`<input stem>_report.json`).
+/// error measurement: `tests/lod_error.rs` tests that) plus `extra`, asserts it succeeded and
+/// returns its report (`<input stem>_report.json`).
 pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["--planes", "60", "--no-measure"];
+    args.extend_from_slice(extra);
+    frond_lod_measured(input, out, &args)
+}
+
+/// Runs `frond lod INPUT -o OUT --samples 16` plus `extra`, each LOD's error measured (unless
+/// `extra` says `--no-measure`), asserts it succeeded and returns its report.
+pub fn frond_lod_measured(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
     let mut args = vec![
         "lod",
         input.to_str().expect("utf-8 path"),
@@ -64,9 +73,6 @@ pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value 
         out.to_str().expect("utf-8 path"),
         "--samples",
         "16",
-        "--planes",
-        "60",
-        "--no-measure",
     ];
     args.extend_from_slice(extra);
     frond_ok(&args);
@@ -77,6 +83,20 @@ pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value 
     let report = out.join(format!("{stem}_report.json"));
     serde_json::from_slice(&std::fs::read(&report).expect("the lod report"))
         .expect("report is JSON")
+}
+
+/// Runs `frond eval ORIGINAL CANDIDATE --json` plus `extra`, asserts it succeeded and returns
+/// its JSON report.
+pub fn frond_eval(original: &Path, candidate: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "eval",
+        original.to_str().expect("utf-8"),
+        candidate.to_str().expect("utf-8"),
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    let out = frond_ok(&args);
+    serde_json::from_slice(&out.stdout).expect("JSON report")
 }
 
 /// Installs the Node tools once (npm install into tools/node_modules) and returns the folder:
@@ -146,6 +166,8 @@ const _: () = {
         frond,
         frond_ok,
         frond_lod,
+        frond_lod_measured,
+        frond_eval,
         node_tools,
         validate,
         gltf_cases::triangle_gltf,
