@@ -362,7 +362,7 @@ impl CardCoverage {
     /// Of `candidates` scales (ascending), the one whose kept cards, each scaled about its
     /// centre, cover samples closest to all cards' coverage ([`CardCoverage::differing`]),
     /// searched upwards until the count rises, then, where the count is nearly flat there,
-    /// refined [`REFINE_STEPS`] times by halving the bracket around it (the coarse steps are a
+    /// refined `REFINE_STEPS` times by halving the bracket around it (the coarse steps are a
     /// quarter of the range apart, wide enough to step over the best scale of a dense crown at
     /// a far size); ties go to the smaller scale.
     pub fn best_scale(&self, keep: &[bool], candidates: &[f32]) -> f32 {
