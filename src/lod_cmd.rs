@@ -238,5 +238,9 @@ fn read_back_costs(set: &OutputSet, report: &mut LodReport) -> Result<()> {
             .filter(|_| leaf_area > 0.0)
             .map(|c| c.alpha_tested_area / leaf_area);
     }
+    for w in report.cost_increases() {
+        tracing::warn!("{w}");
+        report.warnings.push(w);
+    }
     Ok(())
 }

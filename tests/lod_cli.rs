@@ -456,6 +456,7 @@ fn with_context<R>(
         seed: params.search.seed,
         max_billboards: None,
         max_foliage_triangles: None,
+        max_alpha_tested_area: None,
     })
 }
 

@@ -192,7 +192,7 @@ pub fn build_chain(
             card_foliage,
         )
         .map_err(|e| (Some(k + 1), e))?;
-        spent = spent.after(&lod, req.animation);
+        spent = spent.after(tree, &lod, req.animation);
         lods.push(lod);
     }
     let t_built = Instant::now();
@@ -224,6 +224,8 @@ struct Spent {
     triangles: usize,
     /// Decoded bytes of every texture the LOD draws with (atlas and wood maps).
     texture_bytes: usize,
+    /// Alpha-tested area (world units²): overdraw.
+    alpha_tested_area: f64,
     animation: AnimationCount,
 }
 
@@ -238,6 +240,11 @@ pub struct LodBudget {
     pub channels: usize,
     /// Decoded texture bytes (atlas and wood maps).
     pub texture_bytes: usize,
+    /// Alpha-tested area (world units², cards or billboards; `null` when unbounded): the
+    /// previous LOD's, so that no LOD asks for more overdraw. Card LODs keep within it;
+    /// billboard methods do not yet control their quads' area, and `frond lod` warns when a
+    /// written LOD exceeds its predecessor's.
+    pub alpha_tested_area: f64,
 }
 
 /// Atlas texels per squared pixel of screen height: a tree `H` pixels high covers about
@@ -261,6 +268,7 @@ impl LodBudget {
             joints,
             channels: usize::MAX,
             texture_bytes: usize::MAX,
+            alpha_tested_area: f64::INFINITY,
         }
     }
 }
@@ -274,6 +282,7 @@ impl Spent {
             wood_share: lod0.entry.wood_triangles as f64 / lod0.entry.triangles.max(1) as f64,
             triangles: lod0.entry.triangles,
             texture_bytes: parts_image_bytes(tree, &lod0.parts, &lod0.image_sizes),
+            alpha_tested_area: alpha_tested_area(tree, lod0),
             animation,
         }
     }
@@ -292,15 +301,18 @@ impl Spent {
             joints: self.animation.joints.min(joints_for_screen(h)),
             channels: self.animation.channels,
             texture_bytes: self.texture_bytes.min(4 * texels),
+            alpha_tested_area: self.alpha_tested_area,
         }
     }
 
     /// What has been spent once `lod` is built.
-    fn after(&self, lod: &ChainLod, animation: BillboardAnimation) -> Spent {
+    fn after(&self, tree: &Tree, lod: &ChainLod, animation: BillboardAnimation) -> Spent {
         let mut next = Spent {
             wood_share: self.wood_share,
             triangles: lod.entry.triangles,
             texture_bytes: lod.entry.texture_bytes,
+            // A LOD over its predecessor's does not raise the bar for the next.
+            alpha_tested_area: self.alpha_tested_area.min(alpha_tested_area(tree, lod)),
             animation: self.animation,
         };
         let n = match (lod.cloud(), lod.parts.first()) {
@@ -313,6 +325,37 @@ impl Spent {
         };
         next
     }
+}
+
+/// A LOD's alpha-tested area (world units², rest pose): its parts' triangles whose material
+/// is alpha-tested or blended, and its billboards' quads (always alpha-tested), as
+/// `frond_scene::file_cost` counts the written file's.
+fn alpha_tested_area(tree: &Tree, lod: &ChainLod) -> f64 {
+    let parts: f64 = lod
+        .parts
+        .iter()
+        .flat_map(|m| m.primitives.iter().map(move |p| (m, p)))
+        .filter(|(_, p)| {
+            tree.materials
+                .get(p.material)
+                .is_some_and(|m| m.alpha_mode != frond_scene::AlphaMode::Opaque)
+        })
+        .flat_map(|(m, p)| {
+            p.indices.chunks_exact(3).map(move |t| {
+                let [a, b, c] = [0, 1, 2].map(|k| {
+                    m.positions
+                        .get(t[k] as usize)
+                        .copied()
+                        .unwrap_or(glam::Vec3::ZERO)
+                });
+                f64::from(0.5 * (b - a).cross(c - a).length())
+            })
+        })
+        .sum();
+    let quads: f64 = lod.cloud().map_or(0.0, |c| {
+        c.billboards.iter().map(|b| f64::from(b.quad.area())).sum()
+    });
+    parts + quads
 }
 
 /// Joints and channels of a LOD drawn with meshes alone (LOD0, a card LOD): one joint per rig
@@ -361,7 +404,7 @@ fn remap(m: &mut WoodMesh, map: &[Option<usize>]) {
 }
 
 /// An empty report line for a LOD.
-fn entry(method: String, method_reason: String) -> LodEntry {
+pub(crate) fn entry(method: String, method_reason: String) -> LodEntry {
     LodEntry {
         file: String::new(),
         mapping: None,
@@ -544,6 +587,7 @@ fn billboard_lod(
         seed: req.seed.wrapping_add(k as u64),
         max_billboards: Some(max_billboards.max(1)),
         max_foliage_triangles: Some(lod_budget.triangles.saturating_sub(wood_lod.triangles())),
+        max_alpha_tested_area: Some(lod_budget.alpha_tested_area),
     };
     let built = method.build(&ctx)?;
     let mut e = entry(method.name().name().into(), reason.into());

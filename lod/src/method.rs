@@ -48,6 +48,9 @@ pub struct BuildContext<'a> {
     pub max_billboards: Option<usize>,
     /// Most foliage triangles the LOD may have (its triangle budget less the wood's).
     pub max_foliage_triangles: Option<usize>,
+    /// Most alpha-tested area (world units²) the LOD's foliage may have: the previous LOD's
+    /// (the monotone rule on overdraw). Card LODs grow their survivors within it.
+    pub max_alpha_tested_area: Option<f64>,
 }
 
 /// A LOD's foliage as a method built it. Today every method bakes an animated billboard cloud;

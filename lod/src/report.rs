@@ -127,8 +127,111 @@ pub struct LodReport {
     pub timings_s: serde_json::Value,
 }
 
+/// Reads one cost off a written file's.
+type CostOf = fn(&frond_scene::FileCost) -> f64;
+
+/// The costs the monotone rule compares between consecutive LODs (issue 17 item 3), each with
+/// its name in the warnings: what an engine pays, read back from the written files.
+const MONOTONE_COSTS: [(&str, CostOf); 8] = [
+    ("triangles", |c| c.triangles as f64),
+    ("joints per skin", |c| c.joints_per_skin_max as f64),
+    ("animated channels", |c| c.animated_channels as f64),
+    ("draw calls", |c| c.draw_calls as f64),
+    ("materials", |c| c.materials as f64),
+    ("decoded texture bytes", |c| c.texture_decoded_bytes as f64),
+    ("file bytes", |c| c.file_bytes as f64),
+    ("alpha-tested area (overdraw)", |c| c.alpha_tested_area),
+];
+
+impl LodReport {
+    /// One line per cost in which a LOD's written file costs more than the LOD before it (LOD0,
+    /// the input, for the first): the chain should never write one, and a method that cannot
+    /// keep within a rule (a static cloud's large, mostly transparent quads) is named rather
+    /// than hidden. Areas compare within a part in a million (float sums).
+    pub fn cost_increases(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for pair in self.lods.windows(2) {
+            let (Some(before), Some(after)) = (&pair[0].cost, &pair[1].cost) else {
+                continue;
+            };
+            for (name, get) in MONOTONE_COSTS {
+                let (b, a) = (get(before), get(after));
+                if a > b * (1.0 + 1e-6) {
+                    out.push(format!(
+                        "{} costs more than {} in {name}: {a} against {b} (the chain's monotone \
+                         rule)",
+                        pair[1].file, pair[0].file
+                    ));
+                }
+            }
+        }
+        out
+    }
+}
+
 /// The report's file name: `<name>_report.json`, so that several trees can share one output
 /// folder without their reports colliding.
 pub fn report_name(name: &str) -> String {
     format!("{name}_report.json")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use frond_scene::FileCost;
+
+    fn lod(file: &str, cost: FileCost) -> LodEntry {
+        let mut e = crate::chain::entry("cards".into(), String::new());
+        e.file = file.into();
+        e.cost = Some(cost);
+        e
+    }
+
+    #[test]
+    fn a_lod_costing_more_than_the_one_before_is_named_per_cost() {
+        let input = FileCost {
+            triangles: 100,
+            file_bytes: 1000,
+            alpha_tested_area: 2.0,
+            ..Default::default()
+        };
+        let cheaper = FileCost {
+            triangles: 50,
+            file_bytes: 900,
+            alpha_tested_area: 2.0,
+            ..Default::default()
+        };
+        // More quad area and bytes than the LOD before it, though fewer triangles.
+        let worse = FileCost {
+            triangles: 25,
+            file_bytes: 950,
+            alpha_tested_area: 3.0,
+            ..Default::default()
+        };
+        let mut report = LodReport {
+            input: String::new(),
+            name: "t".into(),
+            clip: None,
+            period: 0.0,
+            samples: 0,
+            seed: 0,
+            pixel_error: 1.0,
+            animation: "skin".into(),
+            tree_height: 1.0,
+            lods: vec![lod("t_LOD0.glb", input), lod("t_LOD1.glb", cheaper)],
+            combined: String::new(),
+            files: Vec::new(),
+            warnings: Vec::new(),
+            timings_s: serde_json::Value::Null,
+        };
+        assert!(
+            report.cost_increases().is_empty(),
+            "equal area is no increase"
+        );
+        report.lods.push(lod("t_LOD2.glb", worse));
+        let lines = report.cost_increases();
+        assert_eq!(lines.len(), 2, "{lines:?}");
+        assert!(lines[0].starts_with("t_LOD2.glb costs more than t_LOD1.glb in file bytes: 950"));
+        assert!(lines[1].contains("alpha-tested area (overdraw): 3 against 2"));
+    }
 }

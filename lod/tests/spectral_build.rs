@@ -84,6 +84,7 @@ fn build(
         seed: sp.seed,
         max_billboards: None,
         max_foliage_triangles: None,
+        max_alpha_tested_area: None,
     };
     build_spectral_cloud(&ctx, sp).expect("spectral cloud")
 }

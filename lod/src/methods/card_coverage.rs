@@ -395,12 +395,14 @@ impl CardCoverage {
         ) else {
             return best.1;
         };
+        let top = candidates.last().copied().unwrap_or(1.0);
         let mut half = 0.5 * (hi - lo).max(0.0);
         for _ in 0..REFINE_STEPS {
             half *= 0.5;
             let centre = best.1;
             for s in [centre - half, centre + half] {
-                if s < 1.0 || half <= 0.0 {
+                // Within the candidates' range: the largest is a budget (overdraw), not a step.
+                if s < 1.0 || s > top || half <= 0.0 {
                     continue;
                 }
                 let differing = self.differing(original, keep, s);

@@ -53,7 +53,11 @@ impl ClusteringMethod for Cards {
             return Err(LodError::NoFoliage(ctx.tree.source.display().to_string()));
         }
         let max_triangles = ctx.max_foliage_triangles.unwrap_or(usize::MAX);
-        let mut cards = thin_cards(ctx.tree, &foliage, max_triangles, ctx.level.pixel, ctx.seed);
+        let budget = CardBudget {
+            triangles: max_triangles,
+            area: ctx.max_alpha_tested_area.unwrap_or(f64::INFINITY),
+        };
+        let mut cards = thin_cards(ctx.tree, &foliage, &budget, ctx.level.pixel, ctx.seed);
         cards.rig = ctx.tree.rig.clone();
         Ok(MethodOutput {
             foliage: Foliage::Cards(cards),
@@ -61,6 +65,15 @@ impl ClusteringMethod for Cards {
             report: Default::default(),
         })
     }
+}
+
+/// What a card LOD may spend on its cards.
+#[derive(Clone, Copy, Debug)]
+pub struct CardBudget {
+    /// Most triangles.
+    pub triangles: usize,
+    /// Most card area (world units²): the previous LOD's alpha-tested area.
+    pub area: f64,
 }
 
 /// Triangles a foliage piece may have and still count as one card: a quad (2), or a quad cut
@@ -100,10 +113,11 @@ const SCALE_STEPS: usize = 5;
 pub fn thin_cards(
     tree: &Tree,
     foliage: &WoodMesh,
-    max_triangles: usize,
+    budget: &CardBudget,
     pixel: f32,
     seed: u64,
 ) -> CardFoliage {
+    let max_triangles = budget.triangles;
     let cards = foliage.pieces();
     let area: Vec<f32> = cards
         .iter()
@@ -132,7 +146,8 @@ pub fn thin_cards(
         1.0
     } else {
         let most = if kept_area > 0.0 {
-            (total / kept_area).sqrt()
+            // The area-keeping scale, held to the overdraw budget (never below 1).
+            (total.min(budget.area as f32) / kept_area).sqrt().max(1.0)
         } else {
             1.0
         };
