@@ -42,6 +42,27 @@ fn the_report_gives_each_lods_error_as_frond_eval_measures_it() {
         assert_eq!(lod["method"], "cards");
         assert!(coverage <= bound, "{file}: error {coverage} at {h} px");
     }
+    // The default chain keeps the monotone rule on every cost read back from its files (the
+    // 60 px cards grow only within the 200 px LOD's alpha-tested area): no warning names one.
+    let warnings = report["warnings"].as_array().expect("warnings");
+    assert!(
+        !warnings
+            .iter()
+            .any(|w| w.as_str().is_some_and(|w| w.contains("costs more than"))),
+        "{warnings:?}"
+    );
+    let (near, far) = (&lods[1], &lods[2]);
+    let area = |l: &serde_json::Value| l["cost"]["alpha_tested_area"].as_f64().expect("area");
+    assert!(area(far) <= area(near), "overdraw grows at 60 px");
+    assert!(
+        (far["budget"]["alpha_tested_area"]
+            .as_f64()
+            .expect("area budget")
+            - area(near))
+        .abs()
+            <= 1e-3 * area(near),
+        "the 60 px LOD's area budget is the 200 px LOD's area"
+    );
 }
 
 #[test]
