@@ -51,7 +51,7 @@ mod tree;
 pub use camera::{Camera, Projection};
 pub use error::RenderError;
 pub use frame::Frame;
-pub use pipeline::{LIGHT_DIRECTION, mip_chain};
+pub use pipeline::{LIGHT_DIRECTION, alpha_mip_chain, mip_chain};
 pub use renderer::{Output, Renderer};
 pub use scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
 pub use tree::{TreeParts, scene_from_positions, tree_scene};

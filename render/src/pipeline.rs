@@ -228,51 +228,79 @@ fn downsample(width: u32, height: u32, rgba: &[u8]) -> (u32, u32, Vec<u8>) {
     for y in 0..h2 {
         for x in 0..w2 {
             let mut acc = [0.0f32; 3];
-            let (mut alpha, mut weight, mut n) = (0.0f32, 0.0f32, 0.0f32);
-            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                let (sx, sy) = ((2 * x + dx).min(width - 1), (2 * y + dy).min(height - 1));
+            let mut weight = 0.0f32;
+            let block = block(width, height, x, y);
+            for &(sx, sy) in &block {
                 let i = ((sy * width + sx) * 4) as usize;
                 let a = rgba[i + 3] as f32 / 255.0;
                 for k in 0..3 {
                     acc[k] += srgb_to_linear(rgba[i + k]) * a.max(1e-3);
                 }
                 weight += a.max(1e-3);
-                alpha += a;
-                n += 1.0;
             }
             let o = ((y * w2 + x) * 4) as usize;
             for k in 0..3 {
                 out[o + k] = linear_to_srgb(acc[k] / weight);
             }
-            out[o + 3] = (alpha / n * 255.0 + 0.5) as u8;
+            out[o + 3] =
+                mean_alpha(block.map(|(sx, sy)| rgba[((sy * width + sx) * 4 + 3) as usize]));
         }
     }
     (w2, h2, out)
 }
 
-/// Fraction of texels whose alpha passes a 0.5 alpha test.
-fn alpha_coverage(rgba: &[u8]) -> f32 {
-    let n = rgba.len() / 4;
+/// The 2×2 block of texel `(x, y)` of the next level, edge texels repeated.
+fn block(width: u32, height: u32, x: u32, y: u32) -> [(u32, u32); 4] {
+    [(0, 0), (1, 0), (0, 1), (1, 1)]
+        .map(|(dx, dy)| ((2 * x + dx).min(width - 1), (2 * y + dy).min(height - 1)))
+}
+
+/// The next level's alpha of a 2×2 block: the mean, rounded.
+fn mean_alpha(a: [u8; 4]) -> u8 {
+    let sum: f32 = a.iter().map(|&v| v as f32 / 255.0).sum();
+    (sum / 4.0 * 255.0 + 0.5) as u8
+}
+
+/// [`downsample`] of an image's alpha alone (one byte a texel): the same alpha, without the
+/// colour work.
+fn downsample_alpha(width: u32, height: u32, alpha: &[u8]) -> (u32, u32, Vec<u8>) {
+    let (w2, h2) = ((width / 2).max(1), (height / 2).max(1));
+    let out = (0..h2)
+        .flat_map(|y| (0..w2).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            mean_alpha(block(width, height, x, y).map(|(sx, sy)| alpha[(sy * width + sx) as usize]))
+        })
+        .collect();
+    (w2, h2, out)
+}
+
+/// Fraction of texels whose alpha passes a 0.5 alpha test; texels of `stride` bytes, alpha
+/// last (4: RGBA, 1: alpha alone).
+fn alpha_coverage(data: &[u8], stride: usize) -> f32 {
+    let n = data.len() / stride;
     if n == 0 {
         return 0.0;
     }
-    rgba.chunks_exact(4).filter(|p| p[3] >= 128).count() as f32 / n as f32
+    data.chunks_exact(stride)
+        .filter(|p| p[stride - 1] >= 128)
+        .count() as f32
+        / n as f32
 }
 
 /// A mip level whose alpha is rescaled so that as many texels pass the 0.5 alpha test as in
 /// level 0 (coverage-preserving mipmaps): averaged alpha alone makes leaves vanish at a
 /// distance. The threshold is put halfway between the weakest texel that should pass and the
 /// strongest that should not, so neither lands on the test's edge.
-fn preserve_coverage(rgba: &[u8], target: f32) -> Vec<u8> {
-    let mut out = rgba.to_vec();
-    let n = rgba.len() / 4;
+fn preserve_coverage(data: &[u8], stride: usize, target: f32) -> Vec<u8> {
+    let mut out = data.to_vec();
+    let n = data.len() / stride;
     let want = (target * n as f32).round() as usize;
     if n == 0 || want == 0 {
         return out;
     }
     let mut histogram = [0usize; 256];
-    for p in rgba.chunks_exact(4) {
-        histogram[p[3] as usize] += 1;
+    for p in data.chunks_exact(stride) {
+        histogram[p[stride - 1] as usize] += 1;
     }
     // Walk down from opaque until `want` texels are included.
     let (mut count, mut v_in) = (0usize, 0usize);
@@ -289,8 +317,8 @@ fn preserve_coverage(rgba: &[u8], target: f32) -> Vec<u8> {
         return out;
     }
     let scale = 127.5 / threshold;
-    for p in out.chunks_exact_mut(4) {
-        p[3] = (p[3] as f32 * scale).round().min(255.0) as u8;
+    for p in out.chunks_exact_mut(stride) {
+        p[stride - 1] = (p[stride - 1] as f32 * scale).round().min(255.0) as u8;
     }
     out
 }
@@ -300,13 +328,35 @@ fn preserve_coverage(rgba: &[u8], target: f32) -> Vec<u8> {
 /// alpha-tested coverage (`preserve_coverage`). Public so that CPU models of what the
 /// renderer shows (card thinning's coverage) sample the same levels.
 pub fn mip_chain(width: u32, height: u32, rgba: &[u8]) -> Vec<(u32, u32, Vec<u8>)> {
+    chain(width, height, rgba, 4, downsample)
+}
+
+/// The alpha of every level of [`mip_chain`], computed from the image's alpha alone (one byte
+/// a texel): the same bytes as the chain's alpha channel, without its colour work (a
+/// 2048² leaf map's colour levels cost half a second).
+pub fn alpha_mip_chain(width: u32, height: u32, alpha: &[u8]) -> Vec<(u32, u32, Vec<u8>)> {
+    chain(width, height, alpha, 1, downsample_alpha)
+}
+
+/// One mip level: width, height, texels.
+type Level = (u32, u32, Vec<u8>);
+
+/// The coverage-preserving chain of texels of `stride` bytes (alpha last), each level from the
+/// previous one's plain `down`sample.
+fn chain(
+    width: u32,
+    height: u32,
+    data: &[u8],
+    stride: usize,
+    down: fn(u32, u32, &[u8]) -> Level,
+) -> Vec<Level> {
     let levels = 32 - width.max(height).max(1).leading_zeros();
-    let coverage0 = alpha_coverage(rgba);
-    let mut out = vec![(width, height, rgba.to_vec())];
-    let (mut w, mut h, mut data) = (width, height, rgba.to_vec());
+    let coverage0 = alpha_coverage(data, stride);
+    let mut out = vec![(width, height, data.to_vec())];
+    let (mut w, mut h, mut level) = (width, height, data.to_vec());
     for _ in 1..levels {
-        (w, h, data) = downsample(w, h, &data);
-        out.push((w, h, preserve_coverage(&data, coverage0)));
+        (w, h, level) = down(w, h, &level);
+        out.push((w, h, preserve_coverage(&level, stride, coverage0)));
     }
     out
 }
@@ -368,4 +418,32 @@ pub(crate) fn upload_texture(
         );
     }
     texture.create_view(&Default::default())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_alpha_chain_is_the_full_chains_alpha() {
+        // An odd-sized image with varied alpha (a hash of the texel), so every level keeps
+        // edge texels and rescales its alpha.
+        let (w, h) = (37u32, 22u32);
+        let rgba: Vec<u8> = (0..w * h)
+            .flat_map(|i| {
+                let v = i.wrapping_mul(2_654_435_761) >> 24;
+                [v as u8, (v * 3) as u8, 200, (v % 256) as u8]
+            })
+            .collect();
+        let alpha: Vec<u8> = rgba.chunks_exact(4).map(|p| p[3]).collect();
+        let full = mip_chain(w, h, &rgba);
+        let alone = alpha_mip_chain(w, h, &alpha);
+        assert_eq!(full.len(), 6);
+        assert_eq!(full.len(), alone.len());
+        for ((fw, fh, f), (aw, ah, a)) in full.iter().zip(&alone) {
+            assert_eq!((fw, fh), (aw, ah));
+            let f_alpha: Vec<u8> = f.chunks_exact(4).map(|p| p[3]).collect();
+            assert_eq!(&f_alpha, a, "level {fw}x{fh}");
+        }
+    }
 }

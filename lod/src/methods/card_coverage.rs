@@ -63,7 +63,7 @@ struct Card {
 const ALPHA_MAP_SIDE: u32 = 256;
 
 /// A texture's alpha as the renderer samples it: its coverage-preserving mip levels
-/// ([`frond_render::mip_chain`]) from the first no larger than [`ALPHA_MAP_SIDE`] a side. At a
+/// ([`frond_render::alpha_mip_chain`]) from the first no larger than [`ALPHA_MAP_SIDE`] a side. At a
 /// far LOD a leaf card is a few samples wide and the renderer reads a small, coarse level (a
 /// blob that keeps the card's covered fraction), not the full map's thin outline: thinning and
 /// the scale search judge the same shapes the coverage metric will see.
@@ -76,7 +76,8 @@ struct AlphaMap {
 
 impl AlphaMap {
     fn of(t: &frond_scene::Texture) -> AlphaMap {
-        let chain = frond_render::mip_chain(t.width, t.height, &t.rgba);
+        let alpha: Vec<u8> = t.rgba.chunks_exact(4).map(|p| p[3]).collect();
+        let chain = frond_render::alpha_mip_chain(t.width, t.height, &alpha);
         let first = chain
             .iter()
             .position(|(w, h, _)| (*w).max(*h) <= ALPHA_MAP_SIDE)
@@ -84,10 +85,7 @@ impl AlphaMap {
         let levels = chain
             .into_iter()
             .skip(first)
-            .map(|(w, h, rgba)| {
-                let alpha = rgba.chunks_exact(4).map(|p| p[3]).collect();
-                (w as usize, h as usize, alpha)
-            })
+            .map(|(w, h, alpha)| (w as usize, h as usize, alpha))
             .collect();
         AlphaMap { first, levels }
     }
