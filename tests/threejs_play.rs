@@ -433,7 +433,7 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
     // own, after the baked ones'.
     let copies: Vec<usize> = lods
         .iter()
-        .map(|l| usize_of(&l["input_textured_billboards"]).unwrap_or(0))
+        .map(|l| usize_of(&l["input_textured_billboards"]).expect("copied billboards"))
         .collect();
     let mut files: Vec<PathBuf> = lods
         .iter()

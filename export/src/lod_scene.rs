@@ -316,7 +316,8 @@ pub fn add_lod(
             if let Some(sets) = &lod.vat_uvs {
                 p.extra_uvs = sets.iter().map(|set| per_corner(set)).collect();
                 vat_prims.push(p);
-            } else if !p.positions.is_empty() {
+            } else {
+                // A group holds at least the billboard that made it.
                 if let Some(rows) = &lod.spectral_uvs {
                     p.extra_uvs = vec![per_corner(rows)];
                 }

@@ -17,7 +17,7 @@ use crate::contract::{AnimatedBillboardCloud, LoopClock};
 use crate::error::LodError;
 use crate::joint_budget::{AnimationCount, BillboardAnimation, JointCap, count};
 use crate::method::{BuildContext, Foliage, Method, MethodReport};
-use crate::methods::cards::is_card_foliage;
+use crate::methods::cards::{is_card_foliage, triangle_area};
 use crate::motion_budget::{ScreenBudget, apply_budget};
 use crate::report::{DroppedReport, LodEntry, LodTimings};
 use crate::screen_budget::{LodLevel, lod_levels};
@@ -334,22 +334,14 @@ fn alpha_tested_area(tree: &Tree, lod: &ChainLod) -> f64 {
     let parts: f64 = lod
         .parts
         .iter()
-        .flat_map(|m| m.primitives.iter().map(move |p| (m, p)))
-        .filter(|(_, p)| {
+        .flat_map(|m| m.primitives.iter().enumerate().map(move |(i, p)| (m, i, p)))
+        .filter(|(_, _, p)| {
             tree.materials
                 .get(p.material)
                 .is_some_and(|m| m.alpha_mode != frond_scene::AlphaMode::Opaque)
         })
-        .flat_map(|(m, p)| {
-            p.indices.chunks_exact(3).map(move |t| {
-                let [a, b, c] = [0, 1, 2].map(|k| {
-                    m.positions
-                        .get(t[k] as usize)
-                        .copied()
-                        .unwrap_or(glam::Vec3::ZERO)
-                });
-                f64::from(0.5 * (b - a).cross(c - a).length())
-            })
+        .flat_map(|(m, i, p)| {
+            (0..p.indices.len() / 3).map(move |t| f64::from(triangle_area(m, i, t)))
         })
         .sum();
     let quads: f64 = lod.cloud().map_or(0.0, |c| {

@@ -152,8 +152,7 @@ pub fn build_animated_cloud(
         None
     } else {
         let draw = scene_from_positions(tree, &sampled.average, None, TreeParts::Foliage);
-        let pick = |v: &[Quad]| bake.iter().map(|&i| v[i]).collect::<Vec<_>>();
-        let bake_quads = pick(&quads);
+        let bake_quads: Vec<Quad> = bake.iter().map(|&i| quads[i]).collect();
         let bake_drawn: Vec<Vec<usize>> = bake.iter().map(|&i| drawn[i].clone()).collect();
         // The atlas budget holds as many billboards as the chain allowed for it; one that a
         // method could not fit (too few texels even at the smallest texture per quad) doubles

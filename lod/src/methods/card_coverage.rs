@@ -68,6 +68,8 @@ const ALPHA_MAP_SIDE: u32 = 256;
 /// blob that keeps the card's covered fraction), not the full map's thin outline: thinning and
 /// the scale search judge the same shapes the coverage metric will see.
 struct AlphaMap {
+    /// The full texture's size in texels (what mip levels are counted from).
+    size: Vec2,
     /// Level of the full texture that `levels[0]` is.
     first: usize,
     /// `(width, height, alpha)` per level.
@@ -87,7 +89,11 @@ impl AlphaMap {
             .skip(first)
             .map(|(w, h, alpha)| (w as usize, h as usize, alpha))
             .collect();
-        AlphaMap { first, levels }
+        AlphaMap {
+            size: Vec2::new(t.width as f32, t.height as f32),
+            first,
+            levels,
+        }
     }
 
     /// The level pair mip level `lod` of the full texture reads: the first kept level at or
@@ -143,8 +149,6 @@ pub struct CardCoverage {
     /// [`CardCoverage::thin`]'s cover counts when it ran, else rasterised on first use.
     original: OnceLock<Vec<Vec<bool>>>,
     views: Vec<View>,
-    /// Per texture of the tree, its size in texels.
-    texture_sizes: Vec<Vec2>,
     /// World units per sample.
     spacing: f32,
     /// World units per sample of the coverage metric's supersampled render at this LOD's
@@ -189,11 +193,6 @@ impl CardCoverage {
         }
         CardCoverage {
             alpha_maps,
-            texture_sizes: tree
-                .textures
-                .iter()
-                .map(|t| Vec2::new(t.width as f32, t.height as f32))
-                .collect(),
             original: OnceLock::new(),
             views,
             spacing,
@@ -227,8 +226,7 @@ impl CardCoverage {
             // The texture, its cutoff and the mip level the renderer reads on this triangle.
             let alpha = c.alpha.and_then(|(texture, cutoff)| {
                 let map = self.alpha_maps.get(texture)?.as_ref()?;
-                let size = self.texture_sizes.get(texture).copied()?;
-                Some((map, cutoff, map.level(self.mip_level(&p, &uv, size))))
+                Some((map, cutoff, map.level(self.mip_level(&p, &uv, map.size))))
             });
             let lo = p[0].min(p[1]).min(p[2]).floor().max(Vec2::ZERO);
             let hi = p[0].max(p[1]).max(p[2]).ceil();

@@ -94,7 +94,7 @@ pub fn is_card_foliage(tree: &Tree) -> bool {
 }
 
 /// Area of triangle `t` of primitive `p`.
-fn triangle_area(mesh: &WoodMesh, p: usize, t: usize) -> f32 {
+pub(crate) fn triangle_area(mesh: &WoodMesh, p: usize, t: usize) -> f32 {
     let i = &mesh.primitives[p].indices[3 * t..3 * t + 3];
     let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[i[k] as usize]);
     0.5 * (b - a).cross(c - a).length()
