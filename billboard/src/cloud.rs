@@ -217,6 +217,7 @@ impl BillboardCloud {
         frond_render::DrawScene {
             meshes: vec![mesh],
             materials: vec![DrawMaterial {
+                wrap: Default::default(),
                 base_color: [1.0; 4],
                 texture: Some(0),
                 alpha_cutoff: Some(0.5),

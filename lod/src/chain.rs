@@ -529,6 +529,49 @@ fn simplify_wood(wood: &WoodMesh, max_error: f32, max_triangles: usize) -> (Wood
     (mesh, error)
 }
 
+/// How much finer than one pixel the wood may be refined into triangles the foliage left.
+const WOOD_REFINE_FLOOR: f32 = 8.0;
+
+/// Bisection steps of [`refine_wood`]'s error.
+const WOOD_REFINE_STEPS: usize = 6;
+
+/// `wood` at the finest error between `floor` and `current`'s (mesh, error, thin pieces
+/// dropped) that fits in `max_triangles`, found by bisection of the error's logarithm; branches
+/// narrower than the error are re-admitted. A near LOD whose cards need fewer triangles than
+/// it may draw spends them on its branches (pine_medium at 600 px: coverage error 0.0052 with
+/// the wood at one pixel).
+fn refine_wood(
+    wood: &WoodMesh,
+    current: (WoodMesh, f32, usize),
+    floor: f32,
+    max_triangles: usize,
+) -> (WoodMesh, f32, usize) {
+    let mut best = current;
+    if best.0.triangles() > max_triangles || !(floor > 0.0 && best.1 > floor) {
+        return best;
+    }
+    let at = |error: f32| {
+        let (kept, thin) = wood.without_thin_pieces(error);
+        (kept.simplify(error).0, error, thin)
+    };
+    // The floor first: often everything fits.
+    let finest = at(floor);
+    if finest.0.triangles() <= max_triangles {
+        return finest;
+    }
+    let (mut lo, mut hi) = (floor.ln(), best.1.ln());
+    for _ in 0..WOOD_REFINE_STEPS {
+        let tried = at((0.5 * (lo + hi)).exp());
+        if tried.0.triangles() <= max_triangles {
+            hi = tried.1.ln();
+            best = tried;
+        } else {
+            lo = tried.1.ln();
+        }
+    }
+    best
+}
+
 /// Billboard LOD `k + 1`: the wood simplified to its share of the budget, the method's
 /// foliage within the rest, the motion budget applied within its joints and channels.
 #[expect(
@@ -582,6 +625,18 @@ fn billboard_lod(
         max_alpha_tested_area: Some(lod_budget.alpha_tested_area),
     };
     let built = method.build(&ctx)?;
+    // Triangles the foliage left unused go back to the wood, as a finer wood error.
+    let foliage_triangles = match &built.foliage {
+        Foliage::Cards(cards) => cards.mesh.triangles(),
+        Foliage::Cloud(cloud) => 2 * cloud.billboards.len(),
+    };
+    let room = lod_budget.triangles.saturating_sub(foliage_triangles);
+    let (wood_lod, wood_error, thin_pieces) = refine_wood(
+        wood,
+        (wood_lod, wood_error, thin_pieces),
+        level.wood_error / WOOD_REFINE_FLOOR,
+        room,
+    );
     let mut e = entry(method.name().name().into(), reason.into());
     e.screen_height = Some(level.screen_height);
     e.pixel = Some(level.pixel);
@@ -747,5 +802,39 @@ fn cloud_lod(
         clips,
         image_sizes,
         entry: e,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use frond_scene::{ImportOptions, import};
+
+    #[test]
+    fn the_wood_is_refined_into_the_room_left_and_no_further() {
+        let tree = import(&frond_testdata::sample(), &ImportOptions::default()).expect("sample");
+        let wood = WoodMesh::from_tree(&tree);
+        let coarse = 0.01 * tree.height();
+        let (kept, thin) = wood.without_thin_pieces(coarse);
+        let (mesh, _) = kept.simplify(coarse);
+        let start = mesh.triangles();
+        assert!(start < wood.triangles());
+        // Room for half again as many triangles: a finer error, within the room.
+        let room = start + start / 2;
+        let (refined, error, _) =
+            refine_wood(&wood, (mesh.clone(), coarse, thin), coarse / 64.0, room);
+        assert!(error < coarse, "{error}");
+        assert!(refined.triangles() > start && refined.triangles() <= room);
+        // No room: unchanged.
+        let (same, same_error, _) = refine_wood(&wood, (mesh, coarse, thin), coarse / 64.0, start);
+        assert_eq!((same.triangles(), same_error), (start, coarse));
+        // Room for everything: the floor.
+        let (_, finest, _) = refine_wood(
+            &wood,
+            (kept.simplify(coarse).0, coarse, thin),
+            coarse / 64.0,
+            usize::MAX,
+        );
+        assert_eq!(finest, coarse / 64.0);
     }
 }

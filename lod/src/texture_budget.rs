@@ -17,10 +17,13 @@ pub type ImageSizes = BTreeMap<usize, [u32; 2]>;
 /// Texels per screen pixel an alpha-tested (`MASK`) material's maps keep: the alpha test turns
 /// the texture's outline into the leaf's, and at one texel per pixel filtering moves that
 /// outline by a pixel. Measured on pine_medium's card LODs (coverage error at 600/200/60 px,
-/// issue 17): 0.107/0.214/0.83 at 1 texel per pixel, 0.043/0.127/0.60 at 4, for 82 KB of
-/// texture at most against the input's 20 MB; the sample's did not change (its leaf map is
-/// already small).
-pub const ALPHA_TESTED_TEXELS_PER_PIXEL: f32 = 4.0;
+/// issue 17): 0.107/0.214/0.83 at 1 texel per pixel, 0.043/0.127/0.60 at 4; with trimmed
+/// cards and the wood refined, 0.0052/0.085/0.354 at 4, 0.0027/0.080/0.326 at 8 and
+/// 0.0016/0.078/0.317 at 16 — four texels per sample of the metric's 4× supersampled render,
+/// where the 600 px LOD first matches plain wood decimation (gltfpack `-si`, 0.0023) — for
+/// 266 KB of texture at most against the input's 20 MB; the sample's did not change (its leaf
+/// map is already small).
+pub const ALPHA_TESTED_TEXELS_PER_PIXEL: f32 = 16.0;
 
 /// Smallest side a downscaled image keeps.
 pub const MIN_IMAGE_SIDE: u32 = 4;

@@ -3,6 +3,7 @@
 //! fallback texture.
 
 use crate::batch::Vertex;
+use frond_scene::Wrap;
 
 /// Colour target format; readback bytes are therefore sRGB-encoded.
 pub(crate) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -45,7 +46,9 @@ pub(crate) struct Pipelines {
     pub normal_culled: wgpu::RenderPipeline,
     /// Normal output, both faces drawn.
     pub normal_double_sided: wgpu::RenderPipeline,
-    pub sampler: wgpu::Sampler,
+    /// One sampler per pair of wrap modes (u, v), indexed by [`wrap_index`]; linear filtering
+    /// with mipmaps.
+    pub samplers: Vec<wgpu::Sampler>,
     pub white: wgpu::TextureView,
 }
 
@@ -173,16 +176,22 @@ impl Pipelines {
             NORMAL_FORMAT,
         );
 
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("frond-render sampler"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            address_mode_w: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            ..Default::default()
-        });
+        let samplers = WRAPS
+            .iter()
+            .flat_map(|&u| WRAPS.map(|v| (u, v)))
+            .map(|(u, v)| {
+                device.create_sampler(&wgpu::SamplerDescriptor {
+                    label: Some("frond-render sampler"),
+                    address_mode_u: address_mode(u),
+                    address_mode_v: address_mode(v),
+                    address_mode_w: wgpu::AddressMode::Repeat,
+                    mag_filter: wgpu::FilterMode::Linear,
+                    min_filter: wgpu::FilterMode::Linear,
+                    mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                    ..Default::default()
+                })
+            })
+            .collect();
         let white = upload_texture(device, queue, "frond-render white", 1, 1, &[255; 4], false);
 
         Pipelines {
@@ -192,7 +201,7 @@ impl Pipelines {
             double_sided,
             normal_culled,
             normal_double_sided,
-            sampler,
+            samplers,
             white,
         }
     }
@@ -445,5 +454,22 @@ mod tests {
             let f_alpha: Vec<u8> = f.chunks_exact(4).map(|p| p[3]).collect();
             assert_eq!(&f_alpha, a, "level {fw}x{fh}");
         }
+    }
+}
+
+/// The wrap modes, in the order of [`Pipelines::samplers`] (u major).
+const WRAPS: [Wrap; 3] = [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat];
+
+/// The index in [`Pipelines::samplers`] of the sampler wrapping as `wrap` (u, v).
+pub(crate) fn wrap_index(wrap: [Wrap; 2]) -> usize {
+    let at = |w: Wrap| WRAPS.iter().position(|&x| x == w).unwrap_or(0);
+    at(wrap[0]) * WRAPS.len() + at(wrap[1])
+}
+
+fn address_mode(wrap: Wrap) -> wgpu::AddressMode {
+    match wrap {
+        Wrap::Repeat => wgpu::AddressMode::Repeat,
+        Wrap::ClampToEdge => wgpu::AddressMode::ClampToEdge,
+        Wrap::MirroredRepeat => wgpu::AddressMode::MirrorRepeat,
     }
 }

@@ -529,7 +529,9 @@ impl Renderer {
                     },
                     wgpu::BindGroupEntry {
                         binding: 2,
-                        resource: wgpu::BindingResource::Sampler(&p.sampler),
+                        resource: wgpu::BindingResource::Sampler(
+                            &p.samplers[crate::pipeline::wrap_index(material.wrap)],
+                        ),
                     },
                 ],
             });

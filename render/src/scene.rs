@@ -1,5 +1,6 @@
 //! Draw inputs: plain triangle meshes, glTF-like materials and RGBA8 textures.
 
+use frond_scene::Wrap;
 use glam::Vec3;
 
 use crate::error::RenderError;
@@ -29,6 +30,8 @@ pub struct DrawMaterial {
     pub alpha_cutoff: Option<f32>,
     /// Draw both faces; otherwise back faces (clockwise on screen) are culled.
     pub double_sided: bool,
+    /// How the texture wraps outside [0, 1] along u and v (the glTF sampler's modes).
+    pub wrap: [Wrap; 2],
 }
 
 impl DrawMaterial {
@@ -39,6 +42,7 @@ impl DrawMaterial {
             texture: None,
             alpha_cutoff: None,
             double_sided: false,
+            wrap: [Wrap::Repeat; 2],
         }
     }
 }

@@ -86,6 +86,7 @@ pub fn scene_from_positions(
         .materials
         .iter()
         .map(|m| DrawMaterial {
+            wrap: m.base_color_wrap,
             base_color: m.base_color,
             texture: m.base_color_texture,
             alpha_cutoff: match m.alpha_mode {

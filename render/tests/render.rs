@@ -5,6 +5,7 @@
 use frond_render::{
     Camera, DrawMaterial, DrawMesh, DrawScene, DrawTexture, Frame, Projection, RenderError,
 };
+use frond_scene::Wrap;
 use glam::Vec3;
 
 mod common;
@@ -113,6 +114,7 @@ fn alpha_mask_cuts_out_the_transparent_half() {
         }
     }
     let masked = DrawMaterial {
+        wrap: Default::default(),
         base_color: [1.0; 4],
         texture: Some(0),
         alpha_cutoff: Some(0.5),
@@ -150,6 +152,55 @@ fn alpha_mask_cuts_out_the_transparent_half() {
         .render(&s, &ortho(0.0, 1.0), 64, 64, [0.0; 4])
         .expect("render");
     assert_eq!(frame.covered_count(), 64 * 64);
+}
+
+/// The sampler's wrap modes are honoured: a texture opaque in its right half only, stretched
+/// over u in [0, 2] across the view, shows twice when repeating (a quarter of the view each,
+/// 2 of 4 quarters), once when clamped (the right quarter of [0, 1], and beyond 1 the opaque
+/// edge column: half the view), and mirrored, [0.5, 1.5] opaque.
+#[test]
+fn wrap_modes_decide_what_lies_outside_the_texture() {
+    let r = renderer();
+    let (w, h) = (64u32, 4u32);
+    let rgba: Vec<u8> = (0..w * h)
+        .flat_map(|i| [0, 255, 0, if i % w < w / 2 { 0 } else { 255 }])
+        .collect();
+    let mut quad = quad_z([-1.0, -1.0], [1.0, 1.0], 0.0, 0);
+    quad.uvs = Some(vec![[0.0, 1.0], [2.0, 1.0], [2.0, 0.0], [0.0, 0.0]]);
+    let covered_columns = |wrap: [Wrap; 2]| {
+        let s = DrawScene {
+            meshes: vec![quad.clone()],
+            materials: vec![DrawMaterial {
+                base_color: [1.0; 4],
+                texture: Some(0),
+                alpha_cutoff: Some(0.5),
+                double_sided: true,
+                wrap,
+            }],
+            textures: vec![DrawTexture {
+                width: w,
+                height: h,
+                rgba: rgba.clone(),
+            }],
+        };
+        let frame = r
+            .render(&s, &ortho(0.0, 1.0), 64, 64, [0.0; 4])
+            .expect("render");
+        (0..64).map(|x| frame.covered(x, 32)).collect::<Vec<bool>>()
+    };
+    // Columns well inside each quarter of the view (u in steps of 0.5).
+    let quarters = |c: &[bool]| [4, 20, 36, 52].map(|x: usize| (c[x], c[x + 8]));
+    let t = (true, true);
+    let f = (false, false);
+    assert_eq!(quarters(&covered_columns([Wrap::Repeat; 2])), [f, t, f, t]);
+    assert_eq!(
+        quarters(&covered_columns([Wrap::ClampToEdge, Wrap::Repeat])),
+        [f, t, t, t]
+    );
+    assert_eq!(
+        quarters(&covered_columns([Wrap::MirroredRepeat, Wrap::Repeat])),
+        [f, t, t, f]
+    );
 }
 
 #[test]
@@ -521,6 +572,7 @@ fn timing_100k_triangles() {
             material: 0,
         }],
         materials: vec![DrawMaterial {
+            wrap: Default::default(),
             base_color: [1.0; 4],
             texture: Some(0),
             alpha_cutoff: Some(0.5),

@@ -138,6 +138,7 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
             name: "default".into(),
             base_color: [1.0; 4],
             base_color_texture: None,
+            base_color_wrap: [Wrap::Repeat; 2],
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: 0.5,
             double_sided: false,
@@ -590,6 +591,7 @@ fn read_materials(src: &GltfSource, warnings: &mut Vec<String>) -> Result<Materi
     let mut texcoord_sets = 1usize;
     for (i, m) in src.root.materials.iter().enumerate() {
         let pbr = &m.pbr_metallic_roughness;
+        let mut base_color_wrap = [Wrap::Repeat; 2];
         let tex = match &pbr.base_color_texture {
             Some(info) => {
                 let t = src.root.textures.get(info.index.value()).ok_or_else(|| {
@@ -604,6 +606,9 @@ fn read_materials(src: &GltfSource, warnings: &mut Vec<String>) -> Result<Materi
                         "texture {}: image {image} does not exist",
                         info.index.value()
                     )));
+                }
+                if let Some(sampler) = t.sampler.and_then(|s| src.root.samplers.get(s.value())) {
+                    base_color_wrap = [&sampler.wrap_s, &sampler.wrap_t].map(wrap_of);
                 }
                 let mut set = info.tex_coord;
                 let mut xf = glam::Affine2::IDENTITY;
@@ -708,6 +713,7 @@ fn read_materials(src: &GltfSource, warnings: &mut Vec<String>) -> Result<Materi
             name: m.name.clone().unwrap_or_else(|| format!("material{i}")),
             base_color: pbr.base_color_factor.0,
             base_color_texture: None,
+            base_color_wrap,
             alpha_mode,
             alpha_cutoff: m.alpha_cutoff.map(|c| c.0).unwrap_or(0.5),
             double_sided: m.double_sided,
@@ -721,6 +727,15 @@ fn read_materials(src: &GltfSource, warnings: &mut Vec<String>) -> Result<Materi
         textures,
         texcoord_sets,
     })
+}
+
+/// A glTF sampler's wrap mode as frond's (an invalid one reads as the default, repeat).
+fn wrap_of(mode: &Checked<json::texture::WrappingMode>) -> Wrap {
+    match mode {
+        Checked::Valid(json::texture::WrappingMode::ClampToEdge) => Wrap::ClampToEdge,
+        Checked::Valid(json::texture::WrappingMode::MirroredRepeat) => Wrap::MirroredRepeat,
+        _ => Wrap::Repeat,
+    }
 }
 
 /// The MIME type of an encoded image recognised from its first bytes (PNG or JPEG).

@@ -105,6 +105,34 @@ pub enum AlphaMode {
     Blend,
 }
 
+/// How a texture is sampled outside [0, 1] along one axis (glTF sampler `wrapS`/`wrapT`; the
+/// default when a texture has no sampler is [`Wrap::Repeat`]). Renderers must honour it:
+/// a leaf texture clamped at a transparent border shows nothing outside its card, a repeating
+/// one shows its neighbour.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+pub enum Wrap {
+    #[default]
+    Repeat,
+    ClampToEdge,
+    MirroredRepeat,
+}
+
+impl Wrap {
+    /// The texel (0..`size`) a texture coordinate `x`, in texels, reads under this mode.
+    pub fn texel(self, x: f32, size: u32) -> u32 {
+        let n = size.max(1) as f32;
+        let t = match self {
+            Wrap::Repeat => x.rem_euclid(n),
+            Wrap::ClampToEdge => x.clamp(0.0, n - 1.0),
+            Wrap::MirroredRepeat => {
+                let m = x.rem_euclid(2.0 * n);
+                if m < n { m } else { 2.0 * n - m }
+            }
+        };
+        (t.max(0.0) as u32).min(size.max(1) - 1)
+    }
+}
+
 /// How many texture coordinate sets ([`Vertices::texcoords`]) a tree carries at most:
 /// `TEXCOORD_0` and `TEXCOORD_1` (a second set for lightmaps or occlusion is common; more are
 /// rare). A material map naming a later set is written with `texCoord` 0 and a warning.
@@ -118,6 +146,8 @@ pub struct Material {
     pub base_color: [f32; 4],
     /// Index into `Tree::textures`.
     pub base_color_texture: Option<usize>,
+    /// How the base-colour texture wraps along u and v (its sampler's modes).
+    pub base_color_wrap: [Wrap; 2],
     pub alpha_mode: AlphaMode,
     pub alpha_cutoff: f32,
     pub double_sided: bool,

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use frond_scene::gltf_writer::*;
-use frond_scene::{ImportOptions, Part, SampleOptions, Tree, import_bytes, sample};
+use frond_scene::{ImportOptions, Part, SampleOptions, Tree, Wrap, import_bytes, sample};
 use glam::{Mat4, Quat, Vec3};
 use serde_json::{Value, json};
 
@@ -319,4 +319,30 @@ fn quantized_positions_texture_transform_matrix_nodes_and_strips() {
     assert!((uv[3] - glam::Vec2::new(1.0, 0.75)).length() < 1e-6);
     assert_eq!(tree.textures.len(), 1);
     assert_eq!(tree.materials[0].base_color_texture, Some(0));
+}
+
+/// The base-colour map's sampler wrap modes are read (the sample's bark repeats, its leaf
+/// texture is clamped), and [`Wrap::texel`] maps coordinates outside the texture as glTF does.
+#[test]
+fn base_colour_wrap_modes_are_read_and_applied() {
+    let tree =
+        frond_scene::import(&frond_testdata::sample(), &ImportOptions::default()).expect("sample");
+    let wraps: Vec<(String, [Wrap; 2])> = tree
+        .materials
+        .iter()
+        .map(|m| (m.name.clone(), m.base_color_wrap))
+        .collect();
+    assert!(
+        wraps.contains(&("bark".into(), [Wrap::Repeat; 2])),
+        "{wraps:?}"
+    );
+    assert!(
+        wraps.contains(&("leaves".into(), [Wrap::ClampToEdge; 2])),
+        "{wraps:?}"
+    );
+    // Texels of a 4-texel axis.
+    let at = |w: Wrap| [-1.5, 0.5, 3.5, 4.5, 6.2].map(|x| w.texel(x, 4));
+    assert_eq!(at(Wrap::Repeat), [2, 0, 3, 0, 2]);
+    assert_eq!(at(Wrap::ClampToEdge), [0, 0, 3, 3, 3]);
+    assert_eq!(at(Wrap::MirroredRepeat), [1, 0, 3, 3, 1]);
 }

@@ -19,7 +19,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use frond_scene::wood::WoodMesh;
-use frond_scene::{AlphaMode, Bounds, Tree};
+use frond_scene::{AlphaMode, Bounds, Tree, Wrap};
 
 /// Views of the ring at eye level (the coverage metric's viewers, spec §8.2) …
 const RING_VIEWS: usize = 8;
@@ -53,8 +53,9 @@ struct View {
 struct Card {
     triangles: Vec<[(Vec3, Vec2); 3]>,
     centre: Vec3,
-    /// Texture index into the tree's textures and the alpha a sample needs; `None`: opaque.
-    alpha: Option<(usize, f32)>,
+    /// Texture index into the tree's textures, the alpha a sample needs and how the texture
+    /// wraps; `None`: opaque.
+    alpha: Option<(usize, f32, [Wrap; 2])>,
 }
 
 /// Largest side of the alpha maps the rasteriser samples: the renderer's mip levels from the
@@ -105,23 +106,27 @@ impl AlphaMap {
         (k, if k == last { 0.0 } else { l - k as f32 })
     }
 
-    /// Alpha (0..1) at `uv` (repeating outside [0, 1]) at the level pair `(k, frac)`
+    /// Alpha (0..1) at `uv` (outside [0, 1] as `wrap` says) at the level pair `(k, frac)`
     /// ([`AlphaMap::level`]): nearest texel of the two levels, blended linearly between them
     /// (the renderer's trilinear filter, point-sampled within a level).
-    fn at(&self, uv: Vec2, (k, frac): (usize, f32)) -> f32 {
-        // Wraps into [0, 1) by truncation (`floor` is a libm call in this hot loop).
-        let wrap = |v: f32| {
-            let f = v - (v as i32) as f32;
-            if f < 0.0 { f + 1.0 } else { f }
+    fn at(&self, uv: Vec2, (k, frac): (usize, f32), wrap: [Wrap; 2]) -> f32 {
+        // Inside the texture (nearly always) without the wrap's remainder: a libm call in
+        // this hot loop.
+        let index = |x: f32, n: usize, w: Wrap| {
+            let t = x * n as f32;
+            if (0.0..n as f32).contains(&t) {
+                t as usize
+            } else {
+                w.texel(t, n as u32) as usize
+            }
         };
-        let (u, v) = (wrap(uv.x), wrap(uv.y));
         let texel = |level: &(usize, usize, Vec<u8>)| {
             let (w, h, a) = level;
             if *w == 0 || *h == 0 {
                 return 1.0;
             }
-            let x = ((u * *w as f32) as usize).min(w - 1);
-            let y = ((v * *h as f32) as usize).min(h - 1);
+            let x = index(uv.x, *w, wrap[0]);
+            let y = index(uv.y, *h, wrap[1]);
             f32::from(a[y * w + x]) / 255.0
         };
         let Some(a) = self.levels.get(k) else {
@@ -185,7 +190,7 @@ impl CardCoverage {
         let mut alpha_maps: Vec<Option<AlphaMap>> =
             (0..tree.textures.len()).map(|_| None).collect();
         for c in &cards {
-            if let Some((t, _)) = c.alpha
+            if let Some((t, _, _)) = c.alpha
                 && alpha_maps[t].is_none()
             {
                 alpha_maps[t] = Some(AlphaMap::of(&tree.textures[t]));
@@ -224,9 +229,14 @@ impl CardCoverage {
                 area = -area;
             }
             // The texture, its cutoff and the mip level the renderer reads on this triangle.
-            let alpha = c.alpha.and_then(|(texture, cutoff)| {
+            let alpha = c.alpha.and_then(|(texture, cutoff, wrap)| {
                 let map = self.alpha_maps.get(texture)?.as_ref()?;
-                Some((map, cutoff, map.level(self.mip_level(&p, &uv, map.size))))
+                Some((
+                    map,
+                    cutoff,
+                    wrap,
+                    map.level(self.mip_level(&p, &uv, map.size)),
+                ))
             });
             let lo = p[0].min(p[1]).min(p[2]).floor().max(Vec2::ZERO);
             let hi = p[0].max(p[1]).max(p[2]).ceil();
@@ -248,9 +258,9 @@ impl CardCoverage {
                     if (0..3).any(|k| w[k] < 0.0 || (w[k] == 0.0 && !owns_zero[k])) {
                         continue;
                     }
-                    if let Some((map, cutoff, level)) = alpha {
+                    if let Some((map, cutoff, wrap, level)) = alpha {
                         let t = (uv[0] * w[0] + uv[1] * w[1] + uv[2] * w[2]) / area;
-                        if map.at(t, level) < cutoff {
+                        if map.at(t, level, wrap) < cutoff {
                             continue;
                         }
                     }
@@ -550,10 +560,11 @@ fn card(tree: &Tree, foliage: &WoodMesh, tris: &[(usize, usize)]) -> Card {
         };
         // The factor scales the texture's alpha: the texel needs cutoff / factor.
         let factor = m.base_color[3];
+        let wrap = m.base_color_wrap;
         if factor <= 0.0 {
-            return Some((m.base_color_texture?, f32::INFINITY));
+            return Some((m.base_color_texture?, f32::INFINITY, wrap));
         }
-        Some((m.base_color_texture?, cutoff / factor))
+        Some((m.base_color_texture?, cutoff / factor, wrap))
     });
     Card {
         triangles,
@@ -656,6 +667,8 @@ mod tests {
         }
     }
 
+    const REPEAT: [Wrap; 2] = [Wrap::Repeat; 2];
+
     #[test]
     fn far_cards_read_the_renderers_coarse_coverage_preserving_levels() {
         let texture = thin_lines();
@@ -674,18 +687,21 @@ mod tests {
             for (x, y) in [(0, 0), (w / 3, h / 2), (w - 1, h - 1)] {
                 let uv = Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
                 assert_eq!(
-                    map.at(uv, map.level(k as f32)),
+                    map.at(uv, map.level(k as f32), REPEAT),
                     alpha(k, x, y),
                     "level {k} at {x},{y}"
                 );
                 if k == 1 {
-                    assert_eq!(map.at(uv, map.level(0.0)), alpha(1, x, y));
+                    assert_eq!(map.at(uv, map.level(0.0), REPEAT), alpha(1, x, y));
                 }
             }
         }
         let uv = Vec2::splat(0.3);
-        let (a, b) = (map.at(uv, map.level(3.0)), map.at(uv, map.level(4.0)));
-        assert!((map.at(uv, map.level(3.5)) - 0.5 * (a + b)).abs() < 1e-6);
+        let (a, b) = (
+            map.at(uv, map.level(3.0), REPEAT),
+            map.at(uv, map.level(4.0), REPEAT),
+        );
+        assert!((map.at(uv, map.level(3.5), REPEAT) - 0.5 * (a + b)).abs() < 1e-6);
 
         // The level follows the texel step per rendered sample: the whole 512² texture over a
         // triangle 8 samples wide is 64 texels a sample, level 6.

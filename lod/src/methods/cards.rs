@@ -2,7 +2,9 @@
 //! leaf reduction and ez-tree's LODs do the same): the cards that add least to the tree's
 //! silhouette at the LOD's pixel size are dropped until the rest fit the LOD's triangle
 //! budget ([`crate::methods::card_coverage`]), and the survivors are grown about their centres
-//! by the scale that brings their coverage closest to the input's. The cards stay
+//! by the scale that brings their coverage closest to the input's. Cards are first trimmed to
+//! one triangle where their texture allows ([`crate::methods::card_trim`]): half the
+//! triangles, so twice the cards within a budget. The cards stay
 //! skinned as in the input and share its leaf material and texture: no bake, no atlas.
 
 use rand::SeedableRng;
@@ -17,6 +19,7 @@ use crate::chain::part_mesh;
 use crate::error::LodError;
 use crate::method::{BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput};
 use crate::methods::card_coverage::{CardCoverage, card_centre, card_vertices};
+use crate::methods::card_trim::trim_cards;
 
 /// The `cards` method; it has no options.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -37,6 +40,8 @@ pub struct CardFoliage {
 pub struct CardReport {
     /// Cards of the input (connected pieces of foliage triangles).
     pub cards: usize,
+    /// Cards drawn as one trimmed triangle ([`crate::methods::card_trim`]).
+    pub trimmed: usize,
     pub kept: usize,
     /// Linear scale of every kept card about its centre.
     pub scale: f32,
@@ -118,6 +123,8 @@ pub fn thin_cards(
     seed: u64,
 ) -> CardFoliage {
     let max_triangles = budget.triangles;
+    let trimmed = trim_cards(tree, foliage);
+    let foliage = &trimmed.mesh;
     let cards = foliage.pieces();
     let area: Vec<f32> = cards
         .iter()
@@ -185,6 +192,7 @@ pub fn thin_cards(
         rig: Rig::default(),
         report: CardReport {
             cards: cards.len(),
+            trimmed: trimmed.cards,
             kept,
             scale,
         },

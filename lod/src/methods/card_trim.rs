@@ -1,0 +1,807 @@
+//! Leaf cards trimmed to one triangle (issue 17 item 7: quads trimmed to what they show). A
+//! leaf card is a quad of two triangles whose texture is mostly transparent: a sprig drawn on
+//! a quarter of its texels. The smallest triangle that holds every texel the alpha test can
+//! pass, and whose part outside the card reads only transparent texels under the texture's
+//! wrap modes, draws exactly the card's pixels with one triangle instead of two and, on the
+//! shared trees' leaf textures, 60–75 % of the card's area: half the triangles and less
+//! overdraw at no coverage cost. A card LOD then keeps twice the cards per triangle.
+//!
+//! The triangle is searched in the card's texture frame (the parallelogram its corners span in
+//! texture coordinates, `[0, 1]²`): each side is a supporting line of the opaque texels' hull
+//! in one of 64 directions, every triple of directions that closes a triangle is a
+//! candidate, and the smallest whose outside part is clear wins. Cards sharing their texture
+//! region (every card of a tree with one leaf texture) share the search. Written here: the
+//! constrained minimal triangle is a few lines over support functions, which no geometry crate
+//! offers with the wrap-mode constraint.
+
+use std::collections::{HashMap, HashSet};
+
+use glam::{Mat4, Vec2, Vec3};
+
+use frond_scene::sampling::world_at;
+use frond_scene::wood::{NO_BONE, WoodMesh};
+use frond_scene::{AlphaMode, Tree};
+
+use crate::methods::card_coverage::card_vertices;
+
+/// Directions of the triangle's sides searched: every 360/64 = 5.6°.
+const DIRECTIONS: usize = 64;
+
+/// Texels around an opaque one that a point outside the card must keep clear of, per 128
+/// texels of the texture's side (at least 2): the renderer's coarser mip levels blur the
+/// texture's edge rows and columns outwards (8 texels of a 1024² texture is level 3).
+const CLEAR_PER_128: f32 = 1.0;
+
+/// Area (fraction of the card) of the trimmed triangle's outside part that may lie near
+/// passing texels: where a side crosses the card's edge beside a leaf touching it, a sliver a
+/// few texels wide reads the edge's texels. Far below a pixel at any size the card is drawn.
+const SPILL: f32 = 0.002;
+
+/// Grid points per side of the search window `[-1, 2]²` of the card's frame, at most: whether
+/// a candidate's outside part is clear is read off this grid.
+const GRID: usize = 384;
+
+/// The foliage with its cards trimmed, and what trimming did.
+pub struct Trimmed {
+    pub mesh: WoodMesh,
+    /// Cards replaced by one triangle.
+    pub cards: usize,
+    /// Total area of the cards trimmed, before and after (world units²).
+    pub area_before: f64,
+    pub area_after: f64,
+}
+
+/// The foliage `mesh` of `tree` with every leaf card that can be trimmed replaced by its
+/// trimmed triangle ([`trimmed_triangle`]); other pieces unchanged. New vertices are affine
+/// combinations of the card's corners in every attribute (positions, normals, texture
+/// coordinates; skin weights combined per bone, negatives dropped, renormalised). The
+/// triangle faces the card's way.
+pub fn trim_cards(tree: &Tree, mesh: &WoodMesh) -> Trimmed {
+    let pieces = mesh.pieces();
+    let motion = BoneMotion::of(tree);
+    let mut regions: HashMap<RegionKey, Option<[Vec2; 3]>> = HashMap::new();
+    let mut out = mesh.clone();
+    // The second triangles of trimmed cards (the first is overwritten with the trimmed one).
+    let mut dropped: HashSet<(usize, usize)> = HashSet::new();
+    let (mut cards, mut area_before, mut area_after) = (0, 0.0, 0.0);
+    for piece in &pieces {
+        let Some(card) = CardFrame::of(tree, mesh, piece) else {
+            continue;
+        };
+        let triangle = *regions.entry(card.key()).or_insert_with(|| {
+            let material = &tree.materials[mesh.primitives[piece[0].0].material];
+            trimmed_triangle(tree, material, &card.uv)
+        });
+        let Some(triangle) = triangle else {
+            continue;
+        };
+        let base = out.positions.len() as u32;
+        for uv in triangle {
+            card.push_vertex(mesh, &mut out, uv, &motion);
+        }
+        let p = |k: u32| out.positions[(base + k) as usize];
+        let facing = (p(1) - p(0)).cross(p(2) - p(0));
+        let mut tri = [base, base + 1, base + 2];
+        if facing.dot(card.facing) < 0.0 {
+            tri.swap(1, 2);
+        }
+        area_before += f64::from(card.facing.length());
+        area_after += f64::from(0.5 * facing.length());
+        cards += 1;
+        dropped.insert(piece[1]);
+        out.primitives[piece[0].0].indices[3 * piece[0].1..3 * piece[0].1 + 3]
+            .copy_from_slice(&tri);
+    }
+    for (pi, p) in out.primitives.iter_mut().enumerate() {
+        let old = std::mem::take(&mut p.indices);
+        for (ti, t) in old.chunks_exact(3).enumerate() {
+            if !dropped.contains(&(pi, ti)) {
+                p.indices.extend_from_slice(t);
+            }
+        }
+    }
+    Trimmed {
+        mesh: out.compacted(),
+        cards,
+        area_before,
+        area_after,
+    }
+}
+
+/// Quantised texture region of a card: its four texture corners (1e-5 steps), sorted.
+type RegionKey = [(i64, i64); 4];
+
+/// A two-triangle card whose texture coordinates map affinely onto its positions.
+struct CardFrame {
+    /// Three of the card's vertices, every attribute of a point of the card an affine
+    /// combination of theirs.
+    corners: [u32; 3],
+    /// Their base-colour texture coordinates.
+    corner_uv: [Vec2; 3],
+    /// The card's texture region: origin and the two edges from it.
+    uv: [Vec2; 3],
+    /// The card's area-weighted normal (length: the card's area).
+    facing: Vec3,
+}
+
+impl CardFrame {
+    /// The card `piece` of `mesh` when it is one (two triangles of one alpha-tested, textured
+    /// material over four vertices, a parallelogram both in space and in texture space, mapped
+    /// affinely), else `None`.
+    fn of(tree: &Tree, mesh: &WoodMesh, piece: &[(usize, usize)]) -> Option<CardFrame> {
+        let [(p0, _), (p1, _)] = piece else {
+            return None;
+        };
+        let material = tree.materials.get(mesh.primitives[*p0].material)?;
+        if *p0 != *p1
+            || material.alpha_mode != AlphaMode::Mask
+            || material.base_color_texture.is_none()
+        {
+            return None;
+        }
+        let verts = card_vertices(mesh, piece);
+        let &[a, b, c, d] = verts.as_slice() else {
+            return None;
+        };
+        let uv = |v: u32| mesh.uvs.get(v as usize).copied();
+        let (ua, ub, uc, ud) = (uv(a)?, uv(b)?, uv(c)?, uv(d)?);
+        // Three corners spanning the texture region; the fourth must follow affinely.
+        let mut best = None;
+        for (three, fourth) in [
+            ([a, b, c], d),
+            ([a, b, d], c),
+            ([a, c, d], b),
+            ([b, c, d], a),
+        ] {
+            let u = three.map(|v| mesh.uvs[v as usize]);
+            let area = (u[1] - u[0]).perp_dot(u[2] - u[0]).abs();
+            if best.is_none_or(|(_, _, ar)| area > ar) {
+                best = Some((three, fourth, area));
+            }
+        }
+        let (corners, fourth, area) = best?;
+        if area <= 1e-12 {
+            return None;
+        }
+        let corner_uv = corners.map(|v| mesh.uvs[v as usize]);
+        let w = barycentric(&corner_uv, mesh.uvs[fourth as usize])?;
+        let at =
+            |f: &dyn Fn(u32) -> Vec3| corners.iter().zip(w).map(|(&v, k)| f(v) * k).sum::<Vec3>();
+        let pos = |v: u32| mesh.positions[v as usize];
+        let size = (pos(a) - pos(c)).length().max((pos(b) - pos(d)).length());
+        if (at(&pos) - pos(fourth)).length() > 1e-3 * size.max(f32::MIN_POSITIVE) {
+            return None;
+        }
+        for set in &mesh.texcoords {
+            let t = |v: u32| {
+                set.get(v as usize)
+                    .copied()
+                    .unwrap_or(Vec2::ZERO)
+                    .extend(0.0)
+            };
+            if (at(&t) - t(fourth)).length() > 1e-4 {
+                return None;
+            }
+        }
+        // The region: the parallelogram of the four texture corners, from its
+        // lexicographically first corner, edges counter-clockwise.
+        let mut all = [ua, ub, uc, ud];
+        all.sort_by(|p, q| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
+        let o = all[0];
+        // The corner opposite `o` is the one the other two sum to, with `o`.
+        let opposite = (1..4).min_by(|&i, &j| {
+            let miss = |k: usize| {
+                let rest: Vec2 = (1..4).filter(|&r| r != k).map(|r| all[r]).sum();
+                (rest - o - all[k]).length()
+            };
+            miss(i).total_cmp(&miss(j))
+        })?;
+        let edges: Vec<Vec2> = (1..4)
+            .filter(|&r| r != opposite)
+            .map(|r| all[r] - o)
+            .collect();
+        let (mut e1, mut e2) = (edges[0], edges[1]);
+        if e1.perp_dot(e2) < 0.0 {
+            std::mem::swap(&mut e1, &mut e2);
+        }
+        if (o + e1 + e2 - all[opposite]).length() > 1e-4 * (e1.length() + e2.length()) {
+            return None;
+        }
+        let facing = piece
+            .iter()
+            .map(|&(p, t)| {
+                let i = &mesh.primitives[p].indices[3 * t..3 * t + 3];
+                let [x, y, z] = [0, 1, 2].map(|k| mesh.positions[i[k] as usize]);
+                0.5 * (y - x).cross(z - x)
+            })
+            .sum();
+        Some(CardFrame {
+            corners,
+            corner_uv,
+            uv: [o, e1, e2],
+            facing,
+        })
+    }
+
+    fn key(&self) -> RegionKey {
+        let [o, e1, e2] = self.uv;
+        let q = |p: Vec2| ((p.x * 1e5).round() as i64, (p.y * 1e5).round() as i64);
+        let mut k = [q(o), q(o + e1), q(o + e2), q(o + e1 + e2)];
+        k.sort_unstable();
+        k
+    }
+
+    /// Appends to `out` the card's point at base-colour coordinates `uv`, every attribute
+    /// combined from the card's corners in `mesh`.
+    fn push_vertex(&self, mesh: &WoodMesh, out: &mut WoodMesh, uv: Vec2, motion: &BoneMotion) {
+        let w = barycentric(&self.corner_uv, uv).unwrap_or([1.0, 0.0, 0.0]);
+        let mix3 = |a: &[Vec3]| {
+            self.corners
+                .iter()
+                .zip(w)
+                .map(|(&v, k)| a[v as usize] * k)
+                .sum::<Vec3>()
+        };
+        let mix2 = |a: &[Vec2]| {
+            self.corners
+                .iter()
+                .zip(w)
+                .map(|(&v, k)| a.get(v as usize).copied().unwrap_or(Vec2::ZERO) * k)
+                .sum::<Vec2>()
+        };
+        let position = mix3(&mesh.positions);
+        out.positions.push(position);
+        out.normals
+            .push(mix3(&mesh.normals).try_normalize().unwrap_or(Vec3::Y));
+        out.uvs.push(uv);
+        for (o, set) in out.texcoords.iter_mut().zip(&mesh.texcoords) {
+            // Sets are per vertex; pad a short one so the new vertex lands at its index.
+            o.resize(out.positions.len() - 1, Vec2::ZERO);
+            o.push(mix2(set));
+        }
+        let (bones, weights) = mix_weights(mesh, &self.corners, w, position, motion);
+        out.bones.push(bones);
+        out.weights.push(weights);
+    }
+}
+
+/// Barycentric coordinates of `p` in triangle `t` (any point of the plane: they may be
+/// negative); `None` for a degenerate triangle.
+fn barycentric(t: &[Vec2; 3], p: Vec2) -> Option<[f32; 3]> {
+    let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
+    let det = e1.perp_dot(e2);
+    if det.abs() <= f32::MIN_POSITIVE {
+        return None;
+    }
+    let d = p - t[0];
+    let b = d.perp_dot(e2) / det;
+    let c = e1.perp_dot(d) / det;
+    Some([1.0 - b - c, b, c])
+}
+
+/// Frames of the clip a blended card's new vertices are fitted over.
+const FIT_FRAMES: usize = 16;
+
+/// Projected-gradient iterations of the weight fit.
+const FIT_ITERATIONS: usize = 300;
+
+/// Each bone's deformation (its world matrix times its rest world's inverse: rest-pose world
+/// positions in, posed ones out) at [`FIT_FRAMES`] times over the tree's first clip.
+struct BoneMotion {
+    frames: Vec<Vec<Mat4>>,
+}
+
+impl BoneMotion {
+    fn of(tree: &Tree) -> BoneMotion {
+        let Some(clip) = tree.rig.clips.first() else {
+            return BoneMotion { frames: Vec::new() };
+        };
+        let rest_inverse: Vec<Mat4> = tree.bones.iter().map(|b| b.rest_world.inverse()).collect();
+        let frames = (0..FIT_FRAMES)
+            .map(|f| {
+                let t = clip.start + clip.duration() * f as f32 / FIT_FRAMES as f32;
+                let world = world_at(tree, Some(0), t);
+                tree.bones
+                    .iter()
+                    .zip(&rest_inverse)
+                    .map(|(b, inv)| world.get(b.node).copied().unwrap_or(Mat4::IDENTITY) * *inv)
+                    .collect()
+            })
+            .collect();
+        BoneMotion { frames }
+    }
+
+    /// Where bone `b` moves rest position `p` in frame `f`.
+    fn moved(&self, f: usize, b: u32, p: Vec3) -> Vec3 {
+        self.frames[f]
+            .get(b as usize)
+            .map_or(p, |m| m.transform_point3(p))
+    }
+}
+
+/// The skin of a card's new vertex at rest position `position`, `w` its barycentric
+/// coordinates over `corners`. A card bound to one skin keeps it exactly. A blended card's
+/// vertex gets the weights (non-negative, summing to 1, over the corners' bones) that move it
+/// closest, over `motion`'s frames, to where the card's own motion carries that point (the
+/// same combination of the posed corners): combining the corners' weights alone would leave
+/// negative weights outside the card and bend the triangle away from the card it replaces.
+fn mix_weights(
+    mesh: &WoodMesh,
+    corners: &[u32; 3],
+    w: [f32; 3],
+    position: Vec3,
+    motion: &BoneMotion,
+) -> ([u32; 4], [f32; 4]) {
+    let first = corners[0] as usize;
+    let skin = |v: u32| (mesh.bones[v as usize], mesh.weights[v as usize]);
+    if corners.iter().all(|&v| skin(v) == skin(corners[0])) {
+        return skin(corners[0]);
+    }
+    let mut bones: Vec<u32> = corners
+        .iter()
+        .flat_map(|&v| {
+            let (b, x) = skin(v);
+            (0..4)
+                .filter(move |&k| x[k] > 0.0 && b[k] != NO_BONE)
+                .map(move |k| b[k])
+        })
+        .collect();
+    bones.sort_unstable();
+    bones.dedup();
+    if bones.is_empty() || motion.frames.is_empty() {
+        return skin(corners[0]);
+    }
+    // Normal equations of Σ_f |A_f x − T_f|²: A_f's columns are the vertex moved by each bone,
+    // T_f the card's own motion of the point.
+    let n = bones.len();
+    let mut h = vec![0.0f64; n * n];
+    let mut c = vec![0.0f64; n];
+    for f in 0..motion.frames.len() {
+        let target: Vec3 = corners
+            .iter()
+            .zip(w)
+            .map(|(&v, k)| {
+                let (b, x) = skin(v);
+                let p = mesh.positions[v as usize];
+                (0..4)
+                    .map(|j| motion.moved(f, b[j], p) * x[j])
+                    .sum::<Vec3>()
+                    * k
+            })
+            .sum();
+        let columns: Vec<Vec3> = bones
+            .iter()
+            .map(|&b| motion.moved(f, b, position))
+            .collect();
+        for i in 0..n {
+            c[i] += f64::from(columns[i].dot(target));
+            for j in 0..n {
+                h[i * n + j] += f64::from(columns[i].dot(columns[j]));
+            }
+        }
+    }
+    // Projected gradient on the simplex, from the corners' weights combined.
+    let mut x: Vec<f64> = bones
+        .iter()
+        .map(|&b| {
+            corners
+                .iter()
+                .zip(w)
+                .map(|(&v, k)| {
+                    let (bs, xs) = skin(v);
+                    (0..4)
+                        .filter(|&j| bs[j] == b)
+                        .map(|j| f64::from(xs[j] * k))
+                        .sum::<f64>()
+                })
+                .sum()
+        })
+        .collect();
+    project_to_simplex(&mut x);
+    let lipschitz = (0..n)
+        .map(|i| h[i * n + i])
+        .sum::<f64>()
+        .max(f64::MIN_POSITIVE);
+    for _ in 0..FIT_ITERATIONS {
+        for i in 0..n {
+            let g: f64 = (0..n).map(|j| h[i * n + j] * x[j]).sum::<f64>() - c[i];
+            x[i] -= g / lipschitz;
+        }
+        project_to_simplex(&mut x);
+    }
+    let mut fitted: Vec<(u32, f32)> = bones.iter().zip(&x).map(|(&b, &v)| (b, v as f32)).collect();
+    fitted.retain(|(_, v)| *v > 0.0);
+    fitted.sort_by(|p, q| q.1.total_cmp(&p.1).then(p.0.cmp(&q.0)));
+    fitted.truncate(4);
+    let total: f32 = fitted.iter().map(|(_, v)| v).sum();
+    if fitted.is_empty() || total <= 0.0 {
+        return (mesh.bones[first], mesh.weights[first]);
+    }
+    let mut out_bones = [fitted[0].0; 4];
+    let mut out_weights = [0.0; 4];
+    for (k, (b, v)) in fitted.iter().enumerate() {
+        out_bones[k] = *b;
+        out_weights[k] = v / total;
+    }
+    (out_bones, out_weights)
+}
+
+/// `x` replaced by its nearest point of the probability simplex (non-negative, summing to 1):
+/// the sort-and-threshold projection.
+fn project_to_simplex(x: &mut [f64]) {
+    let mut sorted: Vec<f64> = x.to_vec();
+    sorted.sort_by(|a, b| b.total_cmp(a));
+    let mut sum = 0.0;
+    let mut theta = 0.0;
+    for (k, &v) in sorted.iter().enumerate() {
+        sum += v;
+        let t = (sum - 1.0) / (k + 1) as f64;
+        if v - t > 0.0 {
+            theta = t;
+        }
+    }
+    x.iter_mut().for_each(|v| *v = (*v - theta).max(0.0));
+}
+
+/// The smallest triangle (texture coordinates) holding every texel of `material`'s base-colour
+/// texture inside the region `[o, e1, e2]` (origin and edges) that its alpha test can pass,
+/// whose part outside the region reads transparent texels under the texture's wrap modes, no
+/// larger than the region; `None` when there is none or the region shows nothing.
+pub fn trimmed_triangle(
+    tree: &Tree,
+    material: &frond_scene::Material,
+    region: &[Vec2; 3],
+) -> Option<[Vec2; 3]> {
+    let texture = tree.textures.get(material.base_color_texture?)?;
+    let (w, h) = (texture.width as usize, texture.height as usize);
+    if w == 0 || h == 0 || texture.rgba.len() < w * h * 4 {
+        return None;
+    }
+    let factor = material.base_color[3];
+    if factor <= 0.0 {
+        return None;
+    }
+    let cutoff = (material.alpha_cutoff / factor * 255.0)
+        .ceil()
+        .clamp(0.0, 256.0) as u16;
+    let opaque: Vec<bool> = texture
+        .rgba
+        .chunks_exact(4)
+        .map(|p| u16::from(p[3]) >= cutoff)
+        .collect();
+    let [o, e1, e2] = *region;
+    let size = Vec2::new(w as f32, h as f32);
+    // Texel space <-> the region's frame (s, t) in [0, 1]².
+    let to_frame = |x: Vec2| -> Vec2 {
+        let d = x / size - o;
+        let det = e1.perp_dot(e2);
+        Vec2::new(d.perp_dot(e2) / det, e1.perp_dot(d) / det)
+    };
+    let to_texel = |f: Vec2| -> Vec2 { (o + e1 * f.x + e2 * f.y) * size };
+    if e1.perp_dot(e2).abs() <= f32::MIN_POSITIVE {
+        return None;
+    }
+
+    // The hull's support points: per texel row, the outermost passing texels whose centres
+    // lie in the region, each grown to the square bilinear filtering reaches (a texel
+    // either side of its centre), clipped to the region.
+    let mut points: Vec<Vec2> = Vec::new();
+    for y in 0..h {
+        let row = &opaque[y * w..(y + 1) * w];
+        let inside = |x: usize| {
+            let f = to_frame(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+            (0.0..=1.0).contains(&f.x) && (0.0..=1.0).contains(&f.y)
+        };
+        let first = (0..w).find(|&x| row[x] && inside(x));
+        let last = (0..w).rev().find(|&x| row[x] && inside(x));
+        for x in first.into_iter().chain(last) {
+            let c = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            for d in [
+                Vec2::new(-1.0, -1.0),
+                Vec2::new(1.0, -1.0),
+                Vec2::new(-1.0, 1.0),
+                Vec2::ONE,
+            ] {
+                points.push(to_frame(c + d).clamp(Vec2::ZERO, Vec2::ONE));
+            }
+        }
+    }
+    if points.is_empty() {
+        return None;
+    }
+
+    // Where a point outside the region may not go: its wrapped texel is within `clear` texels
+    // of a passing one. Read on a grid over [-1, 2]² of the frame, as per-row prefix counts.
+    let clear = (CLEAR_PER_128 * w.max(h) as f32 / 128.0).max(2.0).ceil() as usize;
+    let near = dilate(&opaque, w, h, clear);
+    let side = (to_texel(Vec2::X) - to_texel(Vec2::ZERO))
+        .length()
+        .max((to_texel(Vec2::Y) - to_texel(Vec2::ZERO)).length());
+    let n = ((3.0 * side / clear as f32).ceil() as usize).clamp(16, GRID);
+    let step = 3.0 / n as f32;
+    let grid_point = |i: usize| -1.0 + (i as f32 + 0.5) * step;
+    let mut prefix = vec![0u32; n * (n + 1)];
+    for j in 0..n {
+        for i in 0..n {
+            let f = Vec2::new(grid_point(i), grid_point(j));
+            let outside = !((0.0..=1.0).contains(&f.x) && (0.0..=1.0).contains(&f.y));
+            let blocked = outside && {
+                let t = to_texel(f);
+                let x = material.base_color_wrap[0].texel(t.x, w as u32) as usize;
+                let y = material.base_color_wrap[1].texel(t.y, h as u32) as usize;
+                near[y * w + x]
+            };
+            prefix[j * (n + 1) + i + 1] = prefix[j * (n + 1) + i] + u32::from(blocked);
+        }
+    }
+    // Blocked grid points a candidate may cover: their cells' area within [`SPILL`] of the card.
+    let allowed = (SPILL / (step * step)).floor() as u32;
+    let clear_of_blocked = |tri: &[Vec2; 3]| -> bool {
+        if tri
+            .iter()
+            .any(|v| v.min_element() < -1.0 || v.max_element() > 2.0)
+        {
+            return false;
+        }
+        let mut blocked = 0u32;
+        let lo = tri.iter().map(|v| v.y).fold(f32::INFINITY, f32::min);
+        let hi = tri.iter().map(|v| v.y).fold(f32::NEG_INFINITY, f32::max);
+        let j0 = (((lo + 1.0) / step - 0.5).ceil().max(0.0)) as usize;
+        let j1 = (((hi + 1.0) / step - 0.5).floor() as usize).min(n - 1);
+        for j in j0..=j1 {
+            let y = grid_point(j);
+            // The triangle's span on this row.
+            let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
+            for k in 0..3 {
+                let (p, q) = (tri[k], tri[(k + 1) % 3]);
+                if (p.y - y) * (q.y - y) <= 0.0 && p.y != q.y {
+                    let x = p.x + (q.x - p.x) * (y - p.y) / (q.y - p.y);
+                    a = a.min(x);
+                    b = b.max(x);
+                }
+            }
+            if a > b {
+                continue;
+            }
+            let i0 = (((a + 1.0) / step - 0.5).ceil().max(0.0)) as usize;
+            let i1 = ((b + 1.0) / step - 0.5).floor();
+            if i1 < 0.0 {
+                continue;
+            }
+            let i1 = (i1 as usize).min(n - 1);
+            if i0 <= i1 {
+                blocked += prefix[j * (n + 1) + i1 + 1] - prefix[j * (n + 1) + i0];
+                if blocked > allowed {
+                    return false;
+                }
+            }
+        }
+        true
+    };
+
+    // Supporting lines of the points' hull, and the triangles three of them close.
+    let normals: Vec<Vec2> = (0..DIRECTIONS)
+        .map(|k| Vec2::from_angle(k as f32 * std::f32::consts::TAU / DIRECTIONS as f32))
+        .collect();
+    let support: Vec<f32> = normals
+        .iter()
+        .map(|nrm| {
+            points
+                .iter()
+                .map(|p| nrm.dot(*p))
+                .fold(f32::NEG_INFINITY, f32::max)
+        })
+        .collect();
+    let meet = |i: usize, j: usize| -> Option<Vec2> {
+        let (a, b) = (normals[i], normals[j]);
+        let det = a.perp_dot(b);
+        (det.abs() > 1e-6).then(|| {
+            Vec2::new(
+                support[i] * b.y - support[j] * a.y,
+                a.x * support[j] - b.x * support[i],
+            ) / det
+        })
+    };
+    let half = DIRECTIONS / 2;
+    let mut candidates: Vec<(f32, [Vec2; 3])> = Vec::new();
+    for i in 0..DIRECTIONS {
+        for j in i + 1..DIRECTIONS {
+            for k in j + 1..DIRECTIONS {
+                // Closed when no gap between consecutive normals reaches half a turn.
+                if j - i >= half || k - j >= half || DIRECTIONS - (k - i) >= half {
+                    continue;
+                }
+                let (Some(a), Some(b), Some(c)) = (meet(i, j), meet(j, k), meet(k, i)) else {
+                    continue;
+                };
+                let area = 0.5 * (b - a).perp_dot(c - a).abs();
+                // Never larger than the card itself.
+                if area < 1.0 {
+                    candidates.push((area, [a, b, c]));
+                }
+            }
+        }
+    }
+    candidates.sort_by(|p, q| p.0.total_cmp(&q.0));
+    let [a, b, c] = candidates
+        .into_iter()
+        .map(|(_, t)| t)
+        .find(|t| clear_of_blocked(t))?;
+    Some([a, b, c].map(|f| o + e1 * f.x + e2 * f.y))
+}
+
+/// `mask` grown by `r` texels (a square window), separably.
+fn dilate(mask: &[bool], w: usize, h: usize, r: usize) -> Vec<bool> {
+    let pass = |src: &[bool], len: usize, stride: usize, lines: usize, line_stride: usize| {
+        let mut out = vec![false; src.len()];
+        for l in 0..lines {
+            let at = |i: usize| l * line_stride + i * stride;
+            // Running count of set entries in the window [i - r, i + r].
+            let mut count = 0usize;
+            for i in 0..len.min(r) {
+                count += usize::from(src[at(i)]);
+            }
+            for i in 0..len {
+                if i + r < len {
+                    count += usize::from(src[at(i + r)]);
+                }
+                if i > r {
+                    count -= usize::from(src[at(i - r - 1)]);
+                }
+                out[at(i)] = count > 0;
+            }
+        }
+        out
+    };
+    let rows = pass(mask, w, 1, h, w);
+    pass(&rows, h, w, w, 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use frond_scene::{ImportOptions, Part, import};
+
+    #[test]
+    fn dilation_grows_by_the_radius() {
+        let (w, h) = (7, 5);
+        let mut m = vec![false; w * h];
+        m[2 * w + 3] = true;
+        let d = dilate(&m, w, h, 1);
+        let set: Vec<(usize, usize)> = (0..w * h)
+            .filter(|&i| d[i])
+            .map(|i| (i % w, i / w))
+            .collect();
+        assert_eq!(set.len(), 9);
+        assert!(
+            set.iter()
+                .all(|&(x, y)| (2..=4).contains(&x) && (1..=3).contains(&y))
+        );
+    }
+
+    fn sample() -> (Tree, WoodMesh) {
+        let tree = import(&frond_testdata::sample(), &ImportOptions::default()).expect("sample");
+        let foliage = WoodMesh::from_tree_part(&tree, Part::Foliage);
+        (tree, foliage)
+    }
+
+    /// The sample's leaf texture with its alpha replaced by a disc of radius 0.3 in the middle:
+    /// a leaf drawn on a quarter of its card, clear of the card's edges (the shared trees'
+    /// sprigs cover 16–26 %).
+    fn disc_leaves(tree: &mut Tree, foliage: &WoodMesh) {
+        let m = &tree.materials[foliage.primitives[0].material];
+        let t = &mut tree.textures[m.base_color_texture.expect("leaf texture")];
+        let (w, h) = (t.width as usize, t.height as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let p = Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+                t.rgba[(y * w + x) * 4 + 3] = if p.distance(Vec2::splat(0.5)) < 0.3 {
+                    255
+                } else {
+                    0
+                };
+            }
+        }
+    }
+
+    #[test]
+    fn a_leaf_filling_its_card_keeps_its_quad() {
+        // Every texel passing: any triangle holding the card is twice its area.
+        let (mut tree, foliage) = sample();
+        let m = &tree.materials[foliage.primitives[0].material];
+        let t = &mut tree.textures[m.base_color_texture.expect("leaf texture")];
+        t.rgba.chunks_exact_mut(4).for_each(|p| p[3] = 255);
+        let trimmed = trim_cards(&tree, &foliage);
+        assert_eq!(trimmed.cards, 0);
+        assert_eq!(trimmed.mesh.triangles(), foliage.triangles());
+    }
+
+    #[test]
+    fn trimmed_cards_are_one_triangle_each_drawing_the_same_texels() {
+        let (mut tree, foliage) = sample();
+        disc_leaves(&mut tree, &foliage);
+        let pieces = foliage.pieces();
+        let trimmed = trim_cards(&tree, &foliage);
+        assert_eq!(trimmed.cards, pieces.len(), "every card is trimmed");
+        assert_eq!(trimmed.mesh.triangles(), pieces.len());
+        // A disc of area 0.28 needs a triangle of at least 3√3·0.3² = 0.47 of the card.
+        let ratio = trimmed.area_after / trimmed.area_before;
+        assert!((0.45..0.6).contains(&ratio), "area ratio {ratio}");
+
+        // Where the card drew a passing texel the triangle draws it, and the triangle draws
+        // nothing more (clamped texels outside the card are transparent), over a grid of the
+        // card's texture region and around it.
+        let m = &tree.materials[foliage.primitives[0].material];
+        let texture = &tree.textures[m.base_color_texture.expect("leaf texture")];
+        let region = [Vec2::ZERO, Vec2::X, Vec2::Y];
+        let tri = trimmed_triangle(&tree, m, &region).expect("a triangle");
+        let (w, h) = (texture.width, texture.height);
+        let passes = |uv: Vec2| {
+            let x = m.base_color_wrap[0].texel(uv.x * w as f32, w) as usize;
+            let y = m.base_color_wrap[1].texel(uv.y * h as f32, h) as usize;
+            f32::from(texture.rgba[(y * w as usize + x) * 4 + 3]) / 255.0 >= m.alpha_cutoff
+        };
+        let n = 300;
+        let mut drawn = 0;
+        for j in 0..n {
+            for i in 0..n {
+                let uv = Vec2::new(i as f32 + 0.5, j as f32 + 0.5) * 3.0 / n as f32 - Vec2::ONE;
+                let in_card = uv.min_element() >= 0.0 && uv.max_element() <= 1.0;
+                let b = barycentric(&tri, uv).expect("triangle");
+                let in_triangle = b.iter().all(|&k| k >= 0.0);
+                let card = in_card && passes(uv);
+                assert_eq!(card, in_triangle && passes(uv), "at {uv}");
+                drawn += usize::from(card);
+            }
+        }
+        assert!(drawn > n * n / 40, "{drawn}");
+
+        // Each trimmed card faces its card's way and keeps its skin.
+        for (piece, new) in pieces.iter().zip(trimmed.mesh.pieces()) {
+            let normal = |mesh: &WoodMesh, tris: &[(usize, usize)]| -> Vec3 {
+                tris.iter()
+                    .map(|&(p, t)| {
+                        let i = &mesh.primitives[p].indices[3 * t..3 * t + 3];
+                        let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[i[k] as usize]);
+                        (b - a).cross(c - a)
+                    })
+                    .sum()
+            };
+            let (before, after) = (normal(&foliage, piece), normal(&trimmed.mesh, &new));
+            assert!(before.normalize().dot(after.normalize()) > 0.999);
+            let v0 = card_vertices(&foliage, piece)[0] as usize;
+            for v in card_vertices(&trimmed.mesh, &new) {
+                assert_eq!(trimmed.mesh.bones[v as usize], foliage.bones[v0]);
+                assert_eq!(trimmed.mesh.weights[v as usize], foliage.weights[v0]);
+            }
+        }
+    }
+
+    /// The shared trees' sprig textures: every card trimmed, to 59–80 % of its area.
+    #[test]
+    fn the_shared_trees_cards_are_trimmed() {
+        let paths = frond_testdata::require_trees!([
+            "oak_medium.glb",
+            "pine_medium_blender.glb",
+            "bush_1.glb"
+        ]);
+        for path in paths {
+            let tree = import(&path, &ImportOptions::default()).expect("tree");
+            let foliage = WoodMesh::from_tree_part(&tree, Part::Foliage);
+            let cards = foliage.pieces().iter().filter(|p| p.len() == 2).count();
+            let trimmed = trim_cards(&tree, &foliage);
+            let ratio = trimmed.area_after / trimmed.area_before;
+            let name = path.display();
+            assert!(
+                trimmed.cards == cards,
+                "{name}: {} of {cards}",
+                trimmed.cards
+            );
+            assert!((0.5..0.82).contains(&ratio), "{name}: area ratio {ratio}");
+            assert_eq!(
+                trimmed.mesh.triangles(),
+                foliage.triangles() - trimmed.cards
+            );
+        }
+    }
+}
