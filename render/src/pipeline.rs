@@ -429,6 +429,23 @@ pub(crate) fn upload_texture(
     texture.create_view(&Default::default())
 }
 
+/// The wrap modes, in the order of [`Pipelines::samplers`] (u major).
+const WRAPS: [Wrap; 3] = [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat];
+
+/// The index in [`Pipelines::samplers`] of the sampler wrapping as `wrap` (u, v).
+pub(crate) fn wrap_index(wrap: [Wrap; 2]) -> usize {
+    let at = |w: Wrap| WRAPS.iter().position(|&x| x == w).unwrap_or(0);
+    at(wrap[0]) * WRAPS.len() + at(wrap[1])
+}
+
+fn address_mode(wrap: Wrap) -> wgpu::AddressMode {
+    match wrap {
+        Wrap::Repeat => wgpu::AddressMode::Repeat,
+        Wrap::ClampToEdge => wgpu::AddressMode::ClampToEdge,
+        Wrap::MirroredRepeat => wgpu::AddressMode::MirrorRepeat,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -454,22 +471,5 @@ mod tests {
             let f_alpha: Vec<u8> = f.chunks_exact(4).map(|p| p[3]).collect();
             assert_eq!(&f_alpha, a, "level {fw}x{fh}");
         }
-    }
-}
-
-/// The wrap modes, in the order of [`Pipelines::samplers`] (u major).
-const WRAPS: [Wrap; 3] = [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat];
-
-/// The index in [`Pipelines::samplers`] of the sampler wrapping as `wrap` (u, v).
-pub(crate) fn wrap_index(wrap: [Wrap; 2]) -> usize {
-    let at = |w: Wrap| WRAPS.iter().position(|&x| x == w).unwrap_or(0);
-    at(wrap[0]) * WRAPS.len() + at(wrap[1])
-}
-
-fn address_mode(wrap: Wrap) -> wgpu::AddressMode {
-    match wrap {
-        Wrap::Repeat => wgpu::AddressMode::Repeat,
-        Wrap::ClampToEdge => wgpu::AddressMode::ClampToEdge,
-        Wrap::MirroredRepeat => wgpu::AddressMode::MirrorRepeat,
     }
 }
