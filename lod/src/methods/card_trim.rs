@@ -3,7 +3,7 @@
 //! a quarter of its texels. The smallest triangle that holds every texel the alpha test can
 //! pass, and whose part outside the card reads only transparent texels under the texture's
 //! wrap modes, draws exactly the card's pixels with one triangle instead of two and, on the
-//! shared trees' leaf textures, 60–75 % of the card's area: half the triangles and less
+//! X: half the triangles and less
 //! overdraw at no coverage cost. A card LOD then keeps twice the cards per triangle.
 //!
 //! The triangle is searched in the card's texture frame (the parallelogram its corners span in
@@ -54,12 +54,13 @@ pub struct Trimmed {
 /// The foliage `mesh` of `tree` with every leaf card that can be trimmed replaced by its
 /// trimmed triangle ([`trimmed_triangle`]); other pieces unchanged. New vertices are affine
 /// combinations of the card's corners in every attribute (positions, normals, texture
-/// coordinates; skin weights combined per bone, negatives dropped, renormalised). The
-/// triangle faces the card's way.
+/// coordinates); a card bound to one skin keeps it, a blended card's new vertices get weights
+/// fitted to the card's motion. The triangle faces the card's way.
 pub fn trim_cards(tree: &Tree, mesh: &WoodMesh) -> Trimmed {
     let pieces = mesh.pieces();
     let motion = BoneMotion::of(tree);
-    let mut regions: HashMap<RegionKey, Option<[Vec2; 3]>> = HashMap::new();
+    // Per material (its texture, cutoff and wrap modes) and texture region.
+    let mut regions: HashMap<(usize, RegionKey), Option<[Vec2; 3]>> = HashMap::new();
     let mut out = mesh.clone();
     // The second triangles of trimmed cards (the first is overwritten with the trimmed one).
     let mut dropped: HashSet<(usize, usize)> = HashSet::new();
@@ -68,10 +69,10 @@ pub fn trim_cards(tree: &Tree, mesh: &WoodMesh) -> Trimmed {
         let Some(card) = CardFrame::of(tree, mesh, piece) else {
             continue;
         };
-        let triangle = *regions.entry(card.key()).or_insert_with(|| {
-            let material = &tree.materials[mesh.primitives[piece[0].0].material];
-            trimmed_triangle(tree, material, &card.uv)
-        });
+        let material = mesh.primitives[piece[0].0].material;
+        let triangle = *regions
+            .entry((material, card.key()))
+            .or_insert_with(|| trimmed_triangle(tree, &tree.materials[material], &card.uv));
         let Some(triangle) = triangle else {
             continue;
         };
