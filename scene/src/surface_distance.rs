@@ -161,20 +161,36 @@ impl SurfaceBvh {
         if self.nodes.is_empty() {
             return best;
         }
-        let mut stack = vec![0usize];
-        while let Some(n) = stack.pop() {
+        let box_distance = |n: usize| {
             let node = &self.nodes[n];
-            let d = (node.lo - p).max(p - node.hi).max(Vec3::ZERO).length();
+            (node.lo - p).max(p - node.hi).max(Vec3::ZERO).length()
+        };
+        // The nearer child first: the leaves it reaches bound the farther one, which is then
+        // mostly pruned (a third of `frond lod`'s time on oak_dense went to these queries when
+        // the left child always came first). The minimum does not depend on the order.
+        let mut stack: Vec<(usize, f32)> = Vec::with_capacity(64);
+        stack.push((0, box_distance(0)));
+        while let Some((n, d)) = stack.pop() {
             if d >= best {
                 continue;
             }
+            let node = &self.nodes[n];
             if node.count > 0 {
                 for t in &self.triangles[node.first..node.first + node.count] {
                     best = best.min(triangle_distance(p, t));
                 }
             } else {
-                stack.push(node.right);
-                stack.push(n + 1);
+                let (left, right) = (
+                    (n + 1, box_distance(n + 1)),
+                    (node.right, box_distance(node.right)),
+                );
+                let (near, far) = if left.1 <= right.1 {
+                    (left, right)
+                } else {
+                    (right, left)
+                };
+                stack.push(far);
+                stack.push(near);
             }
         }
         best
