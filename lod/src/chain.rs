@@ -533,7 +533,7 @@ fn simplify_wood(wood: &WoodMesh, max_error: f32, max_triangles: usize) -> (Wood
 const WOOD_REFINE_FLOOR: f32 = 8.0;
 
 /// Bisection steps of [`refine_wood`]'s error.
-const WOOD_REFINE_STEPS: usize = 3;
+const WOOD_REFINE_STEPS: usize = 6;
 
 /// `wood` at the finest error between `floor` and `current`'s (mesh, error, thin pieces
 /// dropped) that fits in `max_triangles`, found by bisection of the error's logarithm; branches
