@@ -47,7 +47,11 @@ fn billboards_at_epsilon_zero_draw_the_leaves_outline_at_their_size() {
             .as_u64()
             .expect("input-textured billboards");
         assert!(billboards > 1000, "{name}: {billboards} billboards");
-        assert!(own <= billboards, "{name}");
+        // Nearly every billboard holds one card on its own texels (99 % of both trees').
+        assert!(
+            own <= billboards && 10 * own >= 9 * billboards,
+            "{name}: {own} of {billboards} billboards on the input's texels"
+        );
         let error = lod["error"]["coverage"].as_f64().expect("error");
         let lod0 = frond_eval(
             &tree,

@@ -132,8 +132,8 @@ struct Region {
 
 impl Region {
     fn of(tree: &Tree, material: &frond_scene::Material, region: &[Vec2; 3]) -> Option<Region> {
-        let triangle = trimmed_triangle(tree, material, region)?;
         let (opaque, w, h) = passing_texels(tree, material)?;
+        let triangle = triangle_over(&opaque, w, h, material, region)?;
         let [o, e1, e2] = *region;
         let samples = (0..FIT_SAMPLES * FIT_SAMPLES)
             .map(|k| {
@@ -609,6 +609,17 @@ pub fn trimmed_triangle(
     region: &[Vec2; 3],
 ) -> Option<[Vec2; 3]> {
     let (opaque, w, h) = passing_texels(tree, material)?;
+    triangle_over(&opaque, w, h, material, region)
+}
+
+/// [`trimmed_triangle`] over the texture's passing texels `opaque` (`w` × `h`).
+fn triangle_over(
+    opaque: &[bool],
+    w: usize,
+    h: usize,
+    material: &frond_scene::Material,
+    region: &[Vec2; 3],
+) -> Option<[Vec2; 3]> {
     let [o, e1, e2] = *region;
     let size = Vec2::new(w as f32, h as f32);
     // Texel space <-> the region's frame (s, t) in [0, 1]².
