@@ -664,7 +664,7 @@ fn triangle_over(
     // Where a point outside the region may not go: its wrapped texel is within `clear` texels
     // of a passing one. Read on a grid over [-1, 2]² of the frame, as per-row prefix counts.
     let clear = (CLEAR_PER_128 * w.max(h) as f32 / 128.0).max(2.0).ceil() as usize;
-    let near = dilate(&opaque, w, h, clear);
+    let near = dilate(opaque, w, h, clear);
     let side = (to_texel(Vec2::X) - to_texel(Vec2::ZERO))
         .length()
         .max((to_texel(Vec2::Y) - to_texel(Vec2::ZERO)).length());
