@@ -30,7 +30,9 @@
 //! Both renders of a pair use this one camera, computed from the bounds the caller passes (the
 //! whole tree's rest bounds), never from either scene.
 
-use frond_render::{Camera, DrawScene, Projection, RenderError, Renderer};
+use frond_render::{
+    Camera, DrawScene, Projection, RenderError, Renderer, SoftwareTextures, render_coverage,
+};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -62,6 +64,29 @@ pub struct CoverageParams {
     /// least half of its samples are. Without it both masks carry the alpha-test aliasing of
     /// minified leaf textures, which alone measured 0.04 on bush_1 at ε = 0 (0.018 with 4).
     pub supersample: u32,
+    /// Which rasteriser draws the masks: the CPU one by default (fast, and the same numbers on
+    /// every machine), the wgpu one on request (a GPU's own filtering and rasterisation rules).
+    #[serde(default)]
+    pub rasteriser: Rasteriser,
+    /// Also compute the covered pixels' colour ([`CoverageReport::colour_difference`]); the
+    /// coverage alone needs neither a depth test nor the textures' colour.
+    #[serde(default = "yes")]
+    pub colour: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// The rasteriser of the metric's renders.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Rasteriser {
+    /// [`frond_render::render_coverage`]: the CPU rasteriser built for coverage renders.
+    #[default]
+    Software,
+    /// [`Renderer::render_mipmapped`] on the renderer's adapter.
+    Gpu,
 }
 
 impl Default for CoverageParams {
@@ -76,6 +101,8 @@ impl Default for CoverageParams {
             elevation_deg: 0.0,
             fov_y_deg: 40.0,
             supersample: 4,
+            rasteriser: Rasteriser::Software,
+            colour: true,
         }
     }
 }
@@ -269,7 +296,8 @@ pub struct CoverageMasks {
     pub frames: usize,
     /// View-major (`d · frames + f`): whether each pixel is covered.
     covered: Vec<Vec<bool>>,
-    /// The same pairs: mean linear RGB of each pixel's covered samples.
+    /// The same pairs: mean linear RGB of each pixel's covered samples (empty vectors when
+    /// drawn without colour, [`CoverageParams::colour`]).
     colour: Vec<Vec<[f32; 3]>>,
 }
 
@@ -288,19 +316,48 @@ pub fn coverage_masks(
         .map(|d| view_camera(bounds_min, bounds_max, d, params))
         .collect::<Result<Vec<_>, _>>()?;
     let expected = params.width as usize * params.height as usize;
-    let (mut covered, mut colour) = (Vec::new(), Vec::new());
-    for camera in &cameras {
-        for scene in scenes {
-            let (m, rgb) = coverage_mask(renderer, scene, camera, params)?;
-            if m.len() != expected {
-                return Err(MetricError::MaskSize {
-                    len: m.len(),
-                    expected,
-                });
+    let rendered: Vec<(Vec<bool>, Vec<[f32; 3]>)> = match params.rasteriser {
+        Rasteriser::Gpu => cameras
+            .iter()
+            .flat_map(|camera| scenes.iter().map(move |scene| (camera, scene)))
+            .map(|(camera, scene)| coverage_mask(renderer, scene, camera, params))
+            .collect::<Result<_, _>>()?,
+        Rasteriser::Software => {
+            // Mip chains prepared once for the frames that share them (a model's frames do),
+            // then every (view, frame) render at once: each is deterministic, and they are
+            // collected in order.
+            let mut prepared: Vec<SoftwareTextures> = Vec::new();
+            let mut of_frame: Vec<usize> = Vec::with_capacity(scenes.len());
+            for (f, scene) in scenes.iter().enumerate() {
+                match (0..f).find(|&g| same_textures(&scenes[g], scene)) {
+                    Some(g) => of_frame.push(of_frame[g]),
+                    None => {
+                        of_frame.push(prepared.len());
+                        prepared.push(SoftwareTextures::new(scene, params.colour)?);
+                    }
+                }
             }
-            covered.push(m);
-            colour.push(rgb);
+            let pairs: Vec<(usize, usize)> = (0..cameras.len())
+                .flat_map(|d| (0..scenes.len()).map(move |f| (d, f)))
+                .collect();
+            pairs
+                .par_iter()
+                .map(|&(d, f)| {
+                    software_mask(&scenes[f], &prepared[of_frame[f]], &cameras[d], params)
+                })
+                .collect::<Result<_, _>>()?
         }
+    };
+    let (mut covered, mut colour) = (Vec::new(), Vec::new());
+    for (m, rgb) in rendered {
+        if m.len() != expected {
+            return Err(MetricError::MaskSize {
+                len: m.len(),
+                expected,
+            });
+        }
+        covered.push(m);
+        colour.push(rgb);
     }
     Ok(CoverageMasks {
         pixels: expected,
@@ -343,7 +400,9 @@ pub fn compare_masks(
             let (o, s) = (&original.covered[i], &simplified.covered[i]);
             let (o_rgb, s_rgb) = (&original.colour[i], &simplified.colour[i]);
             let (mut diff, mut shared) = (0.0f64, 0usize);
-            for p in 0..o.len().min(s.len()) {
+            // Masks drawn without colour have none to compare.
+            let with_colour = o_rgb.len() == o.len() && s_rgb.len() == s.len();
+            for p in (0..o.len().min(s.len())).filter(|_| with_colour) {
                 if o[p] && s[p] {
                     let d: f32 = (0..3).map(|c| (o_rgb[p][c] - s_rgb[p][c]).abs()).sum();
                     diff += f64::from(d) / 3.0;
@@ -402,7 +461,43 @@ fn mean_or_nan(sum: f64, count: usize) -> f64 {
     }
 }
 
-/// Checks counts and sizes; the camera settings are checked by [`validate_camera_params`].
+/// Whether two frames' scenes draw the same textures with the same materials (a model's
+/// frames do: only the positions move), so one preparation serves both.
+fn same_textures(a: &DrawScene, b: &DrawScene) -> bool {
+    a.materials == b.materials
+        && a.textures == b.textures
+        && a.meshes
+            .iter()
+            .map(|m| (m.material, m.indices.is_empty()))
+            .eq(b.meshes.iter().map(|m| (m.material, m.indices.is_empty())))
+}
+
+/// The binary coverage mask of `scene` at the metric's size drawn by the CPU rasteriser, and
+/// the covered pixels' colour when `params.colour` (else an empty vector).
+fn software_mask(
+    scene: &DrawScene,
+    textures: &SoftwareTextures,
+    camera: &Camera,
+    params: &CoverageParams,
+) -> Result<(Vec<bool>, Vec<[f32; 3]>), MetricError> {
+    camera.validate()?;
+    let aspect = params.width as f32 / params.height as f32;
+    // The wgpu path's projection: depth planes around the scene's own bounds.
+    let view_proj = match scene.bounds() {
+        Some((min, max)) => camera.view_proj_for_bounds(aspect, min, max),
+        None => camera.view_proj(aspect),
+    };
+    let image = render_coverage(
+        scene,
+        textures,
+        view_proj,
+        params.width,
+        params.height,
+        params.supersample,
+    )?;
+    Ok((image.covered, image.colour))
+}
+
 /// The binary coverage mask of `scene` at the metric's size: rendered `supersample`× larger,
 /// a pixel covered when at least half of its samples are.
 fn coverage_mask(

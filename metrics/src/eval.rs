@@ -94,7 +94,8 @@ pub struct EvalContext<'a> {
     original: &'a Tree,
     sampled: Sampled,
     frame_times: Vec<f32>,
-    masks: HashMap<(u32, u32), CoverageMasks>,
+    /// Per image size and whether drawn with colour.
+    masks: HashMap<((u32, u32), bool), CoverageMasks>,
     views: u32,
     /// The original file's cost, read once.
     original_file: FileCost,
@@ -144,12 +145,13 @@ impl<'a> EvalContext<'a> {
         &self.original.source
     }
 
-    fn params(&self, size: (u32, u32)) -> CoverageParams {
+    fn params(&self, size: (u32, u32), colour: bool) -> CoverageParams {
         CoverageParams {
             views: self.views,
             frames: self.frame_times.len() as u32,
             width: size.0,
             height: size.1,
+            colour,
             ..Default::default()
         }
     }
@@ -168,9 +170,13 @@ impl<'a> EvalContext<'a> {
         )
     }
 
-    /// The original's coverage masks at `size`, rendered on first use.
-    fn original_masks(&mut self, size: (u32, u32)) -> Result<&CoverageMasks, EvalError> {
-        if !self.masks.contains_key(&size) {
+    /// The original's coverage masks at `size` (with colour or not), rendered on first use.
+    fn original_masks(
+        &mut self,
+        size: (u32, u32),
+        colour: bool,
+    ) -> Result<&CoverageMasks, EvalError> {
+        if !self.masks.contains_key(&(size, colour)) {
             let oc = self.original.clip_index(self.sampled.clip.as_deref());
             let (lo, hi) = self.bounds();
             let m = coverage_masks(
@@ -178,12 +184,12 @@ impl<'a> EvalContext<'a> {
                 &self.scenes(self.original, oc),
                 lo,
                 hi,
-                &self.params(size),
+                &self.params(size, colour),
             )
             .map_err(EvalError::colour(&self.original.source, "colour metric"))?;
-            self.masks.insert(size, m);
+            self.masks.insert((size, colour), m);
         }
-        Ok(&self.masks[&size])
+        Ok(&self.masks[&(size, colour)])
     }
 
     /// `candidate`'s coverage masks at `size`, playing its clip `clip`.
@@ -192,6 +198,7 @@ impl<'a> EvalContext<'a> {
         candidate: &Tree,
         clip: Option<usize>,
         size: (u32, u32),
+        colour: bool,
     ) -> Result<CoverageMasks, EvalError> {
         let (lo, hi) = self.bounds();
         coverage_masks(
@@ -199,7 +206,7 @@ impl<'a> EvalContext<'a> {
             &self.scenes(candidate, clip),
             lo,
             hi,
-            &self.params(size),
+            &self.params(size, colour),
         )
         .map_err(EvalError::colour(&candidate.source, "colour metric"))
     }
@@ -214,9 +221,10 @@ impl<'a> EvalContext<'a> {
         size: (u32, u32),
     ) -> Result<CoverageReport, EvalError> {
         let cc = candidate_clip(candidate, self.sampled.clip.as_deref());
-        let cand_masks = self.candidate_masks(candidate, cc, size)?;
+        // The coverage alone: drawn without colour (no depth test, alpha only).
+        let cand_masks = self.candidate_masks(candidate, cc, size, false)?;
         let all: Vec<usize> = (0..self.frame_times.len()).collect();
-        let original = self.original_masks(size)?;
+        let original = self.original_masks(size, false)?;
         compare_masks(original, &cand_masks, &all).map_err(EvalError::colour(
             &candidate.source,
             "animated colour metric",
@@ -234,10 +242,10 @@ impl<'a> EvalContext<'a> {
         let t0 = Instant::now();
         let candidate_file = file_cost(&candidate.source, &self.limits).map_err(EvalError::Cost)?;
         let cc = candidate_clip(candidate, self.sampled.clip.as_deref());
-        let cand_masks = self.candidate_masks(candidate, cc, size)?;
+        let cand_masks = self.candidate_masks(candidate, cc, size, true)?;
         let all: Vec<usize> = (0..self.frame_times.len()).collect();
         let original: &'a Tree = self.original;
-        let orig_masks = self.original_masks(size)?;
+        let orig_masks = self.original_masks(size, true)?;
         // The static metric (F = 1) is the animated one's first frame: the same renders.
         let stat = compare_masks(orig_masks, &cand_masks, &[0])
             .map_err(EvalError::colour(&original.source, "static colour metric"))?;

@@ -29,8 +29,8 @@ pub mod statistics;
 pub mod triangle_metrics;
 
 pub use coverage::{
-    CoverageMasks, CoverageParams, CoverageReport, MetricError, compare_masks, coverage_error,
-    coverage_masks, ring_azimuth_deg, view_camera,
+    CoverageMasks, CoverageParams, CoverageReport, MetricError, Rasteriser, compare_masks,
+    coverage_error, coverage_masks, ring_azimuth_deg, view_camera,
 };
 pub use eval::{EvalContext, EvalError, EvalRequest, evaluate, image_for_screen_height};
 pub use metric_id::MetricId;

@@ -7,7 +7,8 @@
 use std::sync::OnceLock;
 
 use frond_metrics::{
-    CoverageParams, CoverageReport, MetricError, coverage_error, ring_azimuth_deg, view_camera,
+    CoverageParams, CoverageReport, MetricError, Rasteriser, coverage_error, ring_azimuth_deg,
+    view_camera,
 };
 use frond_render::{DrawMaterial, DrawMesh, DrawScene, Renderer};
 use glam::Vec3;
@@ -36,6 +37,8 @@ fn params(views: u32, frames: u32) -> CoverageParams {
         fov_y_deg: 40.0,
         // Exact pixel counts below are for plain masks; supersampling has its own test.
         supersample: 1,
+        // The default (CPU) rasteriser; `software_raster.rs` checks it against the GPU's.
+        ..Default::default()
     }
 }
 
@@ -97,8 +100,28 @@ fn run(
     max: Vec3,
     p: &CoverageParams,
 ) -> CoverageReport {
-    coverage_error(renderer(), original, simplified, min, max, p)
-        .unwrap_or_else(|e| panic!("coverage_error failed: {e}"))
+    let report = coverage_error(renderer(), original, simplified, min, max, p)
+        .unwrap_or_else(|e| panic!("coverage_error failed: {e}"));
+    // Every known answer holds for the GPU's rasteriser too: the two count the same pixels
+    // but for a few along the edges of each card.
+    let gpu = CoverageParams {
+        rasteriser: Rasteriser::Gpu,
+        ..p.clone()
+    };
+    let other = coverage_error(renderer(), original, simplified, min, max, &gpu)
+        .unwrap_or_else(|e| panic!("coverage_error (GPU) failed: {e}"));
+    for (counts, gpu_counts) in [
+        (&report.original_pixels, &other.original_pixels),
+        (&report.differing_pixels, &other.differing_pixels),
+    ] {
+        for (a, b) in counts.iter().zip(gpu_counts) {
+            assert!(
+                a.abs_diff(*b) <= 2 + a.max(b) / 50,
+                "CPU {a} vs GPU {b} pixels"
+            );
+        }
+    }
+    report
 }
 
 fn bounds(s: &DrawScene) -> (Vec3, Vec3) {

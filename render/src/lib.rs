@@ -46,6 +46,7 @@ mod pipeline;
 mod readback;
 mod renderer;
 mod scene;
+mod software;
 mod tree;
 
 pub use camera::{Camera, Projection};
@@ -54,4 +55,5 @@ pub use frame::Frame;
 pub use pipeline::{LIGHT_DIRECTION, alpha_mip_chain, mip_chain};
 pub use renderer::{Output, Renderer};
 pub use scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
+pub use software::{CoverageImage, SoftwareTextures, render_coverage};
 pub use tree::{TreeParts, scene_from_positions, tree_scene};

@@ -208,7 +208,7 @@ impl Pipelines {
 }
 
 /// sRGB-encoded byte → linear light.
-fn srgb_to_linear(v: u8) -> f32 {
+pub(crate) fn srgb_to_linear(v: u8) -> f32 {
     let c = v as f32 / 255.0;
     if c <= 0.04045 {
         c / 12.92
