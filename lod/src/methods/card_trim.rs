@@ -46,9 +46,23 @@ pub struct Trimmed {
     pub mesh: WoodMesh,
     /// Cards replaced by one triangle.
     pub cards: usize,
+    /// Blended cards left as quads because they bend more than one triangle can follow and the
+    /// budget had room for their second triangle.
+    pub kept_as_quads: usize,
     /// Total area of the cards trimmed, before and after (world units²).
     pub area_before: f64,
     pub area_after: f64,
+}
+
+/// One card's trimmed triangle: its corners' texture coordinates, rest positions and skins,
+/// and how far the triangle's skinning misses the card's own (world units, root mean square
+/// over the leaf's texels and the fit's frames; 0 for a card on one skin).
+struct CardTrim {
+    card: CardFrame,
+    uv: [Vec2; 3],
+    rest: [Vec3; 3],
+    skins: [Skin; 3],
+    miss: f32,
 }
 
 /// The foliage `mesh` of `tree` with every leaf card that can be trimmed replaced by its
@@ -56,34 +70,66 @@ pub struct Trimmed {
 /// combinations of the card's corners in every attribute (positions, normals, texture
 /// coordinates); a card bound to one skin keeps it, a blended card's new vertices get weights
 /// fitted to the card's motion. The triangle faces the card's way.
-pub fn trim_cards(tree: &Tree, mesh: &WoodMesh) -> Trimmed {
+///
+/// A blended card bends when posed (its corners follow different bones) and a flat triangle
+/// cannot: when the trimmed foliage leaves room within `max_triangles`, the cards whose fit
+/// misses most (miss × the card's size: the pixels it moves) stay quads, one more triangle
+/// each (oak_medium_blendedleaves at 600 px: 0.0042 with every card trimmed, 0.00025 with
+/// every card a quad).
+pub fn trim_cards(tree: &Tree, mesh: &WoodMesh, max_triangles: usize) -> Trimmed {
     let pieces = mesh.pieces();
     let motion = BoneMotion::of(tree);
     // Per material (its texture, cutoff and wrap modes) and texture region.
     let mut regions: HashMap<(usize, RegionKey), Option<Region>> = HashMap::new();
+    let trims: Vec<Option<CardTrim>> = pieces
+        .iter()
+        .map(|piece| {
+            let card = CardFrame::of(tree, mesh, piece)?;
+            let material = mesh.primitives[piece[0].0].material;
+            let region = regions
+                .entry((material, card.key()))
+                .or_insert_with(|| Region::of(tree, &tree.materials[material], &card.uv))
+                .as_ref()?;
+            let rest = region.triangle.map(|uv| card.point(&mesh.positions, uv));
+            let (skins, miss) = match card.single_skin(mesh) {
+                Some(skin) => ([skin; 3], 0.0),
+                None => fit_skins(mesh, piece, &card, region, rest, &motion)
+                    .unwrap_or_else(|| ([card.corner_skin(mesh); 3], 0.0)),
+            };
+            Some(CardTrim {
+                card,
+                uv: region.triangle,
+                rest,
+                skins,
+                miss,
+            })
+        })
+        .collect();
+    let trimmable = trims.iter().flatten().count();
+    let room = max_triangles.saturating_sub(mesh.triangles() - trimmable);
+    // The cards that stay quads: the worst-fitting blended ones, as many as the room allows.
+    let mut bending: Vec<(f32, usize)> = trims
+        .iter()
+        .enumerate()
+        .filter_map(|(i, t)| {
+            t.as_ref()
+                .filter(|t| t.miss > 0.0)
+                .map(|t| (t.miss * t.card.facing.length().sqrt(), i))
+        })
+        .collect();
+    bending.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    let quads: HashSet<usize> = bending.iter().take(room).map(|&(_, i)| i).collect();
     let mut out = mesh.clone();
     // The second triangles of trimmed cards (the first is overwritten with the trimmed one).
     let mut dropped: HashSet<(usize, usize)> = HashSet::new();
     let (mut cards, mut area_before, mut area_after) = (0, 0.0, 0.0);
-    for piece in &pieces {
-        let Some(card) = CardFrame::of(tree, mesh, piece) else {
+    for (i, (piece, trim)) in pieces.iter().zip(&trims).enumerate() {
+        let Some(trim) = trim.as_ref().filter(|_| !quads.contains(&i)) else {
             continue;
         };
-        let material = mesh.primitives[piece[0].0].material;
-        let region = regions
-            .entry((material, card.key()))
-            .or_insert_with(|| Region::of(tree, &tree.materials[material], &card.uv));
-        let Some(region) = region else {
-            continue;
-        };
-        let rest = region.triangle.map(|uv| card.point(&mesh.positions, uv));
-        let skins = card
-            .single_skin(mesh)
-            .map(|skin| [skin; 3])
-            .or_else(|| fit_skins(mesh, piece, &card, region, rest, &motion))
-            .unwrap_or_else(|| [card.corner_skin(mesh); 3]);
+        let card = &trim.card;
         let base = out.positions.len() as u32;
-        for ((uv, position), skin) in region.triangle.into_iter().zip(rest).zip(skins) {
+        for ((uv, position), skin) in trim.uv.into_iter().zip(trim.rest).zip(trim.skins) {
             card.push_vertex(mesh, &mut out, uv, position, skin);
         }
         let p = |k: u32| out.positions[(base + k) as usize];
@@ -110,6 +156,7 @@ pub fn trim_cards(tree: &Tree, mesh: &WoodMesh) -> Trimmed {
     Trimmed {
         mesh: out.compacted(),
         cards,
+        kept_as_quads: quads.len(),
         area_before,
         area_after,
     }
@@ -425,7 +472,7 @@ fn fit_skins(
     region: &Region,
     rest: [Vec3; 3],
     motion: &BoneMotion,
-) -> Option<[Skin; 3]> {
+) -> Option<([Skin; 3], f32)> {
     let mut bones: Vec<u32> = card
         .vertices
         .iter()
@@ -490,6 +537,8 @@ fn fit_skins(
     }
     let mut h = vec![0.0f64; n * n];
     let mut c = vec![0.0f64; n];
+    // Σ_f Σ_s |t_s(f)|²: the objective's constant, for the residual.
+    let mut targets = 0.0f64;
     for f in 0..motion.frames.len() {
         let reference = rest.map(|q| motion.moved(f, bones[0], q));
         let d: Vec<Vec3> = (0..n)
@@ -500,6 +549,7 @@ fn fit_skins(
         for (beta, t, gamma) in &samples {
             let card_point: Vec3 = t.iter().zip(gamma).map(|(&v, &g)| skinned(f, v) * g).sum();
             let base: Vec3 = reference.iter().zip(beta).map(|(&r, &b)| r * b).sum();
+            targets += f64::from((card_point - base).length_squared());
             for i in 0..3 {
                 pulled[i] += (card_point - base) * beta[i];
             }
@@ -532,7 +582,16 @@ fn fit_skins(
             previous.clone_from(&x);
         }
     }
-    Some([0, 1, 2].map(|i| strongest_four(&bones, &x[i * nb..(i + 1) * nb])))
+    // The residual x·Hx − 2c·x + Σ|t|², per sample and frame.
+    let quadratic: f64 = (0..n)
+        .map(|a| x[a] * ((0..n).map(|b| h[a * n + b] * x[b]).sum::<f64>() - 2.0 * c[a]))
+        .sum();
+    let count = (samples.len() * motion.frames.len()) as f64;
+    let miss = ((quadratic + targets).max(0.0) / count).sqrt() as f32;
+    Some((
+        [0, 1, 2].map(|i| strongest_four(&bones, &x[i * nb..(i + 1) * nb])),
+        miss,
+    ))
 }
 
 /// The corners' weights over `bones` combined at each vertex of `triangle` as its texture
@@ -956,6 +1015,7 @@ mod tests {
         let motion = BoneMotion::of(&tree);
         let m = &tree.materials[foliage.primitives[0].material];
         let (mut fitted_sum, mut combined_sum, mut fitted_cards) = (0.0, 0.0, 0);
+        let mut misses = Vec::new();
         for piece in foliage.pieces() {
             let card = CardFrame::of(&tree, &foliage, &piece).expect("a card");
             if card.single_skin(&foliage).is_some() {
@@ -963,7 +1023,8 @@ mod tests {
             }
             let region = Region::of(&tree, m, &card.uv).expect("trimmed");
             let rest = region.triangle.map(|uv| card.point(&foliage.positions, uv));
-            let skins = fit_skins(&foliage, &piece, &card, &region, rest, &motion).expect("fit");
+            let (skins, miss) =
+                fit_skins(&foliage, &piece, &card, &region, rest, &motion).expect("fit");
             let mut bones: Vec<u32> = card
                 .vertices
                 .iter()
@@ -977,6 +1038,17 @@ mod tests {
             let e_fit = leaf_error(&foliage, &piece, &region, rest, skins, &motion);
             let e_combined = leaf_error(&foliage, &piece, &region, rest, combined, &motion);
             assert!(e_fit <= e_combined * 1.001 + 1e-5, "{e_fit} > {e_combined}");
+            // The fit's own residual is `leaf_error`'s, in world units.
+            let verts = card_vertices(&foliage, &piece);
+            let size = (foliage.positions[verts[0] as usize]
+                - foliage.positions[verts[3] as usize])
+                .length();
+            assert!(
+                (miss - e_fit * size).abs() <= 0.05 * miss + 1e-6,
+                "{miss} against {}",
+                e_fit * size
+            );
+            misses.push(miss);
             for (b, w) in skins {
                 assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-5);
                 assert!(w.iter().all(|&k| k >= 0.0));
@@ -991,6 +1063,16 @@ mod tests {
             fitted_sum < 0.8 * combined_sum,
             "fitted {fitted_sum} against combined {combined_sum}"
         );
+        // Room in the budget keeps the worst-fitting blended cards as quads, one triangle each.
+        let all = trim_cards(&tree, &foliage, 0);
+        assert_eq!(all.kept_as_quads, 0);
+        let some = trim_cards(&tree, &foliage, all.mesh.triangles() + 10);
+        assert_eq!(some.kept_as_quads, 10);
+        assert_eq!(some.cards, all.cards - 10);
+        assert_eq!(some.mesh.triangles(), all.mesh.triangles() + 10);
+        let every = trim_cards(&tree, &foliage, foliage.triangles());
+        assert_eq!(every.kept_as_quads, blended);
+        assert_eq!(every.mesh.triangles(), all.mesh.triangles() + blended);
     }
 
     #[test]
@@ -1000,7 +1082,7 @@ mod tests {
         let m = &tree.materials[foliage.primitives[0].material];
         let t = &mut tree.textures[m.base_color_texture.expect("leaf texture")];
         t.rgba.chunks_exact_mut(4).for_each(|p| p[3] = 255);
-        let trimmed = trim_cards(&tree, &foliage);
+        let trimmed = trim_cards(&tree, &foliage, 0);
         assert_eq!(trimmed.cards, 0);
         assert_eq!(trimmed.mesh.triangles(), foliage.triangles());
     }
@@ -1010,7 +1092,7 @@ mod tests {
         let (mut tree, foliage) = sample();
         disc_leaves(&mut tree, &foliage);
         let pieces = foliage.pieces();
-        let trimmed = trim_cards(&tree, &foliage);
+        let trimmed = trim_cards(&tree, &foliage, 0);
         assert_eq!(trimmed.cards, pieces.len(), "every card is trimmed");
         assert_eq!(trimmed.mesh.triangles(), pieces.len());
         // A disc of area 0.28 needs a triangle of at least 3√3·0.3² = 0.47 of the card.
@@ -1079,7 +1161,7 @@ mod tests {
             let tree = import(&path, &ImportOptions::default()).expect("tree");
             let foliage = WoodMesh::from_tree_part(&tree, Part::Foliage);
             let cards = foliage.pieces().iter().filter(|p| p.len() == 2).count();
-            let trimmed = trim_cards(&tree, &foliage);
+            let trimmed = trim_cards(&tree, &foliage, 0);
             let ratio = trimmed.area_after / trimmed.area_before;
             let name = path.display();
             assert!(

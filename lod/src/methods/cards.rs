@@ -42,6 +42,9 @@ pub struct CardReport {
     pub cards: usize,
     /// Cards drawn as one trimmed triangle ([`crate::methods::card_trim`]).
     pub trimmed: usize,
+    /// Blended cards left as quads within the triangle budget: they bend when posed, which
+    /// one triangle cannot follow.
+    pub kept_as_quads: usize,
     pub kept: usize,
     /// Linear scale of every kept card about its centre.
     pub scale: f32,
@@ -123,7 +126,7 @@ pub fn thin_cards(
     seed: u64,
 ) -> CardFoliage {
     let max_triangles = budget.triangles;
-    let trimmed = trim_cards(tree, foliage);
+    let trimmed = trim_cards(tree, foliage, max_triangles);
     let foliage = &trimmed.mesh;
     let cards = foliage.pieces();
     let area: Vec<f32> = cards
@@ -193,6 +196,7 @@ pub fn thin_cards(
         report: CardReport {
             cards: cards.len(),
             trimmed: trimmed.cards,
+            kept_as_quads: trimmed.kept_as_quads,
             kept,
             scale,
         },
