@@ -182,6 +182,12 @@ fn measure_errors(
         let coverage = ctx
             .coverage(&lod, size)
             .with_context(|| format!("{}: measuring its error", entry.file))?;
+        let depth = ctx
+            .depth_complexity(&lod, size)
+            .with_context(|| format!("{}: measuring its depth complexity", entry.file))?;
+        let input_depth = ctx
+            .depth_complexity(tree, size)
+            .with_context(|| format!("{path}: measuring its depth complexity"))?;
         let within_target = coverage.mean <= max_error;
         if !within_target {
             let w = format!(
@@ -199,6 +205,8 @@ fn measure_errors(
             image: [size.0, size.1],
             views: MEASURE_VIEWS,
             frames: MEASURE_FRAMES,
+            depth_complexity: depth,
+            input_depth_complexity: input_depth,
         });
     }
     Ok(())

@@ -52,6 +52,20 @@ fn the_report_gives_each_lods_error_as_frond_eval_measures_it() {
         "{warnings:?}"
     );
     let (near, far) = (&lods[1], &lods[2]);
+    // Depth complexity (fragments per covered sample) at each LOD's size: a LOD draws fewer
+    // layers than the input seen at the same size, and the far one fewer than the near one.
+    let depth = |l: &serde_json::Value, key: &str| l["error"][key].as_f64().expect(key);
+    for l in [near, far] {
+        let (lod, input) = (
+            depth(l, "depth_complexity"),
+            depth(l, "input_depth_complexity"),
+        );
+        assert!(
+            lod >= 1.0 && lod < input,
+            "LOD {lod} against the input's {input}"
+        );
+    }
+    assert!(depth(far, "depth_complexity") <= depth(near, "depth_complexity"));
     let area = |l: &serde_json::Value| l["cost"]["alpha_tested_area"].as_f64().expect("area");
     assert!(area(far) <= area(near), "overdraw grows at 60 px");
     assert!(

@@ -70,6 +70,10 @@ pub struct ChainRequest {
 /// What a LOD draws: LOD0 the input's rig, a billboard LOD its foliage (whose rig the
 /// budget pruned).
 #[derive(Clone, Debug)]
+#[expect(
+    clippy::large_enum_variant,
+    reason = "one per LOD of a chain, a handful in all: boxing would only add indirection"
+)]
 pub enum LodContent {
     Input(Rig),
     Foliage(Foliage),

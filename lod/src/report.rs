@@ -79,6 +79,12 @@ pub struct MeasuredError {
     pub image: [u32; 2],
     pub views: u32,
     pub frames: u32,
+    /// The foliage's depth complexity at this size (the metric's first view and frame, 4×
+    /// supersampled): fragments rasterised per covered sample, each one a fragment-shader run
+    /// since alpha-tested surfaces defeat early depth rejection. Overdraw as the GPU pays it.
+    pub depth_complexity: f64,
+    /// The input's, drawn alike.
+    pub input_depth_complexity: f64,
 }
 
 /// What a LOD left out, and why.

@@ -461,6 +461,44 @@ fn mean_or_nan(sum: f64, count: usize) -> f64 {
     }
 }
 
+/// The depth complexity of `scene` from view `view` of `params`' ring, framed by the bounds
+/// (see the module docs), at the metric's size and supersampling: fragments rasterised per
+/// covered sample ([`frond_render::depth_complexity`]), drawn by the CPU rasteriser whatever
+/// `params.rasteriser` says.
+pub fn depth_complexity(
+    scene: &DrawScene,
+    bounds_min: Vec3,
+    bounds_max: Vec3,
+    view: u32,
+    params: &CoverageParams,
+) -> Result<f64, MetricError> {
+    let camera = view_camera(bounds_min, bounds_max, view, params)?;
+    let textures = SoftwareTextures::new(scene, false)?;
+    Ok(frond_render::depth_complexity(
+        scene,
+        &textures,
+        projection(scene, &camera, params)?,
+        params.width,
+        params.height,
+        params.supersample,
+    )?)
+}
+
+/// The wgpu path's projection for `camera` at the metric's size: depth planes around the
+/// scene's own bounds.
+fn projection(
+    scene: &DrawScene,
+    camera: &Camera,
+    params: &CoverageParams,
+) -> Result<glam::Mat4, MetricError> {
+    camera.validate()?;
+    let aspect = params.width as f32 / params.height as f32;
+    Ok(match scene.bounds() {
+        Some((min, max)) => camera.view_proj_for_bounds(aspect, min, max),
+        None => camera.view_proj(aspect),
+    })
+}
+
 /// Whether two frames' scenes draw the same textures with the same materials (a model's
 /// frames do: only the positions move), so one preparation serves both.
 fn same_textures(a: &DrawScene, b: &DrawScene) -> bool {
@@ -480,17 +518,10 @@ fn software_mask(
     camera: &Camera,
     params: &CoverageParams,
 ) -> Result<(Vec<bool>, Vec<[f32; 3]>), MetricError> {
-    camera.validate()?;
-    let aspect = params.width as f32 / params.height as f32;
-    // The wgpu path's projection: depth planes around the scene's own bounds.
-    let view_proj = match scene.bounds() {
-        Some((min, max)) => camera.view_proj_for_bounds(aspect, min, max),
-        None => camera.view_proj(aspect),
-    };
     let image = render_coverage(
         scene,
         textures,
-        view_proj,
+        projection(scene, camera, params)?,
         params.width,
         params.height,
         params.supersample,

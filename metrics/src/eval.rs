@@ -231,6 +231,17 @@ impl<'a> EvalContext<'a> {
         ))
     }
 
+    /// The depth complexity of `candidate`'s foliage at `size`, from the metric's first view
+    /// at its first frame ([`crate::coverage::depth_complexity`]).
+    pub fn depth_complexity(&self, candidate: &Tree, size: (u32, u32)) -> Result<f64, EvalError> {
+        let clip = candidate_clip(candidate, self.sampled.clip.as_deref());
+        let t = self.frame_times.first().copied().unwrap_or(0.0);
+        let scene = tree_scene(candidate, clip, t, TreeParts::Foliage);
+        let (lo, hi) = self.bounds();
+        crate::coverage::depth_complexity(&scene, lo, hi, 0, &self.params(size, false))
+            .map_err(EvalError::colour(&candidate.source, "depth complexity"))
+    }
+
     /// Evaluates `candidate` with images of `size`; `same_file` (the two files have the same
     /// bytes) matches every triangle to itself.
     pub fn evaluate(

@@ -30,7 +30,7 @@ pub mod triangle_metrics;
 
 pub use coverage::{
     CoverageMasks, CoverageParams, CoverageReport, MetricError, Rasteriser, compare_masks,
-    coverage_error, coverage_masks, ring_azimuth_deg, view_camera,
+    coverage_error, coverage_masks, depth_complexity, ring_azimuth_deg, view_camera,
 };
 pub use eval::{EvalContext, EvalError, EvalRequest, evaluate, image_for_screen_height};
 pub use metric_id::MetricId;

@@ -55,5 +55,5 @@ pub use frame::Frame;
 pub use pipeline::{LIGHT_DIRECTION, alpha_mip_chain, mip_chain};
 pub use renderer::{Output, Renderer};
 pub use scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
-pub use software::{CoverageImage, SoftwareTextures, render_coverage};
+pub use software::{CoverageImage, SoftwareTextures, depth_complexity, render_coverage};
 pub use tree::{TreeParts, scene_from_positions, tree_scene};

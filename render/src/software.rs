@@ -172,6 +172,41 @@ pub fn render_coverage(
     height: u32,
     supersample: u32,
 ) -> Result<CoverageImage, RenderError> {
+    rasterise(scene, textures, view_proj, [width, height, supersample]).map(|r| r.0)
+}
+
+/// The depth complexity of `scene` seen through `view_proj` at `width`×`height` pixels of
+/// `supersample`² samples: fragments rasterised (every sample inside a drawn triangle, before
+/// the alpha test discards any: each one runs the fragment shader, since alpha-tested surfaces
+/// defeat early depth rejection) per covered sample; 0 when nothing is covered. The overdraw an
+/// engine pays for alpha-tested foliage, whatever the draw order. The fragments are counted as
+/// the drawn triangles' area in samples (after depth clipping and culling; a part outside the
+/// image's sides counts too), which the samples inside them match up to their edges: counting
+/// them one by one, without skipping covered samples, cost 2.3 s of oak_dense's run.
+pub fn depth_complexity(
+    scene: &DrawScene,
+    textures: &SoftwareTextures,
+    view_proj: Mat4,
+    width: u32,
+    height: u32,
+    supersample: u32,
+) -> Result<f64, RenderError> {
+    let (_, fragments, covered) =
+        rasterise(scene, textures, view_proj, [width, height, supersample])?;
+    Ok(if covered == 0 {
+        0.0
+    } else {
+        fragments / covered as f64
+    })
+}
+
+/// [`render_coverage`], the drawn triangles' area in samples, and the samples covered.
+fn rasterise(
+    scene: &DrawScene,
+    textures: &SoftwareTextures,
+    view_proj: Mat4,
+    [width, height, supersample]: [u32; 3],
+) -> Result<(CoverageImage, f64, u64), RenderError> {
     let ss = supersample.max(1);
     let (sw, sh) = (
         u64::from(width) * u64::from(ss),
@@ -222,7 +257,7 @@ pub fn render_coverage(
         width: sw,
         ss: ss as usize,
     };
-    let resolved: Vec<(Vec<bool>, Vec<[f32; 3]>)> = bins
+    let resolved: Vec<Band> = bins
         .par_iter()
         .enumerate()
         .map(|(b, bin)| raster.band(b * band_rows, ((b + 1) * band_rows).min(sh), bin))
@@ -233,11 +268,21 @@ pub fn render_coverage(
         covered: Vec::with_capacity(width as usize * height as usize),
         colour: Vec::new(),
     };
-    for (covered, colour) in resolved {
-        image.covered.extend(covered);
-        image.colour.extend(colour);
+    let mut covered_samples = 0;
+    for band in resolved {
+        image.covered.extend(band.mask);
+        image.colour.extend(band.colour);
+        covered_samples += band.covered_samples;
     }
-    Ok(image)
+    let area: f64 = triangles.iter().map(|t| 0.5 / f64::from(t.inv_area)).sum();
+    Ok((image, area, covered_samples))
+}
+
+/// One band of the image, resolved: its pixels' coverage and colour, and its covered samples.
+struct Band {
+    mask: Vec<bool>,
+    colour: Vec<[f32; 3]>,
+    covered_samples: u64,
 }
 
 /// Transforms, clips (near and far planes), culls and sets up every triangle of `scene`, in
@@ -579,7 +624,7 @@ struct Raster<'a> {
 impl Raster<'_> {
     /// Sample rows `y0..y1` (whole pixel rows) drawn with the triangles `bin`, resolved to
     /// pixels: coverage, and colour when the textures were prepared with it.
-    fn band(&self, y0: usize, y1: usize, bin: &[u32]) -> (Vec<bool>, Vec<[f32; 3]>) {
+    fn band(&self, y0: usize, y1: usize, bin: &[u32]) -> Band {
         let colour = self.textures.colour;
         let rows = y1 - y0;
         let n = rows * self.width;
@@ -683,7 +728,12 @@ impl Raster<'_> {
                 }
             }
         }
-        self.resolve(rows, &covered, &rgb)
+        let (mask, colour) = self.resolve(rows, &covered, &rgb);
+        Band {
+            mask,
+            colour,
+            covered_samples: covered.iter().map(|w| u64::from(w.count_ones())).sum(),
+        }
     }
 
     /// Pixels of a band of `rows` sample rows (`covered`: bits, 64 to a word, rows padded to
@@ -771,6 +821,30 @@ mod tests {
         assert!(half.colour.is_empty(), "no colour asked for");
         // The left half, row by row.
         assert!((0..30).all(|y| (0..40).all(|x| half.covered[y * 40 + x] == (x < 20))));
+    }
+
+    #[test]
+    fn depth_complexity_counts_every_layer_drawn() {
+        // Three full-screen layers, and a half-screen fourth: 3.5 fragments per covered sample.
+        let scene = DrawScene {
+            meshes: vec![
+                quad(-1.0, 1.0, 0.2, false, 0),
+                quad(-1.0, 1.0, 0.4, false, 0),
+                quad(-1.0, 1.0, 0.6, false, 0),
+                quad(-1.0, 0.0, 0.8, false, 0),
+            ],
+            materials: vec![DrawMaterial::opaque([1.0; 4])],
+            textures: vec![],
+        };
+        let textures = SoftwareTextures::new(&scene, false).expect("textures");
+        let d = depth_complexity(&scene, &textures, Mat4::IDENTITY, 40, 30, 2).expect("count");
+        assert!((d - 3.5).abs() < 1e-6, "{d}");
+        let empty = DrawScene {
+            meshes: vec![],
+            ..scene.clone()
+        };
+        let d = depth_complexity(&empty, &textures, Mat4::IDENTITY, 40, 30, 2).expect("count");
+        assert_eq!(d, 0.0);
     }
 
     #[test]
