@@ -237,6 +237,7 @@ fn lod_input<'a>(tree: &'a Tree, lod: &'a ChainLod, m: &Motion, name: String) ->
             ]
         }),
         spectral_uvs: m.spectral.as_ref().map(|t| t.row_uv.clone()),
+        byte_weights: !matches!(lod.content, frond_lod::chain::LodContent::Input(_)),
     }
 }
 

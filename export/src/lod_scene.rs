@@ -47,6 +47,9 @@ pub struct LodInput<'a> {
     /// follows (own motion comes from the spectral texture, not from joints), with
     /// `spectral_uvs[billboard]` in `TEXCOORD_1` on all four corners.
     pub spectral_uvs: Option<Vec<[f32; 2]>>,
+    /// Skin weights as normalized bytes (every LOD but LOD0, which keeps the input's floats):
+    /// a quarter of the bytes, 1/255 of a bone's motion at most.
+    pub byte_weights: bool,
 }
 
 /// Channels of one clip written for one LOD (merged by clip name across LODs).
@@ -266,6 +269,7 @@ pub fn add_lod(
                         prim: PrimitiveDesc {
                             normals: Some(Vec::new()),
                             uvs: Some(Vec::new()),
+                            byte_weights: lod.byte_weights,
                             material: Some(material),
                             ..Default::default()
                         },
@@ -343,6 +347,7 @@ pub fn add_lod(
                 extra_uvs: vec![Vec::new(); sets - 1],
                 joints: Some(Vec::new()),
                 weights: Some(Vec::new()),
+                byte_weights: lod.byte_weights,
                 material: Some(mat),
                 ..Default::default()
             };

@@ -49,8 +49,33 @@ pub struct PrimitiveDesc {
     pub extra_uvs: Vec<Vec<[f32; 2]>>,
     pub joints: Option<Vec<[u16; 4]>>,
     pub weights: Option<Vec<[f32; 4]>>,
+    /// Write `weights` as normalized unsigned bytes (glTF core: 4 bytes a vertex instead of
+    /// 16, every engine reads them) instead of floats; each vertex's four sum to exactly 255.
+    pub byte_weights: bool,
     pub indices: Vec<u32>,
     pub material: Option<usize>,
+}
+
+/// `w` (non-negative, summing to about 1) as normalized bytes summing to exactly 255: each
+/// rounded down, the remainder given to the largest fractional parts (ties to the lower slot).
+pub fn byte_weights(w: [f32; 4]) -> [u8; 4] {
+    let total: f32 = w.iter().map(|v| v.max(0.0)).sum();
+    if total <= 0.0 || !total.is_finite() {
+        return [255, 0, 0, 0];
+    }
+    let scaled = w.map(|v| v.max(0.0) / total * 255.0);
+    let mut out = scaled.map(|v| v.floor() as u8);
+    let given: u32 = out.iter().map(|&v| u32::from(v)).sum();
+    let mut order = [0usize, 1, 2, 3];
+    order.sort_by(|&a, &b| {
+        let fa = scaled[a] - scaled[a].floor();
+        let fb = scaled[b] - scaled[b].floor();
+        fb.total_cmp(&fa).then(a.cmp(&b))
+    });
+    for &k in order.iter().take(255usize.saturating_sub(given as usize)) {
+        out[k] += 1;
+    }
+    out
 }
 
 /// Animated node property.
@@ -412,16 +437,36 @@ impl GltfBuilder {
                 );
             }
             if let (Some(j), Some(w)) = (&p.joints, &p.weights) {
-                let flat: Vec<u32> = j.iter().flatten().map(|&v| v as u32).collect();
+                // A weight that rounds to no byte leaves its slot, pointing at joint 0 as
+                // unused slots do (the validator flags a joint used with zero weight).
+                let flat: Vec<u32> = j
+                    .iter()
+                    .zip(w)
+                    .flat_map(|(j, w)| {
+                        let bytes = p.byte_weights.then(|| byte_weights(*w));
+                        (0..4).map(move |k| match bytes {
+                            Some(b) if b[k] == 0 => 0,
+                            _ => u32::from(j[k]),
+                        })
+                    })
+                    .collect();
                 attrs.insert(
                     "JOINTS_0".into(),
                     json!(self.add_uints(&flat, "VEC4", 4, Some(34962), true)),
                 );
-                let flat: Vec<f32> = w.iter().flatten().copied().collect();
-                attrs.insert(
-                    "WEIGHTS_0".into(),
-                    json!(self.add_floats(&flat, "VEC4", false, Some(34962))),
-                );
+                let accessor = if p.byte_weights {
+                    let bytes: Vec<u8> = w.iter().flat_map(|&v| byte_weights(v)).collect();
+                    let view = self.push_view(&bytes, Some(34962), None);
+                    self.accessors.push(json!({
+                        "bufferView": view, "componentType": 5121, "normalized": true,
+                        "count": w.len(), "type": "VEC4"
+                    }));
+                    self.accessors.len() - 1
+                } else {
+                    let flat: Vec<f32> = w.iter().flatten().copied().collect();
+                    self.add_floats(&flat, "VEC4", false, Some(34962))
+                };
+                attrs.insert("WEIGHTS_0".into(), json!(accessor));
             }
             let idx = self.add_uints(&p.indices, "SCALAR", 1, Some(34963), false);
             let mut prim = json!({ "attributes": attrs, "indices": idx, "mode": 4 });
@@ -584,4 +629,31 @@ pub fn encode_png(width: u32, height: u32, rgba: &[u8]) -> Result<Vec<u8>, image
         image::ExtendedColorType::Rgba8,
     )?;
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn byte_weights_sum_to_255_and_round_to_the_nearest() {
+        assert_eq!(byte_weights([1.0, 0.0, 0.0, 0.0]), [255, 0, 0, 0]);
+        assert_eq!(byte_weights([0.5, 0.5, 0.0, 0.0]), [128, 127, 0, 0]);
+        assert_eq!(byte_weights([0.0; 4]), [255, 0, 0, 0]);
+        for w in [
+            [0.25f32, 0.25, 0.25, 0.25],
+            [0.7, 0.2, 0.1, 0.0],
+            [0.333, 0.333, 0.334, 0.0],
+            [0.9, 0.05, 0.03, 0.02],
+        ] {
+            let b = byte_weights(w);
+            assert_eq!(b.iter().map(|&v| u32::from(v)).sum::<u32>(), 255, "{w:?}");
+            for k in 0..4 {
+                assert!(
+                    (f32::from(b[k]) / 255.0 - w[k]).abs() <= 1.0 / 255.0,
+                    "{w:?} {b:?}"
+                );
+            }
+        }
+    }
 }
