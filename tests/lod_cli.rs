@@ -507,6 +507,8 @@ fn round_trip(b: &Built) {
             image_sizes: &Default::default(),
             vat_uvs: None,
             spectral_uvs: None,
+            // As `frond lod` writes every LOD but LOD0.
+            byte_weights: true,
         }],
         &FileOptions::default(),
     )
