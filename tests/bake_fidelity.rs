@@ -26,19 +26,7 @@ fn billboards_at_epsilon_zero_draw_the_leaves_outline_at_their_size() {
     for name in names {
         let tree = shared_tree(name);
         let out = tempfile::tempdir().expect("tempdir");
-        let report = frond_lod_measured(
-            &tree,
-            out.path(),
-            &[
-                "--method",
-                "per-bone",
-                "--epsilon",
-                "0",
-                "--lods",
-                "600",
-                "--no-cost-budgets",
-            ],
-        );
+        let report = per_bone_at_zero(&tree, out.path());
         let lods = report["lods"].as_array().expect("lods");
         let lod = &lods[1];
         assert_eq!(lod["method"], "per-bone", "{name}");

@@ -10,23 +10,6 @@ use std::path::Path;
 
 use common::*;
 
-/// The 600 px LOD of `tree` at ε = 0 with the per-bone method. The cost budgets are off: at
-/// ε = 0 a LOD keeps a billboard per card, more than half the input's triangles, and the
-/// budgets would widen ε (they come first); the LOD's texel density (4 texels per pixel for
-/// alpha-tested maps) still applies.
-fn per_bone_at_zero(tree: &Path, out: &Path) -> serde_json::Value {
-    let args = [
-        "--method",
-        "per-bone",
-        "--epsilon",
-        "0",
-        "--lods",
-        "600",
-        "--no-cost-budgets",
-    ];
-    frond_lod_measured(tree, out, &args)
-}
-
 /// `frond eval TREE LOD --screen-height 600`'s animated coverage error.
 fn error_at_600(tree: &Path, lod: &Path) -> f64 {
     frond_eval(tree, lod, &["--screen-height", "600"])["coverage"]["animated"]["mean"]

@@ -507,7 +507,9 @@ struct Trilinear {
 }
 
 /// Bilinear filter of channel `channel` (of `stride`-byte texels) of one level at `(u, v)`,
-/// 0..255; the four texels wrap under `wrap` only when the footprint leaves the level.
+/// each texel `decode`d first (its byte as is for alpha, to linear light for sRGB colour, as
+/// GPUs filter sRGB textures); the four texels wrap under `wrap` only when the footprint
+/// leaves the level.
 #[inline]
 fn bilinear(
     level: &(u32, u32, Vec<u8>),
@@ -515,6 +517,7 @@ fn bilinear(
     wrap: [Wrap; 2],
     stride: usize,
     channel: usize,
+    decode: impl Fn(u8) -> f32,
 ) -> f32 {
     let (w, h, data) = level;
     let x = uv[0] * *w as f32 - 0.5;
@@ -533,7 +536,7 @@ fn bilinear(
         )
     };
     let row = *w as usize * stride;
-    let at = |x: usize, y: usize| f32::from(data[y * row + x * stride + channel]);
+    let at = |x: usize, y: usize| decode(data[y * row + x * stride + channel]);
     let top = at(xa, ya) + (at(xb, ya) - at(xa, ya)) * fx;
     let bottom = at(xa, yb) + (at(xb, yb) - at(xa, yb)) * fx;
     top + (bottom - top) * fy
@@ -555,9 +558,9 @@ impl Levels {
     /// Trilinear alpha (0..1) at `(u, v)`; `stride`: bytes a texel (1: alpha only, 4: RGBA).
     #[inline]
     fn alpha(&self, uv: [f32; 2], lod: Trilinear, wrap: [Wrap; 2], stride: usize) -> f32 {
-        let a = bilinear(&self.0[lod.a], uv, wrap, stride, stride - 1);
+        let a = bilinear(&self.0[lod.a], uv, wrap, stride, stride - 1, f32::from);
         let a = if lod.f > 0.0 {
-            a + (bilinear(&self.0[lod.b], uv, wrap, stride, stride - 1) - a) * lod.f
+            a + (bilinear(&self.0[lod.b], uv, wrap, stride, stride - 1, f32::from) - a) * lod.f
         } else {
             a
         };
@@ -567,21 +570,8 @@ impl Levels {
     /// Trilinear linear RGB at `(u, v)` of an RGBA chain (sRGB decoded before filtering).
     fn rgb(&self, uv: [f32; 2], lod: Trilinear, wrap: [Wrap; 2], linear: &[f32; 256]) -> Vec3 {
         let at = |l: usize| {
-            let (w, h, data) = &self.0[l];
-            // Decode each texel, then filter: one channel at a time on decoded copies.
-            let decoded = |c: usize| {
-                let x = uv[0] * *w as f32 - 0.5;
-                let y = uv[1] * *h as f32 - 0.5;
-                let (x0, y0) = (floor_i64(x), floor_i64(y));
-                let (fx, fy) = (x - x0 as f32, y - y0 as f32);
-                let xs = [wrap_index(x0, *w, wrap[0]), wrap_index(x0 + 1, *w, wrap[0])];
-                let ys = [wrap_index(y0, *h, wrap[1]), wrap_index(y0 + 1, *h, wrap[1])];
-                let t = |x: usize, y: usize| linear[data[(y * *w as usize + x) * 4 + c] as usize];
-                let top = t(xs[0], ys[0]) + (t(xs[1], ys[0]) - t(xs[0], ys[0])) * fx;
-                let bottom = t(xs[0], ys[1]) + (t(xs[1], ys[1]) - t(xs[0], ys[1])) * fx;
-                top + (bottom - top) * fy
-            };
-            Vec3::new(decoded(0), decoded(1), decoded(2))
+            let c = |channel| bilinear(&self.0[l], uv, wrap, 4, channel, |b| linear[b as usize]);
+            Vec3::new(c(0), c(1), c(2))
         };
         let va = at(lod.a);
         if lod.f > 0.0 {

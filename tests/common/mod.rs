@@ -63,6 +63,27 @@ pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value 
     frond_lod_measured(input, out, &args)
 }
 
+/// The 600 px LOD of `tree` at ε = 0 with the per-bone method (every billboard one card), its
+/// error measured; returns the report. The cost budgets are off: at ε = 0 a LOD keeps a
+/// billboard per card, more than half the input's triangles, and the budgets would widen ε
+/// (they come first); the LOD's texel density (4 texels per pixel for alpha-tested maps) still
+/// applies.
+pub fn per_bone_at_zero(tree: &Path, out: &Path) -> serde_json::Value {
+    frond_lod_measured(
+        tree,
+        out,
+        &[
+            "--method",
+            "per-bone",
+            "--epsilon",
+            "0",
+            "--lods",
+            "600",
+            "--no-cost-budgets",
+        ],
+    )
+}
+
 /// Runs `frond lod INPUT -o OUT --samples 16` plus `extra`, each LOD's error measured (unless
 /// `extra` says `--no-measure`), asserts it succeeded and returns its report.
 pub fn frond_lod_measured(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
@@ -167,6 +188,7 @@ const _: () = {
         frond_ok,
         frond_lod,
         frond_lod_measured,
+        per_bone_at_zero,
         frond_eval,
         node_tools,
         validate,
