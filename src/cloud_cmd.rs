@@ -127,7 +127,7 @@ pub fn make_cloud(
 /// wood at `positions` with its own material.
 pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Result<Vec<u8>> {
     let mut doc = GltfBuilder::new(concat!("frond ", env!("CARGO_PKG_VERSION")));
-    let mut sink = TextureSink::new(None);
+    let mut sink = TextureSink::new(None, frond_export::TextureFormat::Png);
     let mat = sink
         .billboard_material(&mut doc, "cloud", &cloud.baked.atlas)
         .context("writing the billboard material")?;

@@ -27,8 +27,14 @@ pub struct LodRequest {
     pub measure: Option<f64>,
     /// Add MSFT_lod to the combined file, with coverages for an image `resolution` high.
     pub msft_lod: bool,
+    /// The view the report's switch values assume: image height and vertical field of view.
     pub resolution: f32,
+    pub fov: f32,
     pub external_textures: bool,
+    /// How the textures frond makes are stored.
+    pub textures: frond_export::TextureFormat,
+    /// Clip names carry Godot's `-loop` import hint.
+    pub loop_hint: bool,
 }
 
 /// Input-name stem used for the files.
@@ -83,6 +89,8 @@ pub fn run_lod(
             name: name.clone(),
             animation: req.animation,
             external_textures: req.external_textures,
+            textures: req.textures,
+            loop_hint: req.loop_hint,
             msft_lod: req
                 .msft_lod
                 .then(|| msft_coverages(&req.chain.screen_heights, req.resolution)),
@@ -106,6 +114,7 @@ pub fn run_lod(
         pixel_error: req.chain.pixel_error,
         animation: req.animation.report_name(),
         tree_height: tree.height(),
+        switching: None,
         lods: written.entries,
         combined: written.combined,
         files: written.files.iter().map(|(p, _)| p.clone()).collect(),
@@ -118,6 +127,7 @@ pub fn run_lod(
         }),
     };
     report.files.push(report_name(&name));
+    fill_switching(tree, req, &mut report);
     for (rel, bytes) in &written.files {
         set.stage(rel, bytes)?;
     }
@@ -131,6 +141,23 @@ pub fn run_lod(
     let json = serde_json::to_vec_pretty(&report).context("serialising the report")?;
     set.commit(&json)?;
     Ok(report)
+}
+
+/// Each LOD's switch values for the request's view ([`frond_lod::switching`]).
+fn fill_switching(tree: &Tree, req: &LodRequest, report: &mut LodReport) {
+    let b = &tree.bounds;
+    let view = frond_lod::switching::SwitchView {
+        fov_deg: req.fov,
+        resolution: req.resolution,
+        tree_height: tree.height(),
+        bounds_size: b.size(),
+        sphere_radius: 0.5 * b.diagonal(),
+    };
+    let values = frond_lod::switching::switch_values(&req.chain.screen_heights, &view);
+    for (entry, v) in report.lods.iter_mut().zip(values) {
+        entry.switch = Some(v);
+    }
+    report.switching = Some(view);
 }
 
 /// Views and frames of the measured error: `frond eval`'s defaults, so the report's number is

@@ -44,8 +44,12 @@ pub struct ChainFileOptions {
     /// The tree's name in file names (`<name>_LOD1.glb`).
     pub name: String,
     pub animation: AnimationMode,
-    /// Textures as PNG files next to the GLBs instead of embedded.
+    /// Textures as files next to the GLBs instead of embedded.
     pub external_textures: bool,
+    /// How the textures frond makes are stored (PNG, KTX2).
+    pub textures: crate::TextureFormat,
+    /// Clip names carry Godot's loop hint ([`crate::lod_file::loop_hinted`]).
+    pub loop_hint: bool,
     /// `MSFT_lod` screen coverages of the combined file's LODs (None: no `MSFT_lod`).
     pub msft_lod: Option<Vec<f32>>,
     /// The asset `extras` of every file (generator, seed, source).
@@ -176,6 +180,8 @@ pub fn chain_files(
             std::slice::from_ref(input),
             &FileOptions {
                 external_textures: options.external_textures.then(|| format!("{}_", prefix(k))),
+                textures: options.textures,
+                loop_hint: options.loop_hint,
                 msft_lod: None,
                 extras: Some(options.extras.clone()),
             },
@@ -202,6 +208,8 @@ pub fn chain_files(
         &inputs,
         &FileOptions {
             external_textures: options.external_textures.then(|| format!("{name}_lods_")),
+            textures: options.textures,
+            loop_hint: options.loop_hint,
             msft_lod: options.msft_lod.clone(),
             extras: Some(options.extras.clone()),
         },
@@ -241,13 +249,14 @@ fn lod_input<'a>(tree: &'a Tree, lod: &'a ChainLod, m: &Motion, name: String) ->
     }
 }
 
-/// The reference shaders, copied next to VAT output and next to spectral textures (when a LOD
-/// wrote one).
+/// The shaders shipped under `shaders/`: the VAT set next to VAT output, the spectral set next
+/// to spectral textures (when a LOD wrote one), the LOD cross-fade alone otherwise.
 fn shader_files(mode: AnimationMode, spectral_written: bool) -> Vec<(String, Vec<u8>)> {
     let set = match mode {
         AnimationMode::Vat(_) => crate::shaders::SHADERS,
         AnimationMode::Spectral if spectral_written => crate::shaders::SPECTRAL_SHADERS,
-        _ => return Vec::new(),
+        // Every chain can cross-fade its LODs: the dither ships with skinned chains too.
+        _ => crate::shaders::LOD_FADE_SHADERS,
     };
     set.iter()
         .map(|(file, text)| (format!("shaders/{file}"), text.as_bytes().to_vec()))
@@ -255,14 +264,8 @@ fn shader_files(mode: AnimationMode, spectral_written: bool) -> Vec<(String, Vec
 }
 
 /// `MSFT_lod` screen coverages for LODs built at `screen_heights` (pixels) on an image
-/// `resolution` pixels high: LOD k is shown down to the size the next LOD was built for; the
-/// last one to a quarter of its own.
+/// `resolution` pixels high ([`frond_lod::switching::min_screen_fractions`]): LOD k is shown
+/// down to the size the next LOD was built for; the last one to a quarter of its own.
 pub fn msft_coverages(screen_heights: &[f32], resolution: f32) -> Vec<f32> {
-    let mut c: Vec<f32> = screen_heights
-        .iter()
-        .map(|h| (h / resolution).min(1.0))
-        .collect();
-    let last = c.last().copied().unwrap_or(0.0) * 0.25;
-    c.push(last);
-    c
+    frond_lod::switching::min_screen_fractions(screen_heights, resolution)
 }

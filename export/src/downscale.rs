@@ -20,37 +20,56 @@ pub fn downscaled_png(
     size: [u32; 2],
     cutoff: Option<f32>,
 ) -> Result<Vec<u8>, ExportError> {
-    let name = || {
-        tree.images
-            .get(j)
-            .and_then(|i| i.name.clone())
-            .unwrap_or_else(|| format!("image{j}"))
-    };
+    let small = downscaled_rgba(tree, j, size, cutoff)?;
+    encode_png(small.width(), small.height(), small.as_raw()).map_err(|source| ExportError::Image {
+        name: image_name(tree, j),
+        source,
+    })
+}
+
+/// Image `j`'s name, or `image<j>`.
+fn image_name(tree: &Tree, j: usize) -> String {
+    tree.images
+        .get(j)
+        .and_then(|i| i.name.clone())
+        .unwrap_or_else(|| format!("image{j}"))
+}
+
+/// Image `j` of `tree` resampled to `size` as RGBA8 (see [`downscaled_png`]).
+pub fn downscaled_rgba(
+    tree: &Tree,
+    j: usize,
+    size: [u32; 2],
+    cutoff: Option<f32>,
+) -> Result<RgbaImage, ExportError> {
     let source: RgbaImage = match tree.textures.iter().find(|t| t.image == Some(j)) {
         Some(t) => RgbaImage::from_raw(t.width, t.height, t.rgba.clone())
             .ok_or_else(|| ExportError::NoTexture(j))?,
         None => {
             let img = tree.images.get(j).ok_or(ExportError::NoTexture(j))?;
-            image::load_from_memory(&img.bytes)
-                .map_err(|source| ExportError::Image {
-                    name: name(),
-                    source,
-                })?
-                .to_rgba8()
+            if img.mime_type == frond_scene::import::KTX2_MIME {
+                let (w, h, rgba) = frond_scene::ktx2::decode_levels(&img.bytes, 1)
+                    .ok()
+                    .and_then(|mut l| l.pop())
+                    .ok_or(ExportError::NoTexture(j))?;
+                RgbaImage::from_raw(w, h, rgba).ok_or(ExportError::NoTexture(j))?
+            } else {
+                image::load_from_memory(&img.bytes)
+                    .map_err(|source| ExportError::Image {
+                        name: image_name(tree, j),
+                        source,
+                    })?
+                    .to_rgba8()
+            }
         }
     };
     let mut small = resize_premultiplied(&source, size[0].max(1), size[1].max(1));
     if let Some(c) = cutoff {
         keep_coverage(source.as_raw(), small.as_mut(), c);
     }
-    encode_png(small.width(), small.height(), small.as_raw()).map_err(|source| ExportError::Image {
-        name: name(),
-        source,
-    })
+    Ok(small)
 }
 
-/// `image` resampled with a triangle filter in premultiplied alpha, so that the colour of
-/// transparent texels (often black) does not bleed into the leaves' edges.
 fn resize_premultiplied(image: &RgbaImage, width: u32, height: u32) -> RgbaImage {
     let (w, h) = image.dimensions();
     let mut pre = image::Rgba32FImage::new(w, h);

@@ -26,6 +26,8 @@ pub enum ExportError {
          spectral form; use a spectral method (or per-bone), or --animation skin/vat"
     )]
     NoSpectralForm(String),
+    #[error("encoding a KTX2 texture: {0}")]
+    Ktx2(String),
     #[error("serialising a sidecar: {0}")]
     Json(String),
 }

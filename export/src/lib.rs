@@ -5,6 +5,7 @@ pub mod chain_files;
 pub mod cloud_motion;
 pub mod downscale;
 pub mod error;
+pub mod ktx2_texture;
 pub mod lod_file;
 pub mod lod_scene;
 pub mod mapping;
@@ -15,5 +16,6 @@ pub mod vat;
 
 pub use chain_files::{AnimationMode, ChainFileOptions, ChainFiles, chain_files, msft_coverages};
 pub use error::ExportError;
+pub use ktx2_texture::TextureFormat;
 pub use lod_file::{FileOptions, GltfFile, write_glb};
 pub use lod_scene::LodInput;

@@ -12,8 +12,13 @@ use crate::textures::TextureSink;
 /// How files are written.
 #[derive(Clone, Debug, Default)]
 pub struct FileOptions {
-    /// Write textures as PNG files next to the glTF, named with this prefix.
+    /// Write textures as files next to the glTF, named with this prefix.
     pub external_textures: Option<String>,
+    /// How the textures frond makes are stored (PNG, KTX2).
+    pub textures: crate::TextureFormat,
+    /// Name clips with Godot's loop import hint (a `-loop` suffix): glTF has no loop flag,
+    /// and Godot's importer loops clips whose names end in `-loop` or `_loop`.
+    pub loop_hint: bool,
     /// Combined files only: add `MSFT_lod` on LOD0 with these screen coverages (one per LOD,
     /// the smallest fraction of the screen height at which that LOD is shown).
     pub msft_lod: Option<Vec<f32>>,
@@ -29,6 +34,16 @@ pub struct GltfFile {
     pub joints: Vec<usize>,
 }
 
+/// `name` with Godot's loop import hint: `-loop` appended unless it ends in `-loop` or
+/// `_loop` already.
+pub fn loop_hinted(name: &str) -> String {
+    if name.ends_with("-loop") || name.ends_with("_loop") {
+        name.to_string()
+    } else {
+        format!("{name}-loop")
+    }
+}
+
 /// Writes `lods` into one GLB. With more than one LOD every node but the LOD mesh nodes gets
 /// the suffix `_LOD<k>` so names stay unique; animations are merged by clip name so one clip
 /// plays every LOD in phase.
@@ -40,7 +55,7 @@ pub fn write_glb(lods: &[LodInput], opts: &FileOptions) -> Result<GltfFile, Expo
     if let Some(e) = &opts.extras {
         doc.set_extras(e.clone());
     }
-    let mut sink = TextureSink::new(opts.external_textures.clone());
+    let mut sink = TextureSink::new(opts.external_textures.clone(), opts.textures);
     let combined = lods.len() > 1;
     let mut clips: Vec<(String, Vec<ChannelDesc>)> = Vec::new();
     let mut mesh_nodes = Vec::new();
@@ -96,6 +111,11 @@ pub fn write_glb(lods: &[LodInput], opts: &FileOptions) -> Result<GltfFile, Expo
         }
     }
     for (name, channels) in clips {
+        let name = if opts.loop_hint {
+            loop_hinted(&name)
+        } else {
+            name
+        };
         doc.add_animation(&name, &channels);
     }
     Ok(GltfFile {

@@ -4,7 +4,8 @@
 //! The tree's own materials are written as the input described them ([`MaterialSource`]):
 //! every map, factor, extension and extra, their textures' samplers, and their images' original
 //! bytes and MIME type (a JPEG stays the same JPEG), so LOD0 looks like the input. Only what
-//! frond makes (billboard atlases) is encoded, as PNG.
+//! frond makes (billboard atlases, downscaled maps) is encoded: as PNG, or as KTX2 with its
+//! own mip chain ([`crate::ktx2_texture`], `--textures`).
 
 use std::collections::HashMap;
 
@@ -13,8 +14,11 @@ use frond_scene::{AlphaMode, MaterialSource, Tree, visit_texture_infos};
 
 use frond_lod::texture_budget::{ImageSizes, material_images};
 
-use crate::downscale::downscaled_png;
+use frond_scene::import::KTX2_MIME;
+
+use crate::downscale::{downscaled_png, downscaled_rgba};
 use crate::error::ExportError;
+use crate::ktx2_texture::{MapKind, TextureFormat, ktx2_bytes};
 
 /// A tree material as written into one LOD: its index and the sizes of those of its images
 /// that LOD downscales.
@@ -22,26 +26,29 @@ type MaterialKey = (usize, Vec<(usize, [u32; 2])>);
 
 /// Collects textures and materials of one document.
 pub struct TextureSink {
-    /// File-name prefix of external PNGs (None: embed).
+    /// File-name prefix of external images (None: embed).
     external: Option<String>,
+    /// How the textures frond makes are stored.
+    format: TextureFormat,
     /// External image files to write next to the glTF: (file name, bytes).
     pub files: Vec<(String, Vec<u8>)>,
     /// Decoded tree texture → document texture (materials without a source).
     tree_textures: HashMap<usize, usize>,
     /// (`Tree::source_textures` entry, size written) → document texture.
     source_textures: HashMap<(usize, Option<[u32; 2]>), usize>,
-    /// (`Tree::images` entry, size written) → document image.
-    source_images: HashMap<(usize, Option<[u32; 2]>), usize>,
+    /// (`Tree::images` entry, size written) → document images (core source, KTX2).
+    source_images: HashMap<(usize, Option<[u32; 2]>), (Option<usize>, Option<usize>)>,
     /// (tree material, sizes of its images) → document material.
     tree_materials: HashMap<MaterialKey, usize>,
 }
 
 impl TextureSink {
     /// Embedded textures, or external files named `<prefix><texture>.<png, jpg, ...>` when
-    /// `external`.
-    pub fn new(external: Option<String>) -> Self {
+    /// `external`; the textures frond makes stored as `format` says.
+    pub fn new(external: Option<String>, format: TextureFormat) -> Self {
         TextureSink {
             external,
+            format,
             files: Vec::new(),
             tree_textures: HashMap::new(),
             source_textures: HashMap::new(),
@@ -67,7 +74,81 @@ impl TextureSink {
         file
     }
 
-    /// Adds an RGBA8 image as a texture (clamped when `clamp`).
+    /// An image of encoded `bytes`, embedded or written next to the glTF as `<stem>.<ext>`.
+    fn place_image(
+        &mut self,
+        doc: &mut GltfBuilder,
+        name: Option<&str>,
+        stem: &str,
+        bytes: &[u8],
+        mime: &str,
+        ext: &str,
+    ) -> usize {
+        match self.external.clone() {
+            None => doc.add_image(name, bytes, mime),
+            Some(prefix) => {
+                // Same name, other pixels: the file is numbered.
+                let file = self.external_file(&prefix, stem, ext, bytes);
+                doc.add_image_uri(name, &file, mime)
+            }
+        }
+    }
+
+    /// The image(s) of an RGBA8 map frond made, as [`TextureFormat`] says: `(core source,
+    /// KTX2 image)`, the core source None for KTX2 alone.
+    fn made_images(
+        &mut self,
+        doc: &mut GltfBuilder,
+        name: &str,
+        image: &image::RgbaImage,
+        kind: MapKind,
+    ) -> Result<(Option<usize>, Option<usize>), ExportError> {
+        let png = || {
+            encode_png(image.width(), image.height(), image.as_raw()).map_err(|source| {
+                ExportError::Image {
+                    name: name.to_string(),
+                    source,
+                }
+            })
+        };
+        let ktx2 = |this: &mut Self, doc: &mut GltfBuilder| {
+            let bytes = ktx2_bytes(name, image.width(), image.height(), image.as_raw(), kind)?;
+            Ok::<_, ExportError>(this.place_image(doc, Some(name), name, &bytes, KTX2_MIME, "ktx2"))
+        };
+        Ok(match self.format {
+            TextureFormat::Png => {
+                let bytes = png()?;
+                let core = self.place_image(doc, Some(name), name, &bytes, "image/png", "png");
+                (Some(core), None)
+            }
+            TextureFormat::Ktx2 => (None, Some(ktx2(self, doc)?)),
+            TextureFormat::Ktx2Png => {
+                let bytes = png()?;
+                let core = self.place_image(doc, Some(name), name, &bytes, "image/png", "png");
+                (Some(core), Some(ktx2(self, doc)?))
+            }
+        })
+    }
+
+    /// A texture of `core` and/or `ktx2` images (one at least) with `sampler` and the further
+    /// JSON members `fields`.
+    fn texture_of(
+        doc: &mut GltfBuilder,
+        (core, ktx2): (Option<usize>, Option<usize>),
+        sampler: Option<usize>,
+        fields: serde_json::Value,
+    ) -> usize {
+        let Some(first) = core.or(ktx2) else {
+            return doc.add_texture_of(0, sampler, fields);
+        };
+        let id = doc.add_texture_of(first, sampler, fields);
+        if let Some(k) = ktx2 {
+            doc.set_basisu_source(id, k, core.is_some());
+        }
+        id
+    }
+
+    /// Adds an RGBA8 colour image frond made as a texture (clamped when `clamp`).
     pub fn add_rgba(
         &mut self,
         doc: &mut GltfBuilder,
@@ -77,19 +158,23 @@ impl TextureSink {
         rgba: &[u8],
         clamp: bool,
     ) -> Result<usize, ExportError> {
-        let png = encode_png(width, height, rgba).map_err(|source| ExportError::Image {
-            name: name.to_string(),
-            source,
+        let image = image::RgbaImage::from_raw(width, height, rgba.to_vec()).ok_or_else(|| {
+            ExportError::Ktx2(format!(
+                "{name}: {width}×{height} with {} bytes",
+                rgba.len()
+            ))
         })?;
-        Ok(match &self.external {
-            None => doc.add_texture(name, &png, clamp),
-            Some(prefix) => {
-                // Same name, other pixels: the file is numbered.
-                let prefix = prefix.clone();
-                let file = self.external_file(&prefix, name, "png", &png);
-                doc.add_texture_uri(name, &file, clamp)
-            }
-        })
+        let images = self.made_images(doc, name, &image, MapKind::Colour)?;
+        let wrap = if clamp { 33071 } else { 10497 };
+        let sampler = doc.add_sampler(
+            serde_json::json!({ "magFilter": 9729, "minFilter": 9987, "wrapS": wrap, "wrapT": wrap }),
+        );
+        Ok(Self::texture_of(
+            doc,
+            images,
+            Some(sampler),
+            serde_json::json!({ "name": name }),
+        ))
     }
 
     /// The billboards' material: the colour atlas, alpha-tested at 0.5, double-sided, rough.
@@ -128,6 +213,7 @@ impl TextureSink {
         t: usize,
         sizes: &ImageSizes,
         cutoff: Option<f32>,
+        kind: MapKind,
     ) -> Result<usize, ExportError> {
         let texture = tree
             .source_textures
@@ -137,45 +223,59 @@ impl TextureSink {
         if let Some(&id) = self.source_textures.get(&(t, size)) {
             return Ok(id);
         }
-        let image = match self.source_images.get(&(texture.image, size)) {
-            Some(&id) => id,
+        let images = match self.source_images.get(&(texture.image, size)) {
+            Some(&ids) => ids,
             None => {
                 let img = tree
                     .images
                     .get(texture.image)
                     .ok_or(ExportError::NoTexture(t))?;
-                // A downscaled image is frond's own PNG; the input's is written as it was.
-                let (bytes, mime, ext, suffix) = match size {
-                    Some(s) => (
-                        downscaled_png(tree, texture.image, s, cutoff)?,
-                        "image/png".to_string(),
-                        "png",
-                        format!("_{}x{}", s[0], s[1]),
-                    ),
-                    None => (
-                        img.bytes.clone(),
-                        img.mime_type.clone(),
-                        img.extension(),
-                        String::new(),
-                    ),
-                };
-                let name = img.name.as_ref().map(|n| format!("{n}{suffix}"));
-                let id = match self.external.clone() {
-                    None => doc.add_image(name.as_deref(), &bytes, &mime),
-                    Some(prefix) => {
+                let ids = match size {
+                    // A downscaled image is frond's own: PNG or KTX2 as asked.
+                    Some(s) if self.format != TextureFormat::Png => {
+                        let small = downscaled_rgba(tree, texture.image, s, cutoff)?;
+                        let stem = img
+                            .name
+                            .clone()
+                            .unwrap_or_else(|| format!("image{}", texture.image));
+                        let name = format!("{stem}_{}x{}", s[0], s[1]);
+                        self.made_images(doc, &name, &small, kind)?
+                    }
+                    _ => {
+                        // The input's image is written as it was.
+                        let (bytes, mime, ext, suffix) = match size {
+                            Some(s) => (
+                                downscaled_png(tree, texture.image, s, cutoff)?,
+                                "image/png".to_string(),
+                                "png",
+                                format!("_{}x{}", s[0], s[1]),
+                            ),
+                            None => (
+                                img.bytes.clone(),
+                                img.mime_type.clone(),
+                                img.extension(),
+                                String::new(),
+                            ),
+                        };
+                        let name = img.name.as_ref().map(|n| format!("{n}{suffix}"));
                         let stem = name
                             .clone()
                             .unwrap_or_else(|| format!("image{}{suffix}", texture.image));
-                        let file = self.external_file(&prefix, &stem, ext, &bytes);
-                        doc.add_image_uri(name.as_deref(), &file, &mime)
+                        let id = self.place_image(doc, name.as_deref(), &stem, &bytes, &mime, ext);
+                        // An input KTX2 image stays KTX2, through the extension.
+                        if mime == KTX2_MIME {
+                            (None, Some(id))
+                        } else {
+                            (Some(id), None)
+                        }
                     }
                 };
-                self.source_images.insert((texture.image, size), id);
-                id
+                self.source_images.insert((texture.image, size), ids);
+                ids
             }
         };
         let sampler = texture.sampler.clone().map(|s| doc.add_sampler(s));
-        let id = doc.add_texture_of(image, sampler, texture.json.clone());
+        let id = Self::texture_of(doc, images, sampler, texture.json.clone());
         self.source_textures.insert((t, size), id);
         Ok(id)
     }
@@ -199,7 +299,7 @@ impl TextureSink {
                 as usize;
             // Only the base colour carries the alpha the material tests.
             let cutoff = cutoff.filter(|_| key == "baseColorTexture");
-            let id = self.source_texture(doc, tree, t, sizes, cutoff)?;
+            let id = self.source_texture(doc, tree, t, sizes, cutoff, MapKind::of_key(key))?;
             info.insert("index".into(), serde_json::json!(id));
             Ok::<(), ExportError>(())
         })?;

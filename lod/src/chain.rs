@@ -419,6 +419,7 @@ pub(crate) fn entry(method: String, method_reason: String) -> LodEntry {
         texels_per_unit: None,
         density_reduced: false,
         cost: None,
+        switch: None,
         alpha_tested_area_ratio: None,
         error: None,
         budget: None,

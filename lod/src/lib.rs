@@ -14,6 +14,7 @@ pub mod methods;
 pub mod motion_budget;
 pub mod report;
 pub mod screen_budget;
+pub mod switching;
 pub mod texture_budget;
 
 use frond_skeleton::BoneDescriptionKind;

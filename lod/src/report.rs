@@ -35,6 +35,10 @@ pub struct LodEntry {
     pub density_reduced: bool,
     /// What the written file costs an engine (read back from it; see `frond_scene::file_cost`).
     pub cost: Option<frond_scene::FileCost>,
+    /// When engines should show this LOD (filled by `frond lod` for its `--fov` and
+    /// `--resolution`; see [`crate::switching`]).
+    #[serde(default)]
+    pub switch: Option<crate::switching::SwitchValues>,
     /// Alpha-tested (leaf card or billboard) area relative to LOD0's: the overdraw the foliage
     /// asks for.
     pub alpha_tested_area_ratio: Option<f64>,
@@ -124,6 +128,8 @@ pub struct LodReport {
     pub pixel_error: f32,
     pub animation: String,
     pub tree_height: f32,
+    /// The view the LODs' `switch` values assume (`--fov`, `--resolution`, the tree's bounds).
+    pub switching: Option<crate::switching::SwitchView>,
     pub lods: Vec<LodEntry>,
     pub combined: String,
     /// Every file of the set, relative to the output folder, this report last.
@@ -138,13 +144,14 @@ type CostOf = fn(&frond_scene::FileCost) -> f64;
 
 /// The costs the monotone rule compares between consecutive LODs (issue 17 item 3), each with
 /// its name in the warnings: what an engine pays, read back from the written files.
-const MONOTONE_COSTS: [(&str, CostOf); 8] = [
+const MONOTONE_COSTS: [(&str, CostOf); 9] = [
     ("triangles", |c| c.triangles as f64),
     ("joints per skin", |c| c.joints_per_skin_max as f64),
     ("animated channels", |c| c.animated_channels as f64),
     ("draw calls", |c| c.draw_calls as f64),
     ("materials", |c| c.materials as f64),
     ("decoded texture bytes", |c| c.texture_decoded_bytes as f64),
+    ("GPU texture bytes", |c| c.texture_gpu_bytes as f64),
     ("file bytes", |c| c.file_bytes as f64),
     ("alpha-tested area (overdraw)", |c| c.alpha_tested_area),
 ];
@@ -224,6 +231,7 @@ mod tests {
             pixel_error: 1.0,
             animation: "skin".into(),
             tree_height: 1.0,
+            switching: None,
             lods: vec![lod("t_LOD0.glb", input), lod("t_LOD1.glb", cheaper)],
             combined: String::new(),
             files: Vec::new(),

@@ -61,6 +61,9 @@ pub struct FileCost {
     pub texture_decoded_bytes: u64,
     /// Encoded bytes of the same images, as stored.
     pub texture_encoded_bytes: u64,
+    /// GPU-resident bytes of the same images, mips included ([`ImageCost::gpu_bytes`]).
+    #[serde(default)]
+    pub texture_gpu_bytes: u64,
     /// Bytes on disk: the file plus every external buffer and image it references (each
     /// distinct file once; `data:` URIs are inside the file already).
     pub file_bytes: u64,
@@ -93,6 +96,14 @@ pub struct ImageCost {
     pub encoded_bytes: u64,
     /// width × height × 4: the image decoded as RGBA8, without mips.
     pub decoded_bytes: u64,
+    /// Mip levels stored in the file (KTX2); 1 for PNG and JPEG, whose mips the engine makes.
+    #[serde(default)]
+    pub levels: u32,
+    /// Bytes it takes on the GPU, mips included: a KTX2 (UASTC) image transcoded to BC7 or
+    /// ASTC 4×4 (16 bytes a 4×4 block, every stored level); PNG or JPEG decoded to RGBA8 with
+    /// the full mip chain engines build (4/3 of level 0).
+    #[serde(default)]
+    pub gpu_bytes: u64,
     /// Whether a material of a drawn primitive uses it (only those count in the totals).
     pub used: bool,
 }
@@ -209,6 +220,7 @@ fn cost_of(src: &GltfSource, own_bytes: u64) -> Result<FileCost> {
     for img in cost.images.iter().filter(|i| i.used) {
         cost.texture_decoded_bytes += img.decoded_bytes;
         cost.texture_encoded_bytes += img.encoded_bytes;
+        cost.texture_gpu_bytes += img.gpu_bytes;
     }
     cost.file_bytes = own_bytes.saturating_add(external_bytes(src)?);
     Ok(cost)
@@ -430,11 +442,10 @@ fn used_images(src: &GltfSource, used: impl Iterator<Item = usize>) -> Result<BT
             mat.emissive_texture.as_ref().map(|t| t.index.value()),
         ];
         for t in textures.into_iter().flatten() {
-            let tex = root
-                .textures
-                .get(t)
-                .ok_or_else(|| src.invalid(format!("material {m}: texture {t} does not exist")))?;
-            let img = tex.source.value();
+            if t >= root.textures.len() {
+                return Err(src.invalid(format!("material {m}: texture {t} does not exist")));
+            }
+            let img = crate::import::texture_image(src, t, true);
             if img >= root.images.len() {
                 return Err(src.invalid(format!("texture {t}: image {img} does not exist")));
             }
@@ -457,6 +468,15 @@ fn image_cost(src: &GltfSource, index: usize, used: bool) -> Result<ImageCost> {
         }
         _ => (0, 0),
     };
+    let ktx2 = crate::ktx2::read_info(&bytes).ok();
+    let (width, height, levels) = match ktx2 {
+        Some(k) => (k.width, k.height, k.levels),
+        None => (width, height, 1),
+    };
+    let gpu_bytes = match ktx2 {
+        Some(k) => crate::ktx2::gpu_bytes(k.width, k.height, k.levels),
+        None => rgba8_mip_bytes(width, height),
+    };
     let mime_type = image
         .mime_type
         .as_ref()
@@ -470,8 +490,21 @@ fn image_cost(src: &GltfSource, index: usize, used: bool) -> Result<ImageCost> {
         height,
         encoded_bytes: bytes.len() as u64,
         decoded_bytes: u64::from(width) * u64::from(height) * 4,
+        levels,
+        gpu_bytes,
         used,
     })
+}
+
+/// RGBA8 bytes of a `width`×`height` image with its full mip chain.
+fn rgba8_mip_bytes(width: u32, height: u32) -> u64 {
+    if width == 0 || height == 0 {
+        return 0;
+    }
+    let levels = 32 - width.max(height).leading_zeros();
+    (0..levels)
+        .map(|l| u64::from((width >> l).max(1)) * u64::from((height >> l).max(1)) * 4)
+        .sum()
 }
 
 /// Bytes of the distinct external files (buffers and images) the document references.

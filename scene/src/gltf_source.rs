@@ -18,6 +18,7 @@ pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
     "KHR_texture_transform",
     "KHR_materials_emissive_strength",
     "KHR_materials_unlit",
+    "KHR_texture_basisu",
 ];
 
 /// A parsed glTF document with its binary buffers resolved.

@@ -125,6 +125,7 @@ pub struct GltfBuilder {
     scene_roots: Vec<usize>,
     extras: Option<Value>,
     extensions_used: Vec<String>,
+    extensions_required: Vec<String>,
 }
 
 fn f32s_to_bytes(v: &[f32]) -> impl Iterator<Item = u8> + '_ {
@@ -289,6 +290,32 @@ impl GltfBuilder {
     pub fn use_extension(&mut self, name: &str) {
         if !self.extensions_used.iter().any(|e| e == name) {
             self.extensions_used.push(name.to_string());
+        }
+    }
+
+    /// Lists an extension in `extensionsRequired` (and `extensionsUsed`), once.
+    pub fn require_extension(&mut self, name: &str) {
+        self.use_extension(name);
+        if !self.extensions_required.iter().any(|e| e == name) {
+            self.extensions_required.push(name.to_string());
+        }
+    }
+
+    /// Makes texture `texture` carry KTX2 image `ktx2` through `KHR_texture_basisu`. With
+    /// `keep_source` its core `source` stays as the fallback for clients without the
+    /// extension; without, `source` is removed and the extension is required (the
+    /// extension's rule: a texture without a fallback needs it in `extensionsRequired`).
+    pub fn set_basisu_source(&mut self, texture: usize, ktx2: usize, keep_source: bool) {
+        let Some(Value::Object(t)) = self.textures.get_mut(texture) else {
+            return;
+        };
+        let ext = t.entry("extensions").or_insert_with(|| json!({}));
+        ext["KHR_texture_basisu"] = json!({ "source": ktx2 });
+        if keep_source {
+            self.use_extension("KHR_texture_basisu");
+        } else {
+            t.remove("source");
+            self.require_extension("KHR_texture_basisu");
         }
     }
 
@@ -589,6 +616,9 @@ impl GltfBuilder {
         }
         if !self.extensions_used.is_empty() {
             root.insert("extensionsUsed".into(), json!(self.extensions_used));
+        }
+        if !self.extensions_required.is_empty() {
+            root.insert("extensionsRequired".into(), json!(self.extensions_required));
         }
         let json_bytes = serde_json::to_vec(&Value::Object(root)).unwrap_or_default();
         glb_container(&json_bytes, &self.bin)

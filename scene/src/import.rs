@@ -600,7 +600,7 @@ fn read_materials(src: &GltfSource, warnings: &mut Vec<String>) -> Result<Materi
                         info.index.value()
                     ))
                 })?;
-                let image = t.source.value();
+                let image = texture_image(src, info.index.value(), false);
                 if image >= src.root.images.len() {
                     return Err(src.invalid(format!(
                         "texture {}: image {image} does not exist",
@@ -654,7 +654,7 @@ fn read_materials(src: &GltfSource, warnings: &mut Vec<String>) -> Result<Materi
                     "material {i}: {key} names texture {index}, which does not exist"
                 ))
             })?;
-            let image = texture.source.value();
+            let image = texture_image(src, index, false);
             if image >= src.root.images.len() {
                 return Err(src.invalid(format!(
                     "texture {index} (material {i} {key}): image {image} does not exist"
@@ -738,6 +738,30 @@ fn wrap_of(mode: &Checked<json::texture::WrappingMode>) -> Wrap {
     }
 }
 
+/// The MIME type of KTX2 images (`KHR_texture_basisu`).
+pub const KTX2_MIME: &str = "image/ktx2";
+
+/// The image texture `t` shows: its core `source`, else the KTX2 image its
+/// `KHR_texture_basisu` names (a texture without a fallback), else an index past the images
+/// (reported as missing by the callers). With `prefer_ktx2`, the KTX2 image first (what a
+/// client with the extension loads: the file's cost). `t` must exist.
+pub fn texture_image(src: &GltfSource, t: usize, prefer_ktx2: bool) -> usize {
+    let core = Some(src.root.textures[t].source.value()).filter(|&i| i != u32::MAX as usize);
+    let ktx2 = src
+        .raw
+        .textures
+        .get(t)
+        .and_then(|j| j.pointer("/extensions/KHR_texture_basisu/source"))
+        .and_then(serde_json::Value::as_u64)
+        .map(|i| i as usize);
+    let (first, second) = if prefer_ktx2 {
+        (ktx2, core)
+    } else {
+        (core, ktx2)
+    };
+    first.or(second).unwrap_or(usize::MAX)
+}
+
 /// The MIME type of an encoded image recognised from its first bytes (PNG or JPEG).
 fn sniff_mime(bytes: &[u8]) -> Option<&'static str> {
     if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
@@ -811,7 +835,7 @@ fn read_source_textures(
     let mut textures = Vec::with_capacity(info.textures.len());
     for &t in &info.textures {
         let texture = &src.root.textures[t];
-        let image = read_image(texture.source.value(), &mut images)?;
+        let image = read_image(texture_image(src, t, false), &mut images)?;
         let mut json = src
             .raw
             .textures
@@ -869,6 +893,15 @@ fn read_textures(
                 .copied()
                 .ok_or_else(|| src.invalid(format!("image {img} was not read")))?;
             let bytes = &images[slot].bytes;
+            if images[slot].mime_type == KTX2_MIME {
+                let info = crate::ktx2::read_info(bytes)
+                    .map_err(|e| src.invalid(format!("image {img}: {e}")))?;
+                return Ok((
+                    img,
+                    slot,
+                    u64::from(info.width) * u64::from(info.height) * 4,
+                ));
+            }
             let (w, h) = image::ImageReader::new(std::io::Cursor::new(bytes))
                 .with_guessed_format()
                 .map_err(|e| src.invalid(format!("image {img}: cannot read ({e})")))?
@@ -891,6 +924,24 @@ fn read_textures(
     let textures = encoded
         .par_iter()
         .map(|&(img, slot, size)| {
+            let name = src.root.images[img]
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("image{img}"));
+            if images[slot].mime_type == KTX2_MIME {
+                let mut levels = crate::ktx2::decode_levels(&images[slot].bytes, 1)
+                    .map_err(|e| src.invalid(format!("image {img}: {e}")))?;
+                let (width, height, rgba) = levels.pop().ok_or_else(|| {
+                    src.invalid(format!("image {img}: a KTX2 file without levels"))
+                })?;
+                return Ok(Texture {
+                    name,
+                    width,
+                    height,
+                    rgba,
+                    image: Some(slot),
+                });
+            }
             let mut reader = image::ImageReader::new(std::io::Cursor::new(&images[slot].bytes))
                 .with_guessed_format()
                 .map_err(|e| src.invalid(format!("image {img}: cannot read ({e})")))?;
@@ -902,10 +953,6 @@ fn read_textures(
                 .decode()
                 .map_err(|e| src.invalid(format!("image {img}: cannot decode ({e})")))?
                 .to_rgba8();
-            let name = src.root.images[img]
-                .name
-                .clone()
-                .unwrap_or_else(|| format!("image{img}"));
             Ok(Texture {
                 name,
                 width: decoded.width(),

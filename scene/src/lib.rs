@@ -11,6 +11,7 @@ pub mod gltf_source;
 pub mod gltf_writer;
 pub mod import;
 pub mod input_file;
+pub mod ktx2;
 pub mod length;
 pub mod model;
 pub mod rig;

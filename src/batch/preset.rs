@@ -5,7 +5,7 @@
 use anyhow::{Result, bail};
 
 use crate::cli::lod::LodArgs;
-use crate::cli::values::AnimationArg;
+use crate::cli::values::{AnimationArg, TexturesArg};
 use serde::Serialize;
 
 /// One engine's conventions.
@@ -27,6 +27,12 @@ pub struct EnginePreset {
     /// Whether 16-bit PNG VAT textures reach the shader at 16 bits (`vat`, EXR half, works
     /// everywhere).
     pub png16_vat: bool,
+    /// How frond's own textures are stored (`--textures`): KTX2 where the importer transcodes
+    /// it.
+    pub textures: TexturesArg,
+    /// Clip names with the `-loop` import hint (`--loop-hint`): Godot loops only clips so
+    /// named.
+    pub loop_hint: bool,
 }
 
 /// What every engine shares: 4 influences, no joint limit known, 16-bit PNG VATs usable.
@@ -38,6 +44,8 @@ const COMMON: EnginePreset = EnginePreset {
     max_influences: 4,
     max_joints: None,
     png16_vat: true,
+    textures: TexturesArg::Png,
+    loop_hint: false,
 };
 
 /// Every preset, by `--preset` name.
@@ -62,17 +70,22 @@ pub const PRESETS: &[EnginePreset] = &[
         ..COMMON
     },
     // Godot 4: embedded images are extracted on import; up to 16384 px; generates its own
-    // mesh LODs (turn off for billboard LODs), no name convention, no MSFT_lod.
+    // mesh LODs (turn off for billboard LODs), no name convention, no MSFT_lod; clips loop on
+    // import only when named `-loop` (Godot 3 and 4 importers).
     EnginePreset {
         name: "godot",
+        loop_hint: true,
         ..COMMON
     },
     // three.js / the web: one GLB a LOD (one request), 4096 px (~99 % of WebGL devices), 4
     // weights (JOINTS_0 only); browsers decode 16-bit PNG to 8 bits, so VAT is EXR
     // (EXRLoader, half float).
+    // three.js reads KTX2 through KTX2Loader (UASTC transcodes to BC7/ASTC/ETC2): a quarter of
+    // RGBA8's GPU memory, and the file's coverage-preserving mips.
     EnginePreset {
         name: "web",
         png16_vat: false,
+        textures: TexturesArg::Ktx2,
         ..COMMON
     },
 ];
@@ -105,6 +118,10 @@ impl EnginePreset {
         args.max_atlas = self.max_atlas;
         args.external_textures |= self.external_textures;
         args.msft_lod |= self.msft_lod;
+        args.loop_hint |= self.loop_hint;
+        if args.textures == TexturesArg::Png {
+            args.textures = self.textures;
+        }
         Ok(())
     }
 
@@ -169,6 +186,18 @@ mod tests {
             (on_web.max_atlas, on_web.external_textures, on_web.msft_lod),
             (4096, false, false)
         );
+        assert_eq!(on_web.textures, TexturesArg::Ktx2);
+        let mut on_godot = args.clone();
+        EnginePreset::named("godot")
+            .unwrap()
+            .apply(&mut on_godot)
+            .unwrap();
+        assert!(on_godot.loop_hint && on_godot.textures == TexturesArg::Png);
+        // A format asked for on the command line stays.
+        let mut own = args.clone();
+        own.textures = TexturesArg::Ktx2Png;
+        web.apply(&mut own).unwrap();
+        assert_eq!(own.textures, TexturesArg::Ktx2Png);
         let unity = EnginePreset::named("unity").unwrap();
         args.animation = AnimationArg::Vat;
         unity.apply(&mut args).unwrap();

@@ -5,9 +5,10 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
+use crate::batch::preset::EnginePreset;
 use crate::cli::args::{BuildArgs, ImportArgs, RunArgs};
 use crate::cli::progress::{Spinner, print_json};
-use crate::cli::values::{AnimationArg, MethodArg};
+use crate::cli::values::{AnimationArg, EngineArg, MethodArg, TexturesArg};
 use crate::lod_cmd::{LodRequest, run_lod};
 use frond_lod::method::ignored_options;
 use frond_lod::{
@@ -44,7 +45,8 @@ pub struct LodArgs {
     /// Vertical field of view in degrees (for --distances).
     #[arg(long, default_value_t = 60.0)]
     pub fov: f32,
-    /// Image height in pixels (for --distances and MSFT_screencoverage).
+    /// Image height in pixels (for --distances, MSFT_screencoverage and the report's switch
+    /// values; --fov too).
     #[arg(long, default_value_t = 1080.0)]
     pub resolution: f32,
     /// Screen-space error budget in pixels.
@@ -96,6 +98,19 @@ pub struct LodArgs {
     /// the input's own images with their original bytes and type (`.jpg`, `.png`, ...).
     #[arg(long)]
     pub external_textures: bool,
+    /// How the textures frond makes (atlases, downscaled maps) are stored; the input's own
+    /// images in LOD0 pass through untouched.
+    #[arg(long, value_enum, default_value_t = TexturesArg::Png)]
+    pub textures: TexturesArg,
+    /// Name clips with Godot's loop import hint (`<clip>-loop`): glTF has no loop flag and
+    /// Godot's importer loops only clips so named.
+    #[arg(long)]
+    pub loop_hint: bool,
+    /// Engine conventions (texture format and limits, external textures, MSFT_lod, loop hint,
+    /// VAT format checks; docs/engines.md); options given too are kept where the preset only
+    /// turns something on.
+    #[arg(long, value_enum)]
+    pub preset: Option<EngineArg>,
     /// Print the report (`<name>_report.json`) to stdout.
     #[arg(long)]
     pub json: bool,
@@ -156,7 +171,10 @@ impl LodArgs {
             measure: (!self.no_measure).then_some(f64::from(self.max_error)),
             msft_lod: self.msft_lod,
             resolution: self.resolution,
+            fov: self.fov,
             external_textures: self.external_textures,
+            textures: self.textures.format(),
+            loop_hint: self.loop_hint,
         })
     }
 
@@ -204,8 +222,13 @@ impl LodArgs {
         a.extend(self.build.to_args());
         a.extend(["--max-atlas".into(), self.max_atlas.to_string()]);
         a.extend(["--padding".into(), self.padding.to_string()]);
+        a.extend(["--textures".into(), self.textures.text().into()]);
+        if let Some(p) = self.preset {
+            a.extend(["--preset".into(), p.text().into()]);
+        }
         for (flag, on) in [
             ("--msft-lod", self.msft_lod),
+            ("--loop-hint", self.loop_hint),
             ("--external-textures", self.external_textures),
             ("--json", self.json),
         ] {
@@ -247,7 +270,10 @@ impl LodArgs {
     }
 
     /// Runs the command.
-    pub fn run(self) -> Result<()> {
+    pub fn run(mut self) -> Result<()> {
+        if let Some(p) = self.preset.and_then(|p| EnginePreset::named(p.text())) {
+            p.apply(&mut self)?;
+        }
         let tree = self.import.load()?;
         let renderer = Renderer::new()?;
         let req = self.request(&tree)?;

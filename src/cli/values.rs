@@ -109,6 +109,41 @@ impl AnimationArg {
     }
 }
 
+/// A `--textures` value: how the textures frond makes are stored.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TexturesArg {
+    /// PNG; engines build plain mip chains.
+    #[default]
+    Png,
+    /// KTX2 (Basis Universal UASTC, Zstandard) with alpha-coverage-preserving mips, through
+    /// KHR_texture_basisu (required: three.js with KTX2Loader, glTFast, Babylon.js).
+    Ktx2,
+    /// KTX2 plus the PNG as fallback for clients without KHR_texture_basisu (Blender, Godot).
+    #[value(name = "ktx2-png")]
+    Ktx2Png,
+}
+
+impl TexturesArg {
+    /// The export stage's setting.
+    pub fn format(self) -> frond_export::TextureFormat {
+        match self {
+            TexturesArg::Png => frond_export::TextureFormat::Png,
+            TexturesArg::Ktx2 => frond_export::TextureFormat::Ktx2,
+            TexturesArg::Ktx2Png => frond_export::TextureFormat::Ktx2Png,
+        }
+    }
+
+    /// The value as written.
+    pub fn text(self) -> &'static str {
+        match self {
+            TexturesArg::Png => "png",
+            TexturesArg::Ktx2 => "ktx2",
+            TexturesArg::Ktx2Png => "ktx2-png",
+        }
+    }
+}
+
 /// A `--parts` value of `frond render`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum PartsArg {

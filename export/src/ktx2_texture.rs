@@ -1,0 +1,157 @@
+//! The textures frond makes, as KTX2 (`--textures ktx2`, `ktx2-png`): a mip chain built
+//! here, encoded to UASTC by [`frond_scene::ktx2`], for `KHR_texture_basisu`.
+//!
+//! Engines build a plain mip chain for a PNG, and plain averaging thins alpha-tested foliage
+//! out until it vanishes with distance. A KTX2 file carries its own chain, so colour maps get
+//! the chain frond's renderer draws with (`frond_render::mip_chain`): colour averaged in linear
+//! light weighted by alpha, alpha rescaled per level so that as many texels pass the 0.5 test
+//! as at full size. Linear data (normal, occlusion, roughness maps) gets a plain 2×2 box chain.
+//! `KHR_texture_basisu` wants level 0 a multiple of 4 a side; a map that is not is resampled
+//! up to the next multiple (UVs are normalized, so nothing else changes).
+
+use frond_scene::ktx2::{Level, encode_uastc};
+use image::RgbaImage;
+use image::imageops::{FilterType, resize};
+
+use crate::error::ExportError;
+
+/// How the textures frond makes are stored (the input's own images in LOD0 are always
+/// passed through as they were).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TextureFormat {
+    /// PNG; the engine builds the mips.
+    #[default]
+    Png,
+    /// KTX2 (UASTC, Zstandard) with its mip chain; `KHR_texture_basisu` required.
+    Ktx2,
+    /// KTX2 plus the PNG as the texture's core source, for clients without the extension.
+    Ktx2Png,
+}
+
+/// What a map holds, which decides its mip chain and transfer function.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapKind {
+    /// sRGB colour with alpha (base colour, emissive).
+    Colour,
+    /// Linear data (normals, occlusion, metal/roughness).
+    Linear,
+}
+
+impl MapKind {
+    /// The kind of the texture behind material key `key` (`baseColorTexture`, ...).
+    pub fn of_key(key: &str) -> MapKind {
+        match key {
+            "baseColorTexture" | "emissiveTexture" => MapKind::Colour,
+            _ => MapKind::Linear,
+        }
+    }
+}
+
+/// A KTX2 file of an RGBA8 image with its mip chain.
+pub fn ktx2_bytes(
+    name: &str,
+    width: u32,
+    height: u32,
+    rgba: &[u8],
+    kind: MapKind,
+) -> Result<Vec<u8>, ExportError> {
+    let (w4, h4) = (
+        width.max(1).next_multiple_of(4),
+        height.max(1).next_multiple_of(4),
+    );
+    let base = if (w4, h4) == (width, height) {
+        rgba.to_vec()
+    } else {
+        let image = RgbaImage::from_raw(width, height, rgba.to_vec()).ok_or_else(|| {
+            ExportError::Ktx2(format!(
+                "{name}: {width}×{height} with {} bytes",
+                rgba.len()
+            ))
+        })?;
+        resize(&image, w4, h4, FilterType::Triangle).into_raw()
+    };
+    let levels = match kind {
+        MapKind::Colour => frond_render::mip_chain(w4, h4, &base),
+        MapKind::Linear => box_chain(w4, h4, base),
+    };
+    let alpha = kind == MapKind::Colour;
+    encode_uastc(&levels, kind == MapKind::Colour, alpha)
+        .map_err(|e| ExportError::Ktx2(format!("{name}: {e}")))
+}
+
+/// The full chain of 2×2 box-filtered levels (edge texels repeated), for linear data.
+fn box_chain(width: u32, height: u32, rgba: Vec<u8>) -> Vec<Level> {
+    let mut out = vec![(width, height, rgba)];
+    while let Some((w, h, data)) = out.last().filter(|l| l.0 > 1 || l.1 > 1) {
+        let (w2, h2) = ((w / 2).max(1), (h / 2).max(1));
+        let mut next = vec![0u8; (w2 * h2 * 4) as usize];
+        for y in 0..h2 {
+            for x in 0..w2 {
+                for k in 0..4 {
+                    let sum: u32 = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                        .iter()
+                        .map(|&(dx, dy)| {
+                            let (sx, sy) = ((2 * x + dx).min(w - 1), (2 * y + dy).min(h - 1));
+                            u32::from(data[((sy * w + sx) * 4 + k) as usize])
+                        })
+                        .sum();
+                    next[((y * w2 + x) * 4 + k) as usize] = sum.div_ceil(4).min(255) as u8;
+                }
+            }
+        }
+        out.push((w2, h2, next));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn colour_maps_keep_alpha_coverage_per_level_and_odd_sizes_grow_to_multiples_of_4() {
+        // 30×18 of thin opaque stripes (1 texel of 4): plain averaging would drop every level
+        // below the test.
+        let (w, h) = (30u32, 18u32);
+        let rgba: Vec<u8> = (0..w * h)
+            .flat_map(|i| {
+                let opaque = (i % w) % 4 == 0;
+                [40, 160, 30, if opaque { 255 } else { 0 }]
+            })
+            .collect();
+        let file = ktx2_bytes("stripes", w, h, &rgba, MapKind::Colour).expect("encodes");
+        let info = frond_scene::ktx2::read_info(&file).expect("reads");
+        assert_eq!((info.width, info.height, info.levels), (32, 20, 6));
+        assert!(info.srgb && info.alpha);
+        let levels = frond_scene::ktx2::decode_levels(&file, usize::MAX).expect("decodes");
+        let coverage =
+            |l: &Level| l.2.chunks(4).filter(|p| p[3] >= 128).count() as f64 / (l.0 * l.1) as f64;
+        let c0 = coverage(&levels[0]);
+        assert!((c0 - 0.25).abs() < 0.06, "{c0}");
+        for l in &levels[1..4] {
+            assert!(
+                (coverage(l) - c0).abs() < 0.05 + 1.0 / (l.0 * l.1) as f64,
+                "{} vs {c0}",
+                coverage(l)
+            );
+        }
+    }
+
+    #[test]
+    fn linear_maps_are_box_filtered() {
+        let chain = box_chain(
+            2,
+            2,
+            vec![
+                0, 0, 0, 0, 100, 100, 100, 100, 0, 0, 0, 0, 200, 200, 200, 200,
+            ],
+        );
+        assert_eq!(chain.len(), 2);
+        assert_eq!(chain[1], (1, 1, vec![75, 75, 75, 75]));
+        let file = ktx2_bytes("n", 8, 8, &[128u8; 256], MapKind::Linear).expect("encodes");
+        let info = frond_scene::ktx2::read_info(&file).expect("reads");
+        assert!(!info.srgb && !info.alpha);
+        assert_eq!(info.levels, 4);
+    }
+}
