@@ -129,7 +129,7 @@ pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Res
     let mut doc = GltfBuilder::new(concat!("frond ", env!("CARGO_PKG_VERSION")));
     let mut sink = TextureSink::new(None, frond_export::TextureFormat::Png);
     let mat = sink
-        .billboard_material(&mut doc, "cloud", &cloud.baked.atlas)
+        .billboard_material(&mut doc, "cloud", &cloud.baked.atlas, true)
         .context("writing the billboard material")?;
     let q = cloud.quad_mesh();
     let quads = PrimitiveDesc {

@@ -35,6 +35,8 @@ pub struct LodRequest {
     pub textures: frond_export::TextureFormat,
     /// Clip names carry Godot's `-loop` import hint.
     pub loop_hint: bool,
+    /// How baked billboards are lit.
+    pub billboard_normals: frond_export::BillboardNormals,
 }
 
 /// Input-name stem used for the files.
@@ -91,6 +93,7 @@ pub fn run_lod(
             external_textures: req.external_textures,
             textures: req.textures,
             loop_hint: req.loop_hint,
+            billboard_normals: req.billboard_normals,
             msft_lod: req
                 .msft_lod
                 .then(|| msft_coverages(&req.chain.screen_heights, req.resolution)),

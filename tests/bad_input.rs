@@ -124,12 +124,12 @@ fn nan_and_inf_positions() {
 fn unsupported_required_extension_is_named() {
     let dir = tempfile::tempdir().expect("tmp");
     let mut doc = triangle_gltf();
-    doc["extensionsUsed"] = json!(["EXT_meshopt_compression"]);
-    doc["extensionsRequired"] = json!(["EXT_meshopt_compression"]);
+    doc["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
+    doc["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
     let path = write_case(dir.path(), "ext", &doc, &triangle_bin(GOOD, [0, 1, 2]));
     expect_clean_error(
         &path,
-        "requires unsupported glTF extension EXT_meshopt_compression",
+        "requires unsupported glTF extension KHR_draco_mesh_compression",
     );
 }
 

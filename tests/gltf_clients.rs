@@ -35,6 +35,19 @@ fn generated_trees_pass_the_khronos_validator() {
 
 #[test]
 fn gltfpack_quantized_tree_reads_back_with_the_same_counts_and_look() {
+    packed_tree_reads_back(&[], "KHR_mesh_quantization");
+}
+
+/// `gltfpack -cc` (EXT_meshopt_compression over quantized data: what assets that went through
+/// gltfpack for the web carry) reads back like the original.
+#[test]
+fn gltfpack_meshopt_compressed_tree_reads_back_with_the_same_counts_and_look() {
+    packed_tree_reads_back(&["-cc"], "EXT_meshopt_compression");
+}
+
+/// bush_1 through gltfpack with `flags`: the copy must name `marker` (else the test proves
+/// nothing) and import with the original's counts, bounds and look.
+fn packed_tree_reads_back(flags: &[&str], marker: &str) {
     let tools = node_tools();
     let dir = tempfile::tempdir().expect("temp dir");
     // A real exporter's tree (ez-tree's bush_1, committed as a fixture): textured, skinned.
@@ -46,6 +59,7 @@ fn gltfpack_quantized_tree_reads_back_with_the_same_counts_and_look() {
         .arg(&src)
         .arg("-o")
         .arg(&packed)
+        .args(flags)
         .status()
         .expect("node runs gltfpack");
     assert!(status.success(), "gltfpack failed");
@@ -55,8 +69,8 @@ fn gltfpack_quantized_tree_reads_back_with_the_same_counts_and_look() {
     let bytes = std::fs::read(&packed).expect("read packed");
     let text = String::from_utf8_lossy(&bytes[..4096.min(bytes.len())]).into_owned();
     assert!(
-        text.contains("KHR_mesh_quantization"),
-        "gltfpack output is not quantized"
+        text.contains(marker),
+        "gltfpack output does not use {marker}"
     );
     assert_eq!(quantized.triangles.len(), original.triangles.len());
     assert_eq!(

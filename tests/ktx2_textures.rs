@@ -44,7 +44,7 @@ fn check_file(file: &Path, fallback: bool) -> Vec<Checked> {
         let bytes = src.image_bytes(k).expect("image bytes");
         let info = read_info(&bytes).expect("a KTX2 frond reads");
         assert!(
-            info.width % 4 == 0 && info.height % 4 == 0,
+            info.width.is_multiple_of(4) && info.height.is_multiple_of(4),
             "{}: image {k} is {}×{}, KHR_texture_basisu wants multiples of 4",
             file.display(),
             info.width,

@@ -509,6 +509,7 @@ fn round_trip(b: &Built) {
             spectral_uvs: None,
             // As `frond lod` writes every LOD but LOD0.
             byte_weights: true,
+            billboard_normals: Default::default(),
         }],
         &FileOptions::default(),
     )

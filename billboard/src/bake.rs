@@ -96,8 +96,12 @@ pub struct Atlas {
     /// [`BakeParams::alpha_cutoff`]; uncovered texels have alpha 0 and the colour of the
     /// nearest covered texel of their quad (dilation, improved-billboard-cloud §4 item 6).
     pub color: Vec<u8>,
-    /// `width * height * 4` bytes, linear: `rgb = n * 0.5 + 0.5` of the unit world-space
-    /// normal facing the quad's front, alpha as in `color` (dilated the same way).
+    /// `width * height * 4` bytes, linear: a tangent-space normal map in glTF's
+    /// `normalTexture` convention, `rgb = n * 0.5 + 0.5` of the unit normal facing the quad's
+    /// front in its own frame (+X along `axis_u`, the image's right; +Y along `axis_v`, the
+    /// image's up; +Z the quad's front normal), so an engine lights each billboard with its
+    /// leaves' normals wherever the billboard turns; alpha as in `color` (dilated the same
+    /// way).
     pub normal: Vec<u8>,
 }
 
@@ -226,7 +230,8 @@ pub fn bake_cloud(
     }
 
     let normals: Vec<Vec3> = quads.iter().map(front_normal).collect();
-    let atlas = dilate(samples, &cells, &normals, params.padding);
+    let mut atlas = dilate(samples, &cells, &normals, params.padding);
+    to_tangent_space(&mut atlas, &cells, quads, params.padding);
     let uv_rects = cells.iter().map(|c| uv_rect(c, width, height)).collect();
     let texture_bytes = atlas.color.len() + atlas.normal.len();
     tracing::debug!(
@@ -1011,6 +1016,40 @@ fn dilate(mut d: Downsampled, cells: &[Cell], quad_normals: &[Vec3], padding: u3
         height: d.height,
         color: d.color,
         normal: d.normal,
+    }
+}
+
+/// Rewrites each quad's padded cell of the normal atlas from world space (as baked and
+/// dilated) into the quad's tangent frame (`axis_u`, `axis_v`, front normal): what glTF's
+/// `normalTexture` holds, the tangents engines derive from the billboard's UVs running along
+/// the same axes.
+fn to_tangent_space(atlas: &mut Atlas, cells: &[Cell], quads: &[Quad], padding: u32) {
+    let width = atlas.width as usize;
+    let decode = |v: u8| f32::from(v) / 255.0 * 2.0 - 1.0;
+    for (cell, quad) in cells.iter().zip(quads) {
+        let (u, v, w) = (
+            quad.axis_u.normalize_or_zero(),
+            quad.axis_v.normalize_or_zero(),
+            front_normal(quad),
+        );
+        let x0 = cell.x.saturating_sub(padding) as usize;
+        let y0 = cell.y.saturating_sub(padding) as usize;
+        let x1 = ((cell.x + cell.width + padding) as usize).min(width);
+        let y1 = ((cell.y + cell.height + padding).min(atlas.height)) as usize;
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let i = (y * width + x) * 4;
+                let n = Vec3::new(
+                    decode(atlas.normal[i]),
+                    decode(atlas.normal[i + 1]),
+                    decode(atlas.normal[i + 2]),
+                )
+                .normalize_or(w);
+                let t = Vec3::new(n.dot(u), n.dot(v), n.dot(w)).normalize_or(Vec3::Z);
+                let [r, g, b, _] = encode_normal(t, 0);
+                atlas.normal[i..i + 3].copy_from_slice(&[r, g, b]);
+            }
+        }
     }
 }
 

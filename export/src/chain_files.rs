@@ -50,6 +50,8 @@ pub struct ChainFileOptions {
     pub textures: crate::TextureFormat,
     /// Clip names carry Godot's loop hint ([`crate::lod_file::loop_hinted`]).
     pub loop_hint: bool,
+    /// How baked billboards are lit.
+    pub billboard_normals: crate::lod_scene::BillboardNormals,
     /// `MSFT_lod` screen coverages of the combined file's LODs (None: no `MSFT_lod`).
     pub msft_lod: Option<Vec<f32>>,
     /// The asset `extras` of every file (generator, seed, source).
@@ -170,7 +172,7 @@ pub fn chain_files(
         .iter()
         .zip(&motions)
         .enumerate()
-        .map(|(k, (lod, m))| lod_input(tree, lod, m, prefix(k)))
+        .map(|(k, (lod, m))| lod_input(tree, lod, m, prefix(k), options.billboard_normals))
         .collect();
     let mut files: Vec<(String, Vec<u8>)> = Vec::new();
     for (k, input) in inputs.iter().enumerate() {
@@ -228,7 +230,13 @@ pub fn chain_files(
 }
 
 /// What export needs of one LOD.
-fn lod_input<'a>(tree: &'a Tree, lod: &'a ChainLod, m: &Motion, name: String) -> LodInput<'a> {
+fn lod_input<'a>(
+    tree: &'a Tree,
+    lod: &'a ChainLod,
+    m: &Motion,
+    name: String,
+    billboard_normals: crate::lod_scene::BillboardNormals,
+) -> LodInput<'a> {
     LodInput {
         name,
         tree,
@@ -246,6 +254,7 @@ fn lod_input<'a>(tree: &'a Tree, lod: &'a ChainLod, m: &Motion, name: String) ->
         }),
         spectral_uvs: m.spectral.as_ref().map(|t| t.row_uv.clone()),
         byte_weights: !matches!(lod.content, frond_lod::chain::LodContent::Input(_)),
+        billboard_normals,
     }
 }
 

@@ -18,4 +18,4 @@ pub use chain_files::{AnimationMode, ChainFileOptions, ChainFiles, chain_files, 
 pub use error::ExportError;
 pub use ktx2_texture::TextureFormat;
 pub use lod_file::{FileOptions, GltfFile, write_glb};
-pub use lod_scene::LodInput;
+pub use lod_scene::{BillboardNormals, LodInput};

@@ -50,6 +50,24 @@ pub struct LodInput<'a> {
     /// Skin weights as normalized bytes (every LOD but LOD0, which keeps the input's floats):
     /// a quarter of the bytes, 1/255 of a bone's motion at most.
     pub byte_weights: bool,
+    /// How baked billboards are lit.
+    pub billboard_normals: BillboardNormals,
+}
+
+/// How baked billboards are lit (`frond lod --billboard-normals`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BillboardNormals {
+    /// The baked normal atlas as the material's `normalTexture` (half the colour atlas's
+    /// side: normals vary slower than the alpha outline), over the quad's own normal: each
+    /// billboard lit with its leaves' normals, so a LOD lights like the tree it replaces.
+    #[default]
+    Baked,
+    /// Vertex normals pointing away from the crown's centre (the billboards' bounding box
+    /// centre), no normal map: the rounded shading foliage tools give tree crowns.
+    Crown,
+    /// One flat normal per quad, no normal map.
+    Flat,
 }
 
 /// Channels of one clip written for one LOD (merged by clip name across LODs).
@@ -167,6 +185,16 @@ pub fn add_lod(
     // those that copy an input card (the hybrid cloud), in order of first use.
     if let Some(cloud) = lod.cloud {
         let mut groups: Vec<TextureGroup> = Vec::new();
+        // The crown's centre: the middle of the billboards' corners' bounding box.
+        let crown_centre = cloud
+            .billboards
+            .iter()
+            .flat_map(|b| b.quad.corners())
+            .fold(None, |acc: Option<(glam::Vec3, glam::Vec3)>, c| match acc {
+                None => Some((c, c)),
+                Some((lo, hi)) => Some((lo.min(c), hi.max(c))),
+            })
+            .map(|(lo, hi)| 0.5 * (lo + hi));
         let clock = &cloud.clock;
         let n = clock.samples.max(1);
         for (bi, b) in cloud.billboards.iter().enumerate() {
@@ -261,7 +289,12 @@ pub fn add_lod(
                 Some(g) => g,
                 None => {
                     let material = match key {
-                        None => sink.billboard_material(doc, &lod.name, &cloud.atlas)?,
+                        None => sink.billboard_material(
+                            doc,
+                            &lod.name,
+                            &cloud.atlas,
+                            lod.billboard_normals == BillboardNormals::Baked,
+                        )?,
                         Some(m) => sink.tree_material(doc, lod.tree, m, lod.image_sizes)?,
                     };
                     groups.push(TextureGroup {
@@ -292,7 +325,13 @@ pub fn add_lod(
             for (c, uv) in b.quad.corners().iter().zip(uvs) {
                 p.positions.push(c.to_array());
                 if let Some(nrm) = p.normals.as_mut() {
-                    nrm.push(b.quad.plane.normal.to_array());
+                    let n = match (lod.billboard_normals, crown_centre) {
+                        (BillboardNormals::Crown, Some(o)) => {
+                            (*c - o).normalize_or(b.quad.plane.normal)
+                        }
+                        _ => b.quad.plane.normal,
+                    };
+                    nrm.push(n.to_array());
                 }
                 if let Some(u) = p.uvs.as_mut() {
                     u.push(uv.to_array());

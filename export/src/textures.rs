@@ -24,6 +24,10 @@ use crate::ktx2_texture::{MapKind, TextureFormat, ktx2_bytes};
 /// that LOD downscales.
 type MaterialKey = (usize, Vec<(usize, [u32; 2])>);
 
+/// A texture's document images: (core `source`, `KHR_texture_basisu` KTX2 image), one at
+/// least.
+type Images = (Option<usize>, Option<usize>);
+
 /// Collects textures and materials of one document.
 pub struct TextureSink {
     /// File-name prefix of external images (None: embed).
@@ -37,7 +41,7 @@ pub struct TextureSink {
     /// (`Tree::source_textures` entry, size written) → document texture.
     source_textures: HashMap<(usize, Option<[u32; 2]>), usize>,
     /// (`Tree::images` entry, size written) → document images (core source, KTX2).
-    source_images: HashMap<(usize, Option<[u32; 2]>), (Option<usize>, Option<usize>)>,
+    source_images: HashMap<(usize, Option<[u32; 2]>), Images>,
     /// (tree material, sizes of its images) → document material.
     tree_materials: HashMap<MaterialKey, usize>,
 }
@@ -102,7 +106,7 @@ impl TextureSink {
         name: &str,
         image: &image::RgbaImage,
         kind: MapKind,
-    ) -> Result<(Option<usize>, Option<usize>), ExportError> {
+    ) -> Result<Images, ExportError> {
         let png = || {
             encode_png(image.width(), image.height(), image.as_raw()).map_err(|source| {
                 ExportError::Image {
@@ -134,7 +138,7 @@ impl TextureSink {
     /// JSON members `fields`.
     fn texture_of(
         doc: &mut GltfBuilder,
-        (core, ktx2): (Option<usize>, Option<usize>),
+        (core, ktx2): Images,
         sampler: Option<usize>,
         fields: serde_json::Value,
     ) -> usize {
@@ -158,13 +162,31 @@ impl TextureSink {
         rgba: &[u8],
         clamp: bool,
     ) -> Result<usize, ExportError> {
+        self.add_map(doc, name, width, height, rgba, clamp, MapKind::Colour)
+    }
+
+    /// Adds an RGBA8 map frond made as a texture of `kind` (clamped when `clamp`).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "an image (name, size, texels) and how it is sampled and encoded"
+    )]
+    fn add_map(
+        &mut self,
+        doc: &mut GltfBuilder,
+        name: &str,
+        width: u32,
+        height: u32,
+        rgba: &[u8],
+        clamp: bool,
+        kind: MapKind,
+    ) -> Result<usize, ExportError> {
         let image = image::RgbaImage::from_raw(width, height, rgba.to_vec()).ok_or_else(|| {
             ExportError::Ktx2(format!(
                 "{name}: {width}×{height} with {} bytes",
                 rgba.len()
             ))
         })?;
-        let images = self.made_images(doc, name, &image, MapKind::Colour)?;
+        let images = self.made_images(doc, name, &image, kind)?;
         let wrap = if clamp { 33071 } else { 10497 };
         let sampler = doc.add_sampler(
             serde_json::json!({ "magFilter": 9729, "minFilter": 9987, "wrapS": wrap, "wrapT": wrap }),
@@ -177,12 +199,14 @@ impl TextureSink {
         ))
     }
 
-    /// The billboards' material: the colour atlas, alpha-tested at 0.5, double-sided, rough.
+    /// The billboards' material: the colour atlas, alpha-tested at 0.5, double-sided, rough;
+    /// with `normals`, the baked normal atlas at half its side as the `normalTexture`.
     pub fn billboard_material(
         &mut self,
         doc: &mut GltfBuilder,
         name: &str,
         atlas: &frond_billboard::Atlas,
+        normals: bool,
     ) -> Result<usize, ExportError> {
         let tex = self.add_rgba(
             doc,
@@ -192,10 +216,25 @@ impl TextureSink {
             &atlas.color,
             true,
         )?;
+        let normal = if normals {
+            let (w, h, rgba) = half_normal_map(atlas.width, atlas.height, &atlas.normal);
+            Some(self.add_map(
+                doc,
+                &format!("{name}_atlas_normal"),
+                w,
+                h,
+                &rgba,
+                true,
+                MapKind::Linear,
+            )?)
+        } else {
+            None
+        };
         Ok(doc.add_material(&MaterialDesc {
             name: format!("{name}_billboards"),
             base_color: [1.0; 4],
             base_color_texture: Some(tex),
+            normal_texture: normal,
             alpha: WriteAlpha::Mask(0.5),
             double_sided: true,
             metallic: 0.0,
@@ -349,6 +388,7 @@ impl TextureSink {
             name: material.name.clone(),
             base_color: material.base_color,
             base_color_texture: texture,
+            normal_texture: None,
             alpha: match material.alpha_mode {
                 AlphaMode::Opaque => WriteAlpha::Opaque,
                 AlphaMode::Mask => WriteAlpha::Mask(material.alpha_cutoff),
@@ -361,6 +401,39 @@ impl TextureSink {
         self.tree_materials.insert(key, id);
         Ok(id)
     }
+}
+
+/// A tangent-space normal map (RGBA8, `n * 0.5 + 0.5`) at half its side, rounded up to a
+/// multiple of 4 (a block-compressed format's block): each texel the renormalised mean of the
+/// 2×2 texels under it (nearest, when rounding up made the map a little larger than half), alpha opaque (a normal map's alpha is unused and would only cost
+/// bytes). The atlas's UVs address it as they address the colour atlas.
+fn half_normal_map(width: u32, height: u32, rgba: &[u8]) -> (u32, u32, Vec<u8>) {
+    let (w2, h2) = (
+        (width / 2).max(1).next_multiple_of(4),
+        (height / 2).max(1).next_multiple_of(4),
+    );
+    let decode = |v: u8| f32::from(v) / 255.0 * 2.0 - 1.0;
+    let encode = |x: f32| ((x * 0.5 + 0.5) * 255.0).round().clamp(0.0, 255.0) as u8;
+    let mut out = Vec::with_capacity((w2 * h2 * 4) as usize);
+    for y in 0..h2 {
+        for x in 0..w2 {
+            let mut n = glam::Vec3::ZERO;
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                // The 2×2 source texels under this one (edges repeated).
+                let sx = (x * width / w2 + dx).min(width - 1);
+                let sy = (y * height / h2 + dy).min(height - 1);
+                let i = ((sy * width + sx) * 4) as usize;
+                // Texels no cell owns hold zeros: flat there.
+                n += match &rgba[i..i + 3] {
+                    [0, 0, 0] => glam::Vec3::Z,
+                    t => glam::Vec3::new(decode(t[0]), decode(t[1]), decode(t[2])),
+                };
+            }
+            let n = n.normalize_or(glam::Vec3::Z);
+            out.extend_from_slice(&[encode(n.x), encode(n.y), encode(n.z), 255]);
+        }
+    }
+    (w2, h2, out)
 }
 
 /// A file-name-safe version of `name` (letters, digits, `-`, `_`, `.`; others become `_`).

@@ -564,6 +564,7 @@ mod tests {
             name: "m".into(),
             base_color: [1.0; 4],
             base_color_texture: texture,
+            normal_texture: None,
             alpha,
             double_sided: false,
             metallic: 0.0,

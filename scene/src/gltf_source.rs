@@ -19,6 +19,7 @@ pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
     "KHR_materials_emissive_strength",
     "KHR_materials_unlit",
     "KHR_texture_basisu",
+    "EXT_meshopt_compression",
 ];
 
 /// A parsed glTF document with its binary buffers resolved.
@@ -39,6 +40,8 @@ pub struct GltfSource {
     /// The parts of the document that are passed through unchanged, as raw JSON (the typed
     /// `root` drops what it does not model, such as unknown material extensions).
     pub raw: RawParts,
+    /// Per buffer view, its bytes decoded from `EXT_meshopt_compression` (None: stored plainly).
+    pub decoded_views: Vec<Option<Vec<u8>>>,
 }
 
 /// The input's materials, textures, samplers and images as raw JSON values, index-aligned with
@@ -53,6 +56,10 @@ pub struct RawParts {
     pub samplers: Vec<serde_json::Value>,
     #[serde(default)]
     pub images: Vec<serde_json::Value>,
+    #[serde(default)]
+    pub buffers: Vec<serde_json::Value>,
+    #[serde(default, rename = "bufferViews")]
+    pub buffer_views: Vec<serde_json::Value>,
 }
 
 impl GltfSource {
@@ -140,12 +147,18 @@ impl GltfSource {
             limits: *limits,
             bytes_read: 0,
             raw,
+            decoded_views: Vec::new(),
         };
         let mut total = bytes.len() as u64;
         let mut glb_bin = glb_bin;
         let mut buffers = Vec::with_capacity(src.root.buffers.len());
         for (i, buffer) in src.root.buffers.iter().enumerate() {
             let declared = buffer.byte_length.0 as usize;
+            // A meshopt fallback buffer has no data: only compressed views point at it.
+            if crate::meshopt_views::is_fallback_buffer(src.raw.buffers.get(i)) {
+                buffers.push(Vec::new());
+                continue;
+            }
             let data = match &buffer.uri {
                 None => glb_bin.take().ok_or_else(|| {
                     err(format!(
@@ -174,6 +187,12 @@ impl GltfSource {
         }
         src.buffers = buffers;
         src.bytes_read = total;
+        src.decoded_views = crate::meshopt_views::decode_views(
+            &src.raw.buffer_views,
+            &src.buffers,
+            limits.max_input_bytes,
+        )
+        .map_err(err)?;
         Ok(src)
     }
 
@@ -217,6 +236,9 @@ impl GltfSource {
 
     /// The bytes of buffer view `index`, bounds-checked.
     pub fn view_bytes(&self, index: usize, what: &str) -> Result<&[u8]> {
+        if let Some(Some(decoded)) = self.decoded_views.get(index) {
+            return Ok(decoded);
+        }
         let view =
             self.root.buffer_views.get(index).ok_or_else(|| {
                 self.invalid(format!("{what}: bufferView {index} does not exist"))

@@ -33,6 +33,8 @@ pub struct MaterialDesc {
     pub base_color: [f32; 4],
     /// Index returned by [`GltfBuilder::add_texture`].
     pub base_color_texture: Option<usize>,
+    /// A tangent-space normal map (`normalTexture`), its texture index.
+    pub normal_texture: Option<usize>,
     pub alpha: WriteAlpha,
     pub double_sided: bool,
     pub metallic: f32,
@@ -420,6 +422,9 @@ impl GltfBuilder {
         }
         let mut mat =
             json!({ "name": m.name, "pbrMetallicRoughness": pbr, "doubleSided": m.double_sided });
+        if let Some(t) = m.normal_texture {
+            mat["normalTexture"] = json!({ "index": t });
+        }
         match m.alpha {
             WriteAlpha::Opaque => {}
             WriteAlpha::Mask(c) => {

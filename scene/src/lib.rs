@@ -13,6 +13,7 @@ pub mod import;
 pub mod input_file;
 pub mod ktx2;
 pub mod length;
+pub mod meshopt_views;
 pub mod model;
 pub mod rig;
 pub mod rigid_fit;

@@ -19,6 +19,7 @@ fn two_bone_card(keys: &[(f32, Quat)], step: bool) -> Vec<u8> {
         name: "plain".into(),
         base_color: [0.2, 0.8, 0.2, 1.0],
         base_color_texture: None,
+        normal_texture: None,
         alpha: WriteAlpha::Mask(0.5),
         double_sided: true,
         metallic: 0.0,

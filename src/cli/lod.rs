@@ -8,7 +8,7 @@ use anyhow::Result;
 use crate::batch::preset::EnginePreset;
 use crate::cli::args::{BuildArgs, ImportArgs, RunArgs};
 use crate::cli::progress::{Spinner, print_json};
-use crate::cli::values::{AnimationArg, EngineArg, MethodArg, TexturesArg};
+use crate::cli::values::{AnimationArg, EngineArg, MethodArg, NormalsArg, TexturesArg};
 use crate::lod_cmd::{LodRequest, run_lod};
 use frond_lod::method::ignored_options;
 use frond_lod::{
@@ -102,6 +102,11 @@ pub struct LodArgs {
     /// images in LOD0 pass through untouched.
     #[arg(long, value_enum, default_value_t = TexturesArg::Png)]
     pub textures: TexturesArg,
+    /// How baked billboards are lit: baked (the normal atlas as their normalTexture, so a LOD
+    /// lights like its leaves), crown (normals away from the crown's centre, no normal map) or
+    /// flat (the quad's own normal).
+    #[arg(long, value_enum, default_value_t = NormalsArg::Baked)]
+    pub billboard_normals: NormalsArg,
     /// Name clips with Godot's loop import hint (`<clip>-loop`): glTF has no loop flag and
     /// Godot's importer loops only clips so named.
     #[arg(long)]
@@ -175,6 +180,7 @@ impl LodArgs {
             external_textures: self.external_textures,
             textures: self.textures.format(),
             loop_hint: self.loop_hint,
+            billboard_normals: self.billboard_normals.normals(),
         })
     }
 
@@ -223,6 +229,10 @@ impl LodArgs {
         a.extend(["--max-atlas".into(), self.max_atlas.to_string()]);
         a.extend(["--padding".into(), self.padding.to_string()]);
         a.extend(["--textures".into(), self.textures.text().into()]);
+        a.extend([
+            "--billboard-normals".into(),
+            self.billboard_normals.text().into(),
+        ]);
         if let Some(p) = self.preset {
             a.extend(["--preset".into(), p.text().into()]);
         }

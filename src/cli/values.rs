@@ -144,6 +144,38 @@ impl TexturesArg {
     }
 }
 
+/// A `--billboard-normals` value: how baked billboards are lit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum NormalsArg {
+    /// The baked normal atlas as the billboards' normalTexture: lit like the leaves.
+    #[default]
+    Baked,
+    /// Vertex normals pointing away from the crown's centre, no normal map.
+    Crown,
+    /// One flat normal per quad.
+    Flat,
+}
+
+impl NormalsArg {
+    /// The export stage's setting.
+    pub fn normals(self) -> frond_export::BillboardNormals {
+        match self {
+            NormalsArg::Baked => frond_export::BillboardNormals::Baked,
+            NormalsArg::Crown => frond_export::BillboardNormals::Crown,
+            NormalsArg::Flat => frond_export::BillboardNormals::Flat,
+        }
+    }
+
+    /// The value as written.
+    pub fn text(self) -> &'static str {
+        match self {
+            NormalsArg::Baked => "baked",
+            NormalsArg::Crown => "crown",
+            NormalsArg::Flat => "flat",
+        }
+    }
+}
+
 /// A `--parts` value of `frond render`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum PartsArg {
