@@ -301,6 +301,10 @@ pub fn add_lod(
                         key,
                         prim: PrimitiveDesc {
                             normals: Some(Vec::new()),
+                            // The atlas's normal map is in each quad's (u, v, front) frame.
+                            tangents: (key.is_none()
+                                && lod.billboard_normals == BillboardNormals::Baked)
+                                .then(Vec::new),
                             uvs: Some(Vec::new()),
                             byte_weights: lod.byte_weights,
                             material: Some(material),
@@ -332,6 +336,11 @@ pub fn add_lod(
                         _ => b.quad.plane.normal,
                     };
                     nrm.push(n.to_array());
+                }
+                if let Some(t) = p.tangents.as_mut() {
+                    // Bitangent = normal × tangent = axis_v, the normal map's +Y (image up).
+                    let u = b.quad.axis_u.normalize_or_zero();
+                    t.push([u.x, u.y, u.z, 1.0]);
                 }
                 if let Some(u) = p.uvs.as_mut() {
                     u.push(uv.to_array());

@@ -46,6 +46,8 @@ pub struct MaterialDesc {
 pub struct PrimitiveDesc {
     pub positions: Vec<[f32; 3]>,
     pub normals: Option<Vec<[f32; 3]>>,
+    /// `TANGENT` (xyz unit, w the bitangent's sign): what a normal map is read in.
+    pub tangents: Option<Vec<[f32; 4]>>,
     pub uvs: Option<Vec<[f32; 2]>>,
     /// Further texture coordinate sets: TEXCOORD_1, TEXCOORD_2, ...
     pub extra_uvs: Vec<Vec<[f32; 2]>>,
@@ -452,6 +454,13 @@ impl GltfBuilder {
                 attrs.insert(
                     "NORMAL".into(),
                     json!(self.add_floats(&flat, "VEC3", false, Some(34962))),
+                );
+            }
+            if let Some(t) = &p.tangents {
+                let flat: Vec<f32> = t.iter().flatten().copied().collect();
+                attrs.insert(
+                    "TANGENT".into(),
+                    json!(self.add_floats(&flat, "VEC4", false, Some(34962))),
                 );
             }
             if let Some(uv) = &p.uvs {
