@@ -593,20 +593,37 @@ fn godot_imports_and_renders_the_sample_chains() {
     let combined_file = combined(&dir.path().join("cards"), &report);
     files.push(combined_file.clone());
     let results = godot_run(&dir.path().join("godot"), &files, &times(&report));
-    for file in &all_lods {
-        let result = &results[file.to_str().expect("utf-8")];
-        let report = if sk_lods.contains(file) {
+    let report_of = |file: &PathBuf| {
+        if sk_lods.contains(file) {
             &sk_report
         } else {
             &report
-        };
-        let measured = check_lod(file, result, report);
+        }
+    };
+    check_chain(&all_lods, &combined_file, &results, report_of);
+}
+
+/// Checks each of `lods` against Godot's `results` and its chain's report, then describes
+/// Godot's import of the combined file (a chain of as many LODs as the first chain has).
+fn check_chain<'a>(
+    lods: &[PathBuf],
+    combined_file: &Path,
+    results: &HashMap<String, Value>,
+    report_of: impl Fn(&PathBuf) -> &'a Value,
+) {
+    for file in lods {
+        let measured = check_lod(
+            file,
+            &results[file.to_str().expect("utf-8")],
+            report_of(file),
+        );
         print_measured(file, &measured);
     }
+    let chain_len = report_of(&lods[0])["lods"].as_array().map_or(0, Vec::len);
     describe_combined(
-        &combined_file,
+        combined_file,
         &results[combined_file.to_str().expect("utf-8")],
-        lods.len(),
+        chain_len,
     );
 }
 
@@ -623,15 +640,7 @@ fn godot_imports_and_renders_the_pine_chain() {
     let mut files = lods.clone();
     files.push(combined_file.clone());
     let results = godot_run(&dir.path().join("godot"), &files, &times(&report));
-    for file in &lods {
-        let measured = check_lod(file, &results[file.to_str().expect("utf-8")], &report);
-        print_measured(file, &measured);
-    }
-    describe_combined(
-        &combined_file,
-        &results[combined_file.to_str().expect("utf-8")],
-        lods.len(),
-    );
+    check_chain(&lods, &combined_file, &results, |_| &report);
 }
 
 /// The Godot 3 materials frond ships (`export/shaders/*_godot3.shader`: VAT, spectral motion,

@@ -24,9 +24,14 @@ use crate::ktx2_texture::{MapKind, TextureFormat, ktx2_bytes};
 /// that LOD downscales.
 type MaterialKey = (usize, Vec<(usize, [u32; 2])>);
 
-/// A texture's document images: (core `source`, `KHR_texture_basisu` KTX2 image), one at
-/// least.
-type Images = (Option<usize>, Option<usize>);
+/// A texture's document images: its core `source`, its `KHR_texture_basisu` KTX2 image, or
+/// both (the PNG then the fallback).
+#[derive(Clone, Copy)]
+enum Images {
+    Core(usize),
+    Ktx2(usize),
+    Both { core: usize, ktx2: usize },
+}
 
 /// Collects textures and materials of one document.
 pub struct TextureSink {
@@ -119,35 +124,35 @@ impl TextureSink {
             let bytes = ktx2_bytes(name, image.width(), image.height(), image.as_raw(), kind)?;
             Ok::<_, ExportError>(this.place_image(doc, Some(name), name, &bytes, KTX2_MIME, "ktx2"))
         };
+        if self.format == TextureFormat::Ktx2 {
+            return Ok(Images::Ktx2(ktx2(self, doc)?));
+        }
+        let bytes = png()?;
+        let core = self.place_image(doc, Some(name), name, &bytes, "image/png", "png");
         Ok(match self.format {
-            TextureFormat::Png => {
-                let bytes = png()?;
-                let core = self.place_image(doc, Some(name), name, &bytes, "image/png", "png");
-                (Some(core), None)
-            }
-            TextureFormat::Ktx2 => (None, Some(ktx2(self, doc)?)),
-            TextureFormat::Ktx2Png => {
-                let bytes = png()?;
-                let core = self.place_image(doc, Some(name), name, &bytes, "image/png", "png");
-                (Some(core), Some(ktx2(self, doc)?))
-            }
+            TextureFormat::Ktx2Png => Images::Both {
+                core,
+                ktx2: ktx2(self, doc)?,
+            },
+            _ => Images::Core(core),
         })
     }
 
-    /// A texture of `core` and/or `ktx2` images (one at least) with `sampler` and the further
-    /// JSON members `fields`.
+    /// A texture of `images` with `sampler` and the further JSON members `fields`.
     fn texture_of(
         doc: &mut GltfBuilder,
-        (core, ktx2): Images,
+        images: Images,
         sampler: Option<usize>,
         fields: serde_json::Value,
     ) -> usize {
-        let Some(first) = core.or(ktx2) else {
-            return doc.add_texture_of(0, sampler, fields);
+        let (first, ktx2, keep_source) = match images {
+            Images::Core(c) => (c, None, true),
+            Images::Ktx2(k) => (k, Some(k), false),
+            Images::Both { core, ktx2 } => (core, Some(ktx2), true),
         };
         let id = doc.add_texture_of(first, sampler, fields);
         if let Some(k) = ktx2 {
-            doc.set_basisu_source(id, k, core.is_some());
+            doc.set_basisu_source(id, k, keep_source);
         }
         id
     }
@@ -303,9 +308,9 @@ impl TextureSink {
                         let id = self.place_image(doc, name.as_deref(), &stem, &bytes, &mime, ext);
                         // An input KTX2 image stays KTX2, through the extension.
                         if mime == KTX2_MIME {
-                            (None, Some(id))
+                            Images::Ktx2(id)
                         } else {
-                            (Some(id), None)
+                            Images::Core(id)
                         }
                     }
                 };
