@@ -35,6 +35,10 @@ pub struct LodRequest {
     pub textures: frond_export::TextureFormat,
     /// Clip names carry Godot's `-loop` import hint.
     pub loop_hint: bool,
+    /// The space VAT data is baked in.
+    pub vat_space: frond_export::vat::VatSpace,
+    /// Geometry compressed with `EXT_meshopt_compression` and `KHR_mesh_quantization`.
+    pub compress: bool,
     /// How baked billboards are lit.
     pub billboard_normals: frond_export::BillboardNormals,
 }
@@ -93,6 +97,8 @@ pub fn run_lod(
             external_textures: req.external_textures,
             textures: req.textures,
             loop_hint: req.loop_hint,
+            vat_space: req.vat_space,
+            compress: req.compress,
             billboard_normals: req.billboard_normals,
             msft_lod: req
                 .msft_lod
@@ -189,6 +195,8 @@ fn measure_errors(
         samples: 2,
         clip: report.clip.clone(),
         limits: unlimited,
+        white_albedo: false,
+        lighting: Default::default(),
     };
     let mut ctx = EvalContext::new(renderer, tree, &req)
         .with_context(|| format!("{path}: sampling the input to measure the LODs"))?;

@@ -11,7 +11,7 @@ use common::*;
 use frond_billboard::cloud::CloudParams;
 use frond_export::LodInput;
 use frond_export::lod_file::{FileOptions, write_glb};
-use frond_export::vat::{VatFormat, decode_rigid};
+use frond_export::vat::{VatFormat, VatSpace, decode_pivots, decode_rigid};
 use frond_lod::cloud_build::{build_animated_cloud, sampled_worlds};
 use frond_lod::joint_budget::{BillboardAnimation, JointCap};
 use frond_lod::methods::per_bone::per_bone_clusters;
@@ -25,6 +25,7 @@ use frond_scene::wood::WoodMesh;
 use frond_scene::{ImportOptions, SampleOptions, Sampled, Tree, import, import_bytes, sample};
 use frond_skeleton::{BoneDescriptionKind, SkeletonParams};
 use frond_spectral::description::SpectralKind;
+use glam::Vec3;
 
 fn sapling() -> PathBuf {
     root().join("samples/sapling.glb")
@@ -72,6 +73,16 @@ fn assert_valid_like(file: &Path, input: &Path) {
             v["messages"]
         );
     }
+}
+
+/// The nodes of a glTF document's first scene's roots.
+fn scene_roots(json: &serde_json::Value) -> Vec<&serde_json::Value> {
+    json["scenes"][0]["nodes"]
+        .as_array()
+        .expect("roots")
+        .iter()
+        .map(|n| &json["nodes"][n.as_u64().expect("index") as usize])
+        .collect()
 }
 
 /// A joint budget that never binds (the half-pixel merges still apply).
@@ -128,11 +139,20 @@ fn skin_lods_are_valid_and_reported() {
     for f in glbs(&out) {
         assert_valid(&f);
     }
-    // The combined file: nodes named <name>_LOD<k>, one animation per clip name.
+    // The combined file: each LOD's mesh node a scene root named for UnityGLTF (starts with
+    // LOD) and the suffix convention (one base, `_LOD<k>`); one animation per clip name.
     let tree = import(&out.join("sapling_lods.glb"), &ImportOptions::default()).expect("import");
+    let json = gltf_json(&out.join("sapling_lods.glb"));
+    let roots = scene_roots(&json);
     for k in 0..3 {
-        let name = format!("sapling_LOD{k}");
+        let name = format!("LOD_sapling_LOD{k}");
         assert!(tree.rig.nodes.iter().any(|n| n.name == name), "{name} node");
+        assert!(
+            roots
+                .iter()
+                .any(|r| r["name"] == name.as_str() && r["mesh"].is_u64()),
+            "{name} is a scene root with the LOD's mesh"
+        );
     }
     let input = import(&sapling(), &ImportOptions::default()).expect("input");
     assert_eq!(tree.rig.clips.len(), input.rig.clips.len());
@@ -187,6 +207,23 @@ fn msft_lod_external_textures_and_vat_are_valid() {
     let combined = std::fs::read(out.join("sapling_lods.glb")).expect("combined");
     let text = String::from_utf8_lossy(&combined);
     assert!(text.contains("MSFT_lod") && text.contains("MSFT_screencoverage"));
+    // LOD0's mesh node carries the chain and names LOD1's, which is no scene root.
+    let json = gltf_json(&out.join("sapling_lods.glb"));
+    let nodes = json["nodes"].as_array().expect("nodes");
+    let roots = scene_roots(&json);
+    let lod0 = roots
+        .iter()
+        .find(|r| r["name"] == "LOD_sapling_LOD0")
+        .expect("LOD0 mesh node is a root");
+    let ids = lod0["extensions"]["MSFT_lod"]["ids"]
+        .as_array()
+        .expect("ids");
+    assert_eq!(ids.len(), 1);
+    assert_eq!(
+        nodes[ids[0].as_u64().expect("id") as usize]["name"],
+        "LOD_sapling_LOD1"
+    );
+    assert!(!roots.iter().any(|r| r["name"] == "LOD_sapling_LOD1"));
     assert!(
         std::fs::read_dir(&out)
             .expect("dir")
@@ -587,37 +624,59 @@ fn static_round_trip_on_a_real_exporters_tree() {
 }
 
 #[test]
-fn vat_textures_decode_back_to_the_motion() {
+fn vat_textures_decode_back_to_the_motion_in_every_space() {
     let b = build(&sapling(), false, 150.0);
-    for format in [VatFormat::ExrHalf, VatFormat::Png16] {
-        let vat = frond_export::cloud_motion::vat_textures(&b.cloud, format, "t").expect("vat");
-        let frames =
-            decode_rigid(&vat.position.bytes, &vat.rotation.bytes, &vat.sidecar).expect("decode");
-        let worlds = sampled_worlds(&b.cloud.rig, &b.cloud.clock);
-        let rest = b.cloud.rest_inverse();
-        let n = worlds.len();
-        let size = b.tree.bounds.size();
-        // Half floats keep 11 bits; PNG16 maps the bounds onto 65535 steps.
-        let tol = match format {
-            VatFormat::ExrHalf => size * 2e-3,
-            VatFormat::Png16 => size * 2e-4,
-        };
-        let mut worst = 0.0f32;
-        for (i, bb) in b.cloud.billboards.iter().enumerate() {
-            let pivot = bb.quad.center;
-            for s in 0..n {
-                let want = b.cloud.corners_at(i, &worlds[s], &rest, s, n);
-                let f = frames[i][s];
-                for (c, w) in bb.quad.corners().iter().zip(want) {
-                    let got = f.rotation * (*c - pivot) + f.position;
-                    worst = worst.max(got.distance(w));
+    for space in [VatSpace::Gltf, VatSpace::Unity, VatSpace::Unreal] {
+        for format in [VatFormat::ExrHalf, VatFormat::Png16] {
+            let vat = frond_export::cloud_motion::vat_textures(&b.cloud, format, "t", space)
+                .expect("vat");
+            assert_eq!(vat.sidecar.version, frond_export::vat::SIDECAR_VERSION);
+            assert_eq!(vat.sidecar.space, space);
+            assert_eq!(vat.sidecar.coordinate_system, space.coordinate_system());
+            assert_eq!(vat.sidecar.clips.len(), 1);
+            assert_eq!(vat.sidecar.clips[0].name.as_deref(), Some("Wind"));
+            assert_eq!(vat.sidecar.clips[0].frames, vat.sidecar.frames);
+            let frames = decode_rigid(&vat.position.bytes, &vat.rotation.bytes, &vat.sidecar)
+                .expect("decode");
+            let pivots = decode_pivots(&vat.pivot.bytes, &vat.sidecar).expect("pivots");
+            let worlds = sampled_worlds(&b.cloud.rig, &b.cloud.clock);
+            let rest = b.cloud.rest_inverse();
+            let n = worlds.len();
+            let size = b.tree.bounds.size();
+            // Half floats keep 11 bits (of centimetres for Unreal); PNG16 maps the bounds onto
+            // 65535 steps.
+            let tol = match format {
+                VatFormat::ExrHalf => size * 2e-3,
+                VatFormat::Png16 => size * 2e-4,
+            };
+            let mut worst = 0.0f32;
+            for (i, bb) in b.cloud.billboards.iter().enumerate() {
+                let pivot = bb.quad.center;
+                // The engine reads the rest pivot as (uv2.x, uv3.x, uv3.y) after its importer
+                // flips v (Unity) or not.
+                let [[px, _], [py, pz]] = vat.pivot_uv[i];
+                let read = match space {
+                    VatSpace::Unity => Vec3::new(px, py, 1.0 - pz),
+                    _ => Vec3::new(px, py, pz),
+                };
+                assert!(space.point_to_gltf(read).distance(pivot) < 1e-4);
+                // The pivot texture holds the same point, to half-float precision.
+                assert!(pivots[i].distance(read) <= read.abs().max_element() * 1e-3 + 1e-4);
+                for s in 0..n {
+                    let want = b.cloud.corners_at(i, &worlds[s], &rest, s, n);
+                    let f = frames[i][s];
+                    for (c, w) in bb.quad.corners().iter().zip(want) {
+                        // The importer turned the mesh's corner into the engine's space.
+                        let got = f.rotation * (space.point(*c) - read) + f.position;
+                        worst = worst.max(space.point_to_gltf(got).distance(w));
+                    }
                 }
             }
+            assert!(
+                worst <= tol,
+                "{space:?} {format:?}: decoded corners off by {worst} > {tol}"
+            );
         }
-        assert!(
-            worst <= tol,
-            "{format:?}: decoded corners off by {worst} > {tol}"
-        );
     }
 }
 

@@ -147,25 +147,12 @@ fn flatten(play: &ThreeClip) -> Vec<Vec<Vec3>> {
         .collect()
 }
 
-/// The glTF JSON of a `.glb` (first chunk) or `.gltf`.
-fn gltf_json(path: &Path) -> serde_json::Value {
-    let bytes = std::fs::read(path).expect("read glTF");
-    let json = if bytes.starts_with(b"glTF") {
-        let len = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
-        assert_eq!(&bytes[16..20], b"JSON", "first GLB chunk is JSON");
-        &bytes[20..20 + len]
-    } else {
-        &bytes[..]
-    };
-    serde_json::from_slice(json).expect("glTF JSON")
-}
-
 /// For every vertex of `flatten(play)`, its index in `tree.vertices`, when the layouts line up:
 /// frond visits `tree.rig.order`, and appends the vertices of each triangle-mode primitive
 /// (modes 4, 5, 6) of each mesh node. None when any three.js mesh lacks its indices or the counts
 /// disagree.
 pub fn frond_order(glb: &Path, tree: &Tree, play: &ThreeClip) -> Option<Vec<usize>> {
-    let json = gltf_json(glb);
+    let json = common::gltf_json(glb);
     let mut base: HashMap<(usize, usize), (usize, usize)> = HashMap::new();
     let mut next = 0usize;
     for &ni in &tree.rig.order {
@@ -511,14 +498,15 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
 
         // Billboards: the first primitives of each billboard LOD's mesh node (the baked ones',
         // then the copies' on the sample's one leaf material), 4 vertices each.
-        let json = gltf_json(file);
+        let json = common::gltf_json(file);
         let nodes = json["nodes"].as_array().expect("nodes");
         for (k, &count) in billboards.iter().enumerate().skip(1) {
             let name = format!("sapling_LOD{k}");
-            let Some(ni) = nodes
-                .iter()
-                .position(|n| n["name"] == name.as_str() && n["mesh"].is_u64())
-            else {
+            // In the combined file the LOD's mesh node is `LOD_<name>`.
+            let Some(ni) = nodes.iter().position(|n| {
+                (n["name"] == name.as_str() || n["name"] == format!("LOD_{name}").as_str())
+                    && n["mesh"].is_u64()
+            }) else {
                 continue;
             };
             let primitives = usize::from(count > copies[k]) + usize::from(copies[k] > 0);
@@ -562,5 +550,79 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
             2,
             "{name}: billboards checked in its file and the combined file"
         );
+    }
+}
+
+/// `frond lod --compress`: every file validates with `EXT_meshopt_compression` and
+/// `KHR_mesh_quantization` required, is smaller, and three.js (its meshopt decoder registered
+/// by `three_sample.mjs`, as a web app does) plays it where it plays the uncompressed file;
+/// frond reads it back with the same triangles.
+#[test]
+fn compressed_chains_validate_and_play_in_threejs_like_plain_ones() {
+    if !have_node() {
+        eprintln!("skipped: `node` is not installed (three.js playback check)");
+        return;
+    }
+    let input = common::root().join("samples/sapling.glb");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let args = [
+        "--lods",
+        "300,60",
+        "--method",
+        "static",
+        "--no-cost-budgets",
+    ];
+    let plain = dir.path().join("plain");
+    let packed = dir.path().join("packed");
+    let report = common::frond_lod(&input, &plain, &args);
+    common::frond_lod(&input, &packed, &[&args[..], &["--compress"]].concat());
+    let mut files: Vec<String> = report["lods"]
+        .as_array()
+        .expect("lods")
+        .iter()
+        .map(|l| l["file"].as_str().expect("file").to_owned())
+        .collect();
+    files.push(report["combined"].as_str().expect("combined").to_owned());
+    let times = [0.0, 0.9, 2.3];
+    for file in &files {
+        let (a, b) = (plain.join(file), packed.join(file));
+        let v = common::validate(&b);
+        assert_eq!(v["errors"], 0, "{file}: {}", v["messages"]);
+        let json = common::gltf_json(&b);
+        for ext in ["EXT_meshopt_compression", "KHR_mesh_quantization"] {
+            assert!(
+                json["extensionsRequired"]
+                    .as_array()
+                    .is_some_and(|r| r.iter().any(|e| e == ext)),
+                "{file}: {ext} required"
+            );
+        }
+        let (na, nb) = (
+            std::fs::metadata(&a).expect("plain").len(),
+            std::fs::metadata(&b).expect("packed").len(),
+        );
+        eprintln!("{file}: {na} bytes plain, {nb} compressed");
+        assert!(nb < na, "{file}: compressed {nb} ≥ plain {na}");
+        let (pa, pb) = (
+            three_positions(&a, None, &times),
+            three_positions(&b, None, &times),
+        );
+        assert_eq!(pa.len(), pb.len());
+        for (x, y) in pa.iter().zip(&pb) {
+            assert_eq!(x.len(), y.len(), "{file}: vertex count");
+            let worst = x
+                .iter()
+                .zip(y)
+                .map(|(p, q)| p.distance(*q))
+                .fold(0.0f32, f32::max);
+            // Positions and keys stay floats: the same poses up to float noise.
+            assert!(worst < 1e-4, "{file}: three.js poses differ by {worst}");
+        }
+        let (ta, tb) = (
+            import(&a, &ImportOptions::default()).expect("plain imports"),
+            import(&b, &ImportOptions::default()).expect("compressed imports"),
+        );
+        assert_eq!(ta.triangles.len(), tb.triangles.len(), "{file}");
+        assert_eq!(ta.vertices.position, tb.vertices.position, "{file}");
     }
 }

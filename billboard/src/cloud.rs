@@ -209,6 +209,7 @@ impl BillboardCloud {
         let mesh = frond_render::DrawMesh {
             positions: q.positions,
             normals: None,
+            tangents: None,
             uvs: Some(q.uvs),
             indices: q.indices,
             material: 0,
@@ -220,6 +221,7 @@ impl BillboardCloud {
                 wrap: Default::default(),
                 base_color: [1.0; 4],
                 texture: Some(0),
+                normal_texture: None,
                 alpha_cutoff: Some(0.5),
                 double_sided: true,
             }],

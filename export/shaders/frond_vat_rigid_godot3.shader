@@ -2,15 +2,15 @@
 // Godot 3 (3.2+, GLES3 only: texelFetch) spatial material for a LOD's unskinned billboard mesh
 // (`<tree>_LOD<k>_vat`). The uniforms come from the LOD's sidecar `<tree>_LOD<k>_vat.json`:
 // vat_frames = `frames`, vat_fps = `fps`, vat_bound_min / vat_bound_max = `bound_min` /
-// `bound_max`, vat_hdr = `hdr`; the textures are `textures.position` and `textures.rotation`;
-// the atlas is the billboards' glTF base colour texture. Same decoding as frond_vat_rigid.wgsl
+// `bound_max`, vat_hdr = `hdr`, clip_start_s = `start_s`; the textures are `textures.position`,
+// `textures.rotation` and `textures.pivot`; the atlas is the billboards' glTF base colour
+// texture. Same decoding as frond_vat_rigid.wgsl
 // (the tested reference) and frond_vat_rigid.gdshader (Godot 4).
 //
 // PIVOT: Godot 3's glTF importer keeps only TEXCOORD_0 and TEXCOORD_1 (as UV and UV2) and drops
 // TEXCOORD_2 / TEXCOORD_3, where frond writes the rest pivot. This material therefore reads the
-// pivot from the vertex colour, COLOR.rgb = (TEXCOORD_2.x, TEXCOORD_3.x, TEXCOORD_3.y), which
-// frond does not write: a post-import step must copy it there, with mesh compression off (the
-// default compression stores colours in 8 bits). See frond_vat_pivot().
+// pivot from the sidecar's pivot texture (`textures.pivot`, EXR half: each piece's rest pivot at
+// its frame-0 texel, the column and row UV2 names). See frond_vat_pivot().
 //
 // Import: textures with Filter, Mipmaps and Repeat off, Compress Mode Uncompressed
 // (no VRAM compression, "Detect 3D" off); use the EXR output (`--animation vat`): Godot reduces
@@ -22,8 +22,7 @@
 // TIME (the default) does so only when that clip started at TIME = 0 and loops (and TIME wraps
 // every rendering/limits/time/time_rollover_secs, 3600 s); otherwise turn use_engine_time off
 // and set clip_time to the AnimationPlayer's current_animation_position. clip_start_s is the
-// clip time of frame 0 (0 unless the sampled loop starts later in the clip; the sidecar does
-// not record it). Godot 3 has no per-instance uniforms: instances sharing this material share
+// clip time of frame 0 (the sidecar's `start_s`). Godot 3 has no per-instance uniforms: instances sharing this material share
 // clip_time and the LOD fade.
 //
 // The pieces move out of the rest mesh's bounds: give the MeshInstance an extra_cull_margin
@@ -36,6 +35,7 @@ render_mode cull_disabled;
 
 uniform sampler2D vat_position;
 uniform sampler2D vat_rotation;
+uniform sampler2D vat_pivot;
 uniform float vat_frames = 1.0;
 uniform float vat_fps = 30.0;
 uniform vec3 vat_bound_min = vec3(0.0, 0.0, 0.0);
@@ -50,9 +50,14 @@ uniform float alpha_scissor : hint_range(0.0, 1.0) = 0.5;
 uniform float lod_fade : hint_range(0.0, 1.0) = 0.0;
 uniform bool lod_incoming = false;
 
-// The rest pivot (see PIVOT above).
-vec3 frond_vat_pivot(vec4 color) {
-	return color.rgb;
+// The rest pivot of the piece at piece_uv (TEXCOORD_1): its frame-0 texel of the pivot texture
+// (see PIVOT above).
+vec3 frond_vat_pivot(vec2 piece_uv) {
+	ivec2 size = textureSize(vat_pivot, 0);
+	int height = textureSize(vat_position, 0).y;
+	int x = clamp(int(floor(piece_uv.x * float(size.x))), 0, size.x - 1);
+	int y = clamp(int(floor(piece_uv.y * float(height))), 0, size.y - 1);
+	return texelFetch(vat_pivot, ivec2(x, y), 0).rgb;
 }
 
 // Rotates v by the unit quaternion q = (x, y, z, w).
@@ -151,7 +156,7 @@ void vertex() {
 	if (use_engine_time) {
 		t = TIME;
 	}
-	vec3 pivot = frond_vat_pivot(COLOR);
+	vec3 pivot = frond_vat_pivot(UV2);
 	vec3 position;
 	vec4 rotation;
 	frond_vat_pose(UV2, (t - clip_start_s) * vat_fps, position, rotation);

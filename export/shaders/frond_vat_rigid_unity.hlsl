@@ -16,7 +16,10 @@
 //   PieceUV       UV node, UV1 (TEXCOORD_1)         PivotXY     UV2 (TEXCOORD_2)
 //   PivotYZ       UV3 (TEXCOORD_3)                  Time        clip time in seconds (Time node)
 //   PositionTex, RotationTex   Texture2D properties  BoundMin, BoundMax, Frames, Fps, Hdr
-//   ClipStart     clip time of frame 0 (0 unless the sampled loop starts later in the clip)
+//   ClipStart     clip time of frame 0 (the sidecar's `start_s`)
+//   EngineSpace   1 when the sidecar's `space` is "unity" (`frond lod --vat-space unity` or
+//                 `--preset unity`): data and pivot already in Unity's space, as Houdini bakes
+//                 for Unity; 0 for "gltf" (converted here)
 // outputs Position -> Vertex Position (Object), Normal -> Vertex Normal (Object).
 // Import both textures with sRGB off, Non-Power of 2 = None, no mipmaps, Filter Point, Wrap
 // Clamp, Compression None (PNG16: format RGBA 64 bit, or RGBA Half for EXR). The mesh's UV1-3
@@ -71,7 +74,7 @@ float4 FrondVatSlerp(float4 a, float4 b, float t)
 
 // The pose of the piece at pieceUv (Unity's flipped UV1) at integer frame, in Unity's space.
 void FrondVatLoad(UnityTexture2D positionTex, UnityTexture2D rotationTex, float2 pieceUv, int frame,
-                  float frames, float3 boundMin, float3 boundMax, float hdr,
+                  float frames, float3 boundMin, float3 boundMax, float hdr, float engineSpace,
                   out float3 position, out float4 rotation)
 {
     int2 size = int2(positionTex.texelSize.zw);
@@ -90,19 +93,26 @@ void FrondVatLoad(UnityTexture2D positionTex, UnityTexture2D rotationTex, float2
         stored = r.xyz * 2.0 - 1.0;
     }
     float4 glRotation = FrondVatDecodeRotation(stored, p.w);
-    // glTF space -> Unity space (x mirrored).
+    // glTF space -> Unity space (x mirrored), unless baked in it.
     position = float3(-glPosition.x, glPosition.y, glPosition.z);
     rotation = float4(glRotation.x, -glRotation.y, -glRotation.z, glRotation.w);
+    if (engineSpace > 0.5)
+    {
+        position = glPosition;
+        rotation = glRotation;
+    }
 }
 
 // Animated object-space position and normal of a rest-pose vertex at clip time Time.
 void FrondVatRigid_float(float3 RestPosition, float3 RestNormal, float2 PieceUV, float2 PivotXY,
                          float2 PivotYZ, float Time, UnityTexture2D PositionTex,
                          UnityTexture2D RotationTex, float3 BoundMin, float3 BoundMax,
-                         float Frames, float Fps, float Hdr, float ClipStart,
+                         float Frames, float Fps, float Hdr, float ClipStart, float EngineSpace,
                          out float3 Position, out float3 Normal)
 {
-    float3 pivot = float3(-PivotXY.x, PivotYZ.x, 1.0 - PivotYZ.y);
+    // Unity-space pivot channels were written with v pre-flipped: they read as the pivot.
+    float3 pivot = EngineSpace > 0.5 ? float3(PivotXY.x, PivotYZ.x, PivotYZ.y)
+                                     : float3(-PivotXY.x, PivotYZ.x, 1.0 - PivotYZ.y);
     float frames = max(Frames, 1.0);
     float frame = (Time - ClipStart) * Fps;
     float wrapped = frame - frames * floor(frame / frames);
@@ -113,9 +123,9 @@ void FrondVatRigid_float(float3 RestPosition, float3 RestNormal, float2 PieceUV,
     float3 positionA, positionB;
     float4 rotationA, rotationB;
     FrondVatLoad(PositionTex, RotationTex, PieceUV, i0, frames, BoundMin, BoundMax, Hdr,
-                 positionA, rotationA);
+                 EngineSpace, positionA, rotationA);
     FrondVatLoad(PositionTex, RotationTex, PieceUV, i1, frames, BoundMin, BoundMax, Hdr,
-                 positionB, rotationB);
+                 EngineSpace, positionB, rotationB);
     float3 position = lerp(positionA, positionB, t);
     float4 rotation = FrondVatSlerp(rotationA, rotationB, t);
     Position = FrondVatRotate(rotation, RestPosition - pivot) + position;
@@ -127,14 +137,14 @@ void FrondVatRigid_float(float3 RestPosition, float3 RestNormal, float2 PieceUV,
 void FrondVatRigid_half(half3 RestPosition, half3 RestNormal, half2 PieceUV, half2 PivotXY,
                         half2 PivotYZ, half Time, UnityTexture2D PositionTex,
                         UnityTexture2D RotationTex, half3 BoundMin, half3 BoundMax,
-                        half Frames, half Fps, half Hdr, half ClipStart,
+                        half Frames, half Fps, half Hdr, half ClipStart, half EngineSpace,
                         out half3 Position, out half3 Normal)
 {
     float3 position, normal;
     FrondVatRigid_float((float3)RestPosition, (float3)RestNormal, (float2)PieceUV,
                         (float2)PivotXY, (float2)PivotYZ, (float)Time, PositionTex, RotationTex,
                         (float3)BoundMin, (float3)BoundMax, (float)Frames, (float)Fps,
-                        (float)Hdr, (float)ClipStart, position, normal);
+                        (float)Hdr, (float)ClipStart, (float)EngineSpace, position, normal);
     Position = (half3)position;
     Normal = (half3)normal;
 }

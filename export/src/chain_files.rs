@@ -10,10 +10,10 @@ use frond_scene::Tree;
 use crate::ExportError;
 use crate::LodInput;
 use crate::cloud_motion::{spectral_textures, vat_textures};
-use crate::lod_file::{FileOptions, write_glb};
+use crate::lod_file::{FileOptions, write_glb, write_named_glb};
 use crate::mapping::Mapping;
 use crate::spectral::SpectralTextures;
-use crate::vat::{VatFormat, VatTextures};
+use crate::vat::{VatFormat, VatSpace, VatTextures};
 
 /// How billboards are animated in the files.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,6 +50,10 @@ pub struct ChainFileOptions {
     pub textures: crate::TextureFormat,
     /// Clip names carry Godot's loop hint ([`crate::lod_file::loop_hinted`]).
     pub loop_hint: bool,
+    /// The space VAT data is baked in (an engine's, for Houdini's stock materials).
+    pub vat_space: VatSpace,
+    /// Compressed geometry (`EXT_meshopt_compression`, `KHR_mesh_quantization`).
+    pub compress: bool,
     /// How baked billboards are lit.
     pub billboard_normals: crate::lod_scene::BillboardNormals,
     /// `MSFT_lod` screen coverages of the combined file's LODs (None: no `MSFT_lod`).
@@ -78,6 +82,7 @@ fn lod_motion(
     lod: &ChainLod,
     tree: &Tree,
     mode: AnimationMode,
+    vat_space: VatSpace,
     prefix: &str,
     entry: &mut LodEntry,
 ) -> Result<Motion, ExportError> {
@@ -88,7 +93,12 @@ fn lod_motion(
         });
     };
     let vat = match mode {
-        AnimationMode::Vat(format) => Some(vat_textures(cloud, format, &format!("{prefix}_vat"))?),
+        AnimationMode::Vat(format) => Some(vat_textures(
+            cloud,
+            format,
+            &format!("{prefix}_vat"),
+            vat_space,
+        )?),
         _ => None,
     };
     let spectral = match mode {
@@ -104,7 +114,7 @@ fn lod_motion(
         .unwrap_or(0);
     // For comparison only: a LOD VAT cannot hold (too large) just has no figure.
     entry.vat_equivalent_bytes = match &spectral {
-        Some(_) => vat_textures(cloud, VatFormat::ExrHalf, "vat")
+        Some(_) => vat_textures(cloud, VatFormat::ExrHalf, "vat", VatSpace::Gltf)
             .ok()
             .map(|v| v.position.bytes.len() + v.rotation.bytes.len()),
         None => None,
@@ -134,8 +144,14 @@ fn sidecars(
         let name = format!("{prefix}_vat.json");
         files.push((pos.clone(), v.position.bytes.clone()));
         files.push((rot.clone(), v.rotation.bytes.clone()));
+        let mut listed = vec![pos, rot];
+        if let Some(pivot) = &v.sidecar.textures.pivot {
+            files.push((pivot.clone(), v.pivot.bytes.clone()));
+            listed.push(pivot.clone());
+        }
         files.push((name.clone(), json(&v.sidecar)?));
-        entry.vat = Some(vec![pos, rot, name]);
+        listed.push(name);
+        entry.vat = Some(listed);
     }
     if let Some(t) = &motion.spectral {
         let name = format!("{prefix}_spectral.json");
@@ -163,8 +179,15 @@ pub fn chain_files(
     let mut entries: Vec<LodEntry> = chain.lods.iter().map(|l| l.entry.clone()).collect();
     let mut motions = Vec::with_capacity(chain.lods.len());
     for (k, lod) in chain.lods.iter().enumerate() {
-        let m = lod_motion(lod, tree, options.animation, &prefix(k), &mut entries[k])
-            .map_err(|e| (format!("building LOD{k}"), e))?;
+        let m = lod_motion(
+            lod,
+            tree,
+            options.animation,
+            options.vat_space,
+            &prefix(k),
+            &mut entries[k],
+        )
+        .map_err(|e| (format!("building LOD{k}"), e))?;
         motions.push(m);
     }
     let inputs: Vec<LodInput> = chain
@@ -184,6 +207,7 @@ pub fn chain_files(
                 external_textures: options.external_textures.then(|| format!("{}_", prefix(k))),
                 textures: options.textures,
                 loop_hint: options.loop_hint,
+                compress: options.compress,
                 msft_lod: None,
                 extras: Some(options.extras.clone()),
             },
@@ -206,15 +230,17 @@ pub fn chain_files(
         .map_err(at)?;
         entry.timings_s.export = t0.elapsed().as_secs_f64();
     }
-    let combined = write_glb(
+    let combined = write_named_glb(
         &inputs,
         &FileOptions {
             external_textures: options.external_textures.then(|| format!("{name}_lods_")),
             textures: options.textures,
             loop_hint: options.loop_hint,
+            compress: options.compress,
             msft_lod: options.msft_lod.clone(),
             extras: Some(options.extras.clone()),
         },
+        name,
     )
     .map_err(|e| ("writing the combined file".to_string(), e))?;
     let combined_name = format!("{name}_lods.glb");

@@ -12,14 +12,17 @@ use frond_scene::Tree;
 
 use crate::ExportError;
 use crate::spectral::{SpectralTerm, SpectralTextures, encode_spectral};
-use crate::vat::{RigidFrame, RigidPiece, VatFormat, VatOptions, VatTextures, encode_rigid_with};
+use crate::vat::{
+    RigidFrame, RigidPiece, VatFormat, VatOptions, VatSpace, VatTextures, encode_rigid_with,
+};
 
-/// Vertex animation textures of every billboard over the clock's samples; textures are named
-/// `<stem>_pos.<ext>` and `<stem>_rot.<ext>`.
+/// Vertex animation textures of every billboard over the clock's samples, baked in `space`;
+/// textures are named `<stem>_pos.<ext>` and `<stem>_rot.<ext>`.
 pub fn vat_textures(
     cloud: &AnimatedBillboardCloud,
     format: VatFormat,
     stem: &str,
+    space: VatSpace,
 ) -> Result<VatTextures, ExportError> {
     let worlds = sampled_worlds(&cloud.rig, &cloud.clock);
     let rest_inv = cloud.rest_inverse();
@@ -54,6 +57,13 @@ pub fn vat_textures(
         format,
         &VatOptions {
             file_stem: stem.to_string(),
+            space,
+            clip: cloud
+                .clock
+                .clip
+                .and_then(|c| cloud.rig.clips.get(c))
+                .map(|c| c.name.clone()),
+            start_s: cloud.clock.start,
             ..Default::default()
         },
     )?)

@@ -9,7 +9,7 @@
 //! `KHR_texture_basisu` wants level 0 a multiple of 4 a side; a map that is not is resampled
 //! up to the next multiple (UVs are normalized, so nothing else changes).
 
-use frond_scene::ktx2::{Level, encode_uastc};
+use frond_scene::ktx2::encode_uastc;
 use image::RgbaImage;
 use image::imageops::{FilterType, resize};
 
@@ -73,36 +73,11 @@ pub fn ktx2_bytes(
     };
     let levels = match kind {
         MapKind::Colour => frond_render::mip_chain(w4, h4, &base),
-        MapKind::Linear => box_chain(w4, h4, base),
+        MapKind::Linear => frond_render::linear_mip_chain(w4, h4, base),
     };
     let alpha = kind == MapKind::Colour;
     encode_uastc(&levels, kind == MapKind::Colour, alpha)
         .map_err(|e| ExportError::Ktx2(format!("{name}: {e}")))
-}
-
-/// The full chain of 2×2 box-filtered levels (edge texels repeated), for linear data.
-fn box_chain(width: u32, height: u32, rgba: Vec<u8>) -> Vec<Level> {
-    let mut out = vec![(width, height, rgba)];
-    while let Some((w, h, data)) = out.last().filter(|l| l.0 > 1 || l.1 > 1) {
-        let (w2, h2) = ((w / 2).max(1), (h / 2).max(1));
-        let mut next = vec![0u8; (w2 * h2 * 4) as usize];
-        for y in 0..h2 {
-            for x in 0..w2 {
-                for k in 0..4 {
-                    let sum: u32 = [(0, 0), (1, 0), (0, 1), (1, 1)]
-                        .iter()
-                        .map(|&(dx, dy)| {
-                            let (sx, sy) = ((2 * x + dx).min(w - 1), (2 * y + dy).min(h - 1));
-                            u32::from(data[((sy * w + sx) * 4 + k) as usize])
-                        })
-                        .sum();
-                    next[((y * w2 + x) * 4 + k) as usize] = sum.div_ceil(4).min(255) as u8;
-                }
-            }
-        }
-        out.push((w2, h2, next));
-    }
-    out
 }
 
 #[cfg(test)]
@@ -131,8 +106,9 @@ mod tests {
         assert_eq!((info.width, info.height, info.levels), (64, 60, 7));
         assert!(info.srgb && info.alpha);
         let levels = frond_scene::ktx2::decode_levels(&file, usize::MAX).expect("decodes");
-        let coverage =
-            |l: &Level| l.2.chunks(4).filter(|p| p[3] >= 128).count() as f64 / f64::from(l.0 * l.1);
+        let coverage = |l: &frond_scene::ktx2::Level| {
+            l.2.chunks(4).filter(|p| p[3] >= 128).count() as f64 / f64::from(l.0 * l.1)
+        };
         let c0 = coverage(&levels[0]);
         assert!(c0 > 0.15 && c0 < 0.4, "{c0}");
         for l in &levels[1..4] {
@@ -143,7 +119,7 @@ mod tests {
 
     #[test]
     fn linear_maps_are_box_filtered() {
-        let chain = box_chain(
+        let chain = frond_render::linear_mip_chain(
             2,
             2,
             vec![

@@ -1,6 +1,11 @@
 //! Whole glTF files: one LOD per file, or every LOD in one combined file whose LOD nodes are
 //! named `<name>_LOD<k>` (the suffix convention Unity and Unreal importers use), optionally
-//! with `MSFT_lod` (spec gltf-and-toolchain.md "LOD chains").
+//! with `MSFT_lod` (spec gltf-and-toolchain.md "LOD chains"). In the combined file each LOD's
+//! skinned mesh node is named `LOD_<name>_LOD<k>`: a scene root whose name starts with `LOD`
+//! (UnityGLTF's name-based LOD import makes a LODGroup of such roots) and ends in `_LOD<k>`
+//! after a base all LODs share (the suffix convention); the LOD's other mesh node (VAT
+//! billboards, not skinned) is its child, so one node shows or hides a LOD (Godot shows every
+//! root at once). Skinned mesh nodes stay scene roots (glTF: parents do not move them).
 
 use frond_scene::gltf_writer::{ChannelDesc, GltfBuilder};
 use serde_json::json;
@@ -19,6 +24,9 @@ pub struct FileOptions {
     /// Name clips with Godot's loop import hint (a `-loop` suffix): glTF has no loop flag,
     /// and Godot's importer loops clips whose names end in `-loop` or `_loop`.
     pub loop_hint: bool,
+    /// Compressed geometry: `EXT_meshopt_compression` and `KHR_mesh_quantization`
+    /// ([`GltfBuilder::set_compression`]).
+    pub compress: bool,
     /// Combined files only: add `MSFT_lod` on LOD0 with these screen coverages (one per LOD,
     /// the smallest fraction of the screen height at which that LOD is shown).
     pub msft_lod: Option<Vec<f32>>,
@@ -48,6 +56,21 @@ pub fn loop_hinted(name: &str) -> String {
 /// the suffix `_LOD<k>` so names stay unique; animations are merged by clip name so one clip
 /// plays every LOD in phase.
 pub fn write_glb(lods: &[LodInput], opts: &FileOptions) -> Result<GltfFile, ExportError> {
+    write_named_glb(lods, opts, "")
+}
+
+/// The name of LOD `k`'s mesh node in a combined file of the tree `name` (see the module
+/// docs).
+pub fn lod_group_name(name: &str, k: usize) -> String {
+    format!("LOD_{name}_LOD{k}")
+}
+
+/// [`write_glb`]; a combined file's LOD mesh nodes are named after the tree `name`.
+pub fn write_named_glb(
+    lods: &[LodInput],
+    opts: &FileOptions,
+    name: &str,
+) -> Result<GltfFile, ExportError> {
     if lods.is_empty() {
         return Err(ExportError::NoLod);
     }
@@ -55,10 +78,11 @@ pub fn write_glb(lods: &[LodInput], opts: &FileOptions) -> Result<GltfFile, Expo
     if let Some(e) = &opts.extras {
         doc.set_extras(e.clone());
     }
+    doc.set_compression(opts.compress);
     let mut sink = TextureSink::new(opts.external_textures.clone(), opts.textures);
     let combined = lods.len() > 1;
     let mut clips: Vec<(String, Vec<ChannelDesc>)> = Vec::new();
-    let mut mesh_nodes = Vec::new();
+    let mut groups = Vec::new();
     let mut joints = Vec::new();
     for (k, lod) in lods.iter().enumerate() {
         let suffix = if combined {
@@ -68,6 +92,21 @@ pub fn write_glb(lods: &[LodInput], opts: &FileOptions) -> Result<GltfFile, Expo
         };
         let nodes = add_lod(&mut doc, lod, &suffix, &mut sink)?;
         doc.add_root(nodes.rig_root);
+        match nodes.mesh_nodes.split_first() {
+            Some((&first, rest)) if combined => {
+                doc.set_node_name(first, &lod_group_name(name, k));
+                for &n in rest {
+                    doc.add_child(first, n);
+                }
+                groups.push(Some(first));
+            }
+            _ => {
+                for &n in &nodes.mesh_nodes {
+                    doc.add_root(n);
+                }
+                groups.push(None);
+            }
+        }
         joints.push(nodes.joints);
         for c in nodes.clips {
             match clips.iter_mut().find(|(n, _)| *n == c.name) {
@@ -75,48 +114,34 @@ pub fn write_glb(lods: &[LodInput], opts: &FileOptions) -> Result<GltfFile, Expo
                 None => clips.push((c.name, c.channels)),
             }
         }
-        mesh_nodes.push(nodes.mesh_nodes);
     }
-    match (&opts.msft_lod, combined) {
-        (Some(coverage), true) => {
-            // LOD0's first mesh node carries the chain; the lower LODs' mesh nodes are reached
+    let groups: Vec<usize> = groups.into_iter().flatten().collect();
+    match (&opts.msft_lod, groups.split_first()) {
+        (Some(coverage), Some((&first, lower))) if combined => {
+            // LOD0's mesh node carries the chain; the lower LODs' mesh nodes are reached
             // through it only (clients without MSFT_lod show LOD0).
             doc.use_extension("MSFT_lod");
-            let ids: Vec<usize> = mesh_nodes[1..]
-                .iter()
-                .filter_map(|n| n.first().copied())
-                .collect();
-            for (k, nodes) in mesh_nodes.iter().enumerate() {
-                for (i, &n) in nodes.iter().enumerate() {
-                    if k == 0 && i == 0 {
-                        doc.set_node_extension(
-                            n,
-                            "MSFT_lod",
-                            json!({ "ids": ids }),
-                            Some(json!({ "MSFT_screencoverage": coverage })),
-                        );
-                        doc.add_root(n);
-                    } else if k == 0 || i > 0 {
-                        doc.add_root(n);
-                    }
-                }
-            }
+            doc.set_node_extension(
+                first,
+                "MSFT_lod",
+                json!({ "ids": lower }),
+                Some(json!({ "MSFT_screencoverage": coverage })),
+            );
+            doc.add_root(first);
         }
         _ => {
-            for nodes in &mesh_nodes {
-                for &n in nodes {
-                    doc.add_root(n);
-                }
+            for &g in &groups {
+                doc.add_root(g);
             }
         }
     }
-    for (name, channels) in clips {
-        let name = if opts.loop_hint {
-            loop_hinted(&name)
+    for (clip, channels) in clips {
+        let clip = if opts.loop_hint {
+            loop_hinted(&clip)
         } else {
-            name
+            clip
         };
-        doc.add_animation(&name, &channels);
+        doc.add_animation(&clip, &channels);
     }
     Ok(GltfFile {
         glb: doc.to_glb(),

@@ -23,8 +23,90 @@ pub const PIVOT_CHANNELS: [&str; 3] = ["TEXCOORD_2.x", "TEXCOORD_3.x", "TEXCOORD
 pub const ROTATION_ENCODING: &str = "smallest_three";
 /// Value of [`VatSidecar::rest_pose`].
 pub const REST_POSE: &str = "mesh";
-/// Value of [`VatSidecar::coordinate_system`].
+/// Value of [`VatSidecar::coordinate_system`] for data in the glTF file's own space.
 pub const COORDINATE_SYSTEM: &str = "gltf_y_up_right_handed_metres";
+/// Value of [`VatSidecar::version`]: 2 added `version`, `space`, `start_s` and `clips` (a
+/// sidecar without `version` is version 1, glTF space).
+pub const SIDECAR_VERSION: u32 = 2;
+
+/// The space the texture data and the pivot channels are baked in: the glTF file's, or the one
+/// an engine's glTF importer turns the mesh into, so that Houdini VAT 3.0's stock materials,
+/// which take the data as the engine's own (Houdini bakes per engine), play it unedited.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VatSpace {
+    /// Right-handed, +Y up, metres: the glTF file's space (frond's own shaders).
+    #[default]
+    Gltf,
+    /// Unity as glTFast and UnityGLTF import: x negated (left-handed, +Y up, metres), every
+    /// UV set's v flipped (`v' = 1 − v`).
+    Unity,
+    /// Unreal as its glTF importers convert: y and z swapped (left-handed, +Z up), centimetres
+    /// (× 100); UVs unchanged.
+    Unreal,
+}
+
+impl VatSpace {
+    /// [`VatSidecar::coordinate_system`] for this space.
+    pub fn coordinate_system(self) -> &'static str {
+        match self {
+            VatSpace::Gltf => COORDINATE_SYSTEM,
+            VatSpace::Unity => "unity_y_up_left_handed_metres",
+            VatSpace::Unreal => "unreal_z_up_left_handed_centimetres",
+        }
+    }
+
+    /// A glTF-space point in this space.
+    pub fn point(self, p: Vec3) -> Vec3 {
+        match self {
+            VatSpace::Gltf => p,
+            VatSpace::Unity => Vec3::new(-p.x, p.y, p.z),
+            VatSpace::Unreal => Vec3::new(p.x, p.z, p.y) * 100.0,
+        }
+    }
+
+    /// A point of this space back in glTF space (the inverse of [`VatSpace::point`]).
+    pub fn point_to_gltf(self, p: Vec3) -> Vec3 {
+        match self {
+            VatSpace::Gltf => p,
+            VatSpace::Unity => Vec3::new(-p.x, p.y, p.z),
+            VatSpace::Unreal => Vec3::new(p.x, p.z, p.y) / 100.0,
+        }
+    }
+
+    /// A glTF-space rotation in this space: conjugated by the change of axes, which mirrors
+    /// (determinant −1), so the axis (a pseudovector) is mapped and negated. Its own inverse.
+    pub fn rotation(self, q: Quat) -> Quat {
+        match self {
+            VatSpace::Gltf => q,
+            VatSpace::Unity => Quat::from_xyzw(q.x, -q.y, -q.z, q.w),
+            VatSpace::Unreal => Quat::from_xyzw(-q.x, -q.z, -q.y, q.w),
+        }
+    }
+
+    /// The values of `TEXCOORD_2` and `TEXCOORD_3` that make the engine read the rest pivot,
+    /// in its space, as `(uv2.x, uv3.x, uv3.y)` after its importer's UV conversion (Unity
+    /// flips v, so v is written as `1 − value`).
+    pub fn pivot_channels(self, pivot: Vec3) -> [[f32; 2]; 2] {
+        let p = self.point(pivot);
+        match self {
+            VatSpace::Unity => [[p.x, 1.0], [p.y, 1.0 - p.z]],
+            VatSpace::Gltf | VatSpace::Unreal => [[p.x, 0.0], [p.y, p.z]],
+        }
+    }
+}
+
+/// One clip the textures hold: frames `first_frame .. first_frame + frames` are its loop.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VatClip {
+    /// The input's clip name (None for a tree without clips).
+    pub name: Option<String>,
+    /// Clip time of frame `first_frame`, seconds (the sampled loop's start).
+    pub start_s: f32,
+    pub duration_s: f32,
+    pub first_frame: u32,
+    pub frames: u32,
+}
 /// Value of [`VatSidecar::row_order`].
 pub const ROW_ORDER: &str = "top_row_first";
 
@@ -87,6 +169,11 @@ pub struct VatTextureFiles {
     pub position: String,
     /// RGB: the three smaller quaternion components; A: rotations (turns) to the next frame.
     pub rotation: String,
+    /// RGB: each piece's rest pivot (as the pivot channels give it, in the data's space), one
+    /// frame's rows (`rows_per_frame` high), EXR half: for engines that drop `TEXCOORD_2`/`_3`
+    /// (Godot 3's importer keeps two UV sets). Version 2 sidecars.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pivot: Option<String>,
 }
 
 /// The JSON written beside the textures: everything a material needs to play them.
@@ -128,8 +215,24 @@ pub struct VatSidecar {
     pub rotation_encoding: String,
     /// Always [`REST_POSE`]: the mesh holds the rest pose; no texture row is the rest pose.
     pub rest_pose: String,
-    /// Always [`COORDINATE_SYSTEM`].
+    /// [`VatSpace::coordinate_system`] of `space`.
     pub coordinate_system: String,
+    /// [`SIDECAR_VERSION`] when written; 1 for sidecars without the field.
+    #[serde(default = "version_1")]
+    pub version: u32,
+    /// Where the texture data and pivot channels are baked (glTF space before version 2).
+    #[serde(default)]
+    pub space: VatSpace,
+    /// Clip time of frame 0, seconds: play at `(clip_time − start_s) × fps`.
+    #[serde(default)]
+    pub start_s: f32,
+    /// The clips the rows hold, in order (one sampled loop today).
+    #[serde(default)]
+    pub clips: Vec<VatClip>,
+}
+
+fn version_1() -> u32 {
+    1
 }
 
 /// Everything [`encode_rigid`] produces.
@@ -137,6 +240,8 @@ pub struct VatSidecar {
 pub struct VatTextures {
     pub position: VatImage,
     pub rotation: VatImage,
+    /// [`VatTextureFiles::pivot`].
+    pub pivot: VatImage,
     pub sidecar: VatSidecar,
     /// Per piece: the texture coordinate to put in the UV channel named in the sidecar
     /// (same for all corners of that billboard).
@@ -153,6 +258,11 @@ pub struct VatOptions {
     pub max_texture_size: u32,
     /// File name stem: textures are `{stem}_pos.{ext}` and `{stem}_rot.{ext}`.
     pub file_stem: String,
+    /// The space the data is baked in (the pieces are given in glTF space).
+    pub space: VatSpace,
+    /// The clip the frames are a loop of, and its time at frame 0 (for the sidecar).
+    pub clip: Option<String>,
+    pub start_s: f32,
 }
 
 impl Default for VatOptions {
@@ -160,6 +270,9 @@ impl Default for VatOptions {
         VatOptions {
             max_texture_size: MAX_TEXTURE_SIZE,
             file_stem: "vat".to_string(),
+            space: VatSpace::Gltf,
+            clip: None,
+            start_s: 0.0,
         }
     }
 }
@@ -398,6 +511,28 @@ pub fn encode_rigid_with(
     if options.max_texture_size == 0 {
         return Err(VatError::InvalidMaxSize(options.max_texture_size));
     }
+    let space = options.space;
+    let rest_pivots: Vec<Vec3> = pieces.iter().map(|p| p.pivot).collect();
+    let converted: Vec<RigidPiece>;
+    let pieces = if space == VatSpace::Gltf {
+        pieces
+    } else {
+        converted = pieces
+            .iter()
+            .map(|p| RigidPiece {
+                pivot: space.point(p.pivot),
+                frames: p
+                    .frames
+                    .iter()
+                    .map(|f| RigidFrame {
+                        position: space.point(f.position),
+                        rotation: space.rotation(f.rotation),
+                    })
+                    .collect(),
+            })
+            .collect();
+        &converted
+    };
     let rotations = validate(pieces, fps)?;
     let frames = rotations[0].len();
     let grid = Grid::new(pieces.len(), frames, options.max_texture_size)?;
@@ -521,9 +656,9 @@ pub fn encode_rigid_with(
             ]
         })
         .collect();
-    let pivot_uv = pieces
+    let pivot_uv = rest_pivots
         .iter()
-        .map(|piece| [[piece.pivot.x, 0.0], [piece.pivot.y, piece.pivot.z]])
+        .map(|&pivot| space.pivot_channels(pivot))
         .collect();
 
     let sidecar = VatSidecar {
@@ -541,6 +676,7 @@ pub fn encode_rigid_with(
         textures: VatTextureFiles {
             position: format!("{}_pos.{extension}", options.file_stem),
             rotation: format!("{}_rot.{extension}", options.file_stem),
+            pivot: Some(format!("{}_pivot.exr", options.file_stem)),
         },
         bound_min: bound_min.to_array(),
         bound_max: material_bound_max.to_array(),
@@ -550,7 +686,17 @@ pub fn encode_rigid_with(
         pivot_channels: PIVOT_CHANNELS.map(str::to_string),
         rotation_encoding: ROTATION_ENCODING.to_string(),
         rest_pose: REST_POSE.to_string(),
-        coordinate_system: COORDINATE_SYSTEM.to_string(),
+        coordinate_system: space.coordinate_system().to_string(),
+        version: SIDECAR_VERSION,
+        space,
+        start_s: options.start_s,
+        clips: vec![VatClip {
+            name: options.clip.clone(),
+            start_s: options.start_s,
+            duration_s: frames as f32 / fps,
+            first_frame: 0,
+            frames: frame_count,
+        }],
     };
     tracing::debug!(
         "VAT rigid: {} pieces × {} frames → {}×{} {:?}",
@@ -560,9 +706,24 @@ pub fn encode_rigid_with(
         grid.height,
         format
     );
+    // The rest pivots, as the pivot channels carry them (in the data's space), at each piece's
+    // frame-0 texel.
+    let mut pivot_texels =
+        vec![[0.0f32, 0.0, 0.0, 1.0]; grid.width as usize * grid.rows_per_frame as usize];
+    for (p, &pivot) in rest_pivots.iter().enumerate() {
+        let q = space.point(pivot);
+        pivot_texels[grid.texel(p, 0)] = [q.x, q.y, q.z, 1.0];
+    }
+    let pivot = VatImage {
+        width: grid.width,
+        height: grid.rows_per_frame,
+        bytes: write_exr_half(grid.width, grid.rows_per_frame, &pivot_texels),
+        extension: "exr",
+    };
     Ok(VatTextures {
         position: image(position_bytes),
         rotation: image(rotation_bytes),
+        pivot,
         sidecar,
         piece_uv,
         pivot_uv,
@@ -810,6 +971,25 @@ pub fn decode_rigid(
         out.push(track);
     }
     Ok(out)
+}
+
+/// Reads the pivot texture ([`VatTextureFiles::pivot`]) back: each piece's rest pivot, in the
+/// sidecar's space (half-float precision).
+pub fn decode_pivots(pivot: &[u8], sidecar: &VatSidecar) -> Result<Vec<Vec3>, VatError> {
+    let grid = sidecar_grid(sidecar)?;
+    let texels = read_texels(
+        pivot,
+        VatFormat::ExrHalf,
+        "pivot",
+        grid.width,
+        grid.rows_per_frame,
+    )?;
+    Ok((0..sidecar.pieces as usize)
+        .map(|p| {
+            let t = texels[grid.texel(p, 0)];
+            Vec3::new(t[0], t[1], t[2])
+        })
+        .collect())
 }
 
 /// Reads the rotation texture's alpha back: per piece and frame, the turns (rotation angle / 2π)

@@ -20,6 +20,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use frond_export::shaders::{LOD_FADE_SHADERS, SHADERS, SPECTRAL_SHADERS, ShaderFile};
+use frond_export::vat::VatSpace;
 use glam::{Mat3, Quat, Vec3};
 
 /// Every shipped file once, by name.
@@ -488,7 +489,7 @@ Texture2D<float4> gRotation : register(t1);
 SamplerState gSampler : register(s0);
 cbuffer Params : register(b0) {
     float4 gTexelSize; float3 gBoundMin; float gFrames; float3 gBoundMax; float gFps;
-    float gHdr; float gTime; float gClipStart;
+    float gHdr; float gTime; float gClipStart; float gEngineSpace;
 };
 struct VertexIn {
     float3 position : POSITION; float3 normal : NORMAL;
@@ -499,12 +500,13 @@ float4 main(VertexIn v) : SV_Position {
     UnityTexture2D rotationTex = UnityStandIn(gRotation, gSampler, gTexelSize);
     float3 p, n;
     FrondVatRigid_float(v.position, v.normal, v.uv1, v.uv2, v.uv3, gTime, positionTex, rotationTex,
-                        gBoundMin, gBoundMax, gFrames, gFps, gHdr, gClipStart, p, n);
+                        gBoundMin, gBoundMax, gFrames, gFps, gHdr, gClipStart, gEngineSpace,
+                        p, n);
     half3 ph, nh;
     FrondVatRigid_half((half3)v.position, (half3)v.normal, (half2)v.uv1, (half2)v.uv2,
                        (half2)v.uv3, (half)gTime, positionTex, rotationTex, (half3)gBoundMin,
                        (half3)gBoundMax, (half)gFrames, (half)gFps, (half)gHdr, (half)gClipStart,
-                       ph, nh);
+                       (half)gEngineSpace, ph, nh);
     return float4(p + n + ph + nh, 1.0);
 }
 "#,
@@ -540,7 +542,7 @@ float3 CustomExpression0(FMaterialVertexParameters Parameters, Texture2D Positio
     SamplerState PositionTexSampler, Texture2D RotationTex, SamplerState RotationTexSampler,
     float2 PieceUV, float2 PivotXY, float2 PivotYZ, float3 LocalPosition, float3 LocalNormal,
     float Time, float ClipStart, float Frames, float Fps, float Hdr, float3 BoundMin,
-    float3 BoundMax, float UnitScale, inout float3 AnimatedNormal)
+    float3 BoundMax, float UnitScale, float EngineSpace, inout float3 AnimatedNormal)
 {
 "#,
         ],
@@ -551,7 +553,7 @@ Texture2D gRotation : register(t1);
 SamplerState gSampler : register(s0);
 cbuffer Params : register(b0) {
     float3x3 gLocalToWorld; float3 gBoundMin; float gFrames; float3 gBoundMax; float gFps;
-    float gHdr; float gTime;
+    float gHdr; float gTime; float gEngineSpace;
 };
 struct VertexIn {
     float3 position : POSITION; float3 normal : NORMAL;
@@ -563,7 +565,7 @@ float4 main(VertexIn v) : SV_Position {
     float3 normal = v.normal;
     float3 offset = CustomExpression0(parameters, gPosition, gSampler, gRotation, gSampler, v.uv1,
         v.uv2, v.uv3, v.position, v.normal, gTime, 0.0, gFrames, gFps, gHdr, gBoundMin,
-        gBoundMax, 100.0, normal);
+        gBoundMax, 100.0, gEngineSpace, normal);
     return float4(v.position + offset + normal, 1.0);
 }
 "#,
@@ -1044,9 +1046,15 @@ fn engine_axis_conversions_turn_quaternions_like_the_imported_mesh() {
     .enumerate()
     {
         let q = Quat::from_axis_angle(axis.normalize(), 0.4 + i as f32);
+        // What the files do, and what `--vat-space` bakes (the same conversion).
         let unity_q = Quat::from_xyzw(q.x, -q.y, -q.z, q.w);
         let unreal_q = Quat::from_xyzw(-q.x, -q.z, -q.y, q.w);
-        for (name, m, converted) in [("Unity", unity, unity_q), ("Unreal", unreal, unreal_q)] {
+        assert_eq!(VatSpace::Unity.rotation(q), unity_q);
+        assert_eq!(VatSpace::Unreal.rotation(q), unreal_q);
+        for (name, m, converted, space) in [
+            ("Unity", unity, unity_q, VatSpace::Unity),
+            ("Unreal", unreal, unreal_q, VatSpace::Unreal),
+        ] {
             let want = m * rotation(q) * m.inverse();
             let got = rotation(converted);
             assert!(
@@ -1062,6 +1070,16 @@ fn engine_axis_conversions_turn_quaternions_like_the_imported_mesh() {
             let gltf = q * (rest - pivot) + p;
             let engine = converted * (m * rest - m * pivot) + m * p;
             assert!((m * gltf).abs_diff_eq(engine, 1e-5), "{name}");
+            // The baked data: the same pose, with Unreal's centimetres.
+            let scale = if space == VatSpace::Unreal {
+                100.0
+            } else {
+                1.0
+            };
+            let baked = VatSpace::rotation(space, q) * (space.point(rest) - space.point(pivot))
+                + space.point(p);
+            assert!((m * gltf * scale).abs_diff_eq(baked, 1e-3), "{name} baked");
+            assert!(space.point_to_gltf(baked).abs_diff_eq(gltf, 1e-5));
         }
     }
 }

@@ -31,7 +31,8 @@
 //! whole tree's rest bounds), never from either scene.
 
 use frond_render::{
-    Camera, DrawScene, Projection, RenderError, Renderer, SoftwareTextures, render_coverage,
+    Camera, DrawScene, Lighting, Projection, RenderError, Renderer, SoftwareTextures,
+    render_coverage,
 };
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -72,6 +73,9 @@ pub struct CoverageParams {
     /// coverage alone needs neither a depth test nor the textures' colour.
     #[serde(default = "yes")]
     pub colour: bool,
+    /// How the colour renders are lit (the CPU rasteriser's; the wgpu one is two-sided).
+    #[serde(default)]
+    pub lighting: Lighting,
 }
 
 fn yes() -> bool {
@@ -103,6 +107,7 @@ impl Default for CoverageParams {
             supersample: 4,
             rasteriser: Rasteriser::Software,
             colour: true,
+            lighting: Lighting::TwoSided,
         }
     }
 }
@@ -130,6 +135,12 @@ pub struct CoverageReport {
     pub colour_difference: f64,
     /// That difference per (view, frame) pair; NaN for a pair sharing no pixel.
     pub colour_per_pair: Vec<f64>,
+    /// The shift of the mean colour over the same pixels: per pair `|mean(o − s)|` (signed
+    /// per pixel, mean of the three channels), averaged like `colour_difference`. What reads as
+    /// one LOD being lighter or darker than the other (the pop at a switch), without the
+    /// per-pixel differences that average out at a distance; NaN when no pair shares a pixel.
+    #[serde(default)]
+    pub colour_shift: f64,
 }
 
 /// Why the coverage metric could not be computed.
@@ -333,7 +344,10 @@ pub fn coverage_masks(
                     Some(g) => of_frame.push(of_frame[g]),
                     None => {
                         of_frame.push(prepared.len());
-                        prepared.push(SoftwareTextures::new(scene, params.colour)?);
+                        prepared.push(
+                            SoftwareTextures::new(scene, params.colour)?
+                                .with_lighting(params.lighting),
+                        );
                     }
                 }
             }
@@ -391,7 +405,7 @@ pub fn compare_masks(
     let mut differing_pixels = Vec::with_capacity(pairs);
     let mut per_view = Vec::with_capacity(original.views);
     let (mut total, mut kept_total, mut discarded) = (0.0f64, 0usize, 0usize);
-    let (mut colour_sum, mut colour_pairs) = (0.0f64, 0usize);
+    let (mut colour_sum, mut colour_pairs, mut shift_sum) = (0.0f64, 0usize, 0.0f64);
     let mut colour_per_pair = Vec::with_capacity(pairs);
     for d in 0..original.views {
         let (mut view_sum, mut view_kept) = (0.0f64, 0usize);
@@ -399,18 +413,21 @@ pub fn compare_masks(
             let i = d * original.frames + f;
             let (o, s) = (&original.covered[i], &simplified.covered[i]);
             let (o_rgb, s_rgb) = (&original.colour[i], &simplified.colour[i]);
-            let (mut diff, mut shared) = (0.0f64, 0usize);
+            let (mut diff, mut signed, mut shared) = (0.0f64, 0.0f64, 0usize);
             // Masks drawn without colour have none to compare.
             let with_colour = o_rgb.len() == o.len() && s_rgb.len() == s.len();
             for p in (0..o.len().min(s.len())).filter(|_| with_colour) {
                 if o[p] && s[p] {
                     let d: f32 = (0..3).map(|c| (o_rgb[p][c] - s_rgb[p][c]).abs()).sum();
                     diff += f64::from(d) / 3.0;
+                    let sd: f32 = (0..3).map(|c| o_rgb[p][c] - s_rgb[p][c]).sum();
+                    signed += f64::from(sd) / 3.0;
                     shared += 1;
                 }
             }
             if shared > 0 {
                 colour_sum += diff / shared as f64;
+                shift_sum += (signed / shared as f64).abs();
                 colour_pairs += 1;
                 colour_per_pair.push(diff / shared as f64);
             } else {
@@ -440,6 +457,7 @@ pub fn compare_masks(
         differing_pixels,
         colour_difference: mean_or_nan(colour_sum, colour_pairs),
         colour_per_pair,
+        colour_shift: mean_or_nan(shift_sum, colour_pairs),
     })
 }
 

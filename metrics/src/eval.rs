@@ -8,7 +8,7 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::time::Instant;
 
-use frond_render::{DrawScene, Renderer, TreeParts, tree_scene};
+use frond_render::{DrawScene, Lighting, Renderer, TreeParts, tree_scene};
 use frond_scene::{
     FileCost, InputLimits, SampleOptions, Sampled, SceneError, Tree, file_cost, sample,
 };
@@ -43,6 +43,13 @@ pub struct EvalRequest {
     pub clip: Option<String>,
     /// What reading a file for its cost may take (the limits the trees were imported with).
     pub limits: InputLimits,
+    /// Draw every surface white (alpha and the alpha test kept) in the colour metric, so its
+    /// colour difference is the lighting's alone: how closely a LOD's normals (vertex normals,
+    /// normal maps) light it like the tree under the metric's directional light, without the
+    /// baked textures' own differences.
+    pub white_albedo: bool,
+    /// How the colour metric's renders are lit.
+    pub lighting: Lighting,
 }
 
 /// Why an evaluation failed.
@@ -86,6 +93,23 @@ fn candidate_clip(candidate: &Tree, name: Option<&str>) -> Option<usize> {
         .or_else(|| candidate.clip_index(None))
 }
 
+/// `scene` with white base colours and textures, their alpha (and so the alpha test) kept:
+/// what is left of its colour is the lighting ([`EvalRequest::white_albedo`]).
+fn whiten(scene: &mut DrawScene) {
+    for m in &mut scene.materials {
+        m.base_color = [1.0, 1.0, 1.0, m.base_color[3]];
+    }
+    // Only colour textures: a normal map must keep its texels.
+    let colour: Vec<usize> = scene.materials.iter().filter_map(|m| m.texture).collect();
+    for (i, t) in scene.textures.iter_mut().enumerate() {
+        if colour.contains(&i) {
+            for texel in t.rgba.chunks_exact_mut(4) {
+                texel[..3].fill(255);
+            }
+        }
+    }
+}
+
 /// The original's half of an evaluation, computed once and reused for every candidate: its
 /// sampled loop, the frame times, and its coverage masks per image size (a sweep scores many
 /// candidates against one original).
@@ -97,6 +121,9 @@ pub struct EvalContext<'a> {
     /// Per image size and whether drawn with colour.
     masks: HashMap<((u32, u32), bool), CoverageMasks>,
     views: u32,
+    /// [`EvalRequest::white_albedo`].
+    white_albedo: bool,
+    lighting: Lighting,
     /// The original file's cost, read once.
     original_file: FileCost,
     limits: InputLimits,
@@ -135,6 +162,8 @@ impl<'a> EvalContext<'a> {
             frame_times,
             masks: Default::default(),
             views: req.views,
+            white_albedo: req.white_albedo,
+            lighting: req.lighting,
             original_file,
             limits: req.limits,
         })
@@ -152,6 +181,7 @@ impl<'a> EvalContext<'a> {
             width: size.0,
             height: size.1,
             colour,
+            lighting: self.lighting,
             ..Default::default()
         }
     }
@@ -159,7 +189,13 @@ impl<'a> EvalContext<'a> {
     fn scenes(&self, tree: &Tree, clip: Option<usize>) -> Vec<DrawScene> {
         self.frame_times
             .iter()
-            .map(|&t| tree_scene(tree, clip, t, TreeParts::Foliage))
+            .map(|&t| {
+                let mut scene = tree_scene(tree, clip, t, TreeParts::Foliage);
+                if self.white_albedo {
+                    whiten(&mut scene);
+                }
+                scene
+            })
             .collect()
     }
 
@@ -342,6 +378,7 @@ fn score(
         None => agg(id, &|m| (f(&m.1), f(&m.1))),
     };
     EvalReport {
+        colour_shift: anim.colour_shift,
         original: original.source.display().to_string(),
         candidate: candidate.source.display().to_string(),
         clip: sampled.clip.clone(),
@@ -384,5 +421,41 @@ fn score(
             "matching": (t2 - t1).as_secs_f64(),
             "trajectories": t2.elapsed().as_secs_f64(),
         }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use frond_render::{DrawMaterial, DrawTexture};
+
+    #[test]
+    fn whitening_keeps_alpha_and_normal_maps() {
+        let texture = |v: u8| DrawTexture {
+            width: 1,
+            height: 2,
+            rgba: vec![v, 10, 20, 0, v, 30, 40, 200],
+        };
+        let mut scene = DrawScene {
+            meshes: vec![],
+            materials: vec![DrawMaterial {
+                base_color: [0.2, 0.4, 0.6, 0.7],
+                texture: Some(0),
+                normal_texture: Some(1),
+                ..DrawMaterial::default()
+            }],
+            textures: vec![texture(5), texture(128)],
+        };
+        whiten(&mut scene);
+        assert_eq!(scene.materials[0].base_color, [1.0, 1.0, 1.0, 0.7]);
+        assert_eq!(
+            scene.textures[0].rgba,
+            vec![255, 255, 255, 0, 255, 255, 255, 200]
+        );
+        assert_eq!(
+            scene.textures[1].rgba,
+            texture(128).rgba,
+            "the normal map as it was"
+        );
     }
 }

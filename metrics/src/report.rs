@@ -90,6 +90,9 @@ pub struct EvalReport {
     pub coverage: CoverageMetrics,
     /// [`MetricId::ColourDifference`].
     pub colour_difference: Metric,
+    /// The animated colour metric's shift of the mean colour over shared pixels
+    /// ([`crate::coverage::CoverageReport::colour_shift`]); NaN when none is shared.
+    pub colour_shift: f64,
     /// [`MetricId::PlaneDistance`].
     pub plane_distance: Metric,
     /// [`MetricId::ProjectedDistance`].
@@ -143,6 +146,7 @@ mod tests {
             frames: 5,
             size: [8, 6],
             tree_height: 1.0,
+            colour_shift: 0.0,
             coverage: CoverageMetrics {
                 static_: m(MetricId::CoverageStatic),
                 animated: m(MetricId::CoverageAnimated),

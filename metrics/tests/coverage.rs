@@ -446,6 +446,7 @@ fn supersampled_masks_keep_analytic_answers() {
         meshes: vec![DrawMesh {
             positions: card(Vec3::ZERO, Vec3::X, 1.0, 1.0),
             normals: None,
+            tangents: None,
             uvs: None,
             indices: vec![0, 1, 2, 0, 2, 3],
             material: 0,
@@ -502,7 +503,7 @@ fn colour_difference_is_zero_for_equal_renders_and_known_for_recoloured_ones() {
         double_sided: true,
         ..DrawMaterial::opaque([0.0, 0.0, 1.0, 1.0])
     };
-    let r = coverage_error(renderer(), &[red], &[blue], lo, hi, &p).expect("metric");
+    let r = coverage_error(renderer(), &[red.clone()], &[blue], lo, hi, &p).expect("metric");
     assert_eq!(r.mean, 0.0, "same coverage");
     assert!(
         (r.colour_difference - 2.0 / 3.0).abs() < 1e-3,
@@ -513,6 +514,15 @@ fn colour_difference_is_zero_for_equal_renders_and_known_for_recoloured_ones() {
     for c in &r.colour_per_pair {
         assert!((c - 2.0 / 3.0).abs() < 1e-3, "{c}");
     }
+    // Red against blue shifts no mean (+1 and −1 in two channels); white against mid grey
+    // shifts it by the whole difference, as lighter or darker LODs do.
+    assert!(r.colour_shift.abs() < 1e-3, "{}", r.colour_shift);
+    let (mut white, mut grey) = (red.clone(), red);
+    white.materials[0].base_color = [1.0; 4];
+    grey.materials[0].base_color = [0.5, 0.5, 0.5, 1.0];
+    let g = coverage_error(renderer(), &[white], &[grey], lo, hi, &p).expect("metric");
+    assert!((g.colour_shift - 0.5).abs() < 1e-3, "{}", g.colour_shift);
+    assert!((g.colour_difference - 0.5).abs() < 1e-3);
 }
 
 #[test]

@@ -22,6 +22,7 @@
 //!     meshes: vec![DrawMesh {
 //!         positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
 //!         normals: None,
+//!         tangents: None,
 //!         uvs: None,
 //!         indices: vec![0, 1, 2],
 //!         material: 0,
@@ -52,8 +53,8 @@ mod tree;
 pub use camera::{Camera, Projection};
 pub use error::RenderError;
 pub use frame::Frame;
-pub use pipeline::{LIGHT_DIRECTION, alpha_mip_chain, mip_chain};
+pub use pipeline::{LIGHT_DIRECTION, alpha_mip_chain, linear_mip_chain, mip_chain};
 pub use renderer::{Output, Renderer};
 pub use scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
-pub use software::{CoverageImage, SoftwareTextures, depth_complexity, render_coverage};
+pub use software::{CoverageImage, Lighting, SoftwareTextures, depth_complexity, render_coverage};
 pub use tree::{TreeParts, scene_from_positions, tree_scene};

@@ -370,6 +370,33 @@ fn chain(
     out
 }
 
+/// The full chain of 2×2 box-filtered levels (edge texels repeated, rounded up), for linear
+/// data such as normal maps, whose texels are no colour to average in linear light nor alpha to
+/// keep coverage of. Shared by the CPU rasteriser's normal maps and the KTX2 writer's.
+pub fn linear_mip_chain(width: u32, height: u32, rgba: Vec<u8>) -> Vec<Level> {
+    let mut out = vec![(width, height, rgba)];
+    while let Some((w, h, data)) = out.last().filter(|l| l.0 > 1 || l.1 > 1) {
+        let (w2, h2) = ((w / 2).max(1), (h / 2).max(1));
+        let mut next = vec![0u8; (w2 * h2 * 4) as usize];
+        for y in 0..h2 {
+            for x in 0..w2 {
+                for k in 0..4 {
+                    let sum: u32 = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                        .iter()
+                        .map(|&(dx, dy)| {
+                            let (sx, sy) = ((2 * x + dx).min(w - 1), (2 * y + dy).min(h - 1));
+                            u32::from(data[((sy * w + sx) * 4 + k) as usize])
+                        })
+                        .sum();
+                    next[((y * w2 + x) * 4 + k) as usize] = sum.div_ceil(4).min(255) as u8;
+                }
+            }
+        }
+        out.push((w2, h2, next));
+    }
+    out
+}
+
 /// Uploads a validated RGBA8 sRGB image as a sampled texture; with `mipmaps`, with a full
 /// coverage-preserving mip chain ([`mip_chain`]).
 pub(crate) fn upload_texture(

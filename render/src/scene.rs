@@ -25,6 +25,10 @@ pub struct DrawMaterial {
     pub base_color: [f32; 4],
     /// Index into [`DrawScene::textures`], sampled with the mesh's UVs.
     pub texture: Option<usize>,
+    /// Index into [`DrawScene::textures`]: a tangent-space normal map (glTF `normalTexture`:
+    /// linear RGB, +Y along the mesh's bitangent), applied by the CPU rasteriser to meshes with
+    /// [`DrawMesh::tangents`] and sampled with the same UVs as `texture`.
+    pub normal_texture: Option<usize>,
     /// `Some(cutoff)`: alpha test (glTF MASK), fragments with alpha < cutoff are
     /// discarded. `None`: opaque, alpha is ignored.
     pub alpha_cutoff: Option<f32>,
@@ -40,6 +44,7 @@ impl DrawMaterial {
         Self {
             base_color,
             texture: None,
+            normal_texture: None,
             alpha_cutoff: None,
             double_sided: false,
             wrap: [Wrap::Repeat; 2],
@@ -61,6 +66,9 @@ pub struct DrawMesh {
     pub positions: Vec<[f32; 3]>,
     /// Per-vertex normals; `None` renders the mesh unlit.
     pub normals: Option<Vec<[f32; 3]>>,
+    /// Per-vertex tangents (xyz, w the bitangent's sign: `B = w · N × T`, glTF `TANGENT`), for
+    /// the material's normal map; ignored without normals.
+    pub tangents: Option<Vec<[f32; 4]>>,
     /// Per-vertex texture coordinates (glTF convention: v = 0 is the top row).
     pub uvs: Option<Vec<[f32; 2]>>,
     /// Triangle list, three indices per triangle, counter-clockwise front faces.
@@ -108,8 +116,11 @@ impl DrawScene {
             validate_mesh(i, mesh, self.materials.len())?;
         }
         for (i, material) in self.materials.iter().enumerate() {
-            if let Some(texture) = material.texture
-                && texture >= self.textures.len()
+            if let Some(texture) = material
+                .texture
+                .into_iter()
+                .chain(material.normal_texture)
+                .find(|&t| t >= self.textures.len())
             {
                 return Err(RenderError::TextureOutOfRange {
                     material: i,
@@ -142,6 +153,7 @@ fn validate_mesh(index: usize, mesh: &DrawMesh, material_count: usize) -> Result
     let attribute_lengths = [
         ("normals", mesh.normals.as_ref().map(Vec::len)),
         ("uvs", mesh.uvs.as_ref().map(Vec::len)),
+        ("tangents", mesh.tangents.as_ref().map(Vec::len)),
     ];
     for (attribute, len) in attribute_lengths {
         if let Some(len) = len

@@ -27,7 +27,9 @@ use glam::{Mat4, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::error::RenderError;
-use crate::pipeline::{LIGHT_DIRECTION, alpha_mip_chain, mip_chain, srgb_to_linear};
+use crate::pipeline::{
+    LIGHT_DIRECTION, alpha_mip_chain, linear_mip_chain, mip_chain, srgb_to_linear,
+};
 use crate::scene::{DrawMaterial, DrawScene};
 
 /// Most samples per side of the supersampled image (coordinates stay exact in `f32`).
@@ -54,12 +56,42 @@ pub struct CoverageImage {
     pub colour: Vec<[f32; 3]>,
 }
 
+/// How lit surfaces are shaded in a colour render.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Lighting {
+    /// `0.6 + 0.4 · |n · L|`, the wgpu path's: both sides of a surface lit alike, whatever
+    /// the light's side (the colour metric's default).
+    #[default]
+    TwoSided,
+    /// What an engine shows of lit, double-sided foliage: `0.3 + 0.7 · max(0, n · L)` with `n`
+    /// the normal of the side facing the viewer (flipped on back faces, as glTF asks of
+    /// double-sided materials). The side of a leaf or billboard turned from the light is
+    /// darker, so a LOD whose normals differ from its leaves' reads lighter or darker.
+    Lambert,
+}
+
+impl Lighting {
+    /// The shade of a unit normal `n` (already facing the viewer) under light `l`.
+    #[inline]
+    fn shade(self, n: Vec3, l: Vec3) -> f32 {
+        match self {
+            Lighting::TwoSided => 0.6 + 0.4 * n.dot(l).abs(),
+            Lighting::Lambert => 0.3 + 0.7 * n.dot(l).max(0.0),
+        }
+    }
+}
+
 /// A scene's textures prepared for [`render_coverage`]: their coverage-preserving mip chains,
 /// computed once for the many renders of one scene's frames and views.
 #[derive(Clone, Debug)]
 pub struct SoftwareTextures {
     textures: Vec<Levels>,
+    /// Per texture, its linear box chain when a drawn material uses it as a normal map and
+    /// colour is drawn (lighting needs the normals); empty otherwise.
+    normal_maps: Vec<Levels>,
     colour: bool,
+    lighting: Lighting,
 }
 
 /// One texture's mip chain, level 0 first: `(width, height, texels)`, one alpha byte a texel,
@@ -72,9 +104,18 @@ impl SoftwareTextures {
     /// also draw colour, which needs the RGB of every level and a depth test per sample.
     pub fn new(scene: &DrawScene, colour: bool) -> Result<SoftwareTextures, RenderError> {
         let mut used = vec![false; scene.textures.len()];
+        let mut normal_map = vec![false; scene.textures.len()];
         for mesh in scene.meshes.iter().filter(|m| !m.indices.is_empty()) {
-            if let Some(t) = scene.materials.get(mesh.material).and_then(|m| m.texture)
+            let material = scene.materials.get(mesh.material);
+            if let Some(t) = material.and_then(|m| m.texture)
                 && let Some(u) = used.get_mut(t)
+            {
+                *u = true;
+            }
+            if colour
+                && mesh.tangents.is_some()
+                && let Some(t) = material.and_then(|m| m.normal_texture)
+                && let Some(u) = normal_map.get_mut(t)
             {
                 *u = true;
             }
@@ -112,7 +153,30 @@ impl SoftwareTextures {
                 }))
             })
             .collect::<Result<_, _>>()?;
-        Ok(SoftwareTextures { textures, colour })
+        let normal_maps = scene
+            .textures
+            .iter()
+            .zip(normal_map)
+            .map(|(t, used)| {
+                Levels(if used {
+                    linear_mip_chain(t.width, t.height, t.rgba.clone())
+                } else {
+                    Vec::new()
+                })
+            })
+            .collect();
+        Ok(SoftwareTextures {
+            textures,
+            normal_maps,
+            colour,
+            lighting: Lighting::TwoSided,
+        })
+    }
+
+    /// The same textures, colour shaded with `lighting`.
+    pub fn with_lighting(mut self, lighting: Lighting) -> SoftwareTextures {
+        self.lighting = lighting;
+        self
     }
 }
 
@@ -129,10 +193,16 @@ struct Setup {
     uq: [[f32; 2]; 3],
     /// Normals divided by `w` (zero for unlit meshes).
     nq: [Vec3; 3],
+    /// Tangents (xyz divided by `w`, w the bitangent's sign) when the normal map applies.
+    tq: Option<[Vec4; 3]>,
+    /// The normal map's two mip levels and the second's weight, chosen at the centroid.
+    normal_lod: Trilinear,
     /// `1 / (twice the signed area)`, positive (vertices ordered so that it is).
     inv_area: f32,
     material: u32,
     lit: bool,
+    /// A back face (drawn double-sided): its normal is flipped to face the viewer.
+    back: bool,
     /// The material texture's two mip levels and the second's weight, chosen at the centroid.
     lod: Trilinear,
     /// Inclusive sample bounds.
@@ -146,6 +216,7 @@ struct ClipVertex {
     clip: Vec4,
     uv: [f32; 2],
     normal: Vec3,
+    tangent: Vec4,
 }
 
 impl ClipVertex {
@@ -157,6 +228,7 @@ impl ClipVertex {
                 a.uv[1] + (b.uv[1] - a.uv[1]) * t,
             ],
             normal: a.normal + (b.normal - a.normal) * t,
+            tangent: a.tangent + (b.tangent - a.tangent) * t,
         }
     }
 }
@@ -303,6 +375,12 @@ fn setup(
             .map(|p| view_proj * Vec3::from(*p).extend(1.0))
             .collect();
         let texture = material.texture.map(|t| &textures.textures[t]);
+        let lit = mesh.normals.is_some();
+        // The normal map applies to lit meshes with tangents when it was prepared (colour).
+        let normal_map = match (lit, &mesh.tangents, material.normal_texture) {
+            (true, Some(_), Some(t)) => Some(&textures.normal_maps[t]).filter(|l| !l.0.is_empty()),
+            _ => None,
+        };
         for tri in mesh.indices.chunks_exact(3) {
             let vertex = |k: usize| {
                 let i = tri[k] as usize;
@@ -313,13 +391,17 @@ fn setup(
                         .normals
                         .as_ref()
                         .map_or(Vec3::ZERO, |n| Vec3::from(n[i])),
+                    tangent: mesh
+                        .tangents
+                        .as_ref()
+                        .map_or(Vec4::ZERO, |t| Vec4::from(t[i])),
                 }
             };
             let corners = [vertex(0), vertex(1), vertex(2)];
             let inside = |v: &ClipVertex| v.clip.z >= 0.0 && v.clip.z <= v.clip.w;
-            let lit = mesh.normals.is_some();
             let mut push = |c: [&ClipVertex; 3]| {
-                if let Some(mut s) = setup_triangle(c, material, texture, lit, sw, sh) {
+                if let Some(mut s) = setup_triangle(c, material, [texture, normal_map], lit, sw, sh)
+                {
                     s.material = mesh.material as u32;
                     out.push(s);
                 }
@@ -367,7 +449,7 @@ fn clip_polygon(polygon: Vec<ClipVertex>) -> Vec<ClipVertex> {
 fn setup_triangle(
     corners: [&ClipVertex; 3],
     material: &DrawMaterial,
-    texture: Option<&Levels>,
+    [texture, normal_map]: [Option<&Levels>; 2],
     lit: bool,
     sw: f32,
     sh: f32,
@@ -381,6 +463,7 @@ fn setup_triangle(
             q,
             [c.uv[0] * q, c.uv[1] * q],
             c.normal * q,
+            c.tangent.truncate().extend(0.0) * q + Vec4::new(0.0, 0.0, 0.0, c.tangent.w),
         )
     });
     if v.iter()
@@ -394,6 +477,8 @@ fn setup_triangle(
     if area == 0.0 || !area.is_finite() || (area > 0.0 && !material.double_sided) {
         return None;
     }
+    // Positive: clockwise on screen, a back face (kept only when double-sided).
+    let back = area > 0.0;
     if area < 0.0 {
         v.swap(1, 2);
     }
@@ -418,15 +503,21 @@ fn setup_triangle(
         q: v.map(|c| c.3),
         uq: v.map(|c| c.4),
         nq: v.map(|c| c.5),
+        tq: normal_map.map(|_| v.map(|c| c.6)),
+        normal_lod: Trilinear::default(),
         inv_area: 1.0 / area,
         material: 0,
         lit,
+        back,
         lod: Trilinear::default(),
         min: [min[0] as i32, min[1] as i32],
         max: [max[0] as i32, max[1] as i32],
     };
     if let Some(levels) = texture {
         s.lod = levels.pair(centroid_lod(&s, levels));
+    }
+    if let Some(levels) = normal_map {
+        s.normal_lod = levels.pair(centroid_lod(&s, levels));
     }
     Some(s)
 }
@@ -567,6 +658,22 @@ impl Levels {
         a / 255.0
     }
 
+    /// Trilinear tangent-space normal at `(u, v)` of a normal map's linear chain: each channel
+    /// from 0..255 to −1..1 (not normalised; the frame's result is).
+    fn normal(&self, uv: [f32; 2], lod: Trilinear, wrap: [Wrap; 2]) -> Vec3 {
+        let at = |l: usize| {
+            let c = |channel| bilinear(&self.0[l], uv, wrap, 4, channel, f32::from);
+            Vec3::new(c(0), c(1), c(2))
+        };
+        let va = at(lod.a);
+        let v = if lod.f > 0.0 {
+            va + (at(lod.b) - va) * lod.f
+        } else {
+            va
+        };
+        v * (2.0 / 255.0) - Vec3::ONE
+    }
+
     /// Trilinear linear RGB at `(u, v)` of an RGBA chain (sRGB decoded before filtering).
     fn rgb(&self, uv: [f32; 2], lod: Trilinear, wrap: [Wrap; 2], linear: &[f32; 256]) -> Vec3 {
         let at = |l: usize| {
@@ -580,6 +687,21 @@ impl Levels {
             va
         }
     }
+}
+
+/// The normal a tangent-space normal map gives (glTF `normalTexture`): `map` (components in
+/// −1..1) in the frame of the interpolated `normal`, `tangent` (xyz; w ignored) made
+/// orthogonal to it, and the bitangent `sign · N × T`. The interpolated normal alone where
+/// the frame is degenerate.
+#[inline]
+fn mapped_normal(normal: Vec3, tangent: Vec4, sign: f32, map: Vec3) -> Vec3 {
+    let n = normal.normalize_or_zero();
+    let t = (tangent.truncate() - n * n.dot(tangent.truncate())).normalize_or_zero();
+    if n == Vec3::ZERO || t == Vec3::ZERO {
+        return normal;
+    }
+    let b = n.cross(t) * if sign < 0.0 { -1.0 } else { 1.0 };
+    t * map.x + b * map.y + n * map.z
 }
 
 /// The samples `first..=last` (offsets from the row's first, at most `len`) of a row whose
@@ -639,6 +761,10 @@ impl Raster<'_> {
             let t = &self.triangles[t as usize];
             let material = &self.scene.materials[t.material as usize];
             let texture = material.texture.map(|i| &self.textures.textures[i]);
+            let normal_map = material
+                .normal_texture
+                .filter(|_| t.tq.is_some())
+                .map(|i| &self.textures.normal_maps[i]);
             let ty0 = (t.min[1] as usize).max(y0);
             let ty1 = (t.max[1] as usize + 1).min(y1);
             // Weights step by these per sample along a row.
@@ -706,9 +832,20 @@ impl Raster<'_> {
                                 .map_or(Vec3::ONE, |l| l.rgb(uv, t.lod, material.wrap, &linear));
                             let mut shade = 1.0;
                             if t.lit {
-                                let normal = (b[0] * t.nq[0] + b[1] * t.nq[1] + b[2] * t.nq[2]) / q;
+                                let mut normal =
+                                    (b[0] * t.nq[0] + b[1] * t.nq[1] + b[2] * t.nq[2]) / q;
+                                if let (Some(tq), Some(map)) = (t.tq, normal_map) {
+                                    normal = mapped_normal(
+                                        normal,
+                                        (b[0] * tq[0] + b[1] * tq[1] + b[2] * tq[2]) / q,
+                                        tq[0].w,
+                                        map.normal(uv, t.normal_lod, material.wrap),
+                                    );
+                                }
                                 if normal.length_squared() > 1e-12 {
-                                    shade = 0.6 + 0.4 * normal.normalize().dot(light).abs();
+                                    let n = normal.normalize();
+                                    let n = if t.back { -n } else { n };
+                                    shade = self.textures.lighting.shade(n, light);
                                 }
                             }
                             rgb[s] = (texel * base * shade).clamp(Vec3::ZERO, Vec3::ONE);
@@ -780,6 +917,7 @@ mod tests {
         DrawMesh {
             positions: vec![[x0, -1.0, z], [x1, -1.0, z], [x1, 1.0, z], [x0, 1.0, z]],
             normals: None,
+            tangents: None,
             uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
             indices,
             material,
@@ -811,6 +949,88 @@ mod tests {
         assert!(half.colour.is_empty(), "no colour asked for");
         // The left half, row by row.
         assert!((0..30).all(|y| (0..40).all(|x| half.covered[y * 40 + x] == (x < 20))));
+    }
+
+    #[test]
+    fn a_normal_map_turns_the_shading_normal_in_the_tangent_frame() {
+        // A white quad facing +z (normal +z, tangent +x, bitangent +y), its map tilting the
+        // normal by 37° towards +y: shaded with the tilted normal, and with the tangent's w
+        // negative (bitangent −y) tilted the other way.
+        let tilted = Vec3::new(0.0, 0.6, 0.8);
+        let texel = [
+            128u8,
+            (255.0 * (0.6 + 1.0) / 2.0) as u8,
+            (255.0 * 1.8 / 2.0) as u8,
+            255,
+        ];
+        let light = Vec3::from(LIGHT_DIRECTION);
+        let shade_of = |sign: Option<f32>| {
+            let mut mesh = quad(-1.0, 1.0, 0.5, false, 0);
+            mesh.normals = Some(vec![[0.0, 0.0, 1.0]; 4]);
+            mesh.tangents = sign.map(|w| vec![[1.0, 0.0, 0.0, w]; 4]);
+            let scene = DrawScene {
+                meshes: vec![mesh],
+                materials: vec![DrawMaterial {
+                    normal_texture: Some(0),
+                    ..DrawMaterial::opaque([1.0; 4])
+                }],
+                textures: vec![DrawTexture {
+                    width: 4,
+                    height: 4,
+                    rgba: texel.repeat(16),
+                }],
+            };
+            render(&scene, true, 1).colour[600][0]
+        };
+        let expect = |n: Vec3| 0.6 + 0.4 * n.normalize().dot(light).abs();
+        let decoded = Vec3::new(
+            f32::from(texel[0]),
+            f32::from(texel[1]),
+            f32::from(texel[2]),
+        ) * (2.0 / 255.0)
+            - Vec3::ONE;
+        assert!((decoded - tilted).length() < 0.01);
+        assert!((shade_of(Some(1.0)) - expect(decoded)).abs() < 1e-4);
+        let mirrored = Vec3::new(decoded.x, -decoded.y, decoded.z);
+        assert!((shade_of(Some(-1.0)) - expect(mirrored)).abs() < 1e-4);
+        // Without tangents the map does not apply: the vertex normal's shade, visibly other.
+        assert!((shade_of(None) - expect(Vec3::Z)).abs() < 1e-4);
+        assert!((expect(decoded) - expect(Vec3::Z)).abs() > 0.1);
+    }
+
+    #[test]
+    fn lambert_lights_the_side_facing_the_viewer() {
+        // A double-sided quad: Lambert lights the normal of the side drawn (a back face's
+        // normal flipped, as GPUs do for double-sided materials), two-sided lighting ignores
+        // the normal's sign.
+        let light = Vec3::from(LIGHT_DIRECTION);
+        let shade = |flip: bool, normal: [f32; 3], lighting: Lighting| {
+            let mut mesh = quad(-1.0, 1.0, 0.5, flip, 0);
+            mesh.normals = Some(vec![normal; 4]);
+            let scene = DrawScene {
+                meshes: vec![mesh],
+                materials: vec![DrawMaterial {
+                    double_sided: true,
+                    ..DrawMaterial::opaque([1.0; 4])
+                }],
+                textures: vec![],
+            };
+            let textures = SoftwareTextures::new(&scene, true)
+                .expect("textures")
+                .with_lighting(lighting);
+            render_coverage(&scene, &textures, Mat4::IDENTITY, 40, 30, 1)
+                .expect("render")
+                .colour[600][0]
+        };
+        let lit = 0.3 + 0.7 * light.z.max(0.0);
+        // Front face with its normal towards the light's side, and a back face whose stored
+        // normal points away: both show the lit side.
+        assert!((shade(false, [0.0, 0.0, 1.0], Lighting::Lambert) - lit).abs() < 1e-4);
+        assert!((shade(true, [0.0, 0.0, -1.0], Lighting::Lambert) - lit).abs() < 1e-4);
+        // A front face whose normal points away from the viewer and the light: ambient only.
+        assert!((shade(false, [0.0, 0.0, -1.0], Lighting::Lambert) - 0.3).abs() < 1e-4);
+        let two_sided = 0.6 + 0.4 * light.z.abs();
+        assert!((shade(false, [0.0, 0.0, -1.0], Lighting::TwoSided) - two_sided).abs() < 1e-4);
     }
 
     #[test]

@@ -117,6 +117,7 @@ fn alpha_mask_cuts_out_the_transparent_half() {
         wrap: Default::default(),
         base_color: [1.0; 4],
         texture: Some(0),
+        normal_texture: None,
         alpha_cutoff: Some(0.5),
         double_sided: true,
     };
@@ -173,6 +174,7 @@ fn wrap_modes_decide_what_lies_outside_the_texture() {
             materials: vec![DrawMaterial {
                 base_color: [1.0; 4],
                 texture: Some(0),
+                normal_texture: None,
                 alpha_cutoff: Some(0.5),
                 double_sided: true,
                 wrap,
@@ -567,6 +569,7 @@ fn timing_100k_triangles() {
         meshes: vec![DrawMesh {
             positions,
             normals: Some(normals),
+            tangents: None,
             uvs: Some(uvs),
             indices,
             material: 0,
@@ -575,6 +578,7 @@ fn timing_100k_triangles() {
             wrap: Default::default(),
             base_color: [1.0; 4],
             texture: Some(0),
+            normal_texture: None,
             alpha_cutoff: Some(0.5),
             double_sided: true,
         }],

@@ -130,6 +130,8 @@ pub struct GltfBuilder {
     extras: Option<Value>,
     extensions_used: Vec<String>,
     extensions_required: Vec<String>,
+    /// [`GltfBuilder::set_compression`].
+    compress: bool,
 }
 
 fn f32s_to_bytes(v: &[f32]) -> impl Iterator<Item = u8> + '_ {
@@ -143,6 +145,68 @@ impl GltfBuilder {
             generator: generator.to_string(),
             ..Default::default()
         }
+    }
+
+    /// Writes the geometry compressed from now on: normals and tangents as normalized bytes,
+    /// texture coordinates within 0..1 as normalized shorts (`KHR_mesh_quantization`), and
+    /// every vertex, index and animation view meshoptimizer-encoded (`EXT_meshopt_compression`,
+    /// both required: a client without them cannot read the file). Positions stay floats: a
+    /// quantized position needs a dequantizing node transform, which skinned meshes ignore.
+    pub fn set_compression(&mut self, on: bool) {
+        self.compress = on;
+    }
+
+    /// Adds an accessor of `count` elements already encoded as `bytes` (`stride` bytes an
+    /// element, padding included), for the quantized attributes.
+    fn add_encoded(
+        &mut self,
+        bytes: &[u8],
+        [component, count, stride]: [usize; 3],
+        ty: &str,
+        normalized: bool,
+    ) -> usize {
+        let view = self.push_view(bytes, Some(34962), Some(stride));
+        let mut acc =
+            json!({ "bufferView": view, "componentType": component, "count": count, "type": ty });
+        if normalized {
+            acc["normalized"] = json!(true);
+        }
+        self.accessors.push(acc);
+        self.accessors.len() - 1
+    }
+
+    /// Unit vectors (3 or 4 components) as normalized signed bytes padded to 4 bytes
+    /// (`KHR_mesh_quantization`).
+    fn add_unit_bytes<const N: usize>(&mut self, data: &[[f32; N]]) -> usize {
+        let bytes: Vec<u8> = data
+            .iter()
+            .flat_map(|v| {
+                let mut b = [0u8; 4];
+                for (o, c) in b.iter_mut().zip(v) {
+                    *o = ((c.clamp(-1.0, 1.0) * 127.0).round() as i8) as u8;
+                }
+                b
+            })
+            .collect();
+        let ty = if N == 3 { "VEC3" } else { "VEC4" };
+        self.use_extension("KHR_mesh_quantization");
+        self.add_encoded(&bytes, [5120, data.len(), 4], ty, true)
+    }
+
+    /// Texture coordinates: as normalized unsigned shorts when compressing and all lie in 0..1
+    /// (steps of 1/65535: under a texel of a 16k texture), else floats.
+    fn add_texcoords(&mut self, uv: &[[f32; 2]]) -> usize {
+        if self.compress && uv.iter().flatten().all(|c| (0.0..=1.0).contains(c)) {
+            let bytes: Vec<u8> = uv
+                .iter()
+                .flatten()
+                .flat_map(|c| ((c * 65535.0).round() as u16).to_le_bytes())
+                .collect();
+            self.use_extension("KHR_mesh_quantization");
+            return self.add_encoded(&bytes, [5123, uv.len(), 4], "VEC2", true);
+        }
+        let flat: Vec<f32> = uv.iter().flatten().copied().collect();
+        self.add_floats(&flat, "VEC2", false, Some(34962))
     }
 
     /// Document-level `extras` (e.g. what produced the file and with which seed).
@@ -230,6 +294,13 @@ impl GltfBuilder {
             "bufferView": view, "componentType": ctype, "count": data.len() / width, "type": ty
         }));
         self.accessors.len() - 1
+    }
+
+    /// Renames node `node` (no effect on an index past the nodes).
+    pub fn set_node_name(&mut self, node: usize, name: &str) {
+        if let Some(n) = self.nodes.get_mut(node) {
+            n["name"] = json!(name);
+        }
     }
 
     /// Adds a node and returns its index.
@@ -450,32 +521,28 @@ impl GltfBuilder {
                 json!(self.add_floats(&flat, "VEC3", true, Some(34962))),
             );
             if let Some(n) = &p.normals {
-                let flat: Vec<f32> = n.iter().flatten().copied().collect();
-                attrs.insert(
-                    "NORMAL".into(),
-                    json!(self.add_floats(&flat, "VEC3", false, Some(34962))),
-                );
+                let accessor = if self.compress {
+                    self.add_unit_bytes(n)
+                } else {
+                    let flat: Vec<f32> = n.iter().flatten().copied().collect();
+                    self.add_floats(&flat, "VEC3", false, Some(34962))
+                };
+                attrs.insert("NORMAL".into(), json!(accessor));
             }
             if let Some(t) = &p.tangents {
-                let flat: Vec<f32> = t.iter().flatten().copied().collect();
-                attrs.insert(
-                    "TANGENT".into(),
-                    json!(self.add_floats(&flat, "VEC4", false, Some(34962))),
-                );
+                let accessor = if self.compress {
+                    self.add_unit_bytes(t)
+                } else {
+                    let flat: Vec<f32> = t.iter().flatten().copied().collect();
+                    self.add_floats(&flat, "VEC4", false, Some(34962))
+                };
+                attrs.insert("TANGENT".into(), json!(accessor));
             }
             if let Some(uv) = &p.uvs {
-                let flat: Vec<f32> = uv.iter().flatten().copied().collect();
-                attrs.insert(
-                    "TEXCOORD_0".into(),
-                    json!(self.add_floats(&flat, "VEC2", false, Some(34962))),
-                );
+                attrs.insert("TEXCOORD_0".into(), json!(self.add_texcoords(uv)));
             }
             for (k, uv) in p.extra_uvs.iter().enumerate() {
-                let flat: Vec<f32> = uv.iter().flatten().copied().collect();
-                attrs.insert(
-                    format!("TEXCOORD_{}", k + 1),
-                    json!(self.add_floats(&flat, "VEC2", false, Some(34962))),
-                );
+                attrs.insert(format!("TEXCOORD_{}", k + 1), json!(self.add_texcoords(uv)));
             }
             if let (Some(j), Some(w)) = (&p.joints, &p.weights) {
                 // A weight that rounds to no byte leaves its slot, pointing at joint 0 as
@@ -597,6 +664,11 @@ impl GltfBuilder {
                 self.nodes[i]["children"] = json!(kids);
             }
         }
+        let fallback = if self.compress {
+            self.compress_views()
+        } else {
+            None
+        };
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
@@ -622,8 +694,15 @@ impl GltfBuilder {
         put("samplers", self.samplers);
         put("accessors", self.accessors);
         put("bufferViews", self.views);
-        if !self.bin.is_empty() {
-            root.insert("buffers".into(), json!([{ "byteLength": self.bin.len() }]));
+        if !self.bin.is_empty() || fallback.is_some() {
+            let mut buffers = vec![json!({ "byteLength": self.bin.len() })];
+            if let Some(len) = fallback {
+                buffers.push(json!({
+                    "byteLength": len,
+                    "extensions": { "EXT_meshopt_compression": { "fallback": true } }
+                }));
+            }
+            root.insert("buffers".into(), Value::Array(buffers));
         }
         if let Some(e) = self.extras {
             root.insert("extras".into(), e);
@@ -636,6 +715,148 @@ impl GltfBuilder {
         }
         let json_bytes = serde_json::to_vec(&Value::Object(root)).unwrap_or_default();
         glb_container(&json_bytes, &self.bin)
+    }
+}
+
+impl GltfBuilder {
+    /// Meshoptimizer-encodes the views of vertex attributes, triangle indices and animation
+    /// keys (`EXT_meshopt_compression`): each such view moves to a fallback buffer without
+    /// data (buffer 1, its byte length returned) and names its encoded bytes in the binary
+    /// chunk; other views (images, inverse binds) stay as they are. None when no view was
+    /// encoded (nothing to compress: no extension, no fallback buffer).
+    fn compress_views(&mut self) -> Option<usize> {
+        use crate::meshopt_views::{encode_attributes, encode_triangles};
+        #[derive(Clone, Copy)]
+        enum Role {
+            Attributes,
+            Triangles { vertices: usize },
+        }
+        let mut roles: Vec<Option<(Role, usize)>> = vec![None; self.views.len()];
+        let accessor = |a: &Value| -> Option<(usize, usize, usize)> {
+            let view = a["bufferView"].as_u64()? as usize;
+            let count = a["count"].as_u64()? as usize;
+            let component = match a["componentType"].as_u64()? {
+                5120 | 5121 => 1,
+                5122 | 5123 => 2,
+                _ => 4,
+            };
+            let width = match a["type"].as_str()? {
+                "SCALAR" => 1,
+                "VEC2" => 2,
+                "VEC3" => 3,
+                "VEC4" => 4,
+                _ => 16,
+            };
+            Some((view, count, component * width))
+        };
+        let mark = |a: usize, role: Role, roles: &mut Vec<Option<(Role, usize)>>| {
+            if let Some((view, count, size)) = self.accessors.get(a).and_then(accessor) {
+                let stride = self.views[view]["byteStride"]
+                    .as_u64()
+                    .map_or(size, |s| s as usize);
+                let stride = match role {
+                    Role::Attributes => stride,
+                    Role::Triangles { .. } => size,
+                };
+                roles[view] = Some((role, count)).filter(|_| {
+                    self.views[view]["byteLength"].as_u64() == Some((count * stride) as u64)
+                });
+            }
+        };
+        for mesh in &self.meshes {
+            for p in mesh["primitives"].as_array().into_iter().flatten() {
+                let mut vertices = 0;
+                for a in p["attributes"]
+                    .as_object()
+                    .into_iter()
+                    .flat_map(|m| m.values())
+                {
+                    if let Some(a) = a.as_u64() {
+                        vertices =
+                            self.accessors[a as usize]["count"].as_u64().unwrap_or(0) as usize;
+                        mark(a as usize, Role::Attributes, &mut roles);
+                    }
+                }
+                if let Some(i) = p["indices"].as_u64() {
+                    mark(i as usize, Role::Triangles { vertices }, &mut roles);
+                }
+            }
+        }
+        for anim in &self.animations {
+            for s in anim["samplers"].as_array().into_iter().flatten() {
+                for key in ["input", "output"] {
+                    if let Some(a) = s[key].as_u64() {
+                        mark(a as usize, Role::Attributes, &mut roles);
+                    }
+                }
+            }
+        }
+        let old = std::mem::take(&mut self.bin);
+        let mut fallback = 0usize;
+        let mut any = false;
+        for (view, role) in self.views.iter_mut().zip(roles) {
+            let offset = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+            let length = view["byteLength"].as_u64().unwrap_or(0) as usize;
+            let bytes = &old[offset..offset + length];
+            let encoded = role.and_then(|(role, count)| {
+                let stride = length.checked_div(count)?;
+                let data = match role {
+                    Role::Attributes => encode_attributes(bytes, count, stride).ok()?,
+                    Role::Triangles { vertices } => {
+                        let indices: Vec<u32> = match stride {
+                            2 => bytes
+                                .chunks_exact(2)
+                                .map(|b| u32::from(u16::from_le_bytes([b[0], b[1]])))
+                                .collect(),
+                            4 => bytes
+                                .chunks_exact(4)
+                                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                                .collect(),
+                            _ => return None,
+                        };
+                        encode_triangles(&indices, vertices).ok()?
+                    }
+                };
+                let mode = match role {
+                    Role::Attributes => "ATTRIBUTES",
+                    Role::Triangles { .. } => "TRIANGLES",
+                };
+                Some((data, mode, stride, count))
+            });
+            while !self.bin.len().is_multiple_of(4) {
+                self.bin.push(0);
+            }
+            match encoded {
+                Some((data, mode, stride, count)) => {
+                    fallback = fallback.next_multiple_of(4);
+                    view["extensions"] = json!({ "EXT_meshopt_compression": {
+                        "buffer": 0, "byteOffset": self.bin.len(), "byteLength": data.len(),
+                        "byteStride": stride, "count": count, "mode": mode
+                    }});
+                    view["buffer"] = json!(1);
+                    view["byteOffset"] = json!(fallback);
+                    fallback += length;
+                    self.bin.extend_from_slice(&data);
+                    any = true;
+                }
+                None => {
+                    view["byteOffset"] = json!(self.bin.len());
+                    self.bin.extend_from_slice(bytes);
+                }
+            }
+        }
+        if !any {
+            return None;
+        }
+        self.require_extension("EXT_meshopt_compression");
+        if self
+            .extensions_used
+            .iter()
+            .any(|e| e == "KHR_mesh_quantization")
+        {
+            self.require_extension("KHR_mesh_quantization");
+        }
+        Some(fallback)
     }
 }
 

@@ -80,11 +80,24 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
     let clips = read_clips(src, nodes.len(), &mut warnings)?;
     let (source_textures, images, slot_of_image) =
         read_source_textures(src, &materials, &mut warnings)?;
-    let (textures, texture_images) = read_textures(src, &materials.base, &images, &slot_of_image)?;
+    // Normal maps are decoded only when the file gives tangent frames to apply them with.
+    let normal_images: Vec<Option<usize>> = if vertices.tangent.is_empty() {
+        vec![None; materials.normal.len()]
+    } else {
+        materials.normal.clone()
+    };
+    let mut decoded: Vec<usize> = materials.base.iter().flatten().map(|t| t.0).collect();
+    decoded.extend(normal_images.iter().flatten());
+    let (textures, texture_images) = read_textures(src, &decoded, &images, &slot_of_image)?;
     let mut materials_out = materials.materials;
-    for (m, info) in materials_out.iter_mut().zip(&materials.base) {
+    for ((m, info), normal) in materials_out
+        .iter_mut()
+        .zip(&materials.base)
+        .zip(&normal_images)
+    {
         m.base_color_texture =
             info.and_then(|(img, _, _)| texture_images.iter().position(|&i| i == img));
+        m.normal_texture = normal.and_then(|img| texture_images.iter().position(|&i| i == img));
     }
     let materials = materials_out;
 
@@ -139,6 +152,7 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
             base_color: [1.0; 4],
             base_color_texture: None,
             base_color_wrap: [Wrap::Repeat; 2],
+            normal_texture: None,
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: 0.5,
             double_sided: false,
@@ -555,6 +569,9 @@ struct MaterialInfo {
     materials: Vec<Material>,
     /// Per material: (input image index, texcoord set, uv transform) of its base colour.
     base: Vec<Option<(usize, u32, glam::Affine2)>>,
+    /// Per material: the input image of its normal map, when that samples the base colour's
+    /// coordinates (see [`Material::normal_texture`]).
+    normal: Vec<Option<usize>>,
     /// The input texture index of every [`Tree::source_textures`] entry, in that order.
     textures: Vec<usize>,
     /// How many texture coordinate sets the maps use (1 ..= [`MAX_TEXCOORD_SETS`]).
@@ -587,6 +604,7 @@ fn extension_names(value: &serde_json::Value, out: &mut Vec<String>) {
 fn read_materials(src: &GltfSource, warnings: &mut Vec<String>) -> Result<MaterialInfo> {
     let mut mats = Vec::new();
     let mut texinfo = Vec::new();
+    let mut normals = Vec::new();
     let mut textures: Vec<usize> = Vec::new();
     let mut texcoord_sets = 1usize;
     for (i, m) in src.root.materials.iter().enumerate() {
@@ -714,16 +732,38 @@ fn read_materials(src: &GltfSource, warnings: &mut Vec<String>) -> Result<Materi
             base_color: pbr.base_color_factor.0,
             base_color_texture: None,
             base_color_wrap,
+            normal_texture: None,
             alpha_mode,
             alpha_cutoff: m.alpha_cutoff.map(|c| c.0).unwrap_or(0.5),
             double_sided: m.double_sided,
             source: Some(MaterialSource { json, extensions }),
         });
+        // The normal map, when it samples what `Vertices::uv` holds: the base colour's set,
+        // untransformed on both (else the two maps' coordinates differ and it is not applied).
+        let plain = |info: &Option<serde_json::Value>| {
+            info.as_ref()
+                .is_none_or(|e| e.get("KHR_texture_transform").is_none())
+        };
+        let normal = m.normal_texture.as_ref().and_then(|n| {
+            let same_set = tex.map_or(0, |t| t.1) == n.tex_coord;
+            let untransformed = tex.is_none_or(|t| t.2 == glam::Affine2::IDENTITY);
+            let n_plain = plain(
+                &src.raw
+                    .materials
+                    .get(i)
+                    .and_then(|j| j.pointer("/normalTexture/extensions"))
+                    .cloned(),
+            );
+            let image = texture_image(src, n.index.value(), false);
+            (same_set && untransformed && n_plain && image < src.root.images.len()).then_some(image)
+        });
         texinfo.push(tex);
+        normals.push(normal);
     }
     Ok(MaterialInfo {
         materials: mats,
         base: texinfo,
+        normal: normals,
         textures,
         texcoord_sets,
     })
@@ -869,20 +909,21 @@ fn read_source_textures(
     Ok((textures, images, slot_of_image))
 }
 
-/// Decodes the base-colour images materials use (in parallel) from their bytes in `images`.
+/// Decodes the images `decoded` (input image indices: the base-colour images materials use,
+/// and the normal maps applied) in parallel from their bytes in `images`.
 ///
 /// The decoded size of every image is read from its header first and the total checked
 /// against [`InputLimits::max_texture_bytes`] before anything is decoded, so a small file that
 /// declares huge images (a "texture bomb") is refused without the memory being taken; each
 /// decoder is also held to the budget, in case a header lies. Images only normal, occlusion,
-/// metallic-roughness or emissive maps use are not decoded at all (they are passed through).
+/// metallic-roughness or emissive maps use (and normal maps not applied) are not decoded at all (they are passed through).
 fn read_textures(
     src: &GltfSource,
-    base: &[Option<(usize, u32, glam::Affine2)>],
+    decoded: &[usize],
     images: &[SourceImage],
     slot_of_image: &HashMap<usize, usize>,
 ) -> Result<(Vec<Texture>, Vec<usize>)> {
-    let mut used: Vec<usize> = base.iter().flatten().map(|t| t.0).collect();
+    let mut used: Vec<usize> = decoded.to_vec();
     used.sort_unstable();
     used.dedup();
     let encoded = used
@@ -1103,6 +1144,14 @@ fn read_meshes(
                 }
                 None => None,
             };
+            let tangents = match attr(json::mesh::Semantic::Tangents) {
+                Some(a) => {
+                    let d = src.read_floats(a, &format!("{what} TANGENT"))?;
+                    check_count(&d, "TANGENT")?;
+                    (d.width == 4).then_some(d)
+                }
+                None => None,
+            };
             let material = p.material.map(|m| m.value());
             if let Some(m) = material
                 && m >= materials.materials.len()
@@ -1183,7 +1232,21 @@ fn read_meshes(
             let mut influences: Vec<(usize, f32)> = Vec::new();
             let (mut zero_weight, mut folded, mut max_dropped) = (0usize, 0usize, 0.0f32);
             let base = verts.len() as u32;
+            if tangents.is_some() && verts.tangent.len() < verts.len() {
+                verts.tangent.resize(verts.len(), glam::Vec4::ZERO);
+            }
             for i in 0..n {
+                if let Some(t) = &tangents {
+                    let t = glam::Vec4::from(t.get::<4>(i));
+                    let xyz = t.truncate().normalize_or_zero();
+                    verts.tangent.push(if t.is_finite() && xyz != Vec3::ZERO {
+                        xyz.extend(if t.w < 0.0 { -1.0 } else { 1.0 })
+                    } else {
+                        glam::Vec4::ZERO
+                    });
+                } else if !verts.tangent.is_empty() {
+                    verts.tangent.push(glam::Vec4::ZERO);
+                }
                 verts.position.push(Vec3::from(pos.get::<3>(i)));
                 verts.normal.push(
                     normals

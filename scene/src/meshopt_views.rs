@@ -5,6 +5,10 @@
 //! Decoded here with meshoptimizer's decoders (the `meshopt` crate's bindings: its typed
 //! wrappers want a Rust type per vertex size, a view's stride is any multiple of 4 up to 256),
 //! so the rest of the importer reads the views as if they were stored plainly.
+//!
+//! Written too ([`encode_attributes`], [`encode_triangles`]), for `--compress`: the encoders'
+//! output in the formats the extension defines (vertex codec version 0, the only one
+//! `EXT_meshopt_compression` allows; index codec version 1).
 
 use serde_json::Value;
 
@@ -195,6 +199,56 @@ fn decode(c: &Compressed, source: &[u8]) -> Result<Vec<u8>, String> {
             Filter::Exponential => ffi::meshopt_decodeFilterExp(p, n, s),
             Filter::Color => ffi::meshopt_decodeFilterColor(p, n, s),
         }
+    }
+    Ok(out)
+}
+
+/// The `ATTRIBUTES`-mode encoding of `count` elements of `stride` bytes (a multiple of 4, at
+/// most 256, as the extension requires; `bytes` holds exactly `count · stride`), vertex codec
+/// version 0 at meshoptimizer's default level.
+pub fn encode_attributes(bytes: &[u8], count: usize, stride: usize) -> Result<Vec<u8>, String> {
+    if stride == 0 || !stride.is_multiple_of(4) || stride > 256 || bytes.len() != count * stride {
+        return Err(format!(
+            "{} bytes are not {count} elements of a stride that is a multiple of 4 up to 256 ({stride})",
+            bytes.len()
+        ));
+    }
+    use meshopt::ffi;
+    // SAFETY: the bound is what the encoder may write for (count, stride); `bytes` holds
+    // count × stride bytes (checked above).
+    let written = unsafe {
+        let bound = ffi::meshopt_encodeVertexBufferBound(count, stride);
+        let mut out = vec![0u8; bound];
+        let n = ffi::meshopt_encodeVertexBufferLevel(
+            out.as_mut_ptr(),
+            out.len(),
+            bytes.as_ptr().cast(),
+            count,
+            stride,
+            2,
+            0,
+        );
+        out.truncate(n);
+        out
+    };
+    if written.is_empty() {
+        return Err("the vertex encoder wrote nothing".into());
+    }
+    Ok(written)
+}
+
+/// The `TRIANGLES`-mode encoding of a triangle list (`indices.len()` a multiple of 3, every
+/// index below `vertex_count`), index codec version 1.
+pub fn encode_triangles(indices: &[u32], vertex_count: usize) -> Result<Vec<u8>, String> {
+    if !indices.len().is_multiple_of(3) || indices.iter().any(|&i| i as usize >= vertex_count) {
+        return Err(format!(
+            "{} indices are not a triangle list over {vertex_count} vertices",
+            indices.len()
+        ));
+    }
+    let out = meshopt::encode_index_buffer(indices, vertex_count).map_err(|e| e.to_string())?;
+    if out.is_empty() {
+        return Err("the index encoder wrote nothing".into());
     }
     Ok(out)
 }

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 use serde::Serialize;
 
 use crate::rig::Rig;
@@ -57,6 +57,10 @@ pub struct Classification {
 pub struct Vertices {
     pub position: Vec<Vec3>,
     pub normal: Vec<Vec3>,
+    /// The input's `TANGENT` (xyz, w the bitangent's sign), for applying normal maps: empty
+    /// when no primitive has one, else one per vertex (zero where a primitive lacks it). Code
+    /// that makes or reorders vertices may leave it empty; readers check its length.
+    pub tangent: Vec<Vec4>,
     /// The base-colour map's coordinates: the texCoord set its material names, with its
     /// `KHR_texture_transform` applied (what baking and rendering sample the decoded texture at).
     pub uv: Vec<Vec2>,
@@ -148,6 +152,10 @@ pub struct Material {
     pub base_color_texture: Option<usize>,
     /// How the base-colour texture wraps along u and v (its sampler's modes).
     pub base_color_wrap: [Wrap; 2],
+    /// Index into `Tree::textures`: the tangent-space normal map, decoded only when it samples
+    /// the base colour's coordinates and the file gives `TANGENT` (frond does not generate
+    /// tangent frames), so that renders light the surface as an engine would.
+    pub normal_texture: Option<usize>,
     pub alpha_mode: AlphaMode,
     pub alpha_cutoff: f32,
     pub double_sided: bool,

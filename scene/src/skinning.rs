@@ -1,7 +1,7 @@
 //! Linear-blend skinning of the tree's vertices for a set of node world matrices
 //! (spec animated-billboard-clouds §7: v' = Σ w · world(joint) · inverseBind · v).
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::model::{Binding, Tree};
@@ -60,6 +60,26 @@ pub fn skin_into(tree: &Tree, pal: &[Vec<Mat4>], out: &mut [Vec3]) {
 
 /// Skinned unit normals of every vertex (weight-blended palette rotation; zero stays zero).
 pub fn skin_normals(tree: &Tree, pal: &[Vec<Mat4>]) -> Vec<Vec3> {
+    skin_directions(tree, pal, &tree.vertices.normal)
+}
+
+/// Skinned tangents of every vertex (xyz as [`skin_normals`], w the bitangent's sign kept;
+/// zero stays zero), or empty when the tree has none ([`crate::Vertices::tangent`]).
+pub fn skin_tangents(tree: &Tree, pal: &[Vec<Mat4>]) -> Vec<Vec4> {
+    let t = &tree.vertices.tangent;
+    if t.len() != tree.vertices.len() {
+        return Vec::new();
+    }
+    let xyz: Vec<Vec3> = t.iter().map(|t| t.truncate()).collect();
+    skin_directions(tree, pal, &xyz)
+        .into_iter()
+        .zip(t)
+        .map(|(d, t)| d.extend(t.w))
+        .collect()
+}
+
+/// The unit directions `dirs` (one per vertex) skinned: the weight-blended palette rotation.
+fn skin_directions(tree: &Tree, pal: &[Vec<Mat4>], dirs: &[Vec3]) -> Vec<Vec3> {
     let v = &tree.vertices;
     (0..v.len())
         .into_par_iter()
@@ -69,7 +89,7 @@ pub fn skin_normals(tree: &Tree, pal: &[Vec<Mat4>]) -> Vec<Vec3> {
             for s in 0..4 {
                 let w = v.weights[i][s];
                 if w > 0.0 {
-                    acc += palette[v.joints[i][s] as usize].transform_vector3(v.normal[i]) * w;
+                    acc += palette[v.joints[i][s] as usize].transform_vector3(dirs[i]) * w;
                 }
             }
             acc.normalize_or_zero()

@@ -5,7 +5,7 @@
 use anyhow::{Result, bail};
 
 use crate::cli::lod::LodArgs;
-use crate::cli::values::{AnimationArg, TexturesArg};
+use crate::cli::values::{AnimationArg, TexturesArg, VatSpaceArg};
 use serde::Serialize;
 
 /// One engine's conventions.
@@ -33,6 +33,11 @@ pub struct EnginePreset {
     /// Clip names with the `-loop` import hint (`--loop-hint`): Godot loops only clips so
     /// named.
     pub loop_hint: bool,
+    /// Compressed geometry (`--compress`): the importer decodes `EXT_meshopt_compression`.
+    pub compress: bool,
+    /// The space VAT data is baked in (`--vat-space`): the engine's, for Houdini VAT 3.0's
+    /// stock materials.
+    pub vat_space: VatSpaceArg,
 }
 
 /// What every engine shares: 4 influences, no joint limit known, 16-bit PNG VATs usable.
@@ -46,6 +51,8 @@ const COMMON: EnginePreset = EnginePreset {
     png16_vat: true,
     textures: TexturesArg::Png,
     loop_hint: false,
+    compress: false,
+    vat_space: VatSpaceArg::Gltf,
 };
 
 /// Every preset, by `--preset` name.
@@ -57,6 +64,7 @@ pub const PRESETS: &[EnginePreset] = &[
         name: "unity",
         external_textures: true,
         msft_lod: true,
+        vat_space: VatSpaceArg::Unity,
         ..COMMON
     },
     // Unreal Engine 5 (Interchange): 8192 is the documented texture limit without .ini
@@ -67,6 +75,7 @@ pub const PRESETS: &[EnginePreset] = &[
         max_atlas: 8192,
         external_textures: true,
         max_joints: Some(256),
+        vat_space: VatSpaceArg::Unreal,
         ..COMMON
     },
     // Godot 4: embedded images are extracted on import; up to 16384 px; generates its own
@@ -81,11 +90,13 @@ pub const PRESETS: &[EnginePreset] = &[
     // weights (JOINTS_0 only); browsers decode 16-bit PNG to 8 bits, so VAT is EXR
     // (EXRLoader, half float).
     // three.js reads KTX2 through KTX2Loader (UASTC transcodes to BC7/ASTC/ETC2): a quarter of
-    // RGBA8's GPU memory, and the file's coverage-preserving mips.
+    // RGBA8's GPU memory, and the file's coverage-preserving mips. Geometry meshopt-compressed
+    // (GLTFLoader.setMeshoptDecoder, as gltfpack -cc output is read).
     EnginePreset {
         name: "web",
         png16_vat: false,
         textures: TexturesArg::Ktx2,
+        compress: true,
         ..COMMON
     },
 ];
@@ -119,6 +130,10 @@ impl EnginePreset {
         args.external_textures |= self.external_textures;
         args.msft_lod |= self.msft_lod;
         args.loop_hint |= self.loop_hint;
+        args.compress |= self.compress;
+        if args.vat_space == VatSpaceArg::Gltf {
+            args.vat_space = self.vat_space;
+        }
         if args.textures == TexturesArg::Png {
             args.textures = self.textures;
         }

@@ -7,6 +7,7 @@ use anyhow::Result;
 
 use crate::cli::args::ImportArgs;
 use crate::cli::progress::{Spinner, print_json};
+use crate::cli::values::LightingArg;
 use crate::eval_cmd::{Costs, EvalRequest, evaluate, image_for_screen_height, same_bytes};
 use crate::render_cmd::parse_size;
 use frond_render::Renderer;
@@ -39,6 +40,16 @@ pub struct EvalArgs {
     /// Clip (default: the original's first; the candidate plays the clip of that name).
     #[arg(long)]
     pub clip: Option<String>,
+    /// Draw the colour metric's surfaces white (alpha kept): colour_difference then measures
+    /// the lighting alone, how closely the candidate's normals and normal maps light it like
+    /// the original under the metric's directional light.
+    #[arg(long)]
+    pub white_albedo: bool,
+    /// How the colour metric lights surfaces: two-sided (0.6 + 0.4·|n·L|, the default) or
+    /// lambert (0.3 + 0.7·max(0, n·L) on the side facing the viewer, as engines light
+    /// double-sided foliage).
+    #[arg(long, value_enum, default_value_t = LightingArg::TwoSided)]
+    pub lighting: LightingArg,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -56,6 +67,8 @@ impl EvalArgs {
             screen_height,
             samples,
             clip,
+            white_albedo,
+            lighting,
             json,
         } = self;
         let original = import.load()?;
@@ -82,6 +95,8 @@ impl EvalArgs {
             samples,
             clip,
             limits: import.limits.limits(),
+            white_albedo,
+            lighting: lighting.lighting(),
         };
         let bar = Spinner::start();
         bar.say(&format!("evaluating {}", candidate.display()));

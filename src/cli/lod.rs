@@ -8,7 +8,9 @@ use anyhow::Result;
 use crate::batch::preset::EnginePreset;
 use crate::cli::args::{BuildArgs, ImportArgs, RunArgs};
 use crate::cli::progress::{Spinner, print_json};
-use crate::cli::values::{AnimationArg, EngineArg, MethodArg, NormalsArg, TexturesArg};
+use crate::cli::values::{
+    AnimationArg, EngineArg, MethodArg, NormalsArg, TexturesArg, VatSpaceArg,
+};
 use crate::lod_cmd::{LodRequest, run_lod};
 use frond_lod::method::ignored_options;
 use frond_lod::{
@@ -111,6 +113,18 @@ pub struct LodArgs {
     /// Godot's importer loops only clips so named.
     #[arg(long)]
     pub loop_hint: bool,
+    /// Compress the geometry: meshoptimizer-encoded vertex, index and animation data
+    /// (EXT_meshopt_compression) with byte normals and short texture coordinates
+    /// (KHR_mesh_quantization). Smaller files for clients with a meshopt decoder (three.js
+    /// with setMeshoptDecoder, Babylon.js, gltfpack's readers); Godot 3 and Blender's importer
+    /// cannot read them.
+    #[arg(long)]
+    pub compress: bool,
+    /// The space `--animation vat`/`vat-png16` data is baked in: gltf (frond's shaders), or an
+    /// engine's (unity, unreal) so Houdini VAT 3.0's stock materials play it unedited; the
+    /// unity and unreal presets set it.
+    #[arg(long, value_enum, default_value_t = VatSpaceArg::Gltf)]
+    pub vat_space: VatSpaceArg,
     /// Engine conventions (texture format and limits, external textures, MSFT_lod, loop hint,
     /// VAT format checks; docs/engines.md); options given too are kept where the preset only
     /// turns something on.
@@ -180,6 +194,8 @@ impl LodArgs {
             external_textures: self.external_textures,
             textures: self.textures.format(),
             loop_hint: self.loop_hint,
+            compress: self.compress,
+            vat_space: self.vat_space.space(),
             billboard_normals: self.billboard_normals.normals(),
         })
     }
@@ -229,6 +245,7 @@ impl LodArgs {
         a.extend(["--max-atlas".into(), self.max_atlas.to_string()]);
         a.extend(["--padding".into(), self.padding.to_string()]);
         a.extend(["--textures".into(), self.textures.text().into()]);
+        a.extend(["--vat-space".into(), self.vat_space.text().into()]);
         a.extend([
             "--billboard-normals".into(),
             self.billboard_normals.text().into(),
@@ -239,6 +256,7 @@ impl LodArgs {
         for (flag, on) in [
             ("--msft-lod", self.msft_lod),
             ("--loop-hint", self.loop_hint),
+            ("--compress", self.compress),
             ("--external-textures", self.external_textures),
             ("--json", self.json),
         ] {

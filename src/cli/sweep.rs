@@ -134,6 +134,8 @@ impl SweepArgs {
             samples,
             clip,
             limits: import.limits.limits(),
+            white_albedo: false,
+            lighting: Default::default(),
         };
         let req = SweepRequest {
             exe: std::env::current_exe().context("locating the frond executable")?,

@@ -176,6 +176,61 @@ impl NormalsArg {
     }
 }
 
+/// A `--lighting` value of `frond eval`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum LightingArg {
+    /// 0.6 + 0.4·|n·L|: both sides lit alike.
+    #[default]
+    TwoSided,
+    /// 0.3 + 0.7·max(0, n·L) on the side facing the viewer.
+    Lambert,
+}
+
+impl LightingArg {
+    /// The renderer's setting.
+    pub fn lighting(self) -> frond_render::Lighting {
+        match self {
+            LightingArg::TwoSided => frond_render::Lighting::TwoSided,
+            LightingArg::Lambert => frond_render::Lighting::Lambert,
+        }
+    }
+}
+
+/// A `--vat-space` value of `frond lod`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VatSpaceArg {
+    /// The glTF file's space (right-handed, +Y up, metres): frond's own shaders.
+    #[default]
+    Gltf,
+    /// Unity's, as glTFast and UnityGLTF import the mesh (x mirrored, v flipped): Houdini VAT
+    /// 3.0's Unity materials play it unedited.
+    Unity,
+    /// Unreal's (Z up, left-handed, centimetres): Houdini VAT 3.0's Unreal material functions
+    /// play it unedited.
+    Unreal,
+}
+
+impl VatSpaceArg {
+    /// The export stage's setting.
+    pub fn space(self) -> frond_export::vat::VatSpace {
+        match self {
+            VatSpaceArg::Gltf => frond_export::vat::VatSpace::Gltf,
+            VatSpaceArg::Unity => frond_export::vat::VatSpace::Unity,
+            VatSpaceArg::Unreal => frond_export::vat::VatSpace::Unreal,
+        }
+    }
+
+    /// The value as written.
+    pub fn text(self) -> &'static str {
+        match self {
+            VatSpaceArg::Gltf => "gltf",
+            VatSpaceArg::Unity => "unity",
+            VatSpaceArg::Unreal => "unreal",
+        }
+    }
+}
+
 /// A `--parts` value of `frond render`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum PartsArg {

@@ -172,6 +172,19 @@ pub fn validate(file: &Path) -> serde_json::Value {
     })
 }
 
+/// The JSON of a glTF file (`.gltf`, or a GLB's JSON chunk).
+pub fn gltf_json(path: &Path) -> serde_json::Value {
+    let bytes = std::fs::read(path).expect("read glTF");
+    let json = if bytes.starts_with(b"glTF") {
+        let len = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
+        assert_eq!(&bytes[16..20], b"JSON", "first GLB chunk is JSON");
+        &bytes[20..20 + len]
+    } else {
+        &bytes[..]
+    };
+    serde_json::from_slice(json).expect("glTF JSON")
+}
+
 // Each test binary compiles this module on its own (`mod common;`) and uses only some of the
 // helpers, and the dead_code lint runs per binary. Instead of a lint exception (a bare `allow`
 // is against house rules, and `#![expect(dead_code)]` fails in any binary that happens to use
@@ -192,6 +205,7 @@ const _: () = {
         frond_eval,
         node_tools,
         validate,
+        gltf_json,
         gltf_cases::triangle_gltf,
         gltf_cases::triangle_bin,
         gltf_cases::GOOD,

@@ -23,6 +23,7 @@ pub fn quad_z(min: [f32; 2], max: [f32; 2], z: f32, material: usize) -> DrawMesh
             [min[0], max[1], z],
         ],
         normals: None,
+        tangents: None,
         uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
         indices: vec![0, 1, 2, 0, 2, 3],
         material,
