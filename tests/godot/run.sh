@@ -3,7 +3,13 @@
 # as a game would, prints one JSON line per file with what Godot made of it and renders it to
 # PNG; headless, under xvfb-run.
 #
-#   tests/godot/run.sh OUT_DIR FILE.glb [FILE.glb ...]
+#   tests/godot/run.sh OUT_DIR FILE.glb[=REFERENCE.glb] [...]
+#
+# With `=REFERENCE.glb`, frond frames and renders REFERENCE instead of FILE (a VAT LOD against
+# the same LOD written skinned: frond does not play VAT). A FILE with a VAT sidecar beside it
+# (`<stem>_vat.json`, frond's naming) has its textures imported too, and inspect.gd plays its
+# `_vat` mesh with the shipped Godot 3 VAT material (export/shaders/frond_vat_rigid_godot3.shader)
+# at each clip time.
 #
 # Environment:
 #   FROND=path/to/frond       also frame Godot's camera on `frond inspect`'s rest-pose bounds and
@@ -48,6 +54,7 @@ export FROND_GODOT_ELEVATION="${FROND_GODOT_ELEVATION:-10}"
 proj="$out/project"
 rm -rf "$proj"
 cp -r "$here/project" "$proj"
+cp "$here/../../export/shaders/frond_vat_rigid_godot3.shader" "$proj/"
 # Godot's editor settings, caches and user data: kept out of the real home.
 export HOME="$out/home"
 export XDG_CONFIG_HOME="$HOME/.config" XDG_DATA_HOME="$HOME/.local/share" XDG_CACHE_HOME="$HOME/.cache"
@@ -65,28 +72,41 @@ unset LC_ALL
 : > "$proj/frond_inspect.txt"
 declare -A seen=()
 index=0
-for file in "$@"; do
+for arg in "$@"; do
   index=$((index + 1))
+  file="${arg%%=*}"
+  reference="$file"
+  [ "$arg" = "$file" ] || reference="${arg#*=}"
   src="$(cd "$(dirname "$file")" && pwd)/$(basename "$file")"
+  ref="$(cd "$(dirname "$reference")" && pwd)/$(basename "$reference")"
   name="$(basename "$file")"
   stem="${name%.*}"
   # Two inputs with one name (two chains of one tree) get the second's position appended.
   [ -z "${seen[$stem]:-}" ] || stem="${stem}_$index"
   seen[$stem]=1
   res="res://models/$stem/$name"
+  # A VAT LOD's textures, imported beside it (their names from the sidecar).
+  vat="${src%.*}_vat.json"
+  if [ -f "$vat" ]; then
+    for texture in $(sed -n 's/^ *"\(position\|rotation\|pivot\)": "\(.*\)",\{0,1\}$/\2/p' "$vat"); do
+      printf '%s\t%s\n' "$(dirname "$src")/$texture" "res://models/$stem/$texture" >> "$proj/frond_import.txt"
+    done
+  else
+    vat=""
+  fi
   bounds=""
   if [ -n "${FROND:-}" ]; then
     # "  bounds: [x, y, z] .. [x, y, z]" -> "x,y,z,x,y,z"
-    bounds="$("$FROND" inspect "$src" | sed -n 's/^ *bounds: \[\(.*\)\] \.\. \[\(.*\)\]$/\1,\2/p' | tr -d ' ')"
+    bounds="$("$FROND" inspect "$ref" | sed -n 's/^ *bounds: \[\(.*\)\] \.\. \[\(.*\)\]$/\1,\2/p' | tr -d ' ')"
     for time in $times; do
-      frond_args=(render "$src" --time "$time" --size "$size" --azimuth "$FROND_GODOT_AZIMUTH" \
+      frond_args=(render "$ref" --time "$time" --size "$size" --azimuth "$FROND_GODOT_AZIMUTH" \
         --elevation "$FROND_GODOT_ELEVATION" -o "$out/$stem.t$time.frond.png")
       [ -z "$clip" ] || frond_args+=(--clip "$clip")
       "$FROND" "${frond_args[@]}" > /dev/null
     done
   fi
   printf '%s\t%s\n' "$src" "$res" >> "$proj/frond_import.txt"
-  printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$src" "$res" "$out/$stem" "$times" "$clip" "$bounds" >> "$proj/frond_inspect.txt"
+  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$src" "$res" "$out/$stem" "$times" "$clip" "$bounds" "$vat" >> "$proj/frond_inspect.txt"
 done
 
 # 1. Import with the editor (the plugin imports the files one by one, then kills the editor:

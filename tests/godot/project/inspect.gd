@@ -7,11 +7,14 @@ extends SceneTree
 #
 # Run by run.sh:  godot3 --path PROJECT --resolution WxH -s res://inspect.gd
 # res://frond_inspect.txt, one model a line, tab-separated:
-#   name  res://path.glb  /abs/out/stem  times  clip  bounds
+#   name  res://path.glb  /abs/out/stem  times  clip  bounds  vat
 # `times` is a space-separated list of clip times (s); each writes <stem>.t<time>.godot.png and
 # <stem>.t<time>.godot_frondsampling.png, the time as written in the list. `clip` may be empty
 # (the first animation); `bounds` is "minx,miny,minz,maxx,maxy,maxz" (frond inspect's rest-pose
-# bounds, so that the camera is frond render's) or empty (the meshes' AABB).
+# bounds, so that the camera is frond render's) or empty (the meshes' AABB). `vat` is the path of
+# a VAT LOD's sidecar (or empty): its `_vat` mesh then gets the shipped Godot 3 VAT material
+# (res://frond_vat_rigid_godot3.shader, the sidecar's numbers, the textures imported beside the
+# model, the mesh's own atlas) and each frame plays it at that clip time (_set_vat).
 # res://frond_import_result.txt (the plugin's) supplies each model's import log.
 #
 # The camera is `frond render`'s (render/src/camera.rs, Camera::framing): perspective, vertical
@@ -57,10 +60,15 @@ func _run() -> void:
 			var scene: Node = packed.instance()
 			stage.add_child(scene)
 			_describe(scene, record)
+			var vat_material: ShaderMaterial = null
+			if job["vat"] != "":
+				vat_material = _set_vat(scene, job, record)
 			record["camera"] = _frame(job["bounds"], record)
 			record["renders"] = []
 			for time in job["times"]:
 				var render := _pose(scene, job["clip"], float(time))
+				if vat_material != null:
+					vat_material.set_shader_param("clip_time", float(time))
 				var base: String = job["out"] + ".t" + time
 				# As imported.
 				_set_frond_sampling(scene, false)
@@ -83,6 +91,59 @@ func _run() -> void:
 		record["log"] = Log.entries(offset)
 		print(to_json(record))
 	quit()
+
+
+# Puts the shipped Godot 3 VAT material on the scene's `_vat` mesh, its uniforms from the sidecar
+# (job["vat"]) and its textures imported beside the model; the clip time is set per frame.
+# Records {"mesh", "textures", "frames", "fps"} under record["vat"]; null when nothing was set.
+func _set_vat(scene: Node, job: Dictionary, record: Dictionary) -> ShaderMaterial:
+	var f := File.new()
+	if f.open(job["vat"], File.READ) != OK:
+		record["vat"] = {"error": "cannot read " + job["vat"]}
+		return null
+	var parsed := JSON.parse(f.get_as_text())
+	f.close()
+	if parsed.error != OK or not (parsed.result is Dictionary):
+		record["vat"] = {"error": "the sidecar is not JSON"}
+		return null
+	var sidecar: Dictionary = parsed.result
+	var target: MeshInstance = null
+	for node in _all(scene, []):
+		if node is MeshInstance and node.name.ends_with("_vat"):
+			target = node
+	if target == null or target.mesh == null:
+		record["vat"] = {"error": "no _vat mesh"}
+		return null
+	var dir: String = job["res"].get_base_dir()
+	var textures: Dictionary = sidecar["textures"]
+	var material := ShaderMaterial.new()
+	material.shader = load("res://frond_vat_rigid_godot3.shader")
+	var loaded := true
+	for key in ["position", "rotation", "pivot"]:
+		var texture = load(dir + "/" + textures[key]) if textures.has(key) else null
+		loaded = loaded and texture is Texture
+		material.set_shader_param("vat_" + key, texture)
+	material.set_shader_param("vat_frames", float(sidecar["frames"]))
+	material.set_shader_param("vat_fps", float(sidecar["fps"]))
+	var lo: Array = sidecar["bound_min"]
+	var hi: Array = sidecar["bound_max"]
+	material.set_shader_param("vat_bound_min", Vector3(lo[0], lo[1], lo[2]))
+	material.set_shader_param("vat_bound_max", Vector3(hi[0], hi[1], hi[2]))
+	material.set_shader_param("vat_hdr", bool(sidecar["hdr"]))
+	material.set_shader_param("clip_start_s", float(sidecar.get("start_s", 0.0)))
+	material.set_shader_param("use_engine_time", false)
+	var atlas = target.mesh.surface_get_material(0)
+	if atlas is SpatialMaterial:
+		material.set_shader_param("albedo_atlas", atlas.albedo_texture)
+		material.set_shader_param("alpha_scissor", atlas.params_alpha_scissor_threshold)
+	target.material_override = material
+	# The pieces leave the rest mesh's bounds.
+	target.extra_cull_margin = 16384.0
+	record["vat"] = {
+		"mesh": target.name, "textures": loaded, "atlas": atlas is SpatialMaterial,
+		"frames": sidecar["frames"], "fps": sidecar["fps"],
+	}
+	return material
 
 
 func _save_frame(path: String) -> bool:
@@ -149,6 +210,7 @@ func _read_jobs() -> Array:
 			"name": p[0], "res": p[1], "out": p[2], "times": times,
 			"clip": p[4] if p.size() > 4 else "",
 			"bounds": bounds,
+			"vat": p[6].strip_edges() if p.size() > 6 else "",
 		})
 	f.close()
 	return jobs
