@@ -615,8 +615,10 @@ fn compressed_chains_validate_and_play_in_threejs_like_plain_ones() {
                 .zip(y)
                 .map(|(p, q)| p.distance(*q))
                 .fold(0.0f32, f32::max);
-            // Positions and keys stay floats: the same poses up to float noise.
-            assert!(worst < 1e-4, "{file}: three.js poses differ by {worst}");
+            // Positions stay floats, rotation keys become normalized shorts (3e-5 rad a key,
+            // adding up along the bone chains).
+            eprintln!("{file}: three.js poses differ by up to {worst}");
+            assert!(worst < 2e-3, "{file}: three.js poses differ by {worst}");
         }
         let (ta, tb) = (
             import(&a, &ImportOptions::default()).expect("plain imports"),

@@ -148,8 +148,9 @@ impl GltfBuilder {
     }
 
     /// Writes the geometry compressed from now on: normals and tangents as normalized bytes,
-    /// texture coordinates within 0..1 as normalized shorts (`KHR_mesh_quantization`), and
-    /// every vertex, index and animation view meshoptimizer-encoded (`EXT_meshopt_compression`,
+    /// texture coordinates within 0..1 as normalized shorts (`KHR_mesh_quantization`), rotation
+    /// keys as normalized shorts (core glTF), and every vertex, index and animation view
+    /// meshoptimizer-encoded (`EXT_meshopt_compression`,
     /// both required: a client without them cannot read the file). Positions stay floats: a
     /// quantized position needs a dequantizing node transform, which skinned meshes ignore.
     pub fn set_compression(&mut self, on: bool) {
@@ -636,7 +637,27 @@ impl GltfBuilder {
             } else {
                 "VEC3"
             };
-            let output = self.add_floats(&c.values, ty, false, None);
+            // Compressed: rotations as normalized shorts (glTF core allows them for rotation
+            // outputs; 3e-5 rad a key), half the bytes before meshoptimizer's encoding. Cubic
+            // spline tangents are no unit quaternions and stay floats.
+            let output = if self.compress
+                && c.path == ChannelPath::Rotation
+                && c.interpolation != WriteInterpolation::CubicSpline
+            {
+                let bytes: Vec<u8> = c
+                    .values
+                    .iter()
+                    .flat_map(|v| ((v.clamp(-1.0, 1.0) * 32767.0).round() as i16).to_le_bytes())
+                    .collect();
+                let view = self.push_view(&bytes, None, None);
+                self.accessors.push(json!({
+                    "bufferView": view, "componentType": 5122, "normalized": true,
+                    "count": c.values.len() / 4, "type": "VEC4"
+                }));
+                self.accessors.len() - 1
+            } else {
+                self.add_floats(&c.values, ty, false, None)
+            };
             samplers.push(json!({
                 "input": input, "output": output,
                 "interpolation": match c.interpolation {
