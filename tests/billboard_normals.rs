@@ -125,6 +125,19 @@ fn baked_normals_are_a_half_size_tangent_space_map_crown_and_flat_are_vertex_nor
         z / count as f64
     );
 
+    // frond reads it back as a normal map it applies: the tangents and the decoded map, at
+    // the file's size, on the billboard material.
+    let tree =
+        frond_scene::import(&baked.path, &frond_scene::ImportOptions::default()).expect("imports");
+    assert_eq!(tree.vertices.tangent.len(), tree.vertices.len());
+    let m = tree
+        .materials
+        .iter()
+        .find(|m| m.name.ends_with("_billboards"))
+        .expect("billboard material");
+    let t = &tree.textures[m.normal_texture.expect("the normal map is applied")];
+    assert_eq!((t.width, t.height), (n.width(), n.height()));
+
     let crown = lod1(dir.path(), "crown");
     let (material, positions, normals) = billboards(&crown);
     assert!(material.get("normalTexture").is_none());

@@ -740,22 +740,15 @@ fn read_materials(src: &GltfSource, warnings: &mut Vec<String>) -> Result<Materi
         });
         // The normal map, when it samples what `Vertices::uv` holds: the base colour's set,
         // untransformed on both (else the two maps' coordinates differ and it is not applied).
-        let plain = |info: &Option<serde_json::Value>| {
-            info.as_ref()
-                .is_none_or(|e| e.get("KHR_texture_transform").is_none())
-        };
         let normal = m.normal_texture.as_ref().and_then(|n| {
             let same_set = tex.map_or(0, |t| t.1) == n.tex_coord;
-            let untransformed = tex.is_none_or(|t| t.2 == glam::Affine2::IDENTITY);
-            let n_plain = plain(
-                &src.raw
-                    .materials
-                    .get(i)
-                    .and_then(|j| j.pointer("/normalTexture/extensions"))
-                    .cloned(),
-            );
+            let untransformed = tex.is_none_or(|t| t.2 == glam::Affine2::IDENTITY)
+                && src.raw.materials.get(i).is_none_or(|j| {
+                    j.pointer("/normalTexture/extensions/KHR_texture_transform")
+                        .is_none()
+                });
             let image = texture_image(src, n.index.value(), false);
-            (same_set && untransformed && n_plain && image < src.root.images.len()).then_some(image)
+            (same_set && untransformed && image < src.root.images.len()).then_some(image)
         });
         texinfo.push(tex);
         normals.push(normal);
