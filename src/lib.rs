@@ -11,3 +11,4 @@ pub mod output;
 pub mod output_set;
 pub mod render_cmd;
 pub mod sweep;
+pub mod view_server;

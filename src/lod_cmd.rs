@@ -41,6 +41,10 @@ pub struct LodRequest {
     pub compress: bool,
     /// How baked billboards are lit.
     pub billboard_normals: frond_export::BillboardNormals,
+    /// Write `<name>_preview.html` and its pictures (`--no-preview` turns it off).
+    pub preview: bool,
+    /// The preview's viewer scripts are elsewhere, at this path relative to the output folder.
+    pub preview_viewer: Option<String>,
 }
 
 /// Input-name stem used for the files.
@@ -141,12 +145,23 @@ pub fn run_lod(
         set.stage(rel, bytes)?;
     }
     read_back_costs(&set, &mut report)?;
+    let lods = if req.measure.is_some() || req.preview {
+        read_back_lods(tree, &set, &report)?
+    } else {
+        Vec::new()
+    };
     if let Some(max_error) = req.measure {
         progress("measuring each LOD's error");
         let t = Instant::now();
-        measure_errors(renderer, tree, &set, &mut report, max_error)?;
+        measure_errors(renderer, tree, &lods, &mut report, max_error)?;
         report.timings_s["measure"] = serde_json::json!(t.elapsed().as_secs_f64());
     }
+    if req.preview {
+        progress("rendering the preview page");
+        write_preview(renderer, tree, req, &lods, &mut set, &mut report)?;
+    }
+    // Everything up to the report, measuring and the preview included.
+    report.timings_s["wall"] = serde_json::json!(t_start.elapsed().as_secs_f64());
     let json = serde_json::to_vec_pretty(&report).context("serialising the report")?;
     set.commit(&json)?;
     Ok(report)
@@ -174,13 +189,79 @@ fn fill_switching(tree: &Tree, req: &LodRequest, report: &mut LodReport) {
 const MEASURE_VIEWS: u32 = 5;
 const MEASURE_FRAMES: u32 = 5;
 
+/// Every written LOD read back from its staged file as `frond eval` reads a candidate, in the
+/// report's order; LOD0 is the input itself (its file passes the input through).
+fn read_back_lods(tree: &Tree, set: &OutputSet, report: &LodReport) -> Result<Vec<Tree>> {
+    let unlimited = unlimited();
+    let mut lods = Vec::with_capacity(report.lods.len());
+    for (k, entry) in report.lods.iter().enumerate() {
+        if k == 0 {
+            lods.push(tree.clone());
+            continue;
+        }
+        let staged = set
+            .staged_path(&entry.file)
+            .with_context(|| format!("{}: not among the files written", entry.file))?;
+        let lod = frond_scene::import(
+            &staged,
+            &ImportOptions {
+                allow_empty: true,
+                limits: unlimited,
+                ..Default::default()
+            },
+        )
+        .with_context(|| format!("{}: reading back what was written", entry.file))?;
+        lods.push(lod);
+    }
+    Ok(lods)
+}
+
+/// Renders `<name>_preview.html` and its pictures from the written LODs (`lods`, read back)
+/// and stages them with the set; the report lists them and the time it took.
+fn write_preview(
+    renderer: &Renderer,
+    tree: &Tree,
+    req: &LodRequest,
+    lods: &[Tree],
+    set: &mut OutputSet,
+    report: &mut LodReport,
+) -> Result<()> {
+    let combined_path = set
+        .staged_path(&report.combined)
+        .with_context(|| format!("{}: not among the files written", report.combined))?;
+    let combined = std::fs::read(&combined_path)
+        .with_context(|| format!("{}: reading back what was written", report.combined))?;
+    let preview = frond_preview::lod_preview(
+        renderer,
+        &frond_preview::LodPreviewRequest {
+            report,
+            input: tree,
+            lods,
+            combined: &combined,
+            resolution: req.resolution,
+            flip_frames: PREVIEW_FLIP_FRAMES,
+            viewer: req.preview_viewer.as_deref(),
+        },
+    )
+    .with_context(|| format!("{}: rendering the preview page", tree.source.display()))?;
+    for (rel, bytes) in &preview.files {
+        set.stage(rel, bytes)?;
+        report.files.insert(report.files.len() - 1, rel.clone());
+    }
+    report.timings_s["preview"] = serde_json::json!(preview.seconds);
+    Ok(())
+}
+
+/// Frames of each LOD's wind flip-book on the preview page.
+const PREVIEW_FLIP_FRAMES: u32 = 12;
+
 /// Fills each billboard or card LOD's `error` with its animated coverage error at its own
-/// screen height, read from its staged file as `frond eval` reads a candidate, and warns (in
+/// screen height, on its written file read back (`lods`, the report's order), and warns (in
 /// the log and the report) about every LOD over `max_error`.
 fn measure_errors(
     renderer: &Renderer,
     tree: &Tree,
-    set: &OutputSet,
+    lods: &[Tree],
     report: &mut LodReport,
     max_error: f64,
 ) -> Result<()> {
@@ -200,28 +281,16 @@ fn measure_errors(
     };
     let mut ctx = EvalContext::new(renderer, tree, &req)
         .with_context(|| format!("{path}: sampling the input to measure the LODs"))?;
-    for entry in &mut report.lods {
+    for (entry, lod) in report.lods.iter_mut().zip(lods) {
         let Some(h) = entry.screen_height else {
             continue;
         };
-        let staged = set
-            .staged_path(&entry.file)
-            .with_context(|| format!("{}: not among the files written", entry.file))?;
-        let lod = frond_scene::import(
-            &staged,
-            &ImportOptions {
-                allow_empty: true,
-                limits: unlimited,
-                ..Default::default()
-            },
-        )
-        .with_context(|| format!("{}: reading back what was written", entry.file))?;
         let size = image_for_screen_height(h.round().max(1.0) as u32);
         let coverage = ctx
-            .coverage(&lod, size)
+            .coverage(lod, size)
             .with_context(|| format!("{}: measuring its error", entry.file))?;
         let depth = ctx
-            .depth_complexity(&lod, size)
+            .depth_complexity(lod, size)
             .with_context(|| format!("{}: measuring its depth complexity", entry.file))?;
         let input_depth = ctx
             .depth_complexity(tree, size)
@@ -229,9 +298,9 @@ fn measure_errors(
         let within_target = coverage.mean <= max_error;
         if !within_target {
             let w = format!(
-                "{}: coverage error {:.3} at {h} px is over the target {max_error} (--max-error): \
+                "{}: coverage error {:.3} at {h} px is over the target {} (--max-error): \
                  written at its budget",
-                entry.file, coverage.mean
+                entry.file, coverage.mean, max_error as f32
             );
             tracing::warn!("{w}");
             report.warnings.push(w);

@@ -54,19 +54,6 @@ const GODOT_NOISE: &[&str] = &["ERROR: free_static: Condition \"p_ptr == __null\
 /// racily.
 static GODOT: Mutex<()> = Mutex::new(());
 
-/// `name` is an executable file in a `PATH` folder.
-fn on_path(name: &str) -> bool {
-    std::env::var_os("PATH").is_some_and(|path| {
-        std::env::split_paths(&path).any(|dir| {
-            let file = dir.join(name);
-            std::fs::metadata(&file).is_ok_and(|m| {
-                use std::os::unix::fs::PermissionsExt;
-                m.is_file() && m.permissions().mode() & 0o111 != 0
-            })
-        })
-    })
-}
-
 /// When Godot cannot run here: prints one `skipped:` line for `test` (straight to stderr, past
 /// libtest's capture, like `frond_testdata::report_skip`) and returns true.
 fn skip_without_godot(test: &str) -> bool {

@@ -88,6 +88,18 @@ fn csv_rows(path: &Path) -> Vec<BTreeMap<String, String>> {
         .collect()
 }
 
+/// The text of every `<text>` element of an SVG, trimmed.
+fn svg_texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|p| {
+            let start = p.find('>')? + 1;
+            let end = p.find("</text>")?;
+            Some(p[start..end].trim().to_string())
+        })
+        .collect()
+}
+
 fn num(row: &BTreeMap<String, String>, key: &str) -> f64 {
     row[key]
         .parse()
@@ -210,6 +222,8 @@ fn sweep_writes_rows_stability_and_charts() {
         "accuracy_vs_texture_bytes",
         "accuracy_vs_time",
         "metrics_vs_epsilon",
+        // One screen height, a grid of ε: ε in that size's pixels as well.
+        "metrics_vs_epsilon_px",
     ] {
         let svg = std::fs::read_to_string(out.join(format!("{stem}.svg"))).expect("svg");
         assert!(svg.starts_with("<svg"), "{stem}");
@@ -228,6 +242,47 @@ fn sweep_writes_rows_stability_and_charts() {
     }
     let time_svg = std::fs::read_to_string(out.join("accuracy_vs_time.svg")).expect("svg");
     assert!(time_svg.contains("Pareto front"));
+    // Axes in the units people use: texture bytes in KB/MB, build time in ms/s.
+    let bytes_svg =
+        std::fs::read_to_string(out.join("accuracy_vs_texture_bytes.svg")).expect("svg");
+    let ticks = svg_texts(&bytes_svg);
+    assert!(
+        ticks
+            .iter()
+            .any(|t| t.ends_with(" KB") || t.ends_with(" MB")),
+        "byte ticks: {ticks:?}"
+    );
+    let ticks = svg_texts(&time_svg);
+    assert!(
+        ticks
+            .iter()
+            .any(|t| t.ends_with(" ms") || t.ends_with(" s")),
+        "time ticks: {ticks:?}"
+    );
+
+    // The sweep's page shows every chart and every run, with the files it names all there.
+    let page = std::fs::read_to_string(out.join("index.html")).expect("index.html");
+    for part in page.split("src=\"").skip(1) {
+        let file = &part[..part.find('"').expect("quoted")];
+        assert!(out.join(file).is_file(), "{file}: named by the page");
+    }
+    for stem in [
+        "accuracy_vs_billboards",
+        "accuracy_vs_time",
+        "metrics_vs_epsilon_px",
+    ] {
+        assert!(
+            page.contains(&format!("src=\"{stem}.png\"")),
+            "{stem} on the page"
+        );
+    }
+    for r in &runs {
+        assert!(
+            page.contains(&format!("<td>{}</td>", r["run"])),
+            "{} on the page",
+            r["run"]
+        );
+    }
 
     // The same sweep on one thread: every number but the timings is the same.
     let again = dir.path().join("again");
@@ -260,6 +315,15 @@ fn screen_height_grid_and_a_run_past_its_limit() {
     assert!((num(far, "epsilon") / num(near, "epsilon") - 3.0).abs() < 1e-4);
     assert!(num(far, "billboards") < num(near, "billboards"));
     assert_eq!(summary["failed"], 0);
+    // Several sizes: points labelled with their screen height, metrics charted against it.
+    let svg = std::fs::read_to_string(out.join("accuracy_vs_billboards.svg")).expect("svg");
+    let texts = svg_texts(&svg);
+    assert!(
+        texts.iter().any(|t| t == "120 px") && texts.iter().any(|t| t == "40 px"),
+        "point labels: {texts:?}"
+    );
+    assert!(out.join("metrics_vs_screen_height.svg").is_file());
+    assert!(!out.join("metrics_vs_epsilon_px.svg").exists());
 
     // A build that cannot finish in a second is stopped and listed with its reason (billboards
     // merging several cards, baked at 16×16 supersampling: at ε = 0 every billboard copies its

@@ -127,6 +127,12 @@ pub fn run_batch(req: &BatchRequest, progress: &dyn BatchProgress) -> Result<Bat
             req.out_dir.display()
         );
     }
+    if req.context.preview {
+        // The trees' preview pages share one copy of the viewer scripts (`--preview-viewer`).
+        for (rel, bytes) in frond_preview::viewer_files(true) {
+            crate::output::write_atomic(&out_abs.join(&rel), bytes)?;
+        }
+    }
     let mut trees = discover(&req.input, Some(&out_abs))?;
     if let Some(s) = req.shard {
         trees.retain(|t| s.takes(&t.relative));

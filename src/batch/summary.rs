@@ -167,7 +167,67 @@ impl BatchSummary {
     pub fn write(&self, dir: &Path, stem: &str) -> Result<()> {
         let json = serde_json::to_vec_pretty(self).context("serialising the summary")?;
         write_atomic(&dir.join(format!("{stem}.csv")), &self.csv()?)?;
+        if stem == "summary" {
+            write_atomic(&dir.join("index.html"), self.index_page().as_bytes())?;
+        }
         write_atomic(&dir.join(format!("{stem}.json")), &json)
+    }
+
+    /// `index.html`: one line per tree linking its preview page (when it wrote one), with its
+    /// LOD0 still, what was made, or why it failed; `frond view OUTDIR` opens it.
+    pub fn index_page(&self) -> String {
+        use frond_preview::index_page::{IndexEntry, index_page, trees_line};
+        let entries: Vec<IndexEntry> = self
+            .trees
+            .iter()
+            .map(|t| {
+                let page = t
+                    .files
+                    .iter()
+                    .find(|f| f.name.ends_with("_preview.html"))
+                    .map(|f| format!("{}/{}", t.output, f.name));
+                let thumbnail = page
+                    .as_ref()
+                    .map(|p| format!("{}/lod0.png", p.trim_end_matches(".html")));
+                let summary = match (&t.status, &t.reason) {
+                    (Status::Failed, reason) => {
+                        format!("failed: {}", reason.as_deref().unwrap_or("unknown"))
+                    }
+                    _ => format!(
+                        "{} LODs, {} → {} triangles, {} written{}",
+                        t.lods.len().saturating_sub(1),
+                        t.lods.first().map_or(0, |l| l.triangles),
+                        t.lods.last().map_or(0, |l| l.triangles),
+                        frond_preview::units::bytes(t.output_bytes as f64),
+                        if t.status == Status::UpToDate {
+                            " (up to date)"
+                        } else {
+                            ""
+                        }
+                    ),
+                };
+                IndexEntry {
+                    name: t.tree.clone(),
+                    page,
+                    thumbnail,
+                    summary,
+                    failed: t.status == Status::Failed,
+                }
+            })
+            .collect();
+        let bytes = self.trees.iter().map(|t| t.output_bytes).sum();
+        index_page(
+            &format!("frond batch: {}", self.input),
+            &format!(
+                "{} · {} built, {} up to date, {} failed · {}",
+                trees_line(self.trees.len(), Some(bytes)),
+                self.counts.built,
+                self.counts.up_to_date,
+                self.counts.failed,
+                frond_preview::units::duration(self.wall_s)
+            ),
+            &entries,
+        )
     }
 
     fn csv(&self) -> Result<Vec<u8>> {

@@ -21,6 +21,7 @@ use crate::cli::lod::LodArgs;
 use crate::cli::values::{AnimationArg, MethodArg};
 use crate::output::write_atomic;
 use clap::ValueEnum;
+use frond_preview::VIEWER_DIR;
 
 /// Name of each tree's stamp, written last into its output folder.
 pub const STAMP: &str = "batch.json";
@@ -48,6 +49,8 @@ pub struct TreeContext {
     pub build: BuildArgs,
     pub preset: Option<EnginePreset>,
     pub eval: bool,
+    /// Each tree's `frond lod` writes its preview page (`frond batch --no-preview` skips it).
+    pub preview: bool,
     pub timeout: Duration,
     /// `RAYON_NUM_THREADS` of each child.
     pub threads: usize,
@@ -58,11 +61,15 @@ pub struct TreeContext {
 /// The `frond lod` arguments (input and output aside) of a tree with `o` as its settings: a
 /// [`LodArgs`] at `frond lod`'s defaults with the settings, the batch's build options and the
 /// engine preset applied, written back as arguments.
-pub fn lod_args(ctx: &TreeContext, o: &Overrides) -> Result<Vec<String>> {
+pub fn lod_args(ctx: &TreeContext, o: &Overrides, output: &str) -> Result<Vec<String>> {
     let mut l = LodArgs::defaults(Path::new("tree.glb"), Path::new("out"));
     // The batch measures with its own `eval` children when asked (`--eval`): the full report,
     // not the error alone.
     l.no_measure = true;
+    l.no_preview = !ctx.preview;
+    // One copy of the preview's viewer scripts for the whole batch, in OUTDIR/viewer.
+    let depth = Path::new(output).components().count();
+    l.preview_viewer = Some(format!("{}{VIEWER_DIR}", "../".repeat(depth)));
     if let Some(m) = &o.method {
         l.method = MethodArg::parse(m).with_context(|| format!("unknown method '{m}'"))?;
     }
@@ -154,7 +161,7 @@ fn summary_key(id: MetricId) -> &'static str {
 /// Processes one tree; never fails: a failure is the entry's status and reason.
 pub fn process(ctx: &TreeContext, tree: &TreeInput) -> TreeEntry {
     let settings = tree.overrides.or(&ctx.defaults);
-    let args = lod_args(ctx, &settings);
+    let args = lod_args(ctx, &settings, &tree.output);
     let mut entry = TreeEntry {
         reason: None,
         args: args.as_ref().cloned().unwrap_or_default(),

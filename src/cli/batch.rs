@@ -43,6 +43,10 @@ pub struct BatchArgs {
     /// Also run `frond eval` on every LOD at its screen height; metrics go to the summary.
     #[arg(long)]
     pub eval: bool,
+    /// Skip each tree's preview page (`<name>_preview.html`) and the batch's `index.html`
+    /// linking them.
+    #[arg(long)]
+    pub no_preview: bool,
     /// Clustering method of every tree (default: frond lod's).
     #[arg(long, value_enum)]
     pub method: Option<MethodArg>,
@@ -90,6 +94,7 @@ impl BatchArgs {
             preset,
             max_memory,
             eval,
+            no_preview,
             method,
             lods,
             animation,
@@ -153,6 +158,7 @@ impl BatchArgs {
                 build,
                 preset,
                 eval,
+                preview: !no_preview,
                 timeout: std::time::Duration::from_secs(timeout.max(1)),
                 threads: (cores / jobs).max(1),
                 limits: limits.limits(),

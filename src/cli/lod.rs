@@ -72,6 +72,15 @@ pub struct LodArgs {
     /// every LOD from five views over five frames at the LOD's size).
     #[arg(long)]
     pub no_measure: bool,
+    /// Skip `<name>_preview.html`, the page showing each LOD at its screen size beside LOD0,
+    /// its difference, wind flip-book, atlas and costs, with a live three.js view of the
+    /// combined file (open it with `frond view OUTDIR`).
+    #[arg(long)]
+    pub no_preview: bool,
+    /// The preview page's viewer scripts are at this path relative to the output folder (and
+    /// not written with the set): `frond batch` keeps one copy for all its trees.
+    #[arg(long, value_name = "PATH")]
+    pub preview_viewer: Option<String>,
     /// Build each LOD at its screen size's ε and texel density alone, without the cost budgets
     /// (for experiments: such LODs may cost more than the input). The hard limits (at most 256
     /// joints per skin, no more than the input's) still hold.
@@ -188,6 +197,8 @@ impl LodArgs {
             },
             animation: self.animation.mode(),
             measure: (!self.no_measure).then_some(f64::from(self.max_error)),
+            preview: !self.no_preview,
+            preview_viewer: self.preview_viewer.clone(),
             msft_lod: self.msft_lod,
             resolution: self.resolution,
             fov: self.fov,
@@ -229,11 +240,15 @@ impl LodArgs {
         if let Some(e) = self.epsilon {
             a.extend(["--epsilon".into(), e.to_string()]);
         }
+        if let Some(v) = &self.preview_viewer {
+            a.extend(["--preview-viewer".into(), v.clone()]);
+        }
         a.extend(["--triangle-ratio".into(), self.triangle_ratio.to_string()]);
         a.extend(["--max-error".into(), self.max_error.to_string()]);
         for (flag, on) in [
             ("--no-measure", self.no_measure),
             ("--no-cost-budgets", self.no_cost_budgets),
+            ("--no-preview", self.no_preview),
         ] {
             if on {
                 a.push(flag.into());
@@ -325,6 +340,17 @@ impl LodArgs {
                 frond_lod::report::report_name(&report.name),
                 report.timings_s["total"].as_f64().unwrap_or(0.0)
             );
+            if let Some(page) = report
+                .files
+                .iter()
+                .find(|f| *f == &frond_preview::preview_name(&report.name))
+            {
+                println!(
+                    "{page}: the preview ({:.2} s); its live view: frond view {}",
+                    report.timings_s["preview"].as_f64().unwrap_or(0.0),
+                    self.output.display()
+                );
+            }
         }
         Ok(())
     }

@@ -14,6 +14,7 @@ pub mod render;
 pub mod sample;
 pub mod sweep;
 pub mod values;
+pub mod view;
 
 use anyhow::Result;
 
@@ -45,6 +46,9 @@ pub enum Command {
     BatchMerge(batch_merge::BatchMergeArgs),
     /// Write a skinned, wind-animated sample tree (.glb).
     Sample(sample::SampleArgs),
+    /// Serve an output folder on localhost and open its preview page (the live view needs the
+    /// files served: browsers do not let a page opened from disk read the GLBs beside it).
+    View(view::ViewArgs),
 }
 
 impl Command {
@@ -60,6 +64,7 @@ impl Command {
             Command::Batch(args) => args.run(),
             Command::BatchMerge(args) => args.run(),
             Command::Sample(args) => args.run(),
+            Command::View(args) => args.run(),
         }
     }
 }

@@ -147,6 +147,7 @@ impl SweepArgs {
             timeout: std::time::Duration::from_secs(timeout.max(1)),
             keep,
             diagonal,
+            tree_height: tree.height(),
         };
         let renderer = Renderer::new()?;
         let bar = Progress::start();

@@ -22,8 +22,12 @@ pub struct Series {
     pub color: RGBColor,
     /// Points joined by a line (x sorted), each with an optional (min, max) bar.
     pub line: Vec<MeanPoint>,
+    /// A label beside each point of `line` (its screen height), or none.
+    pub labels: Vec<String>,
     /// Loose points (every run).
     pub points: Vec<(f64, f64)>,
+    /// A label beside each loose point (its screen height) when the series has no line.
+    pub point_labels: Vec<String>,
     /// A horizontal reference line (a candidate with no x).
     pub level: Option<f64>,
 }
@@ -35,9 +39,34 @@ pub struct Panel {
     pub x_label: String,
     pub y_label: String,
     pub x_log: bool,
+    /// How the axes' ticks are written.
+    pub x_unit: Unit,
+    pub y_unit: Unit,
     pub series: Vec<Series>,
     /// The Pareto front, drawn as a step line with ringed points.
     pub front: Vec<(f64, f64)>,
+}
+
+/// How an axis's ticks are written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unit {
+    /// A plain number.
+    Plain,
+    /// Bytes, as KB and MB.
+    Bytes,
+    /// Seconds, as ms and s.
+    Seconds,
+}
+
+impl Unit {
+    /// A tick's text.
+    fn tick(self, v: f64) -> String {
+        match self {
+            Unit::Plain => tick(v),
+            Unit::Bytes => frond_preview::units::bytes(v),
+            Unit::Seconds => frond_preview::units::duration(v),
+        }
+    }
 }
 
 /// A chart file: panels on a grid of `columns`.
@@ -95,13 +124,14 @@ fn by_method(rows: &[Row]) -> Vec<(String, Vec<&Row>)> {
     out
 }
 
-/// Per grid point of one method: mean x, mean y and the y range over seeds (finite values only).
-fn config_means(rows: &[&Row], x: &str, y: &str) -> Vec<MeanPoint> {
+/// Per grid point of one method: mean x, mean y and the y range over seeds (finite values
+/// only), each with its grid point's screen height as a label.
+fn config_means(rows: &[&Row], x: &str, y: &str) -> Vec<(MeanPoint, String)> {
     let mut groups: BTreeMap<&str, Vec<&Row>> = BTreeMap::new();
     for r in rows {
         groups.entry(r.point.as_str()).or_default().push(r);
     }
-    let mut pts: Vec<MeanPoint> = groups
+    let mut pts: Vec<(MeanPoint, String)> = groups
         .values()
         .filter_map(|g| {
             let pairs: Vec<(f64, f64)> = g
@@ -117,10 +147,11 @@ fn config_means(rows: &[&Row], x: &str, y: &str) -> Vec<MeanPoint> {
             let my = pairs.iter().map(|p| p.1).sum::<f64>() / n;
             let lo = pairs.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
             let hi = pairs.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
-            Some((mx, my, (pairs.len() > 1).then_some((lo, hi))))
+            let label = format!("{} px", tick(f64::from(g[0].screen_height)));
+            Some(((mx, my, (pairs.len() > 1).then_some((lo, hi))), label))
         })
         .collect();
-    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    pts.sort_by(|a, b| a.0.0.total_cmp(&b.0.0));
     pts
 }
 
@@ -130,11 +161,14 @@ fn series_for(rows: &[Row], x: &str, y: &str, x_missing_is_level: bool) -> Vec<S
         .enumerate()
         .map(|(i, (name, rs))| {
             let candidate = rs[0].is_candidate();
-            let points: Vec<(f64, f64)> = rs
+            let (points, point_labels): (Vec<(f64, f64)>, Vec<String>) = rs
                 .iter()
-                .map(|r| (r.get(x), r.get(y)))
-                .filter(|(a, b)| a.is_finite() && b.is_finite())
-                .collect();
+                .map(|r| {
+                    let label = format!("{} px", tick(f64::from(r.screen_height)));
+                    ((r.get(x), r.get(y)), label)
+                })
+                .filter(|((a, b), _)| a.is_finite() && b.is_finite())
+                .unzip();
             let level = (candidate && x_missing_is_level)
                 .then(|| {
                     let ys: Vec<f64> = rs
@@ -145,14 +179,24 @@ fn series_for(rows: &[Row], x: &str, y: &str, x_missing_is_level: bool) -> Vec<S
                     (!ys.is_empty()).then(|| ys.iter().sum::<f64>() / ys.len() as f64)
                 })
                 .flatten();
+            let means = if candidate {
+                Vec::new()
+            } else {
+                config_means(&rs, x, y)
+            };
+            // Labelled by screen height unless every point has the same (a fixed-size ε grid).
+            let sizes: std::collections::BTreeSet<&String> = means.iter().map(|m| &m.1).collect();
+            let several = sizes.len() > 1;
             Series {
                 name,
                 color: PALETTE[i % PALETTE.len()],
-                line: if candidate {
-                    Vec::new()
+                labels: if several {
+                    means.iter().map(|m| m.1.clone()).collect()
                 } else {
-                    config_means(&rs, x, y)
+                    Vec::new()
                 },
+                line: means.into_iter().map(|m| m.0).collect(),
+                point_labels: if several { point_labels } else { Vec::new() },
                 points: if candidate && x_missing_is_level {
                     Vec::new()
                 } else {
@@ -181,7 +225,7 @@ fn wants_log(xs: impl Iterator<Item = f64>) -> bool {
 /// The charts of a sweep: accuracy vs billboards, vs texture bytes, vs build time (with the
 /// Pareto front over every run), and each metric vs ε.
 pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
-    let cost = |stem: &str, x: &str, label: &str| Chart {
+    let cost = |stem: &str, x: &str, label: &str, x_unit: Unit| Chart {
         file_stem: stem.into(),
         columns: 1,
         panels: vec![Panel {
@@ -189,16 +233,24 @@ pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
             x_label: label.into(),
             y_label: accuracy_label(),
             x_log: wants_log(rows.iter().map(|r| r.get(x))),
+            x_unit,
+            y_unit: Unit::Plain,
             series: series_for(rows, x, ACCURACY.column(), false),
             front: Vec::new(),
         }],
     };
     let mut charts = vec![
-        cost("accuracy_vs_billboards", "billboards", "billboards"),
+        cost(
+            "accuracy_vs_billboards",
+            "billboards",
+            "billboards",
+            Unit::Plain,
+        ),
         cost(
             "accuracy_vs_texture_bytes",
             "texture_bytes",
             "texture bytes",
+            Unit::Bytes,
         ),
     ];
     // Build time: every run a point; the front over all of them.
@@ -216,8 +268,10 @@ pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
         columns: 1,
         panels: vec![Panel {
             title: "speed vs accuracy (Pareto front: no run both faster and more accurate)".into(),
-            x_label: "build time of the LOD (s)".into(),
+            x_label: "build time of the LOD".into(),
             y_label: accuracy_label(),
+            x_unit: Unit::Seconds,
+            y_unit: Unit::Plain,
             x_log: wants_log(
                 rows.iter()
                     .filter(|r| !r.is_candidate())
@@ -227,30 +281,75 @@ pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
             front,
         }],
     });
-    let eps_log = wants_log(rows.iter().map(|r| r.epsilon_pct.unwrap_or(f64::NAN)));
     let eps_rows = with_eps_column(rows);
-    charts.push(Chart {
-        file_stem: "metrics_vs_epsilon".into(),
-        columns: 2,
-        panels: charted_metrics()
-            .map(|id| Panel {
-                title: format!("{} vs ε", id.label()),
-                x_label: "ε (% of the bounding-box diagonal)".into(),
-                y_label: id.label().into(),
-                x_log: eps_log,
-                series: series_for(&eps_rows, "epsilon_pct", id.column(), true),
-                front: Vec::new(),
-            })
-            .collect(),
-    });
+    // ε as the model's scale (% of its diagonal); and as what a player sees: in screen pixels
+    // at the LOD's size for a grid of ε at one size, or the screen height itself for a grid of
+    // sizes (where ε is the pixel error by construction, about the same number of pixels at
+    // every point).
+    let heights: std::collections::BTreeSet<u32> = rows
+        .iter()
+        .filter(|r| !r.is_candidate())
+        .map(|r| r.screen_height.to_bits())
+        .collect();
+    let screen = if heights.len() > 1 {
+        (
+            "metrics_vs_screen_height",
+            SCREEN_HEIGHT,
+            "screen height of the tree (pixels)",
+            "screen height",
+        )
+    } else {
+        (
+            "metrics_vs_epsilon_px",
+            EPSILON_PX,
+            "ε in screen pixels at the LOD's size",
+            "ε",
+        )
+    };
+    for (stem, column, label, versus) in [
+        (
+            "metrics_vs_epsilon",
+            "epsilon_pct",
+            "ε (% of the bounding-box diagonal)",
+            "ε",
+        ),
+        screen,
+    ] {
+        let x_log = wants_log(eps_rows.iter().map(|r| r.get(column)));
+        charts.push(Chart {
+            file_stem: stem.into(),
+            columns: 2,
+            panels: charted_metrics()
+                .map(|id| Panel {
+                    title: format!("{} vs {versus}", id.label()),
+                    x_label: label.into(),
+                    y_label: id.label().into(),
+                    x_log,
+                    x_unit: Unit::Plain,
+                    y_unit: Unit::Plain,
+                    series: series_for(&eps_rows, column, id.column(), true),
+                    front: Vec::new(),
+                })
+                .collect(),
+        });
+    }
     charts
 }
 
-/// Rows with ε% as a column, so it can be charted like any value.
+/// The column of ε in screen pixels at the LOD's screen height (filled by the sweep).
+pub const EPSILON_PX: &str = "epsilon_px";
+/// The column of the screen height a run was built at, for charting.
+const SCREEN_HEIGHT: &str = "screen_height";
+
+/// Rows with ε% and the screen height as columns, so they can be charted like any value.
 fn with_eps_column(rows: &[Row]) -> Vec<Row> {
     rows.iter()
         .map(|r| {
             let mut r = r.clone();
+            if !r.is_candidate() {
+                r.values
+                    .insert(SCREEN_HEIGHT.into(), f64::from(r.screen_height));
+            }
             if let Some(e) = r.epsilon_pct.filter(|_| !r.is_candidate()) {
                 r.values.insert("epsilon_pct".into(), e);
             }
@@ -330,21 +429,52 @@ where
         .y_label_area_size(64)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(plot_err)?;
-    let log = p.x_log;
-    let fmt_x = move |v: &f64| if log { tick(10f64.powf(*v)) } else { tick(*v) };
-    chart
-        .configure_mesh()
-        .x_desc(if log {
-            format!("{} (log scale)", p.x_label)
+    let (x_unit, y_unit) = (p.x_unit, p.y_unit);
+    let fmt_x = move |v: &f64| x_unit.tick(*v);
+    let fmt_y = move |v: &f64| y_unit.tick(*v);
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(if p.x_log {
+        format!("{} (log scale)", p.x_label)
+    } else {
+        p.x_label.clone()
+    })
+    .y_desc(&p.y_label)
+    .x_label_formatter(&fmt_x)
+    .y_label_formatter(&fmt_y)
+    .light_line_style(RGBColor(235, 235, 235));
+    if p.x_log {
+        // Log axes get their ticks at 1, 2, 5 × 10^k below (plotters would space them evenly
+        // in log10 and write 1.585, 2.512).
+        mesh.x_labels(0).disable_x_mesh();
+    }
+    mesh.draw().map_err(plot_err)?;
+    if p.x_log {
+        let base = area.get_base_pixel();
+        let style = ("sans-serif", 13).into_font().color(&BLACK);
+        let (lo, hi) = (10f64.powf(x0), 10f64.powf(x1));
+        let ticks = if x_unit == Unit::Bytes {
+            binary_ticks(lo, hi)
         } else {
-            p.x_label.clone()
-        })
-        .y_desc(&p.y_label)
-        .x_label_formatter(&fmt_x)
-        .y_label_formatter(&|v: &f64| tick(*v))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(plot_err)?;
+            log_ticks(lo, hi)
+        };
+        for v in ticks {
+            chart
+                .draw_series(LineSeries::new(
+                    [(v.log10(), y0), (v.log10(), y1)],
+                    RGBColor(225, 225, 225).stroke_width(1),
+                ))
+                .map_err(plot_err)?;
+            let (px, py) = chart.backend_coord(&(v.log10(), y0));
+            let text = x_unit.tick(v);
+            let w = 3.5 * text.len() as f64;
+            area.draw(&Text::new(
+                text,
+                (px - base.0 - w as i32, py - base.1 + 6),
+                style.clone(),
+            ))
+            .map_err(plot_err)?;
+        }
+    }
     for s in &p.series {
         let c = s.color;
         let mut labelled = false;
@@ -367,6 +497,15 @@ where
                     })
                 }))
                 .map_err(plot_err)?;
+            chart
+                .draw_series(s.line.iter().zip(&s.labels).map(|(&(x, y, _), label)| {
+                    Text::new(
+                        label.clone(),
+                        (tx(x), y),
+                        ("sans-serif", 12).into_font().color(&c.mix(0.9)),
+                    )
+                }))
+                .map_err(plot_err)?;
         }
         if !s.points.is_empty() {
             let filled = s.line.is_empty();
@@ -384,6 +523,22 @@ where
                 ann.label(&s.name)
                     .legend(move |(x, y)| Circle::new((x + 9, y), 4, c.filled()));
                 labelled = true;
+            }
+            if s.line.is_empty() {
+                chart
+                    .draw_series(
+                        s.points
+                            .iter()
+                            .zip(&s.point_labels)
+                            .map(|(&(x, y), label)| {
+                                Text::new(
+                                    label.clone(),
+                                    (tx(x), y),
+                                    ("sans-serif", 12).into_font().color(&c.mix(0.9)),
+                                )
+                            }),
+                    )
+                    .map_err(plot_err)?;
             }
         }
         if let Some(level) = s.level {
@@ -431,6 +586,44 @@ where
         .draw()
         .map_err(plot_err)?;
     Ok(())
+}
+
+/// The ticks of a log axis from `lo` to `hi` (> 0): 1, 2 and 5 × 10^k, or only the powers of
+/// ten when those would be more than a dozen, or 1 to 9 × 10^k when fewer than three.
+fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return Vec::new();
+    }
+    let series = |mantissas: &[f64]| -> Vec<f64> {
+        let (k0, k1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+        (k0..=k1)
+            .flat_map(|k| mantissas.iter().map(move |m| m * 10f64.powi(k)))
+            .filter(|v| *v >= lo * (1.0 - 1e-9) && *v <= hi * (1.0 + 1e-9))
+            .collect()
+    };
+    let nice = series(&[1.0, 2.0, 5.0]);
+    if nice.len() > 12 {
+        series(&[1.0])
+    } else if nice.len() < 3 {
+        series(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
+    } else {
+        nice
+    }
+}
+
+/// The ticks of a log axis of bytes: powers of two (64 KB, 128 KB, …), every second or fourth
+/// one when there would be more than ten.
+fn binary_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return Vec::new();
+    }
+    let (k0, k1) = (lo.log2().ceil() as i32, hi.log2().floor() as i32);
+    let n = (k1 - k0 + 1).max(0) as usize;
+    let step = n.div_ceil(10).max(1).next_power_of_two() as i32;
+    (k0..=k1)
+        .filter(|k| k.rem_euclid(step) == 0)
+        .map(|k| 2f64.powi(k))
+        .collect()
 }
 
 /// An axis tick: 4 significant digits, trailing zeros dropped.
@@ -534,6 +727,28 @@ mod tests {
         assert!(!wants_log([1.0, 2.0, 6.0].into_iter()));
         assert!(!wants_log([0.0, 1.0, 100.0].into_iter()));
         assert!(!wants_log(std::iter::empty()));
+    }
+
+    #[test]
+    fn log_ticks_are_round_numbers() {
+        assert_eq!(
+            log_ticks(12.0, 2800.0),
+            [20.0, 50.0, 100.0, 200.0, 500.0, 1000.0, 2000.0]
+        );
+        assert_eq!(
+            log_ticks(1.0, 1e9).len(),
+            10,
+            "powers of ten when 1-2-5 crowd"
+        );
+        assert_eq!(log_ticks(1.5, 4.5), [2.0, 3.0, 4.0]);
+        assert!(log_ticks(0.0, 1.0).is_empty());
+        assert_eq!(Unit::Bytes.tick(524288.0), "512 KB");
+        assert_eq!(
+            binary_ticks(60_000.0, 300_000.0),
+            [65536.0, 131072.0, 262144.0]
+        );
+        assert!(binary_ticks(1.0, 1e9).len() <= 10);
+        assert_eq!(Unit::Seconds.tick(0.25), "250 ms");
     }
 
     #[test]

@@ -9,6 +9,7 @@
 
 pub mod charts;
 pub mod grid;
+pub mod page;
 pub mod results;
 
 use std::collections::BTreeMap;
@@ -53,6 +54,8 @@ pub struct SweepRequest {
     pub keep: bool,
     /// Rest-pose bounding-box diagonal of the input, for ε in %.
     pub diagonal: f32,
+    /// Rest-pose height of the input, for ε in screen pixels at a LOD's screen height.
+    pub tree_height: f32,
 }
 
 /// `summary.json`.
@@ -179,7 +182,11 @@ pub fn run_sweep(
         ));
         files.push((out_dir.join(format!("{}.png", c.file_stem)), png));
     }
-    let pareto = charts::front(&rows).iter().map(|r| r.run.clone()).collect();
+    let pareto: Vec<String> = charts::front(&rows).iter().map(|r| r.run.clone()).collect();
+    files.push((
+        out_dir.join("index.html"),
+        page::sweep_page(&input.display().to_string(), &rows, &charts, &pareto).into_bytes(),
+    ));
     let summary_path = out_dir.join("summary.json");
     let mut names: Vec<String> = files.iter().map(|(p, _)| p.display().to_string()).collect();
     names.push(summary_path.display().to_string());
@@ -305,8 +312,9 @@ fn lod_run(
         // A grid point measures the method at the ε and size asked for: the chain's cost
         // budgets would widen ε to half the input's triangles.
         no_cost_budgets: true,
-        // The sweep evaluates every point itself.
+        // The sweep evaluates every point itself, and its own page shows the charts.
         no_measure: true,
+        no_preview: true,
         run: RunArgs {
             seed,
             ..req.lod.run.clone()
@@ -332,6 +340,10 @@ fn lod_run(
         Err(why) => row.failure = Some(why),
     }
     row.epsilon_pct = row.epsilon.map(|e| 100.0 * e / f64::from(req.diagonal));
+    if let Some(e) = row.epsilon.filter(|_| req.tree_height > 0.0) {
+        let px = e * f64::from(p.screen_height) / f64::from(req.tree_height);
+        row.values.insert(charts::EPSILON_PX.into(), px);
+    }
     if row.failure.is_some() {
         return Ok(row);
     }

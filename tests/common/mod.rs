@@ -55,10 +55,11 @@ pub fn frond_ok(args: &[&str]) -> Output {
 }
 
 /// Runs `frond lod INPUT -o OUT` with small test settings (16 samples, 60 candidate planes, no
-/// error measurement: `tests/lod_error.rs` tests that) plus `extra`, asserts it succeeded and
+/// error measurement: `tests/lod_error.rs` tests that; no preview page: `tests/preview_page.rs`
+/// does) plus `extra`, asserts it succeeded and
 /// returns its report (`<input stem>_report.json`).
 pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
-    let mut args = vec!["--planes", "60", "--no-measure"];
+    let mut args = vec!["--planes", "60", "--no-measure", "--no-preview"];
     args.extend_from_slice(extra);
     frond_lod_measured(input, out, &args)
 }
@@ -121,14 +122,14 @@ pub fn frond_eval(original: &Path, candidate: &Path, extra: &[&str]) -> serde_js
 }
 
 /// Installs the Node tools once (npm install into tools/node_modules) and returns the folder:
-/// the validator, gltfpack and three.js. Installs whenever one of them is missing (a
+/// the validator, gltfpack, three.js and puppeteer-core (drives Debian's Chromium). Installs whenever one of them is missing (a
 /// tools/node_modules made before a package joined package.json lacks it).
 pub fn node_tools() -> PathBuf {
     static READY: OnceLock<PathBuf> = OnceLock::new();
     READY
         .get_or_init(|| {
             let tools = root().join("tools");
-            let packages = ["gltf-validator", "gltfpack", "three"];
+            let packages = ["gltf-validator", "gltfpack", "three", "puppeteer-core"];
             let missing = |tools: &Path| {
                 packages.iter().any(|p| {
                     !tools
@@ -185,6 +186,32 @@ pub fn gltf_json(path: &Path) -> serde_json::Value {
     serde_json::from_slice(json).expect("glTF JSON")
 }
 
+/// `name` is an executable file in a `PATH` folder.
+pub fn on_path(name: &str) -> bool {
+    std::env::var_os("PATH").is_some_and(|path| {
+        std::env::split_paths(&path).any(|dir| {
+            let file = dir.join(name);
+            std::fs::metadata(&file).is_ok_and(|m| {
+                use std::os::unix::fs::PermissionsExt;
+                m.is_file() && m.permissions().mode() & 0o111 != 0
+            })
+        })
+    })
+}
+
+/// Where a test leaves files for people to look at (screenshots, renders):
+/// `target/test-artefacts/<name>/`, made empty.
+pub fn artefact_dir(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .parent()
+        .expect("target/tmp has a parent")
+        .join("test-artefacts")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("artefact folder");
+    dir
+}
+
 // Each test binary compiles this module on its own (`mod common;`) and uses only some of the
 // helpers, and the dead_code lint runs per binary. Instead of a lint exception (a bare `allow`
 // is against house rules, and `#![expect(dead_code)]` fails in any binary that happens to use
@@ -206,6 +233,8 @@ const _: () = {
         node_tools,
         validate,
         gltf_json,
+        on_path,
+        artefact_dir,
         gltf_cases::triangle_gltf,
         gltf_cases::triangle_bin,
         gltf_cases::GOOD,

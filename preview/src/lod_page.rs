@@ -1,0 +1,686 @@
+//! The preview page of one `frond lod` run (`<name>_preview.html`): the live view of the
+//! combined file, the cost table read from the written files, and per LOD its still at its own
+//! screen height beside LOD0's from the same camera, their difference, the wind loop as a
+//! flip-book and its atlas, with the method, why it was chosen, and the error measured at its
+//! own size.
+
+use std::time::Instant;
+
+use frond_lod::{LodEntry, LodReport};
+use frond_render::{Frame, Renderer};
+use frond_scene::{FileCost, Tree};
+
+use crate::error::PreviewError;
+use crate::html::{esc, figure, href, page};
+use crate::stills::{
+    EXTRA, MISSING, PixelDifference, apng, atlas_png, covered_box, crop, difference, png,
+    preview_camera, render_pose, still_size,
+};
+use crate::units;
+use crate::viewer::{
+    LIVE_VIEW_JS, VIEWER_DIR, ViewConfig, ViewLod, combined_roots, config_json, uses_extension,
+    viewer_files,
+};
+
+/// What a preview of a `frond lod` run is made from.
+pub struct LodPreviewRequest<'a> {
+    /// The run's report, its costs and measured errors filled.
+    pub report: &'a LodReport,
+    /// The input tree (its rest bounds frame the camera).
+    pub input: &'a Tree,
+    /// Every written LOD read back, in the report's order (LOD0 first).
+    pub lods: &'a [Tree],
+    /// The combined file's bytes (its scene roots are grouped per LOD for the live view).
+    pub combined: &'a [u8],
+    /// The report's switch values' image height (`--resolution`).
+    pub resolution: f32,
+    /// Frames of the wind flip-books.
+    pub flip_frames: u32,
+    /// Where the vendored viewer scripts are, relative to the output folder, when somebody
+    /// else writes them (`frond batch` keeps one copy for all its trees); None: the page's own
+    /// `viewer/` is written with it.
+    pub viewer: Option<&'a str>,
+}
+
+/// The page and its pictures, as (path relative to the output folder, bytes).
+pub struct PreviewFiles {
+    /// The page's own name (`<name>_preview.html`).
+    pub page: String,
+    pub files: Vec<(String, Vec<u8>)>,
+    /// Each LOD's difference against LOD0 at its own size (LOD0's own is empty).
+    pub differences: Vec<PixelDifference>,
+    /// Seconds spent rendering and encoding.
+    pub seconds: f64,
+}
+
+/// The page's name for tree `name`.
+pub fn preview_name(name: &str) -> String {
+    format!("{name}_preview.html")
+}
+
+/// The flip-books' height: small (the loop is many frames) but never above the LOD's own size.
+const FLIP_HEIGHT: f32 = 160.0;
+/// LOD0's still when no LOD gives a size.
+const LOD0_HEIGHT: f32 = 400.0;
+/// Largest side of an atlas thumbnail.
+const ATLAS_SIDE: u32 = 512;
+
+/// The pictures of one LOD.
+struct LodPictures {
+    files: Vec<(String, Vec<u8>)>,
+    /// The stills' size (cropped to the tree).
+    still: [u32; 2],
+    /// The image height the stills were rendered at (the tree's height on screen).
+    screen_height: u32,
+    flip: [u32; 2],
+    atlas: Option<[u32; 2]>,
+    difference: PixelDifference,
+}
+
+/// Renders the pictures and writes the page of a `frond lod` run. Deterministic: the same
+/// files give the same bytes.
+pub fn lod_preview(
+    renderer: &Renderer,
+    req: &LodPreviewRequest,
+) -> Result<PreviewFiles, PreviewError> {
+    let t0 = Instant::now();
+    let report = req.report;
+    if req.lods.len() != report.lods.len() {
+        return Err(PreviewError::LodCount {
+            report: report.lods.len(),
+            given: req.lods.len(),
+        });
+    }
+    let dir = format!("{}_preview", report.name);
+    let camera = preview_camera(req.input)?;
+    let lod0 = &req.lods[0];
+    let lod0_height = report
+        .lods
+        .iter()
+        .find_map(|e| e.screen_height)
+        .unwrap_or(LOD0_HEIGHT);
+    // One LOD's pictures at a time: the renderer spreads each frame over the threads.
+    let pictures: Vec<LodPictures> = (0..req.lods.len())
+        .map(|k| {
+            let h = report.lods[k].screen_height.unwrap_or(lod0_height);
+            lod_pictures(renderer, req, &camera, lod0, k, h, &dir)
+        })
+        .collect::<Result<_, _>>()?;
+    let combined_error = |reason| PreviewError::Combined {
+        file: report.combined.clone(),
+        reason,
+    };
+    let groups = combined_roots(req.combined, report.lods.len()).map_err(combined_error)?;
+    let ktx2 = uses_extension(req.combined, "KHR_texture_basisu").map_err(combined_error)?;
+    let config = ViewConfig {
+        combined: report.combined.clone(),
+        clip: report.clip.clone(),
+        viewer: req
+            .viewer
+            .unwrap_or(VIEWER_DIR)
+            .trim_end_matches('/')
+            .to_string(),
+        ktx2,
+        lods: report
+            .lods
+            .iter()
+            .zip(groups)
+            .map(|(e, nodes)| ViewLod {
+                file: e.file.clone(),
+                nodes,
+                screen_height: e.screen_height,
+                shown_down_to_px: e
+                    .switch
+                    .as_ref()
+                    .map_or(0.0, |s| s.min_screen_fraction * req.resolution),
+                triangles: e.cost.as_ref().map_or(e.triangles as u64, |c| c.triangles),
+                vertex_animated: e.vat.is_some() || e.spectral_files.is_some(),
+            })
+            .collect(),
+    };
+    let page_name = preview_name(&report.name);
+    let body = body(report, &pictures, &config, req.flip_frames);
+    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
+    let differences = pictures.iter().map(|p| p.difference).collect();
+    for p in pictures {
+        files.extend(p.files);
+    }
+    if req.viewer.is_none() {
+        for (path, bytes) in viewer_files(ktx2) {
+            files.push((path, bytes.to_vec()));
+        }
+    }
+    let title = format!("{} — frond LOD chain", report.name);
+    files.push((page_name.clone(), page(&title, &body).into_bytes()));
+    Ok(PreviewFiles {
+        page: page_name,
+        files,
+        differences,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// LOD `k`'s still at `h` pixels (and LOD0's at the same size, with the difference, for k > 0),
+/// its flip-book and its atlas.
+fn lod_pictures(
+    renderer: &Renderer,
+    req: &LodPreviewRequest,
+    camera: &frond_render::Camera,
+    lod0: &Tree,
+    k: usize,
+    h: f32,
+    dir: &str,
+) -> Result<LodPictures, PreviewError> {
+    let report = req.report;
+    let tree = &req.lods[k];
+    let clip = clip_of(tree, report.clip.as_deref());
+    let start = clip.map_or(0.0, |c| tree.rig.clips[c].start);
+    let size = still_size(h);
+    let still = render_pose(renderer, tree, clip, start, camera, size, "still")?;
+    let mut files = Vec::new();
+    let mut diff = PixelDifference::default();
+    let rect;
+    if k > 0 {
+        let clip0 = clip_of(lod0, report.clip.as_deref());
+        let start0 = clip0.map_or(0.0, |c| lod0.rig.clips[c].start);
+        let reference = render_pose(renderer, lod0, clip0, start0, camera, size, "still")?;
+        rect = covered_box(&[&reference, &still], 2);
+        let (rgba, d) = difference(&reference, &still);
+        diff = d;
+        files.push((
+            format!("{dir}/lod{k}_lod0.png"),
+            png(
+                rect[2],
+                rect[3],
+                &crop(&reference.rgba, size.0, rect),
+                "a still",
+            )?,
+        ));
+        files.push((
+            format!("{dir}/lod{k}_diff.png"),
+            png(
+                rect[2],
+                rect[3],
+                &crop(&rgba, size.0, rect),
+                "a difference image",
+            )?,
+        ));
+    } else {
+        rect = covered_box(&[&still], 2);
+    }
+    files.push((
+        format!("{dir}/lod{k}.png"),
+        png(
+            rect[2],
+            rect[3],
+            &crop(&still.rgba, size.0, rect),
+            "a still",
+        )?,
+    ));
+    let flip_size = still_size(h.min(FLIP_HEIGHT));
+    let n = req.flip_frames.max(1);
+    let frames: Vec<Frame> = (0..n)
+        .map(|i| {
+            let t = start + report.period * i as f32 / n as f32;
+            render_pose(
+                renderer,
+                tree,
+                clip,
+                t,
+                camera,
+                flip_size,
+                "flip-book frame",
+            )
+        })
+        .collect::<Result<_, _>>()?;
+    let delay = (1000.0 * report.period / n as f32)
+        .round()
+        .clamp(10.0, 2000.0) as u16;
+    let flip = apng(&frames, delay, "a flip-book")?;
+    files.push((format!("{dir}/lod{k}_wind.png"), flip.png));
+    let mut atlas = None;
+    if let Some(a) = report.lods[k].atlas
+        && let Some(picture) = atlas_png(tree, a, ATLAS_SIDE)?
+    {
+        files.push((format!("{dir}/lod{k}_atlas.png"), picture.png));
+        atlas = Some(picture.size);
+    }
+    Ok(LodPictures {
+        files,
+        still: [rect[2], rect[3]],
+        screen_height: size.1,
+        flip: flip.size,
+        atlas,
+        difference: diff,
+    })
+}
+
+/// The LOD's clip of the run's clip name, else its first.
+fn clip_of(tree: &Tree, name: Option<&str>) -> Option<usize> {
+    name.and_then(|n| tree.clip_index(Some(n)))
+        .or_else(|| tree.clip_index(None))
+}
+
+/// The page's body.
+fn body(
+    report: &LodReport,
+    pictures: &[LodPictures],
+    config: &ViewConfig,
+    flip_frames: u32,
+) -> String {
+    let mut b = String::new();
+    let total = report.timings_s["total"].as_f64().unwrap_or(0.0);
+    b.push_str(&format!(
+        "<header><h1>{}</h1><p class=\"meta\">{} LODs of <code>{}</code> · clip {} ({} loop, {} samples) · \
+         seed {} · built in <span class=\"timing\">{}</span> by frond {}</p>\n",
+        esc(&report.name),
+        report.lods.len() - 1,
+        esc(&report.input),
+        esc(report.clip.as_deref().unwrap_or("(none)")),
+        units::duration(f64::from(report.period)),
+        report.samples,
+        report.seed,
+        units::duration(total),
+        env!("CARGO_PKG_VERSION"),
+    ));
+    b.push_str("<nav><a href=\"#live\">Live view</a><a href=\"#costs\">Costs</a>");
+    for (k, _) in report.lods.iter().enumerate() {
+        b.push_str(&format!("<a href=\"#lod{k}\">LOD{k}</a>"));
+    }
+    b.push_str("</nav></header>\n");
+    b.push_str(&live_view(config));
+    b.push_str(&cost_table(report, pictures));
+    for (k, (e, p)) in report.lods.iter().zip(pictures).enumerate() {
+        b.push_str(&lod_section(report, k, e, p, flip_frames));
+    }
+    if !report.warnings.is_empty() {
+        b.push_str("<h2>Warnings</h2><ul>");
+        for w in &report.warnings {
+            b.push_str(&format!("<li>{}</li>", esc(w)));
+        }
+        b.push_str("</ul>\n");
+    }
+    b.push_str(
+        "<footer><p class=\"muted\">Stills, differences and flip-books are frond's own renders \
+         (wood and foliage, textures mip-mapped as engines sample them) from one camera. KB and \
+         MB are 1024 and 1024² bytes. The live view is three.js r187, vendored in \
+         <code>viewer/</code>.</p></footer>\n",
+    );
+    b.push_str(ZOOM_JS);
+    b.push_str(&format!(
+        "<script type=\"application/json\" id=\"frond-config\">{}</script>\n\
+         <script src=\"{}\"></script>\n<script>\n{LIVE_VIEW_JS}</script>\n",
+        config_json(config),
+        href(&format!("{}/frond-three.js", config.viewer)),
+    ));
+    b
+}
+
+/// The live view's markup (its script comes at the end of the page).
+fn live_view(config: &ViewConfig) -> String {
+    let last = config.lods.len().saturating_sub(1);
+    format!(
+        "<section id=\"live\"><h2>Live view</h2>\n<div class=\"live\">\
+         <canvas id=\"live-canvas\"></canvas>\n<div class=\"controls\">\
+         <label>LOD <input type=\"range\" id=\"lod-slider\" min=\"0\" max=\"{last}\" step=\"1\" value=\"0\"></label>\
+         <output id=\"lod-label\">LOD0</output>\
+         <label><input type=\"checkbox\" id=\"lod-auto\"> switch by screen size</label>\
+         <button id=\"play\" type=\"button\">Pause</button><span id=\"live-status\">loading…</span></div>\n\
+         <div id=\"file-fallback\" class=\"fallback\" hidden><p>This page was opened from disk, and \
+         browsers do not let such a page read the files beside it. Run <code>frond view \
+         FOLDER</code> (it serves this folder on localhost and opens the page), or pick \
+         <code>{}</code> here: <input type=\"file\" id=\"file-pick\" accept=\".glb\"></p></div>\n\
+         <p class=\"muted\">Drag to orbit, scroll to zoom. \"Switch by screen size\" shows the LOD \
+         built for the tree's height on this canvas, at the report's switch values.</p></div></section>\n",
+        esc(&config.combined)
+    )
+}
+
+/// A row of the cost table: label, and per LOD the value (None: not known).
+struct Row {
+    label: &'static str,
+    values: Vec<Option<f64>>,
+    show: fn(f64) -> String,
+    /// The chain's monotone rule applies: a value above the LOD before is marked.
+    monotone: bool,
+    /// Show each value as a share of LOD0's too.
+    share: bool,
+}
+
+fn cost_row(
+    label: &'static str,
+    report: &LodReport,
+    get: fn(&FileCost) -> f64,
+    show: fn(f64) -> String,
+) -> Row {
+    Row {
+        label,
+        values: report
+            .lods
+            .iter()
+            .map(|e| e.cost.as_ref().map(get))
+            .collect(),
+        show,
+        monotone: true,
+        share: true,
+    }
+}
+
+fn count(v: f64) -> String {
+    units::count(v.round() as u64)
+}
+
+fn bytes(v: f64) -> String {
+    units::bytes(v)
+}
+
+/// The cost table: what each written file costs an engine, read back from the files.
+fn cost_table(report: &LodReport, pictures: &[LodPictures]) -> String {
+    let rows = [
+        cost_row("Triangles", report, |c| c.triangles as f64, count),
+        cost_row("Vertices", report, |c| c.vertices as f64, count),
+        cost_row("Draw calls", report, |c| c.draw_calls as f64, count),
+        cost_row("Materials", report, |c| c.materials as f64, count),
+        cost_row(
+            "Joints (largest skin)",
+            report,
+            |c| c.joints_per_skin_max as f64,
+            count,
+        ),
+        cost_row(
+            "Animated channels",
+            report,
+            |c| c.animated_channels as f64,
+            count,
+        ),
+        cost_row("Keyframe bytes", report, |c| c.keyframe_bytes as f64, bytes),
+        cost_row(
+            "Texture memory (GPU, mips)",
+            report,
+            |c| c.texture_gpu_bytes as f64,
+            bytes,
+        ),
+        cost_row(
+            "Texture bytes in files",
+            report,
+            |c| c.texture_encoded_bytes as f64,
+            bytes,
+        ),
+        cost_row("File bytes", report, |c| c.file_bytes as f64, bytes),
+        Row {
+            label: "Overdraw (alpha-tested area vs LOD0)",
+            values: report
+                .lods
+                .iter()
+                .map(|e| e.alpha_tested_area_ratio)
+                .collect(),
+            show: |v| format!("{}×", units::significant(v)),
+            monotone: true,
+            share: false,
+        },
+    ];
+    let mut t = String::from(
+        "<section id=\"costs\"><h2>What each LOD costs</h2>\n<p class=\"muted\">Read back from \
+         the written files as an engine counts them. A red cell costs more than the LOD before \
+         it; the small figure is the share of LOD0.</p>\n<table class=\"costs\"><tr><th></th>",
+    );
+    for (k, e) in report.lods.iter().enumerate() {
+        t.push_str(&format!(
+            "<th><a href=\"#lod{k}\">LOD{k}</a><br><small>{}</small></th>",
+            esc(&e.file)
+        ));
+    }
+    t.push_str("</tr>\n");
+    t.push_str("<tr><td>Built for</td>");
+    for e in &report.lods {
+        t.push_str(&format!(
+            "<td>{}</td>",
+            e.screen_height
+                .map_or("the input".into(), |h| format!("{h} px high"))
+        ));
+    }
+    t.push_str("</tr>\n<tr><td>Method</td>");
+    for e in &report.lods {
+        t.push_str(&format!("<td>{}</td>", esc(&e.method)));
+    }
+    t.push_str("</tr>\n");
+    for row in &rows {
+        t.push_str(&format!("<tr><td>{}</td>", row.label));
+        let first = row.values.first().copied().flatten();
+        for (k, v) in row.values.iter().enumerate() {
+            let Some(v) = *v else {
+                t.push_str("<td>–</td>");
+                continue;
+            };
+            let before = k.checked_sub(1).and_then(|j| row.values[j]);
+            let up = row.monotone && before.is_some_and(|b| v > b * (1.0 + 1e-6));
+            let share = match first {
+                Some(f) if row.share && k > 0 && f > 0.0 => {
+                    format!(" <small>{} %</small>", units::significant(100.0 * v / f))
+                }
+                _ => String::new(),
+            };
+            t.push_str(&format!(
+                "<td{}>{}{share}</td>",
+                if up { " class=\"up\"" } else { "" },
+                (row.show)(v)
+            ));
+        }
+        t.push_str("</tr>\n");
+    }
+    if let Some(view) = &report.switching {
+        t.push_str(&format!(
+            "<tr><td>Shown from (camera distance, {}° FOV, {} px screen)</td>",
+            units::significant(f64::from(view.fov_deg)),
+            view.resolution
+        ));
+        for e in &report.lods {
+            t.push_str(&match &e.switch {
+                Some(s) => format!(
+                    "<td>{} – {}</td>",
+                    distance(s.begin_distance),
+                    distance(s.end_distance)
+                ),
+                None => "<td>–</td>".into(),
+            });
+        }
+        t.push_str("</tr>\n<tr><td>Shown down to (tree's share of screen height)</td>");
+        for e in &report.lods {
+            t.push_str(&match &e.switch {
+                Some(s) => format!(
+                    "<td>{} % <small>{} px</small></td>",
+                    units::significant(f64::from(100.0 * s.min_screen_fraction)),
+                    units::significant(f64::from(s.min_screen_fraction * view.resolution))
+                ),
+                None => "<td>–</td>".into(),
+            });
+        }
+        t.push_str("</tr>\n<tr><td>Unity transition height · Unreal screen size</td>");
+        for e in &report.lods {
+            t.push_str(&match &e.switch {
+                Some(s) => format!(
+                    "<td>{} · {}</td>",
+                    units::significant(f64::from(s.unity_transition_height)),
+                    units::significant(f64::from(s.unreal_screen_size))
+                ),
+                None => "<td>–</td>".into(),
+            });
+        }
+        t.push_str("</tr>\n");
+    }
+    t.push_str("<tr><td>Coverage error at its own size (target)</td>");
+    for e in &report.lods {
+        t.push_str(&match &e.error {
+            Some(m) => format!(
+                "<td class=\"{}\">{} <small>({})</small></td>",
+                if m.within_target { "ok" } else { "over" },
+                units::significant(m.coverage),
+                units::significant(m.max_error)
+            ),
+            None => "<td>–</td>".into(),
+        });
+    }
+    t.push_str("</tr>\n<tr><td>Pixels missing · extra in the still</td>");
+    for (k, p) in pictures.iter().enumerate() {
+        let d = p.difference;
+        t.push_str(&if k == 0 {
+            "<td>–</td>".into()
+        } else {
+            format!(
+                "<td>{} · {}</td>",
+                units::count(d.missing),
+                units::count(d.extra)
+            )
+        });
+    }
+    t.push_str("</tr>\n</table></section>\n");
+    t
+}
+
+/// A distance in the file's units (metres for glTF).
+fn distance(d: f32) -> String {
+    if d.is_finite() {
+        format!("{} m", units::significant(f64::from(d)))
+    } else {
+        "∞".into()
+    }
+}
+
+/// One LOD's section.
+fn lod_section(
+    report: &LodReport,
+    k: usize,
+    e: &LodEntry,
+    p: &LodPictures,
+    flip_frames: u32,
+) -> String {
+    let dir = format!("{}_preview", report.name);
+    let h = p.screen_height;
+    // Start magnified so the still reads at about 240 px or more.
+    let zoom = if h >= 240 {
+        1
+    } else if h >= 120 {
+        2
+    } else {
+        4
+    };
+    let mut s = format!(
+        "<section class=\"lod\" id=\"lod{k}\"><h2>LOD{k} — {}</h2>\n<p>File \
+         <a href=\"{}\"><code>{}</code></a>. <b>{}</b>: {}</p>\n",
+        e.screen_height.map_or("the input".into(), |h| format!(
+            "{h} px high · {}",
+            esc(&e.method)
+        )),
+        href(&e.file),
+        esc(&e.file),
+        esc(&e.method),
+        esc(&e.method_reason),
+    );
+    if let Some(m) = &e.error {
+        s.push_str(&format!(
+            "<p>Coverage error at {} px, {} views × {} frames of the loop: <span class=\"{}\">{}</span> \
+             (target {}). Depth complexity {} (the input's {} at this size).</p>\n",
+            m.image[1],
+            m.views,
+            m.frames,
+            if m.within_target { "ok" } else { "over" },
+            units::significant(m.coverage),
+            units::significant(m.max_error),
+            units::significant(m.depth_complexity),
+            units::significant(m.input_depth_complexity),
+        ));
+    }
+    s.push_str(&format!(
+        "<div class=\"zoom\" data-zoom=\"{zoom}\">Stills: <button type=\"button\" data-z=\"1\">1×</button>\
+         <button type=\"button\" data-z=\"2\">2×</button><button type=\"button\" data-z=\"4\">4×</button> \
+         <span class=\"muted\">(pixels as a player sees them at {h} px)</span></div>\n<div class=\"row\">"
+    ));
+    let size = p.still;
+    if k == 0 {
+        s.push_str(&figure(
+            &format!("{dir}/lod0.png"),
+            size,
+            &format!("LOD0 at {h} px"),
+            true,
+        ));
+    } else {
+        s.push_str(&figure(
+            &format!("{dir}/lod{k}_lod0.png"),
+            size,
+            &format!("LOD0 at {h} px"),
+            true,
+        ));
+        s.push_str(&figure(
+            &format!("{dir}/lod{k}.png"),
+            size,
+            &format!("LOD{k} at {h} px, same camera"),
+            true,
+        ));
+        let d = p.difference;
+        s.push_str(&figure(
+            &format!("{dir}/lod{k}_diff.png"),
+            size,
+            &format!(
+                "Difference: <span class=\"legend\"><span style=\"background:rgb({},{},{})\"></span>missing \
+                 {} px<span style=\"background:rgb({},{},{})\"></span>extra {} px</span> ({} % of LOD0's \
+                 {} px)",
+                MISSING[0],
+                MISSING[1],
+                MISSING[2],
+                units::count(d.missing),
+                EXTRA[0],
+                EXTRA[1],
+                EXTRA[2],
+                units::count(d.extra),
+                units::significant(100.0 * d.error()),
+                units::count(d.reference),
+            ),
+            true,
+        ));
+    }
+    s.push_str("</div>\n<div class=\"row\">");
+    let still_note = if e.vat.is_some() || e.spectral_files.is_some() {
+        " (vertex-animated: frond's renderer and the live view show it still)"
+    } else {
+        ""
+    };
+    s.push_str(&format!(
+        "<figure><img class=\"flip\" src=\"{}\" width=\"{}\" height=\"{}\" alt=\"wind loop\">\
+         <figcaption>Wind loop, {flip_frames} frames over {}{still_note}</figcaption></figure>",
+        href(&format!("{dir}/lod{k}_wind.png")),
+        p.flip[0] * 2,
+        p.flip[1] * 2,
+        units::duration(f64::from(report.period)),
+    ));
+    if let (Some(side), Some(a)) = (p.atlas, e.atlas) {
+        s.push_str(&format!(
+            "<figure><img class=\"atlas\" src=\"{}\" width=\"{}\" height=\"{}\" alt=\"atlas\">\
+             <figcaption>Atlas, {}×{} texels ({} billboards)</figcaption></figure>",
+            href(&format!("{dir}/lod{k}_atlas.png")),
+            side[0],
+            side[1],
+            a[0],
+            a[1],
+            e.billboards,
+        ));
+    }
+    s.push_str("</div></section>\n");
+    s
+}
+
+/// The zoom buttons of the stills: each section's pictures at 1×, 2× or 4× their pixels.
+const ZOOM_JS: &str = r#"<script>
+for (const bar of document.querySelectorAll('.zoom')) {
+  const row = bar.nextElementSibling;
+  const set = (z) => {
+    for (const img of row.querySelectorAll('img.px')) {
+      img.style.width = img.getAttribute('width') * z + 'px';
+      img.style.height = 'auto';
+    }
+    for (const b of bar.querySelectorAll('button')) b.classList.toggle('on', b.dataset.z == z);
+  };
+  for (const b of bar.querySelectorAll('button')) b.addEventListener('click', () => set(+b.dataset.z));
+  set(+bar.dataset.zoom);
+}
+</script>
+"#;

@@ -1,0 +1,214 @@
+//! The preview page in a real browser: headless Chromium (Debian's `chromium`, WebGL in software
+//! through SwiftShader) opens the sample's `sapling_preview.html` as `frond view` serves it, and
+//! `tools/preview_check.mjs` (puppeteer-core) checks from the page itself that the live view — a
+//! WebGL canvas drawing the combined file with three.js — loaded every LOD, that the wind plays
+//! (two screenshots at different times differ in the tree's pixels), and that the LOD slider
+//! shows one LOD's meshes at a time and changes the picture. The screenshots are left in
+//! `target/test-artefacts/preview_browser/` (`anim_0.png`, `anim_1.png`, `lod_<k>.png`,
+//! `page.png`).
+//!
+//! Skips (one `skipped:` line) when Chromium or Node is not installed; `.ci/run` installs both.
+
+mod common;
+
+use std::io::{Read, Write};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+
+use common::*;
+use serde_json::Value;
+
+/// The Chromium to drive: `FROND_CHROMIUM`, else the first of Debian's and Google's names on
+/// `PATH`.
+fn chromium() -> Option<String> {
+    if let Ok(c) = std::env::var("FROND_CHROMIUM") {
+        return Some(c);
+    }
+    ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find(|c| on_path(c))
+        .map(|c| {
+            std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())
+                .map(|d| d.join(c))
+                .find(|p| p.is_file())
+                .map_or_else(|| c.to_string(), |p| p.display().to_string())
+        })
+}
+
+/// `frond view` serving a folder, killed on drop.
+struct Server(Child);
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// The page's background (`scene.background` in live_view.js).
+const SKY: [u8; 3] = [0xdf, 0xe9, 0xf1];
+
+/// Pixels of a screenshot that show the tree (not the sky), and of two screenshots the tree
+/// pixels that differ.
+fn tree_mask(path: &Path) -> (u32, u32, Vec<bool>, image::RgbImage) {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb8();
+    let mask = img
+        .pixels()
+        .map(|p| {
+            p.0.iter()
+                .zip(SKY)
+                .map(|(a, b)| a.abs_diff(b) as u32)
+                .sum::<u32>()
+                > 24
+        })
+        .collect();
+    (img.width(), img.height(), mask, img)
+}
+
+fn changed_tree_pixels(a: &Path, b: &Path) -> (usize, usize) {
+    let (wa, ha, ma, ia) = tree_mask(a);
+    let (wb, hb, mb, ib) = tree_mask(b);
+    assert_eq!((wa, ha), (wb, hb), "screenshots of one size");
+    let tree = ma.iter().zip(&mb).filter(|(x, y)| **x || **y).count();
+    let changed = ia
+        .pixels()
+        .zip(ib.pixels())
+        .zip(ma.iter().zip(&mb))
+        .filter(|((p, q), (x, y))| {
+            (**x || **y)
+                && p.0
+                    .iter()
+                    .zip(q.0)
+                    .map(|(a, b)| a.abs_diff(b) as u32)
+                    .sum::<u32>()
+                    > 24
+        })
+        .count();
+    (tree, changed)
+}
+
+#[test]
+fn chromium_plays_the_live_view_and_switches_lods() {
+    let Some(chromium) = chromium() else {
+        let _ = std::io::stderr().lock().write_all(
+            b"skipped: preview_browser: chromium not installed (apt-get install chromium, or set FROND_CHROMIUM)\n",
+        );
+        return;
+    };
+    if !on_path("node") {
+        let _ = std::io::stderr()
+            .lock()
+            .write_all(b"skipped: preview_browser: node not installed\n");
+        return;
+    }
+    let tools = node_tools();
+    let tmp = tempfile::tempdir().expect("tmp");
+    let out = tmp.path().join("out");
+    let report = frond_lod_measured(&root().join("samples/sapling.glb"), &out, &["--no-measure"]);
+    let lods = report["lods"].as_array().expect("lods");
+
+    let mut child = Command::new(env!("CARGO_BIN_EXE_frond"))
+        .args([
+            "view",
+            out.to_str().expect("utf-8"),
+            "--port",
+            "0",
+            "--no-open",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("frond view starts");
+    let mut stdout = child.stdout.take().expect("stdout");
+    let server = Server(child);
+    let mut url = Vec::new();
+    let mut byte = [0u8; 1];
+    while stdout.read(&mut byte).expect("reads") == 1 && byte[0] != b'\n' {
+        url.push(byte[0]);
+    }
+    let url = String::from_utf8(url).expect("URL");
+    assert!(url.ends_with("/sapling_preview.html"), "{url}");
+
+    let shots = artefact_dir("preview_browser");
+    let run = Command::new("node")
+        .arg(tools.join("preview_check.mjs"))
+        .arg(&url)
+        .arg(&shots)
+        .arg(&chromium)
+        .output()
+        .expect("node runs");
+    drop(server);
+    let text = String::from_utf8_lossy(&run.stdout);
+    let result: Value = serde_json::from_str(text.trim()).unwrap_or_else(|e| {
+        panic!(
+            "preview_check.mjs printed no JSON ({e}): {text} {}",
+            String::from_utf8_lossy(&run.stderr)
+        )
+    });
+    assert_eq!(
+        result["error"],
+        Value::Null,
+        "the live view failed: {result}"
+    );
+    assert_eq!(result["ok"], true, "{result}");
+
+    // Every LOD loaded from the combined file, with the triangles its own file has.
+    let seen = result["lods"].as_array().expect("lods");
+    assert_eq!(seen.len(), lods.len());
+    for (k, (s, l)) in seen.iter().zip(lods).enumerate() {
+        assert_eq!(s["loaded"], true, "LOD{k} loaded: {s}");
+        assert_eq!(
+            s["triangles"], l["cost"]["triangles"],
+            "LOD{k}'s triangles: {s}"
+        );
+    }
+
+    // The wind plays: the clip's time advanced and the tree's pixels moved.
+    let times: Vec<f64> = result["times"]
+        .as_array()
+        .expect("times")
+        .iter()
+        .filter_map(Value::as_f64)
+        .collect();
+    assert!(
+        times.len() == 2 && times[1] > times[0],
+        "clip time advances: {times:?}"
+    );
+    let (tree, changed) = changed_tree_pixels(&shots.join("anim_0.png"), &shots.join("anim_1.png"));
+    assert!(tree > 5000, "the tree is drawn: {tree} pixels");
+    assert!(
+        changed * 100 > tree,
+        "the animation moves more than 1 % of the tree's pixels: {changed} of {tree}"
+    );
+
+    // The slider shows one LOD at a time, and each looks different from the one before.
+    let visible = result["visible"].as_array().expect("visible");
+    assert_eq!(visible.len(), lods.len());
+    for (k, v) in visible.iter().enumerate() {
+        let v: Vec<bool> = v
+            .as_array()
+            .expect("flags")
+            .iter()
+            .map(|b| b == true)
+            .collect();
+        let expected: Vec<bool> = (0..lods.len()).map(|i| i == k).collect();
+        assert_eq!(
+            v, expected,
+            "slider at {k}: only LOD{k}'s nodes are visible"
+        );
+    }
+    for k in 1..lods.len() {
+        let (tree, changed) = changed_tree_pixels(
+            &shots.join(format!("lod_{}.png", k - 1)),
+            &shots.join(format!("lod_{k}.png")),
+        );
+        assert!(
+            changed > 0 && tree > 5000,
+            "LOD{} → LOD{k}: {changed} of {tree} pixels change",
+            k - 1
+        );
+    }
+    eprintln!("preview_browser: screenshots in {}", shots.display());
+}

@@ -1,0 +1,446 @@
+//! The preview page `frond lod` writes beside its files (`<name>_preview.html`), the batch's
+//! `index.html`, and `frond view`'s server, read back as a browser would: every picture the page
+//! names is there and decodes, stills line up with LOD0's, the difference image's counts are the
+//! page's, flip-books are animated PNGs of the loop, the live view's config names the combined
+//! file's nodes, the whole stays small, and two runs write the same bytes.
+//! (`tests/preview_browser.rs` opens the page in Chromium.)
+
+mod common;
+
+use std::collections::BTreeSet;
+use std::io::{Read, Write};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+
+use common::*;
+use serde_json::Value;
+
+/// Every `src="…"` and `href="…"` of a page that is a relative file (not `#…`, not a URL).
+fn referenced_files(html: &str) -> BTreeSet<String> {
+    let mut out = BTreeSet::new();
+    for attr in ["src=\"", "href=\""] {
+        for part in html.split(attr).skip(1) {
+            let Some(end) = part.find('"') else { continue };
+            let target = &part[..end];
+            if target.is_empty() || target.starts_with('#') || target.contains("://") {
+                continue;
+            }
+            out.insert(target.replace("%20", " "));
+        }
+    }
+    out
+}
+
+/// The live view's config of a page.
+fn view_config(html: &str) -> Value {
+    let start = html
+        .find("id=\"frond-config\">")
+        .expect("the page carries its live view's config")
+        + "id=\"frond-config\">".len();
+    let end = start + html[start..].find("</script>").expect("config closes");
+    serde_json::from_str(&html[start..end]).expect("config is JSON")
+}
+
+fn png_size(path: &Path) -> (u32, u32) {
+    let img = image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    (img.width(), img.height())
+}
+
+/// Pixels of an RGBA PNG equal to `colour`.
+fn count_colour(path: &Path, colour: [u8; 4]) -> usize {
+    let img = image::open(path).expect("decodes").to_rgba8();
+    img.pixels().filter(|p| p.0 == colour).count()
+}
+
+/// The page with its timing (`<span class="timing">`) taken out.
+fn without_timing(html: &str) -> String {
+    let Some(start) = html.find("<span class=\"timing\">") else {
+        return html.to_string();
+    };
+    let end = start + html[start..].find("</span>").expect("span closes");
+    format!("{}{}", &html[..start], &html[end..])
+}
+
+fn sample_run(out: &Path, extra: &[&str]) -> Value {
+    frond_lod_measured(&root().join("samples/sapling.glb"), out, extra)
+}
+
+#[test]
+fn lod_writes_a_preview_page_that_shows_every_lod_from_its_written_file() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let out = tmp.path().join("out");
+    let report = sample_run(&out, &[]);
+    let page_name = "sapling_preview.html";
+    let files: Vec<&str> = report["files"]
+        .as_array()
+        .expect("files")
+        .iter()
+        .filter_map(Value::as_str)
+        .collect();
+    assert!(
+        files.contains(&page_name),
+        "the report lists the page: {files:?}"
+    );
+    let html = std::fs::read_to_string(out.join(page_name)).expect("the page");
+    assert!(html.starts_with("<!doctype html>"));
+
+    // Every file the page names exists, and is listed by the report (nothing stray).
+    let referenced = referenced_files(&html);
+    for f in &referenced {
+        assert!(out.join(f).is_file(), "{f}: named by the page, not written");
+        assert!(
+            files.contains(&f.as_str()),
+            "{f}: not in the report's files"
+        );
+    }
+    let lods = report["lods"].as_array().expect("lods");
+    for (k, lod) in lods.iter().enumerate() {
+        let file = lod["file"].as_str().expect("file");
+        assert!(referenced.contains(file), "the page links {file}");
+        assert!(
+            html.contains(&format!("id=\"lod{k}\"")),
+            "a section for LOD{k}"
+        );
+        assert!(
+            html.contains(&frond_preview::html::esc(
+                lod["method_reason"].as_str().expect("reason")
+            )),
+            "LOD{k}'s method and why"
+        );
+        let flip = out.join(format!("sapling_preview/lod{k}_wind.png"));
+        let decoder = png::Decoder::new(std::io::BufReader::new(
+            std::fs::File::open(&flip).expect("flip-book"),
+        ));
+        let reader = decoder.read_info().expect("PNG");
+        let control = reader.info().animation_control.expect("an animated PNG");
+        assert_eq!(control.num_frames, 12, "LOD{k}: the loop in 12 frames");
+        assert_eq!(control.num_plays, 0, "loops forever");
+        let Some(h) = lod["screen_height"].as_f64() else {
+            continue;
+        };
+        // The LOD, LOD0 and their difference at the LOD's own size (the image the coverage
+        // metric renders, whose height the tree's bounds span), cropped alike to the tree.
+        let still = out.join(format!("sapling_preview/lod{k}.png"));
+        let reference = out.join(format!("sapling_preview/lod{k}_lod0.png"));
+        let diff = out.join(format!("sapling_preview/lod{k}_diff.png"));
+        let size = png_size(&still);
+        assert_eq!(png_size(&reference), size, "LOD{k}: LOD0's still lines up");
+        assert_eq!(png_size(&diff), size, "LOD{k}: the difference lines up");
+        assert!(
+            f64::from(size.1) <= h && f64::from(size.1) >= 0.5 * h,
+            "LOD{k}: a still {size:?} of a tree {h} px high"
+        );
+        // The page's missing/extra counts are the difference image's red and blue pixels.
+        let missing = count_colour(&diff, frond_preview::stills::MISSING);
+        let extra = count_colour(&diff, frond_preview::stills::EXTRA);
+        let counts = format!(
+            "<td>{} · {}</td>",
+            frond_preview::units::count(missing as u64),
+            frond_preview::units::count(extra as u64)
+        );
+        assert!(html.contains(&counts), "LOD{k}: the table says {counts}");
+        // The measured error is on the page, as the report has it.
+        let e = lod["error"]["coverage"].as_f64().expect("measured");
+        assert!(
+            html.contains(&frond_preview::units::significant(e)),
+            "LOD{k}: its error {e}"
+        );
+    }
+
+    // The cost table reads the written files: each LOD's triangles as the report's cost.
+    for lod in lods {
+        let t = lod["cost"]["triangles"].as_u64().expect("triangles");
+        assert!(
+            html.contains(&frond_preview::units::count(t)),
+            "{t} triangles in the table"
+        );
+    }
+
+    // The live view plays the combined file: its config names the file's own root nodes.
+    let config = view_config(&html);
+    assert_eq!(config["combined"], report["combined"]);
+    let combined = gltf_json(&out.join(report["combined"].as_str().expect("combined")));
+    let roots: BTreeSet<String> = combined["scenes"][0]["nodes"]
+        .as_array()
+        .expect("roots")
+        .iter()
+        .map(|n| {
+            combined["nodes"][n.as_u64().expect("index") as usize]["name"]
+                .as_str()
+                .expect("named")
+                .to_string()
+        })
+        .collect();
+    let cfg_lods = config["lods"].as_array().expect("lods");
+    assert_eq!(cfg_lods.len(), lods.len());
+    let mut named = BTreeSet::new();
+    for (k, l) in cfg_lods.iter().enumerate() {
+        for n in l["nodes"].as_array().expect("nodes") {
+            let n = n.as_str().expect("name");
+            assert!(n.ends_with(&format!("_LOD{k}")) || n.ends_with(&format!("_LOD{k}_rig")));
+            named.insert(n.to_string());
+        }
+        assert_eq!(l["triangles"], lods[k]["cost"]["triangles"]);
+    }
+    assert_eq!(
+        named, roots,
+        "every root of the combined file belongs to one LOD"
+    );
+
+    // The vendored three.js is written beside the page, byte for byte; no transcoder without
+    // KTX2 textures.
+    let three = std::fs::read(out.join("viewer/frond-three.js")).expect("three.js");
+    assert_eq!(
+        three,
+        std::fs::read(root().join("preview/vendor/frond-three.js")).expect("vendored")
+    );
+    assert!(!out.join("viewer/basis_transcoder.wasm").exists());
+
+    // Small: the page and everything it adds beside the LOD files.
+    let added: u64 = files
+        .iter()
+        .filter(|f| f.contains("_preview") || f.starts_with("viewer/"))
+        .map(|f| std::fs::metadata(out.join(f)).expect("file").len())
+        .sum();
+    assert!(added < 5 * 1024 * 1024, "the preview adds {added} bytes");
+}
+
+#[test]
+fn preview_bytes_do_not_depend_on_the_run_or_the_thread_count() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    sample_run(&a, &["--no-measure"]);
+    let out = Command::new(env!("CARGO_BIN_EXE_frond"))
+        .args([
+            "lod",
+            root().join("samples/sapling.glb").to_str().expect("utf-8"),
+        ])
+        .args([
+            "-o",
+            b.to_str().expect("utf-8"),
+            "--samples",
+            "16",
+            "--no-measure",
+        ])
+        .env("RAYON_NUM_THREADS", "1")
+        .output()
+        .expect("frond runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let page = |d: &Path| {
+        without_timing(&std::fs::read_to_string(d.join("sapling_preview.html")).expect("page"))
+    };
+    assert_eq!(page(&a), page(&b), "the page");
+    let pictures = |d: &Path| -> Vec<(PathBuf, Vec<u8>)> {
+        let mut v: Vec<_> = std::fs::read_dir(d.join("sapling_preview"))
+            .expect("pictures")
+            .map(|e| {
+                let p = e.expect("entry").path();
+                (
+                    PathBuf::from(p.file_name().expect("name")),
+                    std::fs::read(&p).expect("read"),
+                )
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    let (pa, pb) = (pictures(&a), pictures(&b));
+    assert!(
+        pa.len() >= 10,
+        "stills, differences and flip-books: {}",
+        pa.len()
+    );
+    assert_eq!(pa, pb, "the pictures, byte for byte");
+}
+
+#[test]
+fn no_preview_writes_no_page() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let out = tmp.path().join("out");
+    let report = frond_lod(&root().join("samples/sapling.glb"), &out, &[]);
+    assert!(!out.join("sapling_preview.html").exists());
+    assert!(!out.join("sapling_preview").exists());
+    assert!(!out.join("viewer").exists());
+    let listed = report["files"].to_string();
+    assert!(
+        !listed.contains("preview") && !listed.contains("viewer/"),
+        "{listed}"
+    );
+}
+
+#[test]
+fn batch_writes_an_index_and_one_shared_viewer() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let input = tmp.path().join("in");
+    std::fs::create_dir_all(input.join("park")).expect("folder");
+    std::fs::copy(
+        root().join("samples/sapling.glb"),
+        input.join("park/sapling.glb"),
+    )
+    .expect("copy");
+    let out = tmp.path().join("out");
+    frond_ok(&[
+        "batch",
+        input.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+        "--samples",
+        "16",
+    ]);
+    let index = std::fs::read_to_string(out.join("index.html")).expect("index.html");
+    assert!(
+        index.contains("park/sapling.glb"),
+        "the index names the tree"
+    );
+    for f in referenced_files(&index) {
+        assert!(
+            out.join(&f).is_file(),
+            "{f}: named by the index, not written"
+        );
+    }
+    let page_path = out.join("park/sapling/sapling_preview.html");
+    assert!(index.contains("park/sapling/sapling_preview.html"));
+    let page = std::fs::read_to_string(&page_path).expect("the tree's page");
+    // The tree's page uses the batch's one copy of the viewer, two folders up.
+    let config = view_config(&page);
+    assert_eq!(config["viewer"], "../../viewer");
+    assert!(page.contains("src=\"../../viewer/frond-three.js\""));
+    assert!(out.join("viewer/frond-three.js").is_file());
+    assert!(
+        !out.join("park/sapling/viewer").exists(),
+        "no copy per tree"
+    );
+}
+
+/// `frond view FOLDER --port 0 --no-open`, killed on drop.
+struct Server {
+    child: Child,
+    url: String,
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Starts `frond view` on `folder` and reads the URL it prints first.
+fn serve(folder: &Path) -> Server {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_frond"))
+        .args([
+            "view",
+            folder.to_str().expect("utf-8"),
+            "--port",
+            "0",
+            "--no-open",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("frond view starts");
+    let mut stdout = child.stdout.take().expect("stdout");
+    let mut line = Vec::new();
+    let mut byte = [0u8; 1];
+    while stdout.read(&mut byte).expect("reads") == 1 && byte[0] != b'\n' {
+        line.push(byte[0]);
+    }
+    Server {
+        child,
+        url: String::from_utf8(line).expect("utf-8 URL"),
+    }
+}
+
+/// GET `path` from `addr`: (status, headers, body).
+fn get(addr: &str, path: &str) -> (u16, String, Vec<u8>) {
+    let mut s = TcpStream::connect(addr).expect("connects");
+    write!(s, "GET {path} HTTP/1.1\r\nHost: {addr}\r\n\r\n").expect("sends");
+    let mut raw = Vec::new();
+    s.read_to_end(&mut raw).expect("answer");
+    let split = raw
+        .windows(4)
+        .position(|w| w == b"\r\n\r\n")
+        .expect("headers end");
+    let head = String::from_utf8_lossy(&raw[..split]).into_owned();
+    let status = head
+        .split_whitespace()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .expect("status");
+    (status, head, raw[split + 4..].to_vec())
+}
+
+#[test]
+fn frond_view_serves_the_folder_and_nothing_outside_it() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let out = tmp.path().join("out");
+    frond_lod(&root().join("samples/sapling.glb"), &out, &[]);
+    std::fs::write(
+        out.join("sapling_preview.html"),
+        "<!doctype html><p>page</p>",
+    )
+    .expect("page");
+    std::fs::write(tmp.path().join("secret.txt"), "outside").expect("secret");
+    let server = serve(&out);
+    let rest = server.url.strip_prefix("http://").expect("an http URL");
+    let (addr, page) = rest.split_once('/').expect("a path");
+    assert_eq!(
+        page, "sapling_preview.html",
+        "the one preview page is where it starts"
+    );
+    let (status, head, body) = get(addr, "/sapling_preview.html");
+    assert_eq!(status, 200);
+    assert!(head.contains("text/html"), "{head}");
+    assert_eq!(body, b"<!doctype html><p>page</p>");
+    let (status, head, body) = get(addr, "/sapling_lods.glb");
+    assert_eq!(status, 200);
+    assert!(head.contains("model/gltf-binary"), "{head}");
+    assert_eq!(
+        body,
+        std::fs::read(out.join("sapling_lods.glb")).expect("glb")
+    );
+    for outside in ["/../secret.txt", "/%2e%2e/secret.txt", "/nothing.glb"] {
+        let (status, _, body) = get(addr, outside);
+        assert!(status == 404 || status == 400, "{outside}: {status}");
+        assert!(!String::from_utf8_lossy(&body).contains("outside"));
+    }
+    drop(server);
+
+    // A folder that is not one: an error naming it, at once.
+    let missing = tmp.path().join("missing");
+    let out = frond(&["view", missing.to_str().expect("utf-8"), "--no-open"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing"));
+}
+
+/// oak_dense, the benchmark tree: the page and what it adds stay under 5 MB and cost under a
+/// tenth of the run. Ignored (about a minute in a debug build); run with `--ignored`.
+#[test]
+#[ignore = "the benchmark tree: run with --ignored and report the figures"]
+fn oak_dense_preview_stays_small_and_cheap() {
+    frond_testdata::require_tree!("oak_dense.glb");
+    let tmp = tempfile::tempdir().expect("tmp");
+    let out = tmp.path().join("out");
+    let report = frond_lod_measured(&shared_tree("oak_dense.glb"), &out, &[]);
+    let added: u64 = report["files"]
+        .as_array()
+        .expect("files")
+        .iter()
+        .filter_map(Value::as_str)
+        .filter(|f| f.contains("_preview") || f.starts_with("viewer/"))
+        .map(|f| std::fs::metadata(out.join(f)).expect("file").len())
+        .sum();
+    let t = &report["timings_s"];
+    let (preview, wall) = (
+        t["preview"].as_f64().expect("preview"),
+        t["wall"].as_f64().expect("wall"),
+    );
+    eprintln!("oak_dense preview: {added} bytes, {preview:.2} s of {wall:.2} s");
+    assert!(added < 5 * 1024 * 1024, "{added} bytes");
+    assert!(preview < 0.1 * wall, "{preview} s of {wall} s");
+}
