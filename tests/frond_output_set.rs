@@ -441,10 +441,13 @@ fn a_set_written_by_frond_0_1_is_adopted_and_replaced() {
     std::fs::write(work.join("report.json"), report.to_string()).unwrap();
     std::fs::remove_file(work.join("sapling_report.json")).unwrap();
     ok(&lod(&work, "150", "1", None));
-    // The shared shaders (the LOD cross-fade every chain ships) aside.
+    // The shared shaders (the LOD cross-fade every chain ships) and the preview page with its
+    // pictures and viewer (tests/preview_page.rs) aside.
     let names: Vec<String> = visible_files(&work)
         .into_keys()
-        .filter(|n| !n.starts_with("shaders/"))
+        .filter(|n| {
+            !n.starts_with("shaders/") && !n.starts_with("viewer/") && !n.contains("_preview")
+        })
         .collect();
     assert_eq!(
         names,

@@ -53,15 +53,6 @@ fn count_colour(path: &Path, colour: [u8; 4]) -> usize {
     img.pixels().filter(|p| p.0 == colour).count()
 }
 
-/// The page with its timing (`<span class="timing">`) taken out.
-fn without_timing(html: &str) -> String {
-    let Some(start) = html.find("<span class=\"timing\">") else {
-        return html.to_string();
-    };
-    let end = start + html[start..].find("</span>").expect("span closes");
-    format!("{}{}", &html[..start], &html[end..])
-}
-
 fn sample_run(out: &Path, extra: &[&str]) -> Value {
     frond_lod_measured(&root().join("samples/sapling.glb"), out, extra)
 }
@@ -231,9 +222,7 @@ fn preview_bytes_do_not_depend_on_the_run_or_the_thread_count() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let page = |d: &Path| {
-        without_timing(&std::fs::read_to_string(d.join("sapling_preview.html")).expect("page"))
-    };
+    let page = |d: &Path| std::fs::read_to_string(d.join("sapling_preview.html")).expect("page");
     assert_eq!(page(&a), page(&b), "the page");
     let pictures = |d: &Path| -> Vec<(PathBuf, Vec<u8>)> {
         let mut v: Vec<_> = std::fs::read_dir(d.join("sapling_preview"))

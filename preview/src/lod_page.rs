@@ -269,10 +269,11 @@ fn body(
     flip_frames: u32,
 ) -> String {
     let mut b = String::new();
-    let total = report.timings_s["total"].as_f64().unwrap_or(0.0);
+    // No timings: the page is the same bytes for the same input and seed (they are in the
+    // report).
     b.push_str(&format!(
         "<header><h1>{}</h1><p class=\"meta\">{} LODs of <code>{}</code> · clip {} ({} loop, {} samples) · \
-         seed {} · built in <span class=\"timing\">{}</span> by frond {}</p>\n",
+         seed {} · frond {}</p>\n",
         esc(&report.name),
         report.lods.len() - 1,
         esc(&report.input),
@@ -280,7 +281,6 @@ fn body(
         units::duration(f64::from(report.period)),
         report.samples,
         report.seed,
-        units::duration(total),
         env!("CARGO_PKG_VERSION"),
     ));
     b.push_str("<nav><a href=\"#live\">Live view</a><a href=\"#costs\">Costs</a>");

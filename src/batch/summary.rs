@@ -219,12 +219,11 @@ impl BatchSummary {
         index_page(
             &format!("frond batch: {}", self.input),
             &format!(
-                "{} · {} built, {} up to date, {} failed · {}",
+                "{} · {} built, {} up to date, {} failed",
                 trees_line(self.trees.len(), Some(bytes)),
                 self.counts.built,
                 self.counts.up_to_date,
                 self.counts.failed,
-                frond_preview::units::duration(self.wall_s)
             ),
             &entries,
         )
