@@ -7,7 +7,7 @@
 use std::time::Instant;
 
 use frond_lod::{LodEntry, LodReport};
-use frond_render::{Frame, Renderer};
+use frond_render::{DrawScene, Frame, PosedTree, Renderer, TreeParts};
 use frond_scene::{FileCost, Tree};
 
 use crate::error::PreviewError;
@@ -94,6 +94,10 @@ pub fn lod_preview(
     let dir = format!("{}_preview", report.name);
     let camera = preview_camera(req.input)?;
     let lod0 = &req.lods[0];
+    // LOD0 at the start of its clip: the reference every LOD's still is compared with.
+    let clip0 = clip_of(lod0, report.clip.as_deref());
+    let start0 = clip0.map_or(0.0, |c| lod0.rig.clips[c].start);
+    let reference = PosedTree::new(lod0, clip0, start0, TreeParts::All);
     let lod0_height = report
         .lods
         .iter()
@@ -103,7 +107,7 @@ pub fn lod_preview(
     let pictures: Vec<LodPictures> = (0..req.lods.len())
         .map(|k| {
             let h = report.lods[k].screen_height.unwrap_or(lod0_height);
-            lod_pictures(renderer, req, &camera, lod0, k, h, &dir)
+            lod_pictures(renderer, req, &camera, reference.scene(), k, h, &dir)
         })
         .collect::<Result<_, _>>()?;
     let combined_error = |reason| PreviewError::Combined {
@@ -166,7 +170,7 @@ fn lod_pictures(
     renderer: &Renderer,
     req: &LodPreviewRequest,
     camera: &frond_render::Camera,
-    lod0: &Tree,
+    reference: &DrawScene,
     k: usize,
     h: f32,
     dir: &str,
@@ -176,14 +180,13 @@ fn lod_pictures(
     let clip = clip_of(tree, report.clip.as_deref());
     let start = clip.map_or(0.0, |c| tree.rig.clips[c].start);
     let size = still_size(h);
-    let still = render_pose(renderer, tree, clip, start, camera, size, "still")?;
+    let mut posed = PosedTree::new(tree, clip, start, TreeParts::All);
+    let still = render_pose(renderer, tree, posed.scene(), camera, size, "still")?;
     let mut files = Vec::new();
     let mut diff = PixelDifference::default();
     let rect;
     if k > 0 {
-        let clip0 = clip_of(lod0, report.clip.as_deref());
-        let start0 = clip0.map_or(0.0, |c| lod0.rig.clips[c].start);
-        let reference = render_pose(renderer, lod0, clip0, start0, camera, size, "still")?;
+        let reference = render_pose(renderer, &req.lods[0], reference, camera, size, "still")?;
         rect = covered_box(&[&reference, &still], 2);
         let (rgba, d) = difference(&reference, &still);
         diff = d;
@@ -222,15 +225,8 @@ fn lod_pictures(
     let frames: Vec<Frame> = (0..n)
         .map(|i| {
             let t = start + report.period * i as f32 / n as f32;
-            render_pose(
-                renderer,
-                tree,
-                clip,
-                t,
-                camera,
-                flip_size,
-                "flip-book frame",
-            )
+            let scene = posed.pose(clip, t);
+            render_pose(renderer, tree, scene, camera, flip_size, "flip-book frame")
         })
         .collect::<Result<_, _>>()?;
     let delay = (1000.0 * report.period / n as f32)

@@ -3,7 +3,7 @@
 //! the LOD's atlas.
 
 use frond_metrics::{CoverageParams, image_for_screen_height, view_camera};
-use frond_render::{Camera, Frame, Renderer, TreeParts, tree_scene};
+use frond_render::{Camera, DrawScene, Frame, Renderer};
 use frond_scene::Tree;
 use glam::Vec3;
 
@@ -37,20 +37,18 @@ pub fn still_size(screen_height: f32) -> (u32, u32) {
     image_for_screen_height(screen_height.round().max(1.0) as u32)
 }
 
-/// `tree` (wood and foliage) at time `t` of its clip `clip`, mip-mapped as engines sample
-/// textures, on a transparent background.
+/// A posed tree's scene (`tree` names it in errors), mip-mapped as engines sample textures, on
+/// a transparent background.
 pub fn render_pose(
     renderer: &Renderer,
     tree: &Tree,
-    clip: Option<usize>,
-    t: f32,
+    scene: &DrawScene,
     camera: &Camera,
     size: (u32, u32),
     what: &'static str,
 ) -> Result<Frame, PreviewError> {
-    let scene = tree_scene(tree, clip, t, TreeParts::All);
     renderer
-        .render_mipmapped(&scene, camera, size.0, size.1, [0.0; 4])
+        .render_mipmapped(scene, camera, size.0, size.1, [0.0; 4])
         .map_err(|source| PreviewError::Render {
             file: tree.source.display().to_string(),
             what,

@@ -57,4 +57,4 @@ pub use pipeline::{LIGHT_DIRECTION, alpha_mip_chain, linear_mip_chain, mip_chain
 pub use renderer::{Output, Renderer};
 pub use scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
 pub use software::{CoverageImage, Lighting, SoftwareTextures, depth_complexity, render_coverage};
-pub use tree::{TreeParts, scene_from_positions, tree_scene};
+pub use tree::{PosedTree, TreeParts, scene_from_positions, tree_scene};

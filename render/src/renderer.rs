@@ -455,8 +455,8 @@ impl Renderer {
     /// once each.
     /// The uploaded view of `tex`, from the cache when the same pixels were uploaded before.
     fn cached_texture(&self, tex: &crate::scene::DrawTexture, mipmaps: bool) -> wgpu::TextureView {
-        use std::hash::{Hash, Hasher};
-        let mut h = std::collections::hash_map::DefaultHasher::new();
+        use std::hash::{BuildHasher, Hash, Hasher};
+        let mut h = foldhash::quality::FixedState::with_seed(0).build_hasher();
         (tex.width, tex.height).hash(&mut h);
         tex.rgba.hash(&mut h);
         let key = (h.finish(), mipmaps);

@@ -18,14 +18,81 @@ pub enum TreeParts {
 
 /// The tree posed at time `t` of clip `clip` (rest pose when None).
 pub fn tree_scene(tree: &Tree, clip: Option<usize>, t: f32, parts: TreeParts) -> DrawScene {
+    PosedTree::new(tree, clip, t, parts).scene
+}
+
+/// A tree's draw scene built once and posed many times (a flip-book, the frames of a metric):
+/// the meshes' vertex order, the materials and the textures stay; [`PosedTree::pose`] rewrites
+/// positions, normals and tangents only, instead of rebuilding the scene and copying every
+/// texture per frame.
+pub struct PosedTree<'a> {
+    tree: &'a Tree,
+    scene: DrawScene,
+    /// Per mesh of `scene`, the tree vertex of each of its vertices.
+    sources: Vec<Vec<u32>>,
+}
+
+/// A pose of a tree: skinned positions, normals and tangents (empty when the tree has none).
+struct Pose {
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    tangents: Vec<Vec4>,
+}
+
+fn pose_at(tree: &Tree, clip: Option<usize>, t: f32) -> Pose {
     let world = world_at(tree, clip, t);
     let pal = palettes(tree, &world);
     let mut positions = vec![Vec3::ZERO; tree.vertices.len()];
     skin_into(tree, &pal, &mut positions);
-    let normals = skin_normals(tree, &pal);
-    let tangents = skin_tangents(tree, &pal);
-    let tangents = (!tangents.is_empty()).then_some(tangents.as_slice());
-    posed_scene(tree, &positions, Some(&normals), tangents, parts)
+    Pose {
+        positions,
+        normals: skin_normals(tree, &pal),
+        tangents: skin_tangents(tree, &pal),
+    }
+}
+
+impl<'a> PosedTree<'a> {
+    /// `tree`'s `parts` posed at time `t` of clip `clip` (rest pose when None).
+    pub fn new(tree: &'a Tree, clip: Option<usize>, t: f32, parts: TreeParts) -> PosedTree<'a> {
+        let p = pose_at(tree, clip, t);
+        let tangents = (!p.tangents.is_empty()).then_some(p.tangents.as_slice());
+        let (scene, sources) = build_scene(tree, &p.positions, Some(&p.normals), tangents, parts);
+        PosedTree {
+            tree,
+            scene,
+            sources,
+        }
+    }
+
+    /// The scene posed at time `t` of clip `clip`: the same meshes as [`PosedTree::new`]
+    /// built, with this pose's vertices (what [`tree_scene`] would return).
+    pub fn pose(&mut self, clip: Option<usize>, t: f32) -> &DrawScene {
+        let p = pose_at(self.tree, clip, t);
+        for (mesh, src) in self.scene.meshes.iter_mut().zip(&self.sources) {
+            for (out, &v) in mesh.positions.iter_mut().zip(src) {
+                *out = p.positions[v as usize].to_array();
+            }
+            if let Some(n) = &mut mesh.normals {
+                for (out, &v) in n.iter_mut().zip(src) {
+                    *out = p.normals[v as usize].to_array();
+                }
+            }
+            if let Some(tan) = &mut mesh.tangents {
+                for (out, &v) in tan.iter_mut().zip(src) {
+                    *out = p
+                        .tangents
+                        .get(v as usize)
+                        .map_or([0.0; 4], |t| t.to_array());
+                }
+            }
+        }
+        &self.scene
+    }
+
+    /// The scene as last posed.
+    pub fn scene(&self) -> &DrawScene {
+        &self.scene
+    }
 }
 
 /// A draw scene of `tree`'s triangles at the given vertex positions (e.g. a sampled pose or
@@ -36,18 +103,19 @@ pub fn scene_from_positions(
     normals: Option<&[Vec3]>,
     parts: TreeParts,
 ) -> DrawScene {
-    posed_scene(tree, positions, normals, None, parts)
+    build_scene(tree, positions, normals, None, parts).0
 }
 
 /// [`scene_from_positions`] with the tangents too (one per vertex, zero where the input gave
-/// none), which let the materials' normal maps apply ([`DrawMaterial::normal_texture`]).
-fn posed_scene(
+/// none), which let the materials' normal maps apply ([`DrawMaterial::normal_texture`]); with,
+/// per mesh, the tree vertex of each mesh vertex ([`PosedTree`] reposes through it).
+fn build_scene(
     tree: &Tree,
     positions: &[Vec3],
     normals: Option<&[Vec3]>,
     tangents: Option<&[Vec4]>,
     parts: TreeParts,
-) -> DrawScene {
+) -> (DrawScene, Vec<Vec<u32>>) {
     // Normal maps need a normal and a tangent frame on every vertex of their mesh.
     let framed = |m: usize| -> bool {
         normals.is_some()
@@ -60,6 +128,7 @@ fn posed_scene(
     };
     let mut mapped = vec![false; tree.materials.len()];
     let mut meshes: Vec<DrawMesh> = Vec::new();
+    let mut sources: Vec<Vec<u32>> = Vec::new();
     let mut remap: Vec<u32> = vec![u32::MAX; positions.len()];
     for (m, _) in tree.materials.iter().enumerate() {
         let mut mesh = DrawMesh {
@@ -70,6 +139,7 @@ fn posed_scene(
         let mut nrm = Vec::new();
         let mut tan = Vec::new();
         let mut uvs = Vec::new();
+        let mut src = Vec::new();
         let with_tangents = tree.materials[m].normal_texture.is_some() && framed(m);
         for t in &tree.triangles {
             let keep = match parts {
@@ -85,6 +155,7 @@ fn posed_scene(
                 if remap[v] == u32::MAX {
                     remap[v] = pos.len() as u32;
                     pos.push(positions[v].to_array());
+                    src.push(v as u32);
                     if let Some(n) = normals {
                         nrm.push(n[v].to_array());
                     }
@@ -115,6 +186,7 @@ fn posed_scene(
         }
         mesh.uvs = Some(uvs);
         meshes.push(mesh);
+        sources.push(src);
     }
     let materials = tree
         .materials
@@ -142,9 +214,12 @@ fn posed_scene(
             rgba: t.rgba.clone(),
         })
         .collect();
-    DrawScene {
-        meshes,
-        materials,
-        textures,
-    }
+    (
+        DrawScene {
+            meshes,
+            materials,
+            textures,
+        },
+        sources,
+    )
 }

@@ -644,3 +644,33 @@ fn timing_100k_triangles() {
     );
     assert_eq!(frame.covered_count(), 128 * 128);
 }
+
+/// A posed tree reposed at another time is the scene `tree_scene` builds at that time, vertex
+/// for vertex: the flip-books and metric frames that repose one scene draw what they would
+/// have drawn rebuilding it.
+#[test]
+fn reposing_a_tree_equals_building_its_scene_at_that_time() {
+    use frond_render::{PosedTree, TreeParts, tree_scene};
+    use frond_scene::generator::{Preset, generate};
+    let g = generate(Preset::Small, 3).expect("generates");
+    let tree = frond_scene::import_bytes(
+        std::path::Path::new("small.glb"),
+        &g.glb,
+        &frond_scene::ImportOptions::default(),
+    )
+    .expect("imports");
+    let clip = tree.clip_index(None);
+    for parts in [TreeParts::All, TreeParts::Foliage] {
+        let mut posed = PosedTree::new(&tree, clip, 0.0, parts);
+        assert_eq!(posed.scene(), &tree_scene(&tree, clip, 0.0, parts));
+        for t in [0.7, 1.9] {
+            let expected = tree_scene(&tree, clip, t, parts);
+            assert_eq!(posed.pose(clip, t), &expected, "t = {t}");
+        }
+        assert_ne!(
+            tree_scene(&tree, clip, 0.0, parts).meshes[0].positions,
+            posed.scene().meshes[0].positions,
+            "the wind moves the tree"
+        );
+    }
+}
