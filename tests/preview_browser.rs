@@ -11,9 +11,9 @@
 
 mod common;
 
-use std::io::{Read, Write};
+use std::io::Write;
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 
 use common::*;
 use serde_json::Value;
@@ -33,16 +33,6 @@ fn chromium() -> Option<String> {
                 .find(|p| p.is_file())
                 .map_or_else(|| c.to_string(), |p| p.display().to_string())
         })
-}
-
-/// `frond view` serving a folder, killed on drop.
-struct Server(Child);
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
 }
 
 /// The page's background (`scene.background` in live_view.js).
@@ -129,26 +119,8 @@ fn check_in_chromium(input: &Path, artefacts: &str) {
         .expect("utf-8 stem");
     let lods = report["lods"].as_array().expect("lods");
 
-    let mut child = Command::new(env!("CARGO_BIN_EXE_frond"))
-        .args([
-            "view",
-            out.to_str().expect("utf-8"),
-            "--port",
-            "0",
-            "--no-open",
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("frond view starts");
-    let mut stdout = child.stdout.take().expect("stdout");
-    let server = Server(child);
-    let mut url = Vec::new();
-    let mut byte = [0u8; 1];
-    while stdout.read(&mut byte).expect("reads") == 1 && byte[0] != b'\n' {
-        url.push(byte[0]);
-    }
-    let url = String::from_utf8(url).expect("URL");
+    let server = frond_view(&out);
+    let url = server.url().to_string();
     assert!(url.ends_with(&format!("/{name}_preview.html")), "{url}");
 
     let shots = artefact_dir(artefacts);

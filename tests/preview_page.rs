@@ -11,7 +11,7 @@ use std::collections::BTreeSet;
 use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 
 use common::*;
 use serde_json::Value;
@@ -306,45 +306,6 @@ fn batch_writes_an_index_and_one_shared_viewer() {
     );
 }
 
-/// `frond view FOLDER --port 0 --no-open`, killed on drop.
-struct Server {
-    child: Child,
-    url: String,
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// Starts `frond view` on `folder` and reads the URL it prints first.
-fn serve(folder: &Path) -> Server {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_frond"))
-        .args([
-            "view",
-            folder.to_str().expect("utf-8"),
-            "--port",
-            "0",
-            "--no-open",
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("frond view starts");
-    let mut stdout = child.stdout.take().expect("stdout");
-    let mut line = Vec::new();
-    let mut byte = [0u8; 1];
-    while stdout.read(&mut byte).expect("reads") == 1 && byte[0] != b'\n' {
-        line.push(byte[0]);
-    }
-    Server {
-        child,
-        url: String::from_utf8(line).expect("utf-8 URL"),
-    }
-}
-
 /// GET `path` from `addr`: (status, headers, body).
 fn get(addr: &str, path: &str) -> (u16, String, Vec<u8>) {
     let mut s = TcpStream::connect(addr).expect("connects");
@@ -375,8 +336,8 @@ fn frond_view_serves_the_folder_and_nothing_outside_it() {
     )
     .expect("page");
     std::fs::write(tmp.path().join("secret.txt"), "outside").expect("secret");
-    let server = serve(&out);
-    let rest = server.url.strip_prefix("http://").expect("an http URL");
+    let server = frond_view(&out);
+    let rest = server.url().strip_prefix("http://").expect("an http URL");
     let (addr, page) = rest.split_once('/').expect("a path");
     assert_eq!(
         page, "sapling_preview.html",

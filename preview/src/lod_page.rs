@@ -370,51 +370,52 @@ fn bytes(v: f64) -> String {
     units::bytes(v)
 }
 
+/// A cost of the table read off a file's cost, and how it is written.
+type FileCostRow = (&'static str, fn(&FileCost) -> f64, fn(f64) -> String);
+
+/// The table's rows read off each file's cost (`frond_scene::file_cost`).
+const FILE_COSTS: [FileCostRow; 10] = [
+    ("Triangles", |c| c.triangles as f64, count),
+    ("Vertices", |c| c.vertices as f64, count),
+    ("Draw calls", |c| c.draw_calls as f64, count),
+    ("Materials", |c| c.materials as f64, count),
+    (
+        "Joints (largest skin)",
+        |c| c.joints_per_skin_max as f64,
+        count,
+    ),
+    ("Animated channels", |c| c.animated_channels as f64, count),
+    ("Keyframe bytes", |c| c.keyframe_bytes as f64, bytes),
+    (
+        "Texture memory (GPU, mips)",
+        |c| c.texture_gpu_bytes as f64,
+        bytes,
+    ),
+    (
+        "Texture bytes in files",
+        |c| c.texture_encoded_bytes as f64,
+        bytes,
+    ),
+    ("File bytes", |c| c.file_bytes as f64, bytes),
+];
+
 /// The cost table: what each written file costs an engine, read back from the files.
 fn cost_table(report: &LodReport, pictures: &[LodPictures]) -> String {
-    let rows = [
-        cost_row("Triangles", report, |c| c.triangles as f64, count),
-        cost_row("Vertices", report, |c| c.vertices as f64, count),
-        cost_row("Draw calls", report, |c| c.draw_calls as f64, count),
-        cost_row("Materials", report, |c| c.materials as f64, count),
-        cost_row(
-            "Joints (largest skin)",
-            report,
-            |c| c.joints_per_skin_max as f64,
-            count,
-        ),
-        cost_row(
-            "Animated channels",
-            report,
-            |c| c.animated_channels as f64,
-            count,
-        ),
-        cost_row("Keyframe bytes", report, |c| c.keyframe_bytes as f64, bytes),
-        cost_row(
-            "Texture memory (GPU, mips)",
-            report,
-            |c| c.texture_gpu_bytes as f64,
-            bytes,
-        ),
-        cost_row(
-            "Texture bytes in files",
-            report,
-            |c| c.texture_encoded_bytes as f64,
-            bytes,
-        ),
-        cost_row("File bytes", report, |c| c.file_bytes as f64, bytes),
-        Row {
-            label: "Overdraw (alpha-tested area vs LOD0)",
-            values: report
-                .lods
-                .iter()
-                .map(|e| e.alpha_tested_area_ratio)
-                .collect(),
-            show: |v| format!("{}×", units::significant(v)),
-            monotone: true,
-            share: false,
-        },
-    ];
+    let mut rows: Vec<Row> = FILE_COSTS
+        .iter()
+        .map(|&(label, get, show)| cost_row(label, report, get, show))
+        .collect();
+    rows.push(Row {
+        label: "Overdraw (alpha-tested area vs LOD0)",
+        values: report
+            .lods
+            .iter()
+            .map(|e| e.alpha_tested_area_ratio)
+            .collect(),
+        show: |v| format!("{}×", units::significant(v)),
+        monotone: true,
+        share: false,
+    });
     let mut t = String::from(
         "<section id=\"costs\"><h2>What each LOD costs</h2>\n<p class=\"muted\">Read back from \
          the written files as an engine counts them. A red cell costs more than the LOD before \

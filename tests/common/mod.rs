@@ -199,6 +199,53 @@ pub fn on_path(name: &str) -> bool {
     })
 }
 
+/// `frond view FOLDER --port 0 --no-open` while it lives (stopped on drop).
+pub struct ViewServer {
+    child: std::process::Child,
+    url: String,
+}
+
+impl ViewServer {
+    /// The page's URL, the first line `frond view` prints.
+    pub fn url(&self) -> &str {
+        &self.url
+    }
+}
+
+impl Drop for ViewServer {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Starts `frond view` on `folder` (any free port) and reads the URL it prints.
+pub fn frond_view(folder: &Path) -> ViewServer {
+    use std::io::Read;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_frond"))
+        .args([
+            "view",
+            folder.to_str().expect("utf-8"),
+            "--port",
+            "0",
+            "--no-open",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("frond view starts");
+    let mut stdout = child.stdout.take().expect("stdout");
+    let mut line = Vec::new();
+    let mut byte = [0u8; 1];
+    while stdout.read(&mut byte).expect("reads") == 1 && byte[0] != b'\n' {
+        line.push(byte[0]);
+    }
+    ViewServer {
+        child,
+        url: String::from_utf8(line).expect("utf-8 URL"),
+    }
+}
+
 /// Where a test leaves files for people to look at (screenshots, renders):
 /// `target/test-artefacts/<name>/`, made empty.
 pub fn artefact_dir(name: &str) -> PathBuf {
@@ -235,6 +282,8 @@ const _: () = {
         gltf_json,
         on_path,
         artefact_dir,
+        frond_view,
+        ViewServer::url,
         gltf_cases::triangle_gltf,
         gltf_cases::triangle_bin,
         gltf_cases::GOOD,
