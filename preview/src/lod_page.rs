@@ -62,6 +62,9 @@ pub fn preview_name(name: &str) -> String {
 const FLIP_HEIGHT: f32 = 160.0;
 /// LOD0's still when no LOD gives a size.
 const LOD0_HEIGHT: f32 = 400.0;
+/// LODs with more triangles than this get at most [`HEAVY_FLIP_FRAMES`] flip-book frames.
+const HEAVY_TRIANGLES: usize = 250_000;
+const HEAVY_FLIP_FRAMES: u32 = 6;
 /// Largest side of an atlas thumbnail.
 const ATLAS_SIDE: u32 = 512;
 
@@ -73,6 +76,8 @@ struct LodPictures {
     /// The image height the stills were rendered at (the tree's height on screen).
     screen_height: u32,
     flip: [u32; 2],
+    /// Frames of its flip-book.
+    flip_frames: u32,
     atlas: Option<[u32; 2]>,
     difference: PixelDifference,
 }
@@ -143,7 +148,7 @@ pub fn lod_preview(
             .collect(),
     };
     let page_name = preview_name(&report.name);
-    let body = body(report, &pictures, &config, req.flip_frames);
+    let body = body(report, &pictures, &config);
     let mut files: Vec<(String, Vec<u8>)> = Vec::new();
     let differences = pictures.iter().map(|p| p.difference).collect();
     for p in pictures {
@@ -221,7 +226,15 @@ fn lod_pictures(
         )?,
     ));
     let flip_size = still_size(h.min(FLIP_HEIGHT));
-    let n = req.flip_frames.max(1);
+    // A frame of a LOD this heavy costs half a second on a CPU renderer: fewer of them keep
+    // the preview under a tenth of the run (the 1M-triangle preset: 12 % with 12 frames).
+    let heavy = tree.triangles.len() > HEAVY_TRIANGLES;
+    let n = if heavy {
+        req.flip_frames.min(HEAVY_FLIP_FRAMES)
+    } else {
+        req.flip_frames
+    }
+    .max(1);
     let frames: Vec<Frame> = (0..n)
         .map(|i| {
             let t = start + report.period * i as f32 / n as f32;
@@ -246,6 +259,7 @@ fn lod_pictures(
         still: [rect[2], rect[3]],
         screen_height: size.1,
         flip: flip.size,
+        flip_frames: n,
         atlas,
         difference: diff,
     })
@@ -258,12 +272,7 @@ fn clip_of(tree: &Tree, name: Option<&str>) -> Option<usize> {
 }
 
 /// The page's body.
-fn body(
-    report: &LodReport,
-    pictures: &[LodPictures],
-    config: &ViewConfig,
-    flip_frames: u32,
-) -> String {
+fn body(report: &LodReport, pictures: &[LodPictures], config: &ViewConfig) -> String {
     let mut b = String::new();
     // No timings: the page is the same bytes for the same input and seed (they are in the
     // report).
@@ -287,7 +296,7 @@ fn body(
     b.push_str(&live_view(config));
     b.push_str(&cost_table(report, pictures));
     for (k, (e, p)) in report.lods.iter().zip(pictures).enumerate() {
-        b.push_str(&lod_section(report, k, e, p, flip_frames));
+        b.push_str(&lod_section(report, k, e, p));
     }
     if !report.warnings.is_empty() {
         b.push_str("<h2>Warnings</h2><ul>");
@@ -544,13 +553,7 @@ fn distance(d: f32) -> String {
 }
 
 /// One LOD's section.
-fn lod_section(
-    report: &LodReport,
-    k: usize,
-    e: &LodEntry,
-    p: &LodPictures,
-    flip_frames: u32,
-) -> String {
+fn lod_section(report: &LodReport, k: usize, e: &LodEntry, p: &LodPictures) -> String {
     let dir = format!("{}_preview", report.name);
     let h = p.screen_height;
     // Start magnified so the still reads at about 240 px or more.
@@ -643,10 +646,11 @@ fn lod_section(
     };
     s.push_str(&format!(
         "<figure><img class=\"flip\" src=\"{}\" width=\"{}\" height=\"{}\" alt=\"wind loop\">\
-         <figcaption>Wind loop, {flip_frames} frames over {}{still_note}</figcaption></figure>",
+         <figcaption>Wind loop, {} frames over {}{still_note}</figcaption></figure>",
         href(&format!("{dir}/lod{k}_wind.png")),
         p.flip[0] * 2,
         p.flip[1] * 2,
+        p.flip_frames,
         units::duration(f64::from(report.period)),
     ));
     if let (Some(side), Some(a)) = (p.atlas, e.atlas) {
