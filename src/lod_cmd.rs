@@ -145,11 +145,13 @@ pub fn run_lod(
         set.stage(rel, bytes)?;
     }
     read_back_costs(&set, &mut report)?;
-    let lods = if req.measure.is_some() || req.preview {
-        read_back_lods(tree, &set, &report)?
+    let read_back = if req.measure.is_some() || req.preview {
+        read_back_lods(&set, &report)?
     } else {
         Vec::new()
     };
+    // LOD0 is the input itself (its file passes the input through): not read again.
+    let lods: Vec<&Tree> = std::iter::once(tree).chain(&read_back).collect();
     if let Some(max_error) = req.measure {
         progress("measuring each LOD's error");
         let t = Instant::now();
@@ -158,7 +160,13 @@ pub fn run_lod(
     }
     if req.preview {
         progress("rendering the preview page");
-        write_preview(renderer, tree, req, &lods, &mut set, &mut report)?;
+        let combined = written
+            .files
+            .iter()
+            .find(|(rel, _)| *rel == report.combined)
+            .map(|(_, bytes)| bytes.as_slice())
+            .with_context(|| format!("{}: not among the files written", report.combined))?;
+        write_preview(renderer, req, &lods, combined, &mut set, &mut report)?;
     }
     // Everything up to the report, measuring and the preview included.
     report.timings_s["wall"] = serde_json::json!(t_start.elapsed().as_secs_f64());
@@ -189,16 +197,12 @@ fn fill_switching(tree: &Tree, req: &LodRequest, report: &mut LodReport) {
 const MEASURE_VIEWS: u32 = 5;
 const MEASURE_FRAMES: u32 = 5;
 
-/// Every written LOD read back from its staged file as `frond eval` reads a candidate, in the
-/// report's order; LOD0 is the input itself (its file passes the input through).
-fn read_back_lods(tree: &Tree, set: &OutputSet, report: &LodReport) -> Result<Vec<Tree>> {
+/// Every LOD after LOD0 read back from its staged file as `frond eval` reads a candidate, in
+/// the report's order.
+fn read_back_lods(set: &OutputSet, report: &LodReport) -> Result<Vec<Tree>> {
     let unlimited = unlimited();
     let mut lods = Vec::with_capacity(report.lods.len());
-    for (k, entry) in report.lods.iter().enumerate() {
-        if k == 0 {
-            lods.push(tree.clone());
-            continue;
-        }
+    for entry in report.lods.iter().skip(1) {
         let staged = set
             .staged_path(&entry.file)
             .with_context(|| format!("{}: not among the files written", entry.file))?;
@@ -216,34 +220,30 @@ fn read_back_lods(tree: &Tree, set: &OutputSet, report: &LodReport) -> Result<Ve
     Ok(lods)
 }
 
-/// Renders `<name>_preview.html` and its pictures from the written LODs (`lods`, read back)
-/// and stages them with the set; the report lists them and the time it took.
+/// Renders `<name>_preview.html` and its pictures from the written LODs (`lods`: the input,
+/// then the others read back) and the combined file's bytes, and stages them with the set; the
+/// report lists them and the time it took.
 fn write_preview(
     renderer: &Renderer,
-    tree: &Tree,
     req: &LodRequest,
-    lods: &[Tree],
+    lods: &[&Tree],
+    combined: &[u8],
     set: &mut OutputSet,
     report: &mut LodReport,
 ) -> Result<()> {
-    let combined_path = set
-        .staged_path(&report.combined)
-        .with_context(|| format!("{}: not among the files written", report.combined))?;
-    let combined = std::fs::read(&combined_path)
-        .with_context(|| format!("{}: reading back what was written", report.combined))?;
+    let input = lods[0];
     let preview = frond_preview::lod_preview(
         renderer,
         &frond_preview::LodPreviewRequest {
             report,
-            input: tree,
             lods,
-            combined: &combined,
+            combined,
             resolution: req.resolution,
             flip_frames: PREVIEW_FLIP_FRAMES,
             viewer: req.preview_viewer.as_deref(),
         },
     )
-    .with_context(|| format!("{}: rendering the preview page", tree.source.display()))?;
+    .with_context(|| format!("{}: rendering the preview page", input.source.display()))?;
     for (rel, bytes) in &preview.files {
         set.stage(rel, bytes)?;
         report.files.insert(report.files.len() - 1, rel.clone());
@@ -261,7 +261,7 @@ const PREVIEW_FLIP_FRAMES: u32 = 12;
 fn measure_errors(
     renderer: &Renderer,
     tree: &Tree,
-    lods: &[Tree],
+    lods: &[&Tree],
     report: &mut LodReport,
     max_error: f64,
 ) -> Result<()> {

@@ -88,7 +88,7 @@ pub fn image_for_screen_height(screen_height: u32) -> (u32, u32) {
 
 /// The candidate's clip to play at the original's clip `name`: the one of the same name, else
 /// its first.
-fn candidate_clip(candidate: &Tree, name: Option<&str>) -> Option<usize> {
+pub fn candidate_clip(candidate: &Tree, name: Option<&str>) -> Option<usize> {
     name.and_then(|n| candidate.clip_index(Some(n)))
         .or_else(|| candidate.clip_index(None))
 }

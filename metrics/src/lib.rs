@@ -32,6 +32,8 @@ pub use coverage::{
     CoverageMasks, CoverageParams, CoverageReport, MetricError, Rasteriser, compare_masks,
     coverage_error, coverage_masks, depth_complexity, ring_azimuth_deg, view_camera,
 };
-pub use eval::{EvalContext, EvalError, EvalRequest, evaluate, image_for_screen_height};
+pub use eval::{
+    EvalContext, EvalError, EvalRequest, candidate_clip, evaluate, image_for_screen_height,
+};
 pub use metric_id::MetricId;
 pub use report::{Costs, CoverageMetrics, EvalReport, Metric};

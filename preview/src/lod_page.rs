@@ -6,7 +6,9 @@
 
 use std::time::Instant;
 
+use frond_lod::switching::SwitchValues;
 use frond_lod::{LodEntry, LodReport};
+use frond_metrics::candidate_clip;
 use frond_render::{DrawScene, Frame, PosedTree, Renderer, TreeParts};
 use frond_scene::{FileCost, Tree};
 
@@ -26,10 +28,9 @@ use crate::viewer::{
 pub struct LodPreviewRequest<'a> {
     /// The run's report, its costs and measured errors filled.
     pub report: &'a LodReport,
-    /// The input tree (its rest bounds frame the camera).
-    pub input: &'a Tree,
-    /// Every written LOD read back, in the report's order (LOD0 first).
-    pub lods: &'a [Tree],
+    /// Every LOD in the report's order: LOD0, the input (its rest bounds frame the camera), then
+    /// the written LODs read back.
+    pub lods: &'a [&'a Tree],
     /// The combined file's bytes (its scene roots are grouped per LOD for the live view).
     pub combined: &'a [u8],
     /// The report's switch values' image height (`--resolution`).
@@ -44,11 +45,7 @@ pub struct LodPreviewRequest<'a> {
 
 /// The page and its pictures, as (path relative to the output folder, bytes).
 pub struct PreviewFiles {
-    /// The page's own name (`<name>_preview.html`).
-    pub page: String,
     pub files: Vec<(String, Vec<u8>)>,
-    /// Each LOD's difference against LOD0 at its own size (LOD0's own is empty).
-    pub differences: Vec<PixelDifference>,
     /// Seconds spent rendering and encoding.
     pub seconds: f64,
 }
@@ -97,11 +94,15 @@ pub fn lod_preview(
         });
     }
     let dir = format!("{}_preview", report.name);
-    let camera = preview_camera(req.input)?;
-    let lod0 = &req.lods[0];
+    let Some(&lod0) = req.lods.first() else {
+        return Err(PreviewError::LodCount {
+            report: 0,
+            given: 0,
+        });
+    };
+    let camera = preview_camera(lod0)?;
     // LOD0 at the start of its clip: the reference every LOD's still is compared with.
-    let clip0 = clip_of(lod0, report.clip.as_deref());
-    let start0 = clip0.map_or(0.0, |c| lod0.rig.clips[c].start);
+    let (clip0, start0) = clip_start(lod0, report.clip.as_deref());
     let reference = PosedTree::new(lod0, clip0, start0, TreeParts::All);
     let lod0_height = report
         .lods
@@ -147,10 +148,8 @@ pub fn lod_preview(
             })
             .collect(),
     };
-    let page_name = preview_name(&report.name);
     let body = body(report, &pictures, &config);
     let mut files: Vec<(String, Vec<u8>)> = Vec::new();
-    let differences = pictures.iter().map(|p| p.difference).collect();
     for p in pictures {
         files.extend(p.files);
     }
@@ -160,11 +159,9 @@ pub fn lod_preview(
         }
     }
     let title = format!("{} — frond LOD chain", report.name);
-    files.push((page_name.clone(), page(&title, &body).into_bytes()));
+    files.push((preview_name(&report.name), page(&title, &body).into_bytes()));
     Ok(PreviewFiles {
-        page: page_name,
         files,
-        differences,
         seconds: t0.elapsed().as_secs_f64(),
     })
 }
@@ -181,9 +178,8 @@ fn lod_pictures(
     dir: &str,
 ) -> Result<LodPictures, PreviewError> {
     let report = req.report;
-    let tree = &req.lods[k];
-    let clip = clip_of(tree, report.clip.as_deref());
-    let start = clip.map_or(0.0, |c| tree.rig.clips[c].start);
+    let tree = req.lods[k];
+    let (clip, start) = clip_start(tree, report.clip.as_deref());
     let size = still_size(h);
     let mut posed = PosedTree::new(tree, clip, start, TreeParts::All);
     let still = render_pose(renderer, tree, posed.scene(), camera, size, "still")?;
@@ -191,7 +187,7 @@ fn lod_pictures(
     let mut diff = PixelDifference::default();
     let rect;
     if k > 0 {
-        let reference = render_pose(renderer, &req.lods[0], reference, camera, size, "still")?;
+        let reference = render_pose(renderer, req.lods[0], reference, camera, size, "still")?;
         rect = covered_box(&[&reference, &still], 2);
         let (rgba, d) = difference(&reference, &still);
         diff = d;
@@ -265,10 +261,10 @@ fn lod_pictures(
     })
 }
 
-/// The LOD's clip of the run's clip name, else its first.
-fn clip_of(tree: &Tree, name: Option<&str>) -> Option<usize> {
-    name.and_then(|n| tree.clip_index(Some(n)))
-        .or_else(|| tree.clip_index(None))
+/// The LOD's clip of the run's clip `name` (as `frond eval` picks it) and the time it starts.
+fn clip_start(tree: &Tree, name: Option<&str>) -> (Option<usize>, f32) {
+    let clip = candidate_clip(tree, name);
+    (clip, clip.map_or(0.0, |c| tree.rig.clips[c].start))
 }
 
 /// The page's body.
@@ -437,25 +433,26 @@ fn cost_table(report: &LodReport, pictures: &[LodPictures]) -> String {
         ));
     }
     t.push_str("</tr>\n");
-    t.push_str("<tr><td>Built for</td>");
-    for e in &report.lods {
-        t.push_str(&format!(
-            "<td>{}</td>",
-            e.screen_height
-                .map_or("the input".into(), |h| format!("{h} px high"))
-        ));
-    }
-    t.push_str("</tr>\n<tr><td>Method</td>");
-    for e in &report.lods {
-        t.push_str(&format!("<td>{}</td>", esc(&e.method)));
-    }
-    t.push_str("</tr>\n");
+    let lods = &report.lods;
+    t.push_str(&text_row(
+        "Built for",
+        lods.iter().map(|e| {
+            cell(
+                &e.screen_height
+                    .map_or("the input".into(), |h| format!("{h} px high")),
+            )
+        }),
+    ));
+    t.push_str(&text_row(
+        "Method",
+        lods.iter().map(|e| cell(&esc(&e.method))),
+    ));
     for row in &rows {
         t.push_str(&format!("<tr><td>{}</td>", row.label));
         let first = row.values.first().copied().flatten();
         for (k, v) in row.values.iter().enumerate() {
             let Some(v) = *v else {
-                t.push_str("<td>–</td>");
+                t.push_str(NONE);
                 continue;
             };
             let before = k.checked_sub(1).and_then(|j| row.values[j]);
@@ -475,72 +472,93 @@ fn cost_table(report: &LodReport, pictures: &[LodPictures]) -> String {
         t.push_str("</tr>\n");
     }
     if let Some(view) = &report.switching {
-        t.push_str(&format!(
-            "<tr><td>Shown from (camera distance, {}° FOV, {} px screen)</td>",
-            units::significant(f64::from(view.fov_deg)),
-            view.resolution
-        ));
-        for e in &report.lods {
-            t.push_str(&match &e.switch {
-                Some(s) => format!(
-                    "<td>{} – {}</td>",
+        let switch = |label: &str, show: &dyn Fn(&SwitchValues) -> String| {
+            text_row(
+                label,
+                lods.iter()
+                    .map(|e| e.switch.as_ref().map_or(NONE.into(), |s| cell(&show(s)))),
+            )
+        };
+        t.push_str(&switch(
+            &format!(
+                "Shown from (camera distance, {}° FOV, {} px screen)",
+                units::significant(f64::from(view.fov_deg)),
+                view.resolution
+            ),
+            &|s| {
+                format!(
+                    "{} – {}",
                     distance(s.begin_distance),
                     distance(s.end_distance)
-                ),
-                None => "<td>–</td>".into(),
-            });
-        }
-        t.push_str("</tr>\n<tr><td>Shown down to (tree's share of screen height)</td>");
-        for e in &report.lods {
-            t.push_str(&match &e.switch {
-                Some(s) => format!(
-                    "<td>{} % <small>{} px</small></td>",
+                )
+            },
+        ));
+        t.push_str(&switch(
+            "Shown down to (tree's share of screen height)",
+            &|s| {
+                format!(
+                    "{} % <small>{} px</small>",
                     units::significant(f64::from(100.0 * s.min_screen_fraction)),
                     units::significant(f64::from(s.min_screen_fraction * view.resolution))
-                ),
-                None => "<td>–</td>".into(),
-            });
-        }
-        t.push_str("</tr>\n<tr><td>Unity transition height · Unreal screen size</td>");
-        for e in &report.lods {
-            t.push_str(&match &e.switch {
-                Some(s) => format!(
-                    "<td>{} · {}</td>",
+                )
+            },
+        ));
+        t.push_str(&switch(
+            "Unity transition height · Unreal screen size",
+            &|s| {
+                format!(
+                    "{} · {}",
                     units::significant(f64::from(s.unity_transition_height)),
                     units::significant(f64::from(s.unreal_screen_size))
-                ),
-                None => "<td>–</td>".into(),
-            });
-        }
-        t.push_str("</tr>\n");
+                )
+            },
+        ));
     }
-    t.push_str("<tr><td>Coverage error at its own size (target)</td>");
-    for e in &report.lods {
-        t.push_str(&match &e.error {
+    t.push_str(&text_row(
+        "Coverage error at its own size (target)",
+        lods.iter().map(|e| match &e.error {
             Some(m) => format!(
                 "<td class=\"{}\">{} <small>({})</small></td>",
                 if m.within_target { "ok" } else { "over" },
                 units::significant(m.coverage),
                 units::significant(m.max_error)
             ),
-            None => "<td>–</td>".into(),
-        });
-    }
-    t.push_str("</tr>\n<tr><td>Pixels missing · extra in the still</td>");
-    for (k, p) in pictures.iter().enumerate() {
-        let d = p.difference;
-        t.push_str(&if k == 0 {
-            "<td>–</td>".into()
-        } else {
-            format!(
-                "<td>{} · {}</td>",
-                units::count(d.missing),
-                units::count(d.extra)
-            )
-        });
-    }
-    t.push_str("</tr>\n</table></section>\n");
+            None => NONE.into(),
+        }),
+    ));
+    t.push_str(&text_row(
+        "Pixels missing · extra in the still",
+        pictures.iter().enumerate().map(|(k, p)| {
+            let d = p.difference;
+            if k == 0 {
+                NONE.into()
+            } else {
+                cell(&format!(
+                    "{} · {}",
+                    units::count(d.missing),
+                    units::count(d.extra)
+                ))
+            }
+        }),
+    ));
+    t.push_str("</table></section>\n");
     t
+}
+
+/// A cell of the table for a LOD without the value.
+const NONE: &str = "<td>–</td>";
+
+/// A table cell holding `html`.
+fn cell(html: &str) -> String {
+    format!("<td>{html}</td>")
+}
+
+/// A row of the table: its label, then the cells (each a whole `<td>`).
+fn text_row(label: &str, cells: impl Iterator<Item = String>) -> String {
+    let mut r = format!("<tr><td>{label}</td>");
+    r.extend(cells);
+    r.push_str("</tr>\n");
+    r
 }
 
 /// A distance in the file's units (metres for glTF).
