@@ -12,12 +12,18 @@
 //! How it is rendered: quads are first packed (see [`crate::atlas`]); every member triangle is
 //! then transformed on the CPU into the supersampled atlas (the quad's rectangle maps onto its
 //! texture's cell, depth runs from the quad's far to near member), clipped to its cell, and the
-//! whole supersampled atlas is drawn in large tiles with one identity-matrix render per tile
-//! and output. So thousands of quads cost a handful of renders, not thousands.
+//! whole supersampled atlas is drawn in large pieces with one identity-matrix render each. So
+//! thousands of quads cost a handful of renders, not thousands. By default the CPU bake
+//! rasteriser ([`frond_render::render_bake`]) draws strips of whole atlas rows, colour and
+//! normals in one pass (the same atlas on every machine); [`BakeRasteriser::Wgpu`] draws
+//! square tiles through the wgpu renderer, a colour and a normal pass each.
 
 use std::sync::LazyLock;
 
-use frond_render::{DrawMaterial, DrawMesh, DrawScene, DrawTexture, Output, RenderError, Renderer};
+use frond_render::{
+    DrawMaterial, DrawMesh, DrawScene, DrawTexture, Output, RenderError, Renderer,
+    SoftwareTextures, render_bake,
+};
 use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
 use thiserror::Error;
@@ -65,6 +71,23 @@ pub struct BakeParams {
     /// instead of vanishing where no texel is half covered (the coverage-preserving rule the
     /// renderer's mip chains use). Off: a texel passes when `alpha_cutoff` of it is covered.
     pub preserve_coverage: bool,
+    /// Which rasteriser draws the atlas: the CPU bake rasteriser (default: the same atlas on
+    /// every machine) or the wgpu renderer (a GPU, when there is one).
+    pub rasteriser: BakeRasteriser,
+}
+
+/// The rasteriser that draws a cloud's atlas ([`BakeParams::rasteriser`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BakeRasteriser {
+    /// [`frond_render::render_bake`]: one pass over strips of the atlas, bands in parallel,
+    /// colour and normals together; byte-identical output whatever the machine or thread
+    /// count.
+    #[default]
+    Cpu,
+    /// [`Renderer::render_view`] in tiles, a colour then a normal pass: fast on a GPU, and
+    /// what the adapter's rasteriser makes of the samples.
+    Wgpu,
 }
 
 impl Default for BakeParams {
@@ -80,6 +103,7 @@ impl Default for BakeParams {
             min_side: 4,
             max_side: 1024,
             preserve_coverage: false,
+            rasteriser: BakeRasteriser::Cpu,
         }
     }
 }
@@ -722,8 +746,111 @@ fn cutoff_samples(params: &BakeParams) -> u32 {
         .unwrap_or(total)
 }
 
-/// Renders the supersampled atlas tile by tile (colour, then normals) and downsamples it.
+/// Renders the supersampled atlas with the rasteriser `params` names and downsamples it.
 fn render_atlas(
+    renderer: &Renderer,
+    materials: &[DrawMaterial],
+    textures: &[DrawTexture],
+    placed_triangles: &[Vec<PlacedTriangle>],
+    cells: &[Cell],
+    params: &BakeParams,
+    out: &mut Downsampled,
+) -> Result<(), BakeError> {
+    let materials: Vec<DrawMaterial> = materials.iter().map(two_sided).collect();
+    match params.rasteriser {
+        BakeRasteriser::Cpu => {
+            render_atlas_cpu(&materials, textures, placed_triangles, cells, params, out)
+        }
+        BakeRasteriser::Wgpu => render_atlas_wgpu(
+            renderer,
+            &materials,
+            textures,
+            placed_triangles,
+            cells,
+            params,
+            out,
+        ),
+    }
+}
+
+/// Members are drawn from both sides (a billboard is seen from both) with their texture and
+/// alpha test.
+fn two_sided(m: &DrawMaterial) -> DrawMaterial {
+    DrawMaterial {
+        double_sided: true,
+        ..m.clone()
+    }
+}
+
+/// Texel rows of the atlas the CPU rasteriser draws at a time: its per-texel results for a
+/// 4096-texel-wide strip stay near 13 MB, and a strip holds 16 bands of rows to share among
+/// threads.
+const CPU_STRIP_TEXELS: u32 = 256;
+
+/// The CPU path: strips of whole atlas rows drawn by [`render_bake`] (colour and normals in
+/// one pass) and stored texel by texel.
+fn render_atlas_cpu(
+    materials: &[DrawMaterial],
+    textures: &[DrawTexture],
+    placed_triangles: &[Vec<PlacedTriangle>],
+    cells: &[Cell],
+    params: &BakeParams,
+    out: &mut Downsampled,
+) -> Result<(), BakeError> {
+    let ss = params.supersample;
+    let (total, needed) = (ss * ss, cutoff_samples(params));
+    let prepared = SoftwareTextures::for_bake(textures)?;
+    let mut scene = DrawScene {
+        meshes: Vec::new(),
+        materials: materials.to_vec(),
+        textures: textures.to_vec(),
+    };
+    let width = out.width as usize;
+    for ty in (0..out.height).step_by(CPU_STRIP_TEXELS as usize) {
+        let th = CPU_STRIP_TEXELS.min(out.height - ty);
+        let rect = [0, ty * ss, out.width * ss, th * ss];
+        let (mut meshes, normals) = tile_meshes(placed_triangles, cells, ss, rect, materials.len());
+        if meshes.is_empty() {
+            continue;
+        }
+        for (mesh, n) in meshes.iter_mut().zip(normals) {
+            mesh.normals = Some(n);
+        }
+        scene.meshes = meshes;
+        let image = render_bake(&scene, &prepared, Mat4::IDENTITY, out.width, th, ss)?;
+        let first = ty as usize * width;
+        let strip = first..first + th as usize * width;
+        out.color[strip.start * 4..strip.end * 4]
+            .par_chunks_mut(width * 4)
+            .zip(out.normal[strip.start * 4..strip.end * 4].par_chunks_mut(width * 4))
+            .zip(out.covered[strip.clone()].par_chunks_mut(width))
+            .zip(out.samples[strip].par_chunks_mut(width))
+            .enumerate()
+            .for_each(
+                |(row, (((color_row, normal_row), covered_row), samples_row))| {
+                    for x in 0..width {
+                        let i = row * width + x;
+                        let n = image.samples[i];
+                        if n == 0 {
+                            continue;
+                        }
+                        let normal = Vec3::from(image.normal[i]);
+                        let (c, nb) =
+                            texel_bytes(u32::from(n), total, needed, image.colour[i], normal);
+                        samples_row[x] = n;
+                        color_row[x * 4..x * 4 + 4].copy_from_slice(&c);
+                        normal_row[x * 4..x * 4 + 4].copy_from_slice(&nb);
+                        covered_row[x] = true;
+                    }
+                },
+            );
+    }
+    Ok(())
+}
+
+/// The wgpu path: the supersampled atlas rendered tile by tile (colour, then normals) and
+/// downsampled.
+fn render_atlas_wgpu(
     renderer: &Renderer,
     materials: &[DrawMaterial],
     textures: &[DrawTexture],
@@ -742,17 +869,10 @@ fn render_atlas(
     let tile = (preferred.min(renderer.max_dimension()) / ss).max(1) * ss;
     let needed = cutoff_samples(params);
 
-    // Members drawn from both sides (a billboard is seen from both) with their texture and
-    // alpha test; no normals in the colour pass, so it is unlit (§2.4: ambient only).
+    // No normals in the colour pass, so it is unlit (§2.4: ambient only).
     let mut scene = DrawScene {
         meshes: Vec::new(),
-        materials: materials
-            .iter()
-            .map(|m| DrawMaterial {
-                double_sided: true,
-                ..m.clone()
-            })
-            .collect(),
+        materials: materials.to_vec(),
         textures: textures.to_vec(),
     };
 
@@ -890,30 +1010,38 @@ fn downsample(
                     continue;
                 }
                 let x = ox + col;
+                let mean = sum.map(|c| c / n as f32);
+                let normal = if nn > 0 { nsum } else { Vec3::ZERO };
+                let (c, nb) = texel_bytes(n, total, needed, mean, normal);
                 samples_row[x] = n as u16;
-                let alpha = coverage_alpha(n, total, needed);
-                let c = &mut color_row[x * 4..x * 4 + 4];
-                for k in 0..3 {
-                    c[k] = linear_to_srgb(sum[k] / n as f32);
-                }
-                c[3] = alpha;
+                color_row[x * 4..x * 4 + 4].copy_from_slice(&c);
+                normal_row[x * 4..x * 4 + 4].copy_from_slice(&nb);
                 covered_row[x] = true;
-                let unit = if nn > 0 {
-                    nsum.normalize_or_zero()
-                } else {
-                    Vec3::ZERO
-                };
-                // rgb 0 marks "no normal" (no unit vector encodes to it): dilation replaces it
-                // with the quad's normal.
-                let encoded = if unit == Vec3::ZERO {
-                    [0, 0, 0, alpha]
-                } else {
-                    encode_normal(unit, alpha)
-                };
-                normal_row[x * 4..x * 4 + 4].copy_from_slice(&encoded);
             }
         },
     );
+}
+
+/// One covered texel's colour and normal bytes: `n` of `total` supersamples covered (alpha
+/// from [`coverage_alpha`]), `mean` their linear colour, `normal_sum` the sum of their
+/// normals (rgb 0 when it has no direction: "no normal", which no unit vector encodes to and
+/// dilation replaces with the quad's normal).
+fn texel_bytes(
+    n: u32,
+    total: u32,
+    needed: u32,
+    mean: [f32; 3],
+    normal_sum: Vec3,
+) -> ([u8; 4], [u8; 4]) {
+    let alpha = coverage_alpha(n, total, needed);
+    let [r, g, b] = mean.map(linear_to_srgb);
+    let unit = normal_sum.normalize_or_zero();
+    let normal = if unit == Vec3::ZERO {
+        [0, 0, 0, alpha]
+    } else {
+        encode_normal(unit, alpha)
+    };
+    ([r, g, b, alpha], normal)
 }
 
 /// `rgb = n * 0.5 + 0.5` as bytes, with the given alpha.
@@ -1025,30 +1153,49 @@ fn dilate(mut d: Downsampled, cells: &[Cell], quad_normals: &[Vec3], padding: u3
 /// the same axes.
 fn to_tangent_space(atlas: &mut Atlas, cells: &[Cell], quads: &[Quad], padding: u32) {
     let width = atlas.width as usize;
+    let height = atlas.height;
     let decode = |v: u8| f32::from(v) / 255.0 * 2.0 - 1.0;
-    for (cell, quad) in cells.iter().zip(quads) {
-        let (u, v, w) = (
-            quad.axis_u.normalize_or_zero(),
-            quad.axis_v.normalize_or_zero(),
-            front_normal(quad),
-        );
-        let x0 = cell.x.saturating_sub(padding) as usize;
-        let y0 = cell.y.saturating_sub(padding) as usize;
-        let x1 = ((cell.x + cell.width + padding) as usize).min(width);
-        let y1 = ((cell.y + cell.height + padding).min(atlas.height)) as usize;
-        for y in y0..y1 {
-            for x in x0..x1 {
-                let i = (y * width + x) * 4;
-                let n = Vec3::new(
-                    decode(atlas.normal[i]),
-                    decode(atlas.normal[i + 1]),
-                    decode(atlas.normal[i + 2]),
-                )
-                .normalize_or(w);
-                let t = Vec3::new(n.dot(u), n.dot(v), n.dot(w)).normalize_or(Vec3::Z);
-                let [r, g, b, _] = encode_normal(t, 0);
-                atlas.normal[i..i + 3].copy_from_slice(&[r, g, b]);
-            }
+    let source = &atlas.normal;
+    // Per cell (padded cells are disjoint): its rows' first texel and new rgb values, computed
+    // in parallel, then written.
+    let converted: Vec<Vec<(usize, Vec<[u8; 3]>)>> = cells
+        .par_iter()
+        .zip(quads.par_iter())
+        .map(|(cell, quad)| {
+            let (u, v, w) = (
+                quad.axis_u.normalize_or_zero(),
+                quad.axis_v.normalize_or_zero(),
+                front_normal(quad),
+            );
+            let x0 = cell.x.saturating_sub(padding) as usize;
+            let y0 = cell.y.saturating_sub(padding) as usize;
+            let x1 = ((cell.x + cell.width + padding) as usize).min(width);
+            let y1 = ((cell.y + cell.height + padding).min(height)) as usize;
+            (y0..y1)
+                .map(|y| {
+                    let row = (x0..x1)
+                        .map(|x| {
+                            let i = (y * width + x) * 4;
+                            let n = Vec3::new(
+                                decode(source[i]),
+                                decode(source[i + 1]),
+                                decode(source[i + 2]),
+                            )
+                            .normalize_or(w);
+                            let t = Vec3::new(n.dot(u), n.dot(v), n.dot(w)).normalize_or(Vec3::Z);
+                            let [r, g, b, _] = encode_normal(t, 0);
+                            [r, g, b]
+                        })
+                        .collect();
+                    (y * width + x0, row)
+                })
+                .collect()
+        })
+        .collect();
+    for (first, row) in converted.into_iter().flatten() {
+        for (k, rgb) in row.into_iter().enumerate() {
+            let i = (first + k) * 4;
+            atlas.normal[i..i + 3].copy_from_slice(&rgb);
         }
     }
 }

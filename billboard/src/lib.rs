@@ -14,7 +14,7 @@ pub mod soup;
 pub mod source_copy;
 
 pub use atlas::{Packing, pack};
-pub use bake::{Atlas, BakeError, BakeParams, BakedCloud, Cell, bake_cloud};
+pub use bake::{Atlas, BakeError, BakeParams, BakeRasteriser, BakedCloud, Cell, bake_cloud};
 pub use plane::Plane;
 pub use quad::Quad;
 pub use soup::TriangleSoup;

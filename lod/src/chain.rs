@@ -38,6 +38,8 @@ pub struct CloudOptions {
     pub supersample: u32,
     /// Dilated texels around each billboard's texture in the atlas.
     pub padding: u32,
+    /// The rasteriser that draws the atlases.
+    pub rasteriser: frond_billboard::BakeRasteriser,
 }
 
 /// What a chain is built for.
@@ -483,6 +485,7 @@ fn cloud_params(req: &ChainRequest, level: &LodLevel, k: usize) -> CloudParams {
     params.bake.preserve_coverage = true;
     params.bake.supersample = o.supersample;
     params.bake.padding = o.padding;
+    params.bake.rasteriser = o.rasteriser;
     params
 }
 

@@ -39,6 +39,7 @@
 //! ```
 
 mod adapter;
+mod bake_raster;
 mod batch;
 mod camera;
 mod error;
@@ -50,6 +51,7 @@ mod scene;
 mod software;
 mod tree;
 
+pub use bake_raster::{BakeImage, render_bake};
 pub use camera::{Camera, Projection};
 pub use error::RenderError;
 pub use frame::Frame;

@@ -234,6 +234,9 @@ fn linear_to_srgb(c: f32) -> u8 {
 fn downsample(width: u32, height: u32, rgba: &[u8]) -> (u32, u32, Vec<u8>) {
     let (w2, h2) = ((width / 2).max(1), (height / 2).max(1));
     let mut out = vec![0u8; (w2 * h2 * 4) as usize];
+    // The same values as `srgb_to_linear`, looked up: four texels' three channels an output
+    // texel made `powf` most of a large texture's chain.
+    let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
     for y in 0..h2 {
         for x in 0..w2 {
             let mut acc = [0.0f32; 3];
@@ -243,7 +246,7 @@ fn downsample(width: u32, height: u32, rgba: &[u8]) -> (u32, u32, Vec<u8>) {
                 let i = ((sy * width + sx) * 4) as usize;
                 let a = rgba[i + 3] as f32 / 255.0;
                 for k in 0..3 {
-                    acc[k] += srgb_to_linear(rgba[i + k]) * a.max(1e-3);
+                    acc[k] += linear[rgba[i + k] as usize] * a.max(1e-3);
                 }
                 weight += a.max(1e-3);
             }

@@ -30,17 +30,17 @@ use crate::error::RenderError;
 use crate::pipeline::{
     LIGHT_DIRECTION, alpha_mip_chain, linear_mip_chain, mip_chain, srgb_to_linear,
 };
-use crate::scene::{DrawMaterial, DrawScene};
+use crate::scene::{DrawMaterial, DrawScene, DrawTexture};
 
 /// Most samples per side of the supersampled image (coordinates stay exact in `f32`).
-const MAX_SIDE: u64 = 1 << 15;
+pub(crate) const MAX_SIDE: u64 = 1 << 15;
 
 /// Pixel rows per band: the unit of parallel work and of memory (one band's samples per
 /// thread).
-const BAND_PIXELS: usize = 16;
+pub(crate) const BAND_PIXELS: usize = 16;
 
 /// Largest texture side accepted (as the wgpu path's limit on common adapters).
-const MAX_TEXTURE_SIDE: u32 = 16384;
+pub(crate) const MAX_TEXTURE_SIDE: u32 = 16384;
 
 /// A coverage render resolved to pixels, top row first.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -86,18 +86,18 @@ impl Lighting {
 /// computed once for the many renders of one scene's frames and views.
 #[derive(Clone, Debug)]
 pub struct SoftwareTextures {
-    textures: Vec<Levels>,
+    pub(crate) textures: Vec<Levels>,
     /// Per texture, its linear box chain when a drawn material uses it as a normal map and
     /// colour is drawn (lighting needs the normals); empty otherwise.
     normal_maps: Vec<Levels>,
-    colour: bool,
+    pub(crate) colour: bool,
     lighting: Lighting,
 }
 
 /// One texture's mip chain, level 0 first: `(width, height, texels)`, one alpha byte a texel,
 /// or RGBA (sRGB colour, linear alpha) when colour is drawn.
 #[derive(Clone, Debug)]
-struct Levels(Vec<(u32, u32, Vec<u8>)>);
+pub(crate) struct Levels(Vec<(u32, u32, Vec<u8>)>);
 
 impl SoftwareTextures {
     /// Prepares the textures of `scene` that its drawn meshes' materials sample; `colour`:
@@ -120,8 +120,26 @@ impl SoftwareTextures {
                 *u = true;
             }
         }
-        let textures = scene
-            .textures
+        Self::prepare(&scene.textures, used, normal_map, colour)
+    }
+
+    /// Every one of `textures` prepared for colour renders without normal maps, as the
+    /// billboard bake ([`crate::render_bake`]) draws them: one preparation serves all the
+    /// atlas's tiles, whichever meshes each tile holds.
+    pub fn for_bake(textures: &[DrawTexture]) -> Result<SoftwareTextures, RenderError> {
+        let n = textures.len();
+        Self::prepare(textures, vec![true; n], vec![false; n], true)
+    }
+
+    /// The mip chains of the `used` textures (colour or alpha alone) and of the `normal_map`
+    /// ones (linear).
+    fn prepare(
+        source: &[DrawTexture],
+        used: Vec<bool>,
+        normal_map: Vec<bool>,
+        colour: bool,
+    ) -> Result<SoftwareTextures, RenderError> {
+        let textures = source
             .iter()
             .zip(used)
             .enumerate()
@@ -153,8 +171,7 @@ impl SoftwareTextures {
                 }))
             })
             .collect::<Result<_, _>>()?;
-        let normal_maps = scene
-            .textures
+        let normal_maps = source
             .iter()
             .zip(normal_map)
             .map(|(t, used)| {
@@ -182,32 +199,32 @@ impl SoftwareTextures {
 
 /// One triangle ready to rasterise: sample-space vertices, attributes divided by `w`.
 #[derive(Clone, Copy, Debug)]
-struct Setup {
-    x: [f32; 3],
-    y: [f32; 3],
+pub(crate) struct Setup {
+    pub(crate) x: [f32; 3],
+    pub(crate) y: [f32; 3],
     /// Depth (NDC z), interpolated linearly on screen.
-    z: [f32; 3],
+    pub(crate) z: [f32; 3],
     /// `1 / w`.
-    q: [f32; 3],
+    pub(crate) q: [f32; 3],
     /// Texture coordinates divided by `w`.
-    uq: [[f32; 2]; 3],
+    pub(crate) uq: [[f32; 2]; 3],
     /// Normals divided by `w` (zero for unlit meshes).
-    nq: [Vec3; 3],
+    pub(crate) nq: [Vec3; 3],
     /// Tangents (xyz divided by `w`, w the bitangent's sign) when the normal map applies.
-    tq: Option<[Vec4; 3]>,
+    pub(crate) tq: Option<[Vec4; 3]>,
     /// The normal map's two mip levels and the second's weight, chosen at the centroid.
-    normal_lod: Trilinear,
+    pub(crate) normal_lod: Trilinear,
     /// `1 / (twice the signed area)`, positive (vertices ordered so that it is).
-    inv_area: f32,
-    material: u32,
-    lit: bool,
+    pub(crate) inv_area: f32,
+    pub(crate) material: u32,
+    pub(crate) lit: bool,
     /// A back face (drawn double-sided): its normal is flipped to face the viewer.
-    back: bool,
+    pub(crate) back: bool,
     /// The material texture's two mip levels and the second's weight, chosen at the centroid.
-    lod: Trilinear,
+    pub(crate) lod: Trilinear,
     /// Inclusive sample bounds.
-    min: [i32; 2],
-    max: [i32; 2],
+    pub(crate) min: [i32; 2],
+    pub(crate) max: [i32; 2],
 }
 
 /// A vertex in clip space with its attributes, for near/far clipping.
@@ -279,6 +296,48 @@ fn rasterise(
     view_proj: Mat4,
     [width, height, supersample]: [u32; 3],
 ) -> Result<(CoverageImage, f64, u64), RenderError> {
+    let (sw, sh) = checked_target(scene, textures, view_proj, [width, height, supersample])?;
+    let ss = supersample.max(1);
+    let triangles = setup(scene, textures, view_proj, sw as f32, sh as f32);
+    let band_rows = BAND_PIXELS * ss as usize;
+    let bins = band_bins(&triangles, sh, band_rows);
+    let raster = Raster {
+        scene,
+        textures,
+        triangles: &triangles,
+        width: sw,
+        ss: ss as usize,
+    };
+    let resolved: Vec<Band> = bins
+        .par_iter()
+        .enumerate()
+        .map(|(b, bin)| raster.band(b * band_rows, ((b + 1) * band_rows).min(sh), bin))
+        .collect();
+    let mut image = CoverageImage {
+        width,
+        height,
+        covered: Vec::with_capacity(width as usize * height as usize),
+        colour: Vec::new(),
+    };
+    let mut covered_samples = 0;
+    for band in resolved {
+        image.covered.extend(band.mask);
+        image.colour.extend(band.colour);
+        covered_samples += band.covered_samples;
+    }
+    let area: f64 = triangles.iter().map(|t| 0.5 / f64::from(t.inv_area)).sum();
+    Ok((image, area, covered_samples))
+}
+
+/// The supersampled target's sides in samples, once the request is checked: both sides at
+/// least a pixel and at most [`MAX_SIDE`] samples, a finite matrix, a valid scene and
+/// textures prepared for it.
+pub(crate) fn checked_target(
+    scene: &DrawScene,
+    textures: &SoftwareTextures,
+    view_proj: Mat4,
+    [width, height, supersample]: [u32; 3],
+) -> Result<(usize, usize), RenderError> {
     let ss = supersample.max(1);
     let (sw, sh) = (
         u64::from(width) * u64::from(ss),
@@ -310,11 +369,13 @@ fn rasterise(
             ),
         });
     }
-    let (sw, sh) = (sw as usize, sh as usize);
-    let triangles = setup(scene, textures, view_proj, sw as f32, sh as f32);
-    let band_rows = BAND_PIXELS * ss as usize;
-    let bands = sh.div_ceil(band_rows);
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); bands];
+    Ok((sw as usize, sh as usize))
+}
+
+/// Per band of `band_rows` sample rows (of `sh`), the triangles whose bounds reach it, in
+/// draw order.
+pub(crate) fn band_bins(triangles: &[Setup], sh: usize, band_rows: usize) -> Vec<Vec<u32>> {
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); sh.div_ceil(band_rows)];
     for (i, t) in triangles.iter().enumerate() {
         let first = (t.min[1].max(0) as usize) / band_rows;
         let last = (t.max[1].max(0) as usize).min(sh - 1) / band_rows;
@@ -322,32 +383,7 @@ fn rasterise(
             bin.push(i as u32);
         }
     }
-    let raster = Raster {
-        scene,
-        textures,
-        triangles: &triangles,
-        width: sw,
-        ss: ss as usize,
-    };
-    let resolved: Vec<Band> = bins
-        .par_iter()
-        .enumerate()
-        .map(|(b, bin)| raster.band(b * band_rows, ((b + 1) * band_rows).min(sh), bin))
-        .collect();
-    let mut image = CoverageImage {
-        width,
-        height,
-        covered: Vec::with_capacity(width as usize * height as usize),
-        colour: Vec::new(),
-    };
-    let mut covered_samples = 0;
-    for band in resolved {
-        image.covered.extend(band.mask);
-        image.colour.extend(band.colour);
-        covered_samples += band.covered_samples;
-    }
-    let area: f64 = triangles.iter().map(|t| 0.5 / f64::from(t.inv_area)).sum();
-    Ok((image, area, covered_samples))
+    bins
 }
 
 /// One band of the image, resolved: its pixels' coverage and colour, and its covered samples.
@@ -359,7 +395,7 @@ struct Band {
 
 /// Transforms, clips (near and far planes), culls and sets up every triangle of `scene`, in
 /// draw order, for a target of `sw`×`sh` samples.
-fn setup(
+pub(crate) fn setup(
     scene: &DrawScene,
     textures: &SoftwareTextures,
     view_proj: Mat4,
@@ -524,7 +560,7 @@ fn setup_triangle(
 
 impl Setup {
     /// Screen-space barycentric weights of point `(px, py)`.
-    fn weights(&self, px: f32, py: f32) -> [f32; 3] {
+    pub(crate) fn weights(&self, px: f32, py: f32) -> [f32; 3] {
         let e = |a: usize, b: usize| {
             (self.x[b] - self.x[a]) * (py - self.y[a]) - (self.y[b] - self.y[a]) * (px - self.x[a])
         };
@@ -536,7 +572,7 @@ impl Setup {
     }
 
     /// Perspective-correct texture coordinates at weights `b`, and `Σ b·q`.
-    fn uv(&self, b: [f32; 3]) -> ([f32; 2], f32) {
+    pub(crate) fn uv(&self, b: [f32; 3]) -> ([f32; 2], f32) {
         let q = b[0] * self.q[0] + b[1] * self.q[1] + b[2] * self.q[2];
         let u = b[0] * self.uq[0][0] + b[1] * self.uq[1][0] + b[2] * self.uq[2][0];
         let v = b[0] * self.uq[0][1] + b[1] * self.uq[1][1] + b[2] * self.uq[2][1];
@@ -579,6 +615,14 @@ fn wrap_index(i: i64, n: u32, wrap: Wrap) -> usize {
     if (0..n).contains(&i) {
         return i as usize;
     }
+    // The common cases without a division: a footprint one texel over either edge.
+    match (wrap, i == -1, i == n) {
+        (Wrap::Repeat, true, _) | (Wrap::ClampToEdge, false, true) => return (n - 1) as usize,
+        (Wrap::Repeat, _, true) | (Wrap::ClampToEdge, true, _) => return 0,
+        (Wrap::MirroredRepeat, true, _) => return 0,
+        (Wrap::MirroredRepeat, _, true) => return (n - 1) as usize,
+        _ => {}
+    }
     (match wrap {
         Wrap::Repeat => i.rem_euclid(n),
         Wrap::ClampToEdge => i.clamp(0, n - 1),
@@ -591,7 +635,7 @@ fn wrap_index(i: i64, n: u32, wrap: Wrap) -> usize {
 
 /// A trilinear fetch's two mip levels and the weight of the second (0: the first alone).
 #[derive(Clone, Copy, Debug, Default)]
-struct Trilinear {
+pub(crate) struct Trilinear {
     a: usize,
     b: usize,
     f: f32,
@@ -610,7 +654,51 @@ fn bilinear(
     channel: usize,
     decode: impl Fn(u8) -> f32,
 ) -> f32 {
-    let (w, h, data) = level;
+    let (o, fx, fy) = footprint(level, uv, wrap, stride);
+    let data = &level.2;
+    let at = |k: usize| decode(data[o[k] + channel]);
+    let top = at(0) + (at(1) - at(0)) * fx;
+    let bottom = at(2) + (at(3) - at(2)) * fx;
+    top + (bottom - top) * fy
+}
+
+/// [`bilinear`] of the three colour channels of an RGBA level at once, each texel decoded to
+/// linear light by `linear`: the footprint is found once for the three.
+#[inline]
+fn bilinear_rgb(
+    level: &(u32, u32, Vec<u8>),
+    uv: [f32; 2],
+    wrap: [Wrap; 2],
+    linear: &[f32; 256],
+) -> Vec3 {
+    let (o, fx, fy) = footprint(level, uv, wrap, 4);
+    let data = &level.2;
+    let at = |k: usize| {
+        let t = &data[o[k]..o[k] + 3];
+        Vec3::new(
+            linear[t[0] as usize],
+            linear[t[1] as usize],
+            linear[t[2] as usize],
+        )
+    };
+    let (a, b, c, d) = (at(0), at(1), at(2), at(3));
+    let top = a + (b - a) * fx;
+    let bottom = c + (d - c) * fx;
+    top + (bottom - top) * fy
+}
+
+/// The byte offsets of the four texels (of `stride` bytes) a bilinear fetch of `level` at
+/// `uv` reads — top-left, top-right, bottom-left, bottom-right — and the horizontal and
+/// vertical weights of the second of each pair; they wrap under `wrap` only when the
+/// footprint leaves the level.
+#[inline]
+fn footprint(
+    level: &(u32, u32, Vec<u8>),
+    uv: [f32; 2],
+    wrap: [Wrap; 2],
+    stride: usize,
+) -> ([usize; 4], f32, f32) {
+    let (w, h, _) = level;
     let x = uv[0] * *w as f32 - 0.5;
     let y = uv[1] * *h as f32 - 0.5;
     let (x0, y0) = (floor_i64(x), floor_i64(y));
@@ -627,10 +715,16 @@ fn bilinear(
         )
     };
     let row = *w as usize * stride;
-    let at = |x: usize, y: usize| decode(data[y * row + x * stride + channel]);
-    let top = at(xa, ya) + (at(xb, ya) - at(xa, ya)) * fx;
-    let bottom = at(xa, yb) + (at(xb, yb) - at(xa, yb)) * fx;
-    top + (bottom - top) * fy
+    (
+        [
+            ya * row + xa * stride,
+            ya * row + xb * stride,
+            yb * row + xa * stride,
+            yb * row + xb * stride,
+        ],
+        fx,
+        fy,
+    )
 }
 
 impl Levels {
@@ -648,7 +742,13 @@ impl Levels {
 
     /// Trilinear alpha (0..1) at `(u, v)`; `stride`: bytes a texel (1: alpha only, 4: RGBA).
     #[inline]
-    fn alpha(&self, uv: [f32; 2], lod: Trilinear, wrap: [Wrap; 2], stride: usize) -> f32 {
+    pub(crate) fn alpha(
+        &self,
+        uv: [f32; 2],
+        lod: Trilinear,
+        wrap: [Wrap; 2],
+        stride: usize,
+    ) -> f32 {
         let a = bilinear(&self.0[lod.a], uv, wrap, stride, stride - 1, f32::from);
         let a = if lod.f > 0.0 {
             a + (bilinear(&self.0[lod.b], uv, wrap, stride, stride - 1, f32::from) - a) * lod.f
@@ -656,6 +756,20 @@ impl Levels {
             a
         };
         a / 255.0
+    }
+
+    /// Bilinear alpha (0..1) at `(u, v)` of the one level nearer `lod` (a GPU's
+    /// `LINEAR_MIPMAP_NEAREST`): half the fetches of [`Levels::alpha`].
+    #[inline]
+    pub(crate) fn alpha_nearest_level(
+        &self,
+        uv: [f32; 2],
+        lod: Trilinear,
+        wrap: [Wrap; 2],
+        stride: usize,
+    ) -> f32 {
+        let level = if lod.f < 0.5 { lod.a } else { lod.b };
+        bilinear(&self.0[level], uv, wrap, stride, stride - 1, f32::from) / 255.0
     }
 
     /// Trilinear tangent-space normal at `(u, v)` of a normal map's linear chain: each channel
@@ -675,11 +789,14 @@ impl Levels {
     }
 
     /// Trilinear linear RGB at `(u, v)` of an RGBA chain (sRGB decoded before filtering).
-    fn rgb(&self, uv: [f32; 2], lod: Trilinear, wrap: [Wrap; 2], linear: &[f32; 256]) -> Vec3 {
-        let at = |l: usize| {
-            let c = |channel| bilinear(&self.0[l], uv, wrap, 4, channel, |b| linear[b as usize]);
-            Vec3::new(c(0), c(1), c(2))
-        };
+    pub(crate) fn rgb(
+        &self,
+        uv: [f32; 2],
+        lod: Trilinear,
+        wrap: [Wrap; 2],
+        linear: &[f32; 256],
+    ) -> Vec3 {
+        let at = |l: usize| bilinear_rgb(&self.0[l], uv, wrap, linear);
         let va = at(lod.a);
         if lod.f > 0.0 {
             va + (at(lod.b) - va) * lod.f
@@ -709,7 +826,7 @@ fn mapped_normal(normal: Vec3, tangent: Vec4, sign: f32, map: Vec3) -> Vec3 {
 /// each weight's zero crossing bounds the span, widened by one sample against rounding (the
 /// samples are still tested one by one). `None` when no sample can be.
 #[inline]
-fn row_span(start: [f32; 3], step: [f32; 3], len: usize) -> Option<(usize, usize)> {
+pub(crate) fn row_span(start: [f32; 3], step: [f32; 3], len: usize) -> Option<(usize, usize)> {
     let (mut lo, mut hi) = (0.0f32, len as f32);
     for k in 0..3 {
         if step[k] > 0.0 {
@@ -904,7 +1021,7 @@ impl Raster<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{DrawMesh, DrawTexture};
+    use crate::scene::DrawMesh;
 
     /// A quad over NDC `[x0, x1] × [-1, 1]` at depth `z`, counter-clockwise (front) unless
     /// `flip`, with texture coordinates over the whole texture.

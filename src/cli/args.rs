@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use crate::batch::parse_memory;
+use crate::cli::values::BakeRasteriserArg;
 use frond_lod::{SkeletonOptions, SpectralOptions};
 use frond_scene::{ImportOptions, Length, import};
 
@@ -153,6 +154,10 @@ pub struct BuildArgs {
     /// Supersamples per texel side when baking (1-16; 4 = 4×4, 2 is ~2.5× faster).
     #[arg(long, default_value_t = 4)]
     pub supersample: u32,
+    /// Rasteriser of the billboard atlases: cpu (the same atlas on every machine) or wgpu
+    /// (a GPU's, when there is one).
+    #[arg(long, value_enum, default_value_t = BakeRasteriserArg::Cpu)]
+    pub bake_rasteriser: BakeRasteriserArg,
     /// Spectral methods: animation clusters per LOD (default: one per 10 pixels of screen
     /// height, at least 1).
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..))]
@@ -206,6 +211,12 @@ impl BuildArgs {
         }
         if self.increased_density {
             a.push("--increased-density".to_string());
+        }
+        if self.bake_rasteriser != BakeRasteriserArg::Cpu {
+            a.extend([
+                "--bake-rasteriser".to_string(),
+                self.bake_rasteriser.text().to_string(),
+            ]);
         }
         if let Some(k) = self.clusters {
             a.extend(["--clusters".to_string(), k.to_string()]);

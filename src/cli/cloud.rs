@@ -7,6 +7,7 @@ use frond_scene::Length;
 
 use crate::cli::args::{ImportArgs, RunArgs};
 use crate::cli::progress::{Spinner, print_json};
+use crate::cli::values::BakeRasteriserArg;
 use crate::cloud_cmd::{CloudRequest, run_cloud};
 use crate::render_cmd::parse_size;
 use frond_billboard::cloud::CloudParams;
@@ -48,6 +49,9 @@ pub struct CloudArgs {
     /// Largest atlas side; density is lowered (and reported) when the quads do not fit.
     #[arg(long, default_value_t = 4096)]
     pub max_atlas: u32,
+    /// Rasteriser of the atlas: cpu (the same atlas on every machine) or wgpu (a GPU's).
+    #[arg(long, value_enum, default_value_t = BakeRasteriserArg::Cpu)]
+    pub bake_rasteriser: BakeRasteriserArg,
     /// Views of the coverage check (0 skips it).
     #[arg(long, default_value_t = 5)]
     pub coverage_views: u32,
@@ -85,6 +89,7 @@ impl CloudArgs {
             increased_density,
             texels_per_unit,
             max_atlas,
+            bake_rasteriser,
             coverage_views,
             coverage_size,
             plain,
@@ -111,6 +116,7 @@ impl CloudArgs {
         params.bake.texels_per_unit =
             texels_per_unit.unwrap_or(1024.0 / diag.max(f32::MIN_POSITIVE));
         params.bake.max_atlas = max_atlas;
+        params.bake.rasteriser = bake_rasteriser.rasteriser();
         let req = CloudRequest {
             epsilon,
             params,

@@ -193,6 +193,7 @@ impl LodArgs {
                     max_atlas: self.max_atlas,
                     supersample: build.supersample,
                     padding: self.padding,
+                    rasteriser: build.bake_rasteriser.rasteriser(),
                 },
             },
             animation: self.animation.mode(),

@@ -196,6 +196,35 @@ impl LightingArg {
     }
 }
 
+/// A `--bake-rasteriser` value of `frond lod`, `frond cloud` and `frond sweep`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum BakeRasteriserArg {
+    /// frond's CPU bake rasteriser: the same atlas on every machine, whatever the thread
+    /// count.
+    #[default]
+    Cpu,
+    /// The wgpu renderer: fast on a GPU (the atlas is then the adapter's).
+    Wgpu,
+}
+
+impl BakeRasteriserArg {
+    /// The bake's setting.
+    pub fn rasteriser(self) -> frond_billboard::BakeRasteriser {
+        match self {
+            BakeRasteriserArg::Cpu => frond_billboard::BakeRasteriser::Cpu,
+            BakeRasteriserArg::Wgpu => frond_billboard::BakeRasteriser::Wgpu,
+        }
+    }
+
+    /// The value as written.
+    pub fn text(self) -> &'static str {
+        match self {
+            BakeRasteriserArg::Cpu => "cpu",
+            BakeRasteriserArg::Wgpu => "wgpu",
+        }
+    }
+}
+
 /// A `--vat-space` value of `frond lod`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]

@@ -1,0 +1,368 @@
+//! A CPU rasteriser for billboard baking: the alpha-tested, mip-mapped triangles of a
+//! [`DrawScene`] drawn into a supersampled image, each sample keeping the nearest surface
+//! (depth test `Less`), resolved per pixel to the number of covered samples, their mean
+//! unlit colour in linear light and the sum of their normals facing the viewer.
+//!
+//! Why not the wgpu path ([`crate::Renderer::render_view`] with [`crate::Output::Color`]
+//! then [`crate::Output::Normal`]): a billboard atlas is thousands of tiny orthographic views
+//! of a few triangles each, and a screen rasteriser draws it twice (colour, then normals),
+//! shades every fragment that passes the depth test, writes 8-bit samples and reads whole
+//! tiles back. On llvmpipe, the adapter most machines running frond have, that was a fifth
+//! of `frond lod`'s wall time on oak_dense. Here one pass tests each fragment's depth and
+//! alpha, keeps the winning triangle per sample, and shades only the winners once every
+//! triangle is drawn (deferred): one texture fetch per fragment for the alpha test (from the
+//! nearer mip level, as `LINEAR_MIPMAP_NEAREST`), and one trilinear colour fetch per covered
+//! sample. Bands of rows are rasterised in parallel and
+//! independently, so the image is the same whatever the thread count, and from machine to
+//! machine.
+//!
+//! It follows [`crate::render_coverage`]'s conventions (samples at pixel centres, wgpu clip
+//! space, back faces culled unless double-sided, the coverage-preserving mip chains filtered
+//! trilinearly with the level chosen per triangle) and the wgpu path's bake shaders: colour is
+//! the texel times the material's base colour, unlit; the normal is the interpolated vertex
+//! normal, flipped on back faces so it faces the viewer (improved-billboard-cloud §4 items 4
+//! and 7).
+
+use glam::{Mat4, Vec3};
+use rayon::prelude::*;
+
+use crate::error::RenderError;
+use crate::pipeline::srgb_to_linear;
+use crate::scene::DrawScene;
+use crate::software::{
+    BAND_PIXELS, Setup, SoftwareTextures, band_bins, checked_target, row_span, setup,
+};
+
+/// A bake render resolved to pixels, top row first.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BakeImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width · height` counts of the pixel's samples that a triangle covers (after the
+    /// alpha test).
+    pub samples: Vec<u16>,
+    /// `width · height` mean linear RGB of the covered samples (zero where none is): texel
+    /// times base colour, unlit, each sample clamped to 0..1 as a colour target stores it.
+    pub colour: Vec<[f32; 3]>,
+    /// `width · height` sums of the covered samples' unit normals facing the viewer (a sample
+    /// of a mesh without normals, or with a degenerate one, adds nothing).
+    pub normal: Vec<[f32; 3]>,
+}
+
+/// Renders `scene` through `view_proj` at `width`×`height` pixels of `supersample`² samples
+/// for baking (see the module docs), with `textures` prepared from `scene.textures` with
+/// colour ([`SoftwareTextures::for_bake`]).
+pub fn render_bake(
+    scene: &DrawScene,
+    textures: &SoftwareTextures,
+    view_proj: Mat4,
+    width: u32,
+    height: u32,
+    supersample: u32,
+) -> Result<BakeImage, RenderError> {
+    let (sw, sh) = checked_target(scene, textures, view_proj, [width, height, supersample])?;
+    if !textures.colour {
+        return Err(RenderError::InvalidTexture {
+            texture: 0,
+            reason: "a bake render needs textures prepared with colour".into(),
+        });
+    }
+    let ss = supersample.max(1) as usize;
+    let triangles = setup(scene, textures, view_proj, sw as f32, sh as f32);
+    let band_rows = BAND_PIXELS * ss;
+    let bins = band_bins(&triangles, sh, band_rows);
+    let raster = BakeRaster {
+        scene,
+        textures,
+        triangles: &triangles,
+        width: sw,
+        ss,
+    };
+    // Each thread reuses its depth and winner buffers from band to band (a band's are
+    // megabytes: allocating them afresh cost a page fault per 4 KiB).
+    let bands: Vec<BakeImage> = bins
+        .par_iter()
+        .enumerate()
+        .map_init(Scratch::default, |scratch, (b, bin)| {
+            raster.band(b * band_rows, ((b + 1) * band_rows).min(sh), bin, scratch)
+        })
+        .collect();
+    let pixels = width as usize * height as usize;
+    let mut image = BakeImage {
+        width,
+        height,
+        samples: Vec::with_capacity(pixels),
+        colour: Vec::with_capacity(pixels),
+        normal: Vec::with_capacity(pixels),
+    };
+    for band in bands {
+        image.samples.extend(band.samples);
+        image.colour.extend(band.colour);
+        image.normal.extend(band.normal);
+    }
+    Ok(image)
+}
+
+/// No triangle at this sample.
+const EMPTY: u32 = u32::MAX;
+
+/// One thread's per-sample buffers: the nearest depth so far and the triangle there.
+#[derive(Default)]
+struct Scratch {
+    depth: Vec<f32>,
+    winner: Vec<u32>,
+}
+
+/// What every band of one bake render shares.
+struct BakeRaster<'a> {
+    scene: &'a DrawScene,
+    textures: &'a SoftwareTextures,
+    triangles: &'a [Setup],
+    /// Samples per row.
+    width: usize,
+    ss: usize,
+}
+
+impl BakeRaster<'_> {
+    /// Sample rows `y0..y1` (whole pixel rows) drawn with the triangles `bin` and resolved to
+    /// pixels.
+    fn band(&self, y0: usize, y1: usize, bin: &[u32], scratch: &mut Scratch) -> BakeImage {
+        let rows = y1 - y0;
+        let Scratch { depth, winner } = scratch;
+        depth.clear();
+        depth.resize(rows * self.width, f32::INFINITY);
+        winner.clear();
+        winner.resize(rows * self.width, EMPTY);
+        for &ti in bin {
+            let t = &self.triangles[ti as usize];
+            let material = &self.scene.materials[t.material as usize];
+            let texture = material.texture.map(|i| &self.textures.textures[i]);
+            let ty0 = (t.min[1] as usize).max(y0);
+            let ty1 = (t.max[1] as usize + 1).min(y1);
+            let step = [
+                -(t.y[2] - t.y[1]) * t.inv_area,
+                -(t.y[0] - t.y[2]) * t.inv_area,
+                -(t.y[1] - t.y[0]) * t.inv_area,
+            ];
+            let x0 = t.min[0] as usize;
+            for sy in ty0..ty1 {
+                let row = (sy - y0) * self.width;
+                let start = t.weights(x0 as f32 + 0.5, sy as f32 + 0.5);
+                let Some((first, last)) = row_span(start, step, t.max[0] as usize - x0) else {
+                    continue;
+                };
+                for k in first..=last {
+                    let kf = k as f32;
+                    let b = [
+                        start[0] + step[0] * kf,
+                        start[1] + step[1] * kf,
+                        start[2] + step[2] * kf,
+                    ];
+                    if b[0] < 0.0 || b[1] < 0.0 || b[2] < 0.0 {
+                        continue;
+                    }
+                    let s = row + x0 + k;
+                    let z = b[0] * t.z[0] + b[1] * t.z[1] + b[2] * t.z[2];
+                    if z >= depth[s] {
+                        continue;
+                    }
+                    if let Some(cutoff) = material.alpha_cutoff {
+                        let (uv, _) = t.uv(b);
+                        let a = texture
+                            .map_or(1.0, |l| l.alpha_nearest_level(uv, t.lod, material.wrap, 4));
+                        if a * material.base_color[3] < cutoff {
+                            continue;
+                        }
+                    }
+                    depth[s] = z;
+                    winner[s] = ti;
+                }
+            }
+        }
+        self.resolve(y0, rows, winner)
+    }
+
+    /// Shades each covered sample of the band once (its winning triangle's colour and
+    /// normal) and sums them per pixel.
+    fn resolve(&self, y0: usize, rows: usize, winner: &[u32]) -> BakeImage {
+        let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
+        let ss = self.ss;
+        let (w, h) = (self.width / ss, rows / ss);
+        let mut image = BakeImage {
+            width: w as u32,
+            height: h as u32,
+            samples: vec![0; w * h],
+            colour: vec![[0.0; 3]; w * h],
+            normal: vec![[0.0; 3]; w * h],
+        };
+        for py in 0..h {
+            for px in 0..w {
+                let (mut count, mut colour, mut normal) = (0u16, Vec3::ZERO, Vec3::ZERO);
+                for dy in 0..ss {
+                    let y = py * ss + dy;
+                    for x in px * ss..(px + 1) * ss {
+                        let ti = winner[y * self.width + x];
+                        if ti == EMPTY {
+                            continue;
+                        }
+                        let t = &self.triangles[ti as usize];
+                        let material = &self.scene.materials[t.material as usize];
+                        let b = t.weights(x as f32 + 0.5, (y0 + y) as f32 + 0.5);
+                        let (uv, q) = t.uv(b);
+                        let texel = material
+                            .texture
+                            .map(|i| &self.textures.textures[i])
+                            .map_or(Vec3::ONE, |l| l.rgb(uv, t.lod, material.wrap, &linear));
+                        let base = Vec3::new(
+                            material.base_color[0],
+                            material.base_color[1],
+                            material.base_color[2],
+                        );
+                        colour += (texel * base).clamp(Vec3::ZERO, Vec3::ONE);
+                        let n = (b[0] * t.nq[0] + b[1] * t.nq[1] + b[2] * t.nq[2]) / q;
+                        if n.length_squared() > 1e-12 {
+                            let n = n.normalize();
+                            normal += if t.back { -n } else { n };
+                        }
+                        count += 1;
+                    }
+                }
+                let i = py * w + px;
+                image.samples[i] = count;
+                if count > 0 {
+                    image.colour[i] = (colour / f32::from(count)).to_array();
+                    image.normal[i] = normal.to_array();
+                }
+            }
+        }
+        image
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{DrawMaterial, DrawMesh, DrawTexture};
+
+    /// A triangle pair over NDC `[x0, x1] × [-1, 1]` at depth `z` with normal `n`, counter-
+    /// clockwise (front) unless `flip`.
+    fn quad(x0: f32, x1: f32, z: f32, flip: bool, material: usize, n: [f32; 3]) -> DrawMesh {
+        DrawMesh {
+            positions: vec![[x0, -1.0, z], [x1, -1.0, z], [x1, 1.0, z], [x0, 1.0, z]],
+            normals: Some(vec![n; 4]),
+            tangents: None,
+            uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
+            indices: if flip {
+                vec![0, 2, 1, 0, 3, 2]
+            } else {
+                vec![0, 1, 2, 0, 2, 3]
+            },
+            material,
+        }
+    }
+
+    fn bake(scene: &DrawScene, ss: u32) -> BakeImage {
+        let textures = SoftwareTextures::for_bake(&scene.textures).expect("textures");
+        render_bake(scene, &textures, Mat4::IDENTITY, 8, 4, ss).expect("render")
+    }
+
+    #[test]
+    fn the_nearest_surface_wins_each_sample_and_back_faces_turn_their_normal() {
+        let red = DrawMaterial {
+            double_sided: true,
+            ..DrawMaterial::opaque([1.0, 0.0, 0.0, 1.0])
+        };
+        let green = DrawMaterial {
+            double_sided: true,
+            ..DrawMaterial::opaque([0.0, 1.0, 0.0, 1.0])
+        };
+        // Green (far) everywhere; red (near, a back face) over the left half.
+        let scene = DrawScene {
+            meshes: vec![
+                quad(-1.0, 1.0, 0.8, false, 1, [0.0, 0.0, 1.0]),
+                quad(-1.0, 0.0, 0.2, true, 0, [0.0, 0.0, 1.0]),
+            ],
+            materials: vec![red, green],
+            textures: vec![],
+        };
+        let image = bake(&scene, 2);
+        assert_eq!((image.width, image.height), (8, 4));
+        assert!(image.samples.iter().all(|&n| n == 4));
+        for y in 0..4 {
+            for x in 0..8 {
+                let i = y * 8 + x;
+                let (colour, normal) = if x < 4 {
+                    ([1.0, 0.0, 0.0], [0.0, 0.0, -4.0])
+                } else {
+                    ([0.0, 1.0, 0.0], [0.0, 0.0, 4.0])
+                };
+                assert_eq!(image.colour[i], colour, "pixel {x},{y}");
+                assert_eq!(image.normal[i], normal, "pixel {x},{y}");
+            }
+        }
+    }
+
+    #[test]
+    fn alpha_tested_texels_leave_their_samples_to_the_surface_behind() {
+        // A 2×1 texture, clamped at its edges: left texel opaque white, right texel clear.
+        // The near quad shows the far one through its clear half.
+        let cut = DrawMaterial {
+            alpha_cutoff: Some(0.5),
+            texture: Some(0),
+            double_sided: true,
+            wrap: [frond_scene::Wrap::ClampToEdge; 2],
+            ..DrawMaterial::opaque([1.0; 4])
+        };
+        let blue = DrawMaterial::opaque([0.0, 0.0, 1.0, 1.0]);
+        let scene = DrawScene {
+            meshes: vec![
+                quad(-1.0, 1.0, 0.2, false, 0, [0.0, 0.0, 1.0]),
+                quad(-1.0, 1.0, 0.8, false, 1, [0.0, 0.0, 1.0]),
+            ],
+            materials: vec![cut, blue],
+            textures: vec![DrawTexture {
+                width: 2,
+                height: 1,
+                rgba: vec![255, 255, 255, 255, 255, 255, 255, 0],
+            }],
+        };
+        let image = bake(&scene, 4);
+        // Leftmost and rightmost columns lie well inside one texel each.
+        for y in 0..4 {
+            assert_eq!(image.colour[y * 8], [1.0, 1.0, 1.0]);
+            assert_eq!(image.colour[y * 8 + 7], [0.0, 0.0, 1.0]);
+            assert_eq!(image.samples[y * 8 + 7], 16);
+        }
+    }
+
+    #[test]
+    fn the_image_does_not_depend_on_the_thread_count() {
+        let scene = DrawScene {
+            meshes: vec![DrawMesh {
+                positions: vec![[-0.9, -0.7, 0.5], [0.8, -0.95, 0.3], [0.1, 0.9, 0.6]],
+                normals: Some(vec![[0.0, 0.6, 0.8]; 3]),
+                tangents: None,
+                uvs: None,
+                indices: vec![0, 1, 2],
+                material: 0,
+            }],
+            materials: vec![DrawMaterial::opaque([0.3, 0.6, 0.2, 1.0])],
+            textures: vec![],
+        };
+        let textures = SoftwareTextures::for_bake(&scene.textures).expect("textures");
+        let run = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool")
+                .install(|| render_bake(&scene, &textures, Mat4::IDENTITY, 200, 150, 4))
+                .expect("render")
+        };
+        let one = run(1);
+        assert_eq!(one, run(3));
+        let covered = one.samples.iter().filter(|&&n| n > 0).count();
+        assert!(covered > 5_000, "{covered} pixels covered");
+    }
+}
