@@ -756,20 +756,48 @@ fn render_atlas(
     params: &BakeParams,
     out: &mut Downsampled,
 ) -> Result<(), BakeError> {
-    let materials: Vec<DrawMaterial> = materials.iter().map(two_sided).collect();
+    let job = AtlasJob {
+        materials: materials.iter().map(two_sided).collect(),
+        textures,
+        placed_triangles,
+        cells,
+        params,
+    };
     match params.rasteriser {
-        BakeRasteriser::Cpu => {
-            render_atlas_cpu(&materials, textures, placed_triangles, cells, params, out)
+        BakeRasteriser::Cpu => render_atlas_cpu(&job, out),
+        BakeRasteriser::Wgpu => render_atlas_wgpu(renderer, &job, out),
+    }
+}
+
+/// What either rasteriser draws: the members placed in the supersampled atlas, with their
+/// materials (two-sided) and textures.
+struct AtlasJob<'a> {
+    materials: Vec<DrawMaterial>,
+    textures: &'a [DrawTexture],
+    placed_triangles: &'a [Vec<PlacedTriangle>],
+    cells: &'a [Cell],
+    params: &'a BakeParams,
+}
+
+impl AtlasJob<'_> {
+    /// A scene of the job's materials and textures, without meshes yet.
+    fn scene(&self) -> DrawScene {
+        DrawScene {
+            meshes: Vec::new(),
+            materials: self.materials.clone(),
+            textures: self.textures.to_vec(),
         }
-        BakeRasteriser::Wgpu => render_atlas_wgpu(
-            renderer,
-            &materials,
-            textures,
-            placed_triangles,
-            cells,
-            params,
-            out,
-        ),
+    }
+
+    /// [`tile_meshes`] of the supersampled rectangle `rect`.
+    fn meshes(&self, rect: [u32; 4]) -> (Vec<DrawMesh>, Vec<Vec<[f32; 3]>>) {
+        tile_meshes(
+            self.placed_triangles,
+            self.cells,
+            self.params.supersample,
+            rect,
+            self.materials.len(),
+        )
     }
 }
 
@@ -789,27 +817,16 @@ const CPU_STRIP_TEXELS: u32 = 256;
 
 /// The CPU path: strips of whole atlas rows drawn by [`render_bake`] (colour and normals in
 /// one pass) and stored texel by texel.
-fn render_atlas_cpu(
-    materials: &[DrawMaterial],
-    textures: &[DrawTexture],
-    placed_triangles: &[Vec<PlacedTriangle>],
-    cells: &[Cell],
-    params: &BakeParams,
-    out: &mut Downsampled,
-) -> Result<(), BakeError> {
-    let ss = params.supersample;
-    let (total, needed) = (ss * ss, cutoff_samples(params));
-    let prepared = SoftwareTextures::for_bake(textures)?;
-    let mut scene = DrawScene {
-        meshes: Vec::new(),
-        materials: materials.to_vec(),
-        textures: textures.to_vec(),
-    };
+fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeError> {
+    let ss = job.params.supersample;
+    let (total, needed) = (ss * ss, cutoff_samples(job.params));
+    let prepared = SoftwareTextures::for_bake(job.textures)?;
+    let mut scene = job.scene();
     let width = out.width as usize;
     for ty in (0..out.height).step_by(CPU_STRIP_TEXELS as usize) {
         let th = CPU_STRIP_TEXELS.min(out.height - ty);
         let rect = [0, ty * ss, out.width * ss, th * ss];
-        let (mut meshes, normals) = tile_meshes(placed_triangles, cells, ss, rect, materials.len());
+        let (mut meshes, normals) = job.meshes(rect);
         if meshes.is_empty() {
             continue;
         }
@@ -852,14 +869,10 @@ fn render_atlas_cpu(
 /// downsampled.
 fn render_atlas_wgpu(
     renderer: &Renderer,
-    materials: &[DrawMaterial],
-    textures: &[DrawTexture],
-    placed_triangles: &[Vec<PlacedTriangle>],
-    cells: &[Cell],
-    params: &BakeParams,
+    job: &AtlasJob,
     out: &mut Downsampled,
 ) -> Result<(), BakeError> {
-    let ss = params.supersample;
+    let ss = job.params.supersample;
     let (full_w, full_h) = (out.width * ss, out.height * ss);
     let preferred = if renderer.is_cpu() {
         RENDER_TILE_CPU
@@ -867,25 +880,14 @@ fn render_atlas_wgpu(
         RENDER_TILE_GPU
     };
     let tile = (preferred.min(renderer.max_dimension()) / ss).max(1) * ss;
-    let needed = cutoff_samples(params);
-
+    let needed = cutoff_samples(job.params);
     // No normals in the colour pass, so it is unlit (§2.4: ambient only).
-    let mut scene = DrawScene {
-        meshes: Vec::new(),
-        materials: materials.to_vec(),
-        textures: textures.to_vec(),
-    };
+    let mut scene = job.scene();
 
     for ty in (0..full_h).step_by(tile as usize) {
         for tx in (0..full_w).step_by(tile as usize) {
             let (tw, th) = (tile.min(full_w - tx), tile.min(full_h - ty));
-            let (meshes, normals) = tile_meshes(
-                placed_triangles,
-                cells,
-                ss,
-                [tx, ty, tw, th],
-                materials.len(),
-            );
+            let (meshes, normals) = job.meshes([tx, ty, tw, th]);
             if meshes.is_empty() {
                 continue;
             }

@@ -29,9 +29,7 @@ use rayon::prelude::*;
 use crate::error::RenderError;
 use crate::pipeline::srgb_to_linear;
 use crate::scene::DrawScene;
-use crate::software::{
-    BAND_PIXELS, Setup, SoftwareTextures, band_bins, checked_target, row_span, setup,
-};
+use crate::software::{Bands, Setup, SoftwareTextures, checked_target};
 
 /// A bake render resolved to pixels, top row first.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -70,9 +68,11 @@ pub fn render_bake(
         });
     }
     let ss = supersample.max(1) as usize;
-    let triangles = setup(scene, textures, view_proj, sw as f32, sh as f32);
-    let band_rows = BAND_PIXELS * ss;
-    let bins = band_bins(&triangles, sh, band_rows);
+    let Bands {
+        triangles,
+        bins,
+        rows: band_rows,
+    } = Bands::new(scene, textures, view_proj, [sw, sh], ss);
     let raster = BakeRaster {
         scene,
         textures,
@@ -139,31 +139,14 @@ impl BakeRaster<'_> {
             let t = &self.triangles[ti as usize];
             let material = &self.scene.materials[t.material as usize];
             let texture = material.texture.map(|i| &self.textures.textures[i]);
-            let ty0 = (t.min[1] as usize).max(y0);
-            let ty1 = (t.max[1] as usize + 1).min(y1);
-            let step = [
-                -(t.y[2] - t.y[1]) * t.inv_area,
-                -(t.y[0] - t.y[2]) * t.inv_area,
-                -(t.y[1] - t.y[0]) * t.inv_area,
-            ];
-            let x0 = t.min[0] as usize;
-            for sy in ty0..ty1 {
-                let row = (sy - y0) * self.width;
-                let start = t.weights(x0 as f32 + 0.5, sy as f32 + 0.5);
-                let Some((first, last)) = row_span(start, step, t.max[0] as usize - x0) else {
-                    continue;
-                };
-                for k in first..=last {
-                    let kf = k as f32;
-                    let b = [
-                        start[0] + step[0] * kf,
-                        start[1] + step[1] * kf,
-                        start[2] + step[2] * kf,
-                    ];
+            for span in t.row_spans(y0, y1) {
+                let row = (span.y - y0) * self.width;
+                for x in span.first..=span.last {
+                    let b = span.weights_at(x);
                     if b[0] < 0.0 || b[1] < 0.0 || b[2] < 0.0 {
                         continue;
                     }
-                    let s = row + x0 + k;
+                    let s = row + x;
                     let z = b[0] * t.z[0] + b[1] * t.z[1] + b[2] * t.z[2];
                     if z >= depth[s] {
                         continue;

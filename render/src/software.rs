@@ -37,7 +37,7 @@ pub(crate) const MAX_SIDE: u64 = 1 << 15;
 
 /// Pixel rows per band: the unit of parallel work and of memory (one band's samples per
 /// thread).
-pub(crate) const BAND_PIXELS: usize = 16;
+const BAND_PIXELS: usize = 16;
 
 /// Largest texture side accepted (as the wgpu path's limit on common adapters).
 pub(crate) const MAX_TEXTURE_SIDE: u32 = 16384;
@@ -298,9 +298,11 @@ fn rasterise(
 ) -> Result<(CoverageImage, f64, u64), RenderError> {
     let (sw, sh) = checked_target(scene, textures, view_proj, [width, height, supersample])?;
     let ss = supersample.max(1);
-    let triangles = setup(scene, textures, view_proj, sw as f32, sh as f32);
-    let band_rows = BAND_PIXELS * ss as usize;
-    let bins = band_bins(&triangles, sh, band_rows);
+    let Bands {
+        triangles,
+        bins,
+        rows: band_rows,
+    } = Bands::new(scene, textures, view_proj, [sw, sh], ss as usize);
     let raster = Raster {
         scene,
         textures,
@@ -372,18 +374,42 @@ pub(crate) fn checked_target(
     Ok((sw as usize, sh as usize))
 }
 
-/// Per band of `band_rows` sample rows (of `sh`), the triangles whose bounds reach it, in
-/// draw order.
-pub(crate) fn band_bins(triangles: &[Setup], sh: usize, band_rows: usize) -> Vec<Vec<u32>> {
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); sh.div_ceil(band_rows)];
-    for (i, t) in triangles.iter().enumerate() {
-        let first = (t.min[1].max(0) as usize) / band_rows;
-        let last = (t.max[1].max(0) as usize).min(sh - 1) / band_rows;
-        for bin in &mut bins[first..=last] {
-            bin.push(i as u32);
+/// A render's triangles set up, and binned into bands of [`BAND_PIXELS`] pixel rows: the
+/// unit of parallel work of both CPU rasterisers.
+pub(crate) struct Bands {
+    pub(crate) triangles: Vec<Setup>,
+    /// Per band, the triangles whose bounds reach it, in draw order.
+    pub(crate) bins: Vec<Vec<u32>>,
+    /// Sample rows per band.
+    pub(crate) rows: usize,
+}
+
+impl Bands {
+    /// Sets up `scene`'s triangles for a target of `sw`×`sh` samples, `ss` per pixel side,
+    /// and bins them.
+    pub(crate) fn new(
+        scene: &DrawScene,
+        textures: &SoftwareTextures,
+        view_proj: Mat4,
+        [sw, sh]: [usize; 2],
+        ss: usize,
+    ) -> Bands {
+        let triangles = setup(scene, textures, view_proj, sw as f32, sh as f32);
+        let rows = BAND_PIXELS * ss;
+        let mut bins: Vec<Vec<u32>> = vec![Vec::new(); sh.div_ceil(rows)];
+        for (i, t) in triangles.iter().enumerate() {
+            let first = (t.min[1].max(0) as usize) / rows;
+            let last = (t.max[1].max(0) as usize).min(sh - 1) / rows;
+            for bin in &mut bins[first..=last] {
+                bin.push(i as u32);
+            }
+        }
+        Bands {
+            triangles,
+            bins,
+            rows,
         }
     }
-    bins
 }
 
 /// One band of the image, resolved: its pixels' coverage and colour, and its covered samples.
@@ -395,7 +421,7 @@ struct Band {
 
 /// Transforms, clips (near and far planes), culls and sets up every triangle of `scene`, in
 /// draw order, for a target of `sw`×`sh` samples.
-pub(crate) fn setup(
+fn setup(
     scene: &DrawScene,
     textures: &SoftwareTextures,
     view_proj: Mat4,
@@ -656,9 +682,21 @@ fn bilinear(
 ) -> f32 {
     let (o, fx, fy) = footprint(level, uv, wrap, stride);
     let data = &level.2;
-    let at = |k: usize| decode(data[o[k] + channel]);
-    let top = at(0) + (at(1) - at(0)) * fx;
-    let bottom = at(2) + (at(3) - at(2)) * fx;
+    bilerp([0, 1, 2, 3].map(|k| decode(data[o[k] + channel])), fx, fy)
+}
+
+/// The bilinear blend of a footprint's four values (top-left, top-right, bottom-left,
+/// bottom-right) with the weights of the right and bottom ones.
+#[inline]
+fn bilerp<T>([a, b, c, d]: [T; 4], fx: f32, fy: f32) -> T
+where
+    T: Copy
+        + std::ops::Add<Output = T>
+        + std::ops::Sub<Output = T>
+        + std::ops::Mul<f32, Output = T>,
+{
+    let top = a + (b - a) * fx;
+    let bottom = c + (d - c) * fx;
     top + (bottom - top) * fy
 }
 
@@ -681,10 +719,7 @@ fn bilinear_rgb(
             linear[t[2] as usize],
         )
     };
-    let (a, b, c, d) = (at(0), at(1), at(2), at(3));
-    let top = a + (b - a) * fx;
-    let bottom = c + (d - c) * fx;
-    top + (bottom - top) * fy
+    bilerp([0, 1, 2, 3].map(at), fx, fy)
 }
 
 /// The byte offsets of the four texels (of `stride` bytes) a bilinear fetch of `level` at
@@ -826,7 +861,7 @@ fn mapped_normal(normal: Vec3, tangent: Vec4, sign: f32, map: Vec3) -> Vec3 {
 /// each weight's zero crossing bounds the span, widened by one sample against rounding (the
 /// samples are still tested one by one). `None` when no sample can be.
 #[inline]
-pub(crate) fn row_span(start: [f32; 3], step: [f32; 3], len: usize) -> Option<(usize, usize)> {
+fn row_span(start: [f32; 3], step: [f32; 3], len: usize) -> Option<(usize, usize)> {
     let (mut lo, mut hi) = (0.0f32, len as f32);
     for k in 0..3 {
         if step[k] > 0.0 {
@@ -838,6 +873,59 @@ pub(crate) fn row_span(start: [f32; 3], step: [f32; 3], len: usize) -> Option<(u
         }
     }
     (lo <= hi && hi >= 0.0).then(|| (lo.max(0.0) as usize, (hi as usize).min(len)))
+}
+
+/// One sample row of a triangle: the samples `first..=last` it may cover (see [`row_span`])
+/// and the weights along the row.
+pub(crate) struct RowSpan {
+    /// The sample row.
+    pub(crate) y: usize,
+    pub(crate) first: usize,
+    pub(crate) last: usize,
+    /// The sample the weights `start` are at.
+    x0: usize,
+    start: [f32; 3],
+    /// The weights' change per sample along the row.
+    step: [f32; 3],
+}
+
+impl RowSpan {
+    /// The screen-space barycentric weights of sample `x` of the row.
+    #[inline]
+    pub(crate) fn weights_at(&self, x: usize) -> [f32; 3] {
+        let k = (x - self.x0) as f32;
+        [
+            self.start[0] + self.step[0] * k,
+            self.start[1] + self.step[1] * k,
+            self.start[2] + self.step[2] * k,
+        ]
+    }
+}
+
+impl Setup {
+    /// The sample rows of `y0..y1` the triangle may cover, each with its span of samples.
+    pub(crate) fn row_spans(&self, y0: usize, y1: usize) -> impl Iterator<Item = RowSpan> + '_ {
+        let ty0 = (self.min[1] as usize).max(y0);
+        let ty1 = (self.max[1] as usize + 1).min(y1);
+        let step = [
+            -(self.y[2] - self.y[1]) * self.inv_area,
+            -(self.y[0] - self.y[2]) * self.inv_area,
+            -(self.y[1] - self.y[0]) * self.inv_area,
+        ];
+        let x0 = self.min[0] as usize;
+        (ty0..ty1).filter_map(move |y| {
+            let start = self.weights(x0 as f32 + 0.5, y as f32 + 0.5);
+            let (first, last) = row_span(start, step, self.max[0] as usize - x0)?;
+            Some(RowSpan {
+                y,
+                first: x0 + first,
+                last: x0 + last,
+                x0,
+                start,
+                step,
+            })
+        })
+    }
 }
 
 /// What every band of one render shares.
@@ -882,23 +970,11 @@ impl Raster<'_> {
                 .normal_texture
                 .filter(|_| t.tq.is_some())
                 .map(|i| &self.textures.normal_maps[i]);
-            let ty0 = (t.min[1] as usize).max(y0);
-            let ty1 = (t.max[1] as usize + 1).min(y1);
-            // Weights step by these per sample along a row.
-            let step = [
-                -(t.y[2] - t.y[1]) * t.inv_area,
-                -(t.y[0] - t.y[2]) * t.inv_area,
-                -(t.y[1] - t.y[0]) * t.inv_area,
-            ];
-            let x0 = t.min[0] as usize;
-            for sy in ty0..ty1 {
+            for span in t.row_spans(y0, y1) {
+                let sy = span.y;
                 let row = (sy - y0) * self.width;
                 let row_words = &mut covered[(sy - y0) * words..(sy - y0 + 1) * words];
-                let start = t.weights(x0 as f32 + 0.5, sy as f32 + 0.5);
-                let Some((first, last)) = row_span(start, step, t.max[0] as usize - x0) else {
-                    continue;
-                };
-                let (mut sx, end) = (x0 + first, x0 + last);
+                let (mut sx, end) = (span.first, span.last);
                 while sx <= end {
                     let word = sx / 64;
                     let run_end = end.min(word * 64 + 63);
@@ -914,12 +990,7 @@ impl Raster<'_> {
                         let bit = todo.trailing_zeros() as usize;
                         todo &= todo - 1;
                         let x = word * 64 + bit;
-                        let k = (x - x0) as f32;
-                        let b = [
-                            start[0] + step[0] * k,
-                            start[1] + step[1] * k,
-                            start[2] + step[2] * k,
-                        ];
+                        let b = span.weights_at(x);
                         if b[0] < 0.0 || b[1] < 0.0 || b[2] < 0.0 {
                             continue;
                         }
