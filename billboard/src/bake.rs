@@ -811,8 +811,8 @@ fn two_sided(m: &DrawMaterial) -> DrawMaterial {
 }
 
 /// Texel rows of the atlas the CPU rasteriser draws at a time: its per-texel results for a
-/// 4096-texel-wide strip stay near 13 MB, and a strip holds 16 bands of rows to share among
-/// threads.
+/// 4096-texel-wide strip stay near 27 MB (26 bytes a texel), and a strip holds 16 bands of
+/// rows to share among threads.
 const CPU_STRIP_TEXELS: u32 = 256;
 
 /// The CPU path: strips of whole atlas rows drawn by [`render_bake`] (colour and normals in
