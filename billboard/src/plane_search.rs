@@ -105,9 +105,14 @@ struct Node {
     right: u32,
     parent: u32,
     alive: u32,
+    /// A leaf's alive triangles as bits (bit `k`: stored triangle `start + k`), so a leaf's
+    /// test loop visits only the alive triangles near a candidate's plane.
+    alive_bits: u32,
 }
 
 const LEAF_SIZE: usize = 32;
+// A leaf's alive triangles fit one `u32` of bits ([`Node::alive_bits`]).
+const _: () = assert!(LEAF_SIZE <= 32);
 
 struct Bvh {
     nodes: Vec<Node>,
@@ -153,6 +158,8 @@ impl Bvh {
             return;
         }
         t.alive[i] = false;
+        let leaf = &mut self.nodes[self.leaf_of[i] as usize];
+        leaf.alive_bits &= !(1u32 << (i - leaf.start as usize));
         let mut n = self.leaf_of[i];
         while n != u32::MAX {
             let node = &mut self.nodes[n as usize];
@@ -193,6 +200,11 @@ fn build_node(
         right: 0,
         parent,
         alive: (end - start) as u32,
+        alive_bits: if end - start <= LEAF_SIZE {
+            u32::MAX >> (32 - (end - start))
+        } else {
+            0
+        },
     });
     if end - start <= LEAF_SIZE {
         for &i in &order[start..end] {
@@ -351,27 +363,30 @@ impl Search<'_> {
                 stack.push((node.left, rb, lb));
                 continue;
             }
+            let len = e0 - s0;
+            let (cx, cy, cz) = (&t.cx[s0..e0], &t.cy[s0..e0], &t.cz[s0..e0]);
+            let radius = &t.radius[s0..e0];
             for &c in &partial {
                 let (n, rho) = cands[c as usize];
-                let len = e0 - s0;
-                let (cx, cy, cz) = (&t.cx[s0..e0], &t.cy[s0..e0], &t.cz[s0..e0]);
                 for (k, out) in dc.iter_mut().take(len).enumerate() {
                     *out = (n.x * cx[k] + n.y * cy[k] + n.z * cz[k] - rho).abs();
                 }
+                // Bit masks of the leaf's triangles whose centroid is near enough to be valid
+                // (`maybe`) and of those valid by their bounding sphere alone (`sure`); the
+                // exact test runs only on the rest. Bits are visited in storage order, so the
+                // sum is the one `score_tree` makes.
+                let (mut maybe, mut sure) = (0u32, 0u32);
+                for k in 0..len {
+                    maybe |= u32::from(dc[k] <= eps + m) << k;
+                    sure |= u32::from(dc[k] + radius[k] < eps - m) << k;
+                }
                 let acc = &mut d[c as usize];
-                for i in s0..e0 {
-                    if !t.alive[i] {
-                        continue;
-                    }
-                    let dci = dc[i - s0];
-                    let ok = if dci > eps + m {
-                        false
-                    } else if dci + t.radius[i] < eps - m {
-                        true
-                    } else {
-                        valid_exact(&t.v[i], n, rho, eps)
-                    };
-                    if ok {
+                let mut bits = maybe & node.alive_bits;
+                while bits != 0 {
+                    let k = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    let i = s0 + k;
+                    if sure >> k & 1 == 1 || valid_exact(&t.v[i], n, rho, eps) {
                         *acc += contribution(&t.v[i], t.area_normal[i], n, rho, eps, falloff);
                     }
                 }

@@ -87,6 +87,9 @@ impl Lighting {
 #[derive(Clone, Debug)]
 pub struct SoftwareTextures {
     pub(crate) textures: Vec<Levels>,
+    /// Per texture and level, the alpha bounds of every bilinear footprint
+    /// ([`AlphaBounds`]) when colour is not drawn (coverage renders); empty otherwise.
+    alpha_bounds: Vec<Vec<AlphaBounds>>,
     /// Per texture, its linear box chain when a drawn material uses it as a normal map and
     /// colour is drawn (lighting needs the normals); empty otherwise.
     normal_maps: Vec<Levels>,
@@ -98,6 +101,33 @@ pub struct SoftwareTextures {
 /// or RGBA (sRGB colour, linear alpha) when colour is drawn.
 #[derive(Clone, Debug)]
 pub(crate) struct Levels(Vec<(u32, u32, Vec<u8>)>);
+
+/// The least and greatest alpha of each interior bilinear footprint of one alpha-only level:
+/// entry `y·w + x` bounds texels `(x..=x+1, y..=y+1)` (`[0, 255]`, deciding nothing, where
+/// the footprint would wrap). A filtered alpha lies between its footprint's bounds, and so
+/// does a trilinear blend of two levels' (every step is a monotone lerp), so most alpha tests
+/// are decided without filtering: in a coverage render a sample is tested by every leaf card
+/// over it until one passes, and the filtering was most of the rasteriser's time.
+#[derive(Clone, Debug)]
+struct AlphaBounds(Vec<[u8; 2]>);
+
+impl AlphaBounds {
+    fn new((w, h, alpha): &(u32, u32, Vec<u8>)) -> AlphaBounds {
+        let (w, h) = (*w as usize, *h as usize);
+        let mut bounds = vec![[0u8, 255u8]; alpha.len()];
+        for y in 0..h.saturating_sub(1) {
+            let (top, bottom) = (&alpha[y * w..(y + 1) * w], &alpha[(y + 1) * w..(y + 2) * w]);
+            for x in 0..w - 1 {
+                let q = [top[x], top[x + 1], bottom[x], bottom[x + 1]];
+                bounds[y * w + x] = [
+                    q.iter().copied().fold(u8::MAX, u8::min),
+                    q.iter().copied().fold(0, u8::max),
+                ];
+            }
+        }
+        AlphaBounds(bounds)
+    }
+}
 
 impl SoftwareTextures {
     /// Prepares the textures of `scene` that its drawn meshes' materials sample; `colour`:
@@ -139,7 +169,7 @@ impl SoftwareTextures {
         normal_map: Vec<bool>,
         colour: bool,
     ) -> Result<SoftwareTextures, RenderError> {
-        let textures = source
+        let textures: Vec<Levels> = source
             .iter()
             .zip(used)
             .enumerate()
@@ -182,8 +212,17 @@ impl SoftwareTextures {
                 })
             })
             .collect();
+        let alpha_bounds = if colour {
+            Vec::new()
+        } else {
+            textures
+                .iter()
+                .map(|l: &Levels| l.0.iter().map(AlphaBounds::new).collect())
+                .collect()
+        };
         Ok(SoftwareTextures {
             textures,
+            alpha_bounds,
             normal_maps,
             colour,
             lighting: Lighting::TwoSided,
@@ -428,7 +467,9 @@ fn setup(
     sw: f32,
     sh: f32,
 ) -> Vec<Setup> {
-    let mut out = Vec::new();
+    // Reserved up front: growing it (tens of megabytes for a large tree) was a tenth of a small
+    // render's time.
+    let mut out = Vec::with_capacity(scene.meshes.iter().map(|m| m.indices.len() / 3).sum());
     for mesh in &scene.meshes {
         let material = &scene.materials[mesh.material];
         let clip: Vec<Vec4> = mesh
@@ -662,8 +703,9 @@ fn wrap_index(i: i64, n: u32, wrap: Wrap) -> usize {
 /// A trilinear fetch's two mip levels and the weight of the second (0: the first alone).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Trilinear {
-    a: usize,
-    b: usize,
+    // Level indices as `u32`: a `Setup` is stored per triangle and rendered many times over.
+    a: u32,
+    b: u32,
     f: f32,
 }
 
@@ -769,8 +811,8 @@ impl Levels {
         let a = (floor_i64(lod).max(0) as usize).min(last);
         let f = if a < last { lod - a as f32 } else { 0.0 };
         Trilinear {
-            a,
-            b: (a + 1).min(last),
+            a: a as u32,
+            b: (a + 1).min(last) as u32,
             f,
         }
     }
@@ -784,13 +826,76 @@ impl Levels {
         wrap: [Wrap; 2],
         stride: usize,
     ) -> f32 {
-        let a = bilinear(&self.0[lod.a], uv, wrap, stride, stride - 1, f32::from);
+        let a = bilinear(
+            &self.0[lod.a as usize],
+            uv,
+            wrap,
+            stride,
+            stride - 1,
+            f32::from,
+        );
         let a = if lod.f > 0.0 {
-            a + (bilinear(&self.0[lod.b], uv, wrap, stride, stride - 1, f32::from) - a) * lod.f
+            a + (bilinear(
+                &self.0[lod.b as usize],
+                uv,
+                wrap,
+                stride,
+                stride - 1,
+                f32::from,
+            ) - a)
+                * lod.f
         } else {
             a
         };
         a / 255.0
+    }
+
+    /// The alpha test of a coverage render, `alpha(uv) · scale ≥ cutoff` with the trilinear
+    /// alpha of [`Levels::alpha`] (alpha-only levels, `bounds` theirs): the same answer,
+    /// filtering only when the footprints' [`AlphaBounds`] leave it open.
+    #[inline]
+    fn alpha_test(
+        &self,
+        bounds: &[AlphaBounds],
+        uv: [f32; 2],
+        lod: Trilinear,
+        wrap: [Wrap; 2],
+        [scale, cutoff]: [f32; 2],
+    ) -> bool {
+        let (a, b) = (lod.a as usize, lod.b as usize);
+        let fa = footprint(&self.0[a], uv, wrap, 1);
+        let fb = (lod.f > 0.0).then(|| footprint(&self.0[b], uv, wrap, 1));
+        // The footprints' bounds, when both are interior (then the table's entry is theirs).
+        let interior = |(o, _, _): &([usize; 4], f32, f32), w: u32| {
+            o[1] == o[0] + 1 && o[3] == o[2] + 1 && o[2] == o[0] + w as usize
+        };
+        let mut range = interior(&fa, self.0[a].0).then(|| bounds[a].0[fa.0[0]]);
+        if let (Some(r), Some(fb)) = (range.as_mut(), &fb) {
+            *r = if interior(fb, self.0[b].0) {
+                let q = bounds[b].0[fb.0[0]];
+                [r[0].min(q[0]), r[1].max(q[1])]
+            } else {
+                [0, 255]
+            };
+        }
+        if let Some([lo, hi]) = range {
+            // Monotone in every texel: the same operations on the bounds bound the result.
+            if f32::from(lo) / 255.0 * scale >= cutoff {
+                return true;
+            }
+            if f32::from(hi) / 255.0 * scale < cutoff {
+                return false;
+            }
+        }
+        let filter = |(o, fx, fy): ([usize; 4], f32, f32), level: usize| {
+            let data = &self.0[level].2;
+            bilerp(o.map(|k| f32::from(data[k])), fx, fy)
+        };
+        let mut alpha = filter(fa, a);
+        if let Some(fb) = fb {
+            alpha += (filter(fb, b) - alpha) * lod.f;
+        }
+        !(alpha / 255.0 * scale < cutoff)
     }
 
     /// Bilinear alpha (0..1) at `(u, v)` of the one level nearer `lod` (a GPU's
@@ -803,7 +908,7 @@ impl Levels {
         wrap: [Wrap; 2],
         stride: usize,
     ) -> f32 {
-        let level = if lod.f < 0.5 { lod.a } else { lod.b };
+        let level = if lod.f < 0.5 { lod.a } else { lod.b } as usize;
         bilinear(&self.0[level], uv, wrap, stride, stride - 1, f32::from) / 255.0
     }
 
@@ -814,9 +919,9 @@ impl Levels {
             let c = |channel| bilinear(&self.0[l], uv, wrap, 4, channel, f32::from);
             Vec3::new(c(0), c(1), c(2))
         };
-        let va = at(lod.a);
+        let va = at(lod.a as usize);
         let v = if lod.f > 0.0 {
-            va + (at(lod.b) - va) * lod.f
+            va + (at(lod.b as usize) - va) * lod.f
         } else {
             va
         };
@@ -832,9 +937,9 @@ impl Levels {
         linear: &[f32; 256],
     ) -> Vec3 {
         let at = |l: usize| bilinear_rgb(&self.0[l], uv, wrap, linear);
-        let va = at(lod.a);
+        let va = at(lod.a as usize);
         if lod.f > 0.0 {
-            va + (at(lod.b) - va) * lod.f
+            va + (at(lod.b as usize) - va) * lod.f
         } else {
             va
         }
@@ -966,6 +1071,10 @@ impl Raster<'_> {
             let t = &self.triangles[t as usize];
             let material = &self.scene.materials[t.material as usize];
             let texture = material.texture.map(|i| &self.textures.textures[i]);
+            let bounds = material
+                .texture
+                .and_then(|i| self.textures.alpha_bounds.get(i))
+                .map(Vec::as_slice);
             let normal_map = material
                 .normal_texture
                 .filter(|_| t.tq.is_some())
@@ -1002,9 +1111,18 @@ impl Raster<'_> {
                         }
                         let (uv, q) = t.uv(b);
                         if let Some(cutoff) = material.alpha_cutoff {
-                            let a =
-                                texture.map_or(1.0, |l| l.alpha(uv, t.lod, material.wrap, stride));
-                            if a * material.base_color[3] < cutoff {
+                            let scale = material.base_color[3];
+                            let pass = match (texture, bounds) {
+                                (Some(l), Some(bounds)) => {
+                                    l.alpha_test(bounds, uv, t.lod, material.wrap, [scale, cutoff])
+                                }
+                                _ => {
+                                    let a = texture
+                                        .map_or(1.0, |l| l.alpha(uv, t.lod, material.wrap, stride));
+                                    !(a * scale < cutoff)
+                                }
+                            };
+                            if !pass {
                                 continue;
                             }
                         }
@@ -1335,5 +1453,46 @@ mod tests {
         assert!(render_coverage(&textured, &textures, Mat4::IDENTITY, 10, 10, 1).is_err());
         textured.textures[0].rgba.pop();
         assert!(SoftwareTextures::new(&textured, false).is_err());
+    }
+
+    /// The alpha test decided from the footprints' bounds answers as filtering does, at every
+    /// level pair, inside and across the edges under each wrap, on a texture of hard and soft
+    /// edges (a leaf's), at cutoffs and scales around its values.
+    #[test]
+    fn bounded_alpha_test_matches_the_filtered_one() {
+        let (w, h) = (37u32, 20u32);
+        // A disc of opaque texels with a soft rim, and noise: every kind of footprint.
+        let alpha: Vec<u8> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f32 - 18.0, (i / w) as f32 - 10.0);
+                let r = (x * x + y * y).sqrt();
+                let noise = (i.wrapping_mul(2_654_435_761) >> 27) as f32;
+                (255.0 - (r - 6.0).max(0.0) * 40.0 + noise).clamp(0.0, 255.0) as u8
+            })
+            .collect();
+        let levels = Levels(crate::pipeline::alpha_mip_chain(w, h, &alpha));
+        let bounds: Vec<AlphaBounds> = levels.0.iter().map(AlphaBounds::new).collect();
+        let mut decided = 0;
+        let mut tests = 0;
+        for wrap in [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat] {
+            for lod in [0.0, 0.3, 1.0, 1.7, 2.5, 9.0] {
+                let pair = levels.pair(lod);
+                for k in 0..4000u32 {
+                    let u = (k % 80) as f32 / 53.0 - 0.3;
+                    let v = (k / 80) as f32 / 37.0 - 0.2;
+                    for (scale, cutoff) in [(1.0, 0.5), (0.8, 0.3), (1.0, 1.0), (1.0, 0.0)] {
+                        let filtered = levels.alpha([u, v], pair, [wrap; 2], 1);
+                        let expected = !(filtered * scale < cutoff);
+                        let got =
+                            levels.alpha_test(&bounds, [u, v], pair, [wrap; 2], [scale, cutoff]);
+                        assert_eq!(got, expected, "{wrap:?} lod {lod} uv ({u}, {v}) {cutoff}");
+                        tests += 1;
+                        decided += usize::from(filtered > 0.0 && filtered < 1.0);
+                    }
+                }
+            }
+        }
+        // The texture has soft texels, so the fallback ran too.
+        assert!(decided > tests / 20, "{decided} of {tests}");
     }
 }

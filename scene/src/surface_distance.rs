@@ -157,6 +157,14 @@ impl SurfaceBvh {
 
     /// Distance from `p` to the nearest triangle; infinity when there is none.
     pub fn distance(&self, p: Vec3) -> f32 {
+        self.distance_beyond(p, f32::NEG_INFINITY)
+    }
+
+    /// [`SurfaceBvh::distance`] when it is over `floor`; otherwise some distance at most
+    /// `floor` (the first triangle found that near ends the search). For a maximum of
+    /// distances, or a test against a limit, that is all a query needs: most points lie on or
+    /// near the surface, and proving their exact minimum was most of the queries' time.
+    pub fn distance_beyond(&self, p: Vec3, floor: f32) -> f32 {
         let mut best = f32::INFINITY;
         if self.nodes.is_empty() {
             return best;
@@ -178,6 +186,9 @@ impl SurfaceBvh {
             if node.count > 0 {
                 for t in &self.triangles[node.first..node.first + node.count] {
                     best = best.min(triangle_distance(p, t));
+                }
+                if best <= floor {
+                    return best;
                 }
             } else {
                 let (left, right) = (
@@ -392,6 +403,15 @@ mod tests {
                 .map(|t| triangle_distance(p, t))
                 .fold(f32::INFINITY, f32::min);
             assert_eq!(bvh.distance(p), brute, "at {p}");
+            // Bounded: exact above the floor, at most the floor otherwise.
+            for floor in [brute * 0.5, brute, brute * 2.0] {
+                let d = bvh.distance_beyond(p, floor);
+                if brute > floor {
+                    assert_eq!(d, brute, "at {p}, floor {floor}");
+                } else {
+                    assert!(d <= floor && d >= brute, "at {p}, floor {floor}: {d}");
+                }
+            }
             // The nearest triangle's input index and point agree with the brute force.
             let (id, q, d) = bvh.nearest(p).expect("non-empty");
             assert_eq!(d, brute, "at {p}");

@@ -704,8 +704,10 @@ impl WoodMesh {
             let bvh = SurfaceBvh::new(simplified.clone());
             let mut measured = estimate;
             let mut stray: Vec<u32> = Vec::new();
+            // Each distance matters only over the running maximum (and the limit): the
+            // bounded query gives the same maximum and the same strays.
             for (p, owners) in &checks {
-                let d = bvh.distance(*p);
+                let d = bvh.distance_beyond(*p, measured.min(limit));
                 if d > limit {
                     stray.extend_from_slice(owners);
                 } else {
@@ -715,7 +717,8 @@ impl WoodMesh {
             let mut inward = true;
             'outer: for s in &simplified {
                 for (wa, wb, wc) in SURFACE_SAMPLES {
-                    let d = original_bvh.distance(s[0] * wa + s[1] * wb + s[2] * wc);
+                    let d = original_bvh
+                        .distance_beyond(s[0] * wa + s[1] * wb + s[2] * wc, measured.min(limit));
                     if d > limit {
                         inward = false;
                         break 'outer;
