@@ -116,6 +116,7 @@ impl ChainLod {
 
 /// A built chain: LOD0 and one LOD per screen height.
 pub struct Chain {
+    /// The loop the chain was built from, without its poses ([`Sampled::into_loop`]).
     pub sampled: Sampled,
     pub lods: Vec<ChainLod>,
     /// Seconds spent sampling the loop and building the LODs.
@@ -129,13 +130,25 @@ pub fn sample_foliage(
     clip: Option<&str>,
     samples: usize,
 ) -> Result<Sampled, LodError> {
-    let sampled = sample(
-        tree,
-        &SampleOptions {
-            clip: clip.map(str::to_string),
-            samples,
-        },
-    )?;
+    sample_foliage_with(tree, clip, samples, true)
+}
+
+/// [`sample_foliage`], with the poses only when `poses` ([`frond_scene::sample_loop`]).
+fn sample_foliage_with(
+    tree: &Tree,
+    clip: Option<&str>,
+    samples: usize,
+    poses: bool,
+) -> Result<Sampled, LodError> {
+    let options = SampleOptions {
+        clip: clip.map(str::to_string),
+        samples,
+    };
+    let sampled = if poses {
+        sample(tree, &options)?
+    } else {
+        frond_scene::sample_loop(tree, &options)?
+    };
     if sampled.foliage.is_empty() {
         return Err(LodError::NoFoliage(tree.source.display().to_string()));
     }
@@ -165,11 +178,17 @@ pub fn build_chain(
 ) -> Result<Chain, (Option<usize>, LodError)> {
     let t_start = Instant::now();
     progress("sampling the animation");
-    let sampled = sample_foliage(tree, req.clip.as_deref(), req.samples).map_err(|e| (None, e))?;
+    let card_foliage = is_card_foliage(tree);
+    let spectral = req.animation == BillboardAnimation::Spectral;
+    // The poses only when a LOD's method reads them (card chains do not: 2.4 GB on the 1M
+    // preset).
+    let poses =
+        (0..levels.len()).any(|k| req.method.pick(k, spectral, card_foliage).0.needs_poses());
+    let sampled = sample_foliage_with(tree, req.clip.as_deref(), req.samples, poses)
+        .map_err(|e| (None, e))?;
     let t_sampled = Instant::now();
     let clock = LoopClock::of(tree, &sampled);
     let wood = part_mesh(tree, Part::Wood);
-    let card_foliage = is_card_foliage(tree);
     let lod0 = lod0(tree, &wood);
     let mut spent = Spent::of_lod0(tree, &lod0);
     let mut lods = vec![lod0];
@@ -203,7 +222,8 @@ pub fn build_chain(
     }
     let t_built = Instant::now();
     Ok(Chain {
-        sampled,
+        // Measuring, writing and previewing the chain need the loop alone.
+        sampled: sampled.into_loop(),
         lods,
         t_sample: (t_sampled - t_start).as_secs_f64(),
         t_build: (t_built - t_sampled).as_secs_f64(),

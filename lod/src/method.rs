@@ -86,6 +86,12 @@ pub trait ClusteringMethod: Sync {
     fn name(&self) -> MethodName;
     /// Builds the LOD's foliage within the context's budget.
     fn build(&self, ctx: &BuildContext) -> Result<MethodOutput, LodError>;
+    /// Whether [`ClusteringMethod::build`] reads the sampled poses, trajectories or average
+    /// pose ([`frond_scene::Sampled::positions`]); a chain whose methods do not samples the
+    /// loop without them.
+    fn needs_poses(&self) -> bool {
+        true
+    }
 }
 
 /// Options of spectral clustering (SCA, spec §4.11–4.14).

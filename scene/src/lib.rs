@@ -29,4 +29,4 @@ pub use input_file::InputLimits;
 pub use length::Length;
 pub use model::*;
 pub use rig::{Clip, Node, Rig, Trs};
-pub use sampling::{Motion, SampleOptions, Sampled, sample};
+pub use sampling::{Motion, SampleOptions, Sampled, sample, sample_loop};

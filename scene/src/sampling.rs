@@ -40,6 +40,10 @@ pub struct Sampled {
     pub period: f32,
     pub times: Vec<f32>,
     pub vertices: usize,
+    /// Sample-major skinned positions ([`Sampled::pose`]). This, `bone_world`, `centres` and
+    /// `average` are empty for a loop sampled without its poses ([`sample_loop`],
+    /// [`Sampled::into_loop`]): on the 1M-triangle preset they are 2.4 GB, and card LODs, the
+    /// files and the report need only the loop's clock and its motion facts.
     pub positions: Vec<Vec3>,
     pub bone_world: Vec<Mat4>,
     /// Indices (into `Tree::triangles`) of the non-degenerate foliage triangles.
@@ -74,6 +78,23 @@ impl Sampled {
     pub fn trajectory(&self, k: usize) -> &[Vec3] {
         let n = self.samples();
         &self.centres[k * n..(k + 1) * n]
+    }
+
+    /// Whether the poses, trajectories and average pose are held (see [`Sampled::positions`]).
+    pub fn has_poses(&self) -> bool {
+        !self.positions.is_empty() || self.vertices == 0
+    }
+
+    /// The loop alone: the same clock, foliage list and motion facts, the poses,
+    /// trajectories and average pose freed (see [`Sampled::positions`]).
+    pub fn into_loop(self) -> Sampled {
+        Sampled {
+            positions: Vec::new(),
+            bone_world: Vec::new(),
+            centres: Vec::new(),
+            average: Vec::new(),
+            ..self
+        }
     }
 }
 
@@ -128,8 +149,9 @@ fn motion_from(tree: &Tree, loop_gap: f32, max_displacement: f32) -> Motion {
     }
 }
 
-/// Samples the chosen clip's loop. A tree without clips is a one-frame loop.
-pub fn sample(tree: &Tree, options: &SampleOptions) -> Result<Sampled> {
+/// The clip `options` names (its index; None for a tree without clips), the loop's start,
+/// period and sample count.
+fn loop_of(tree: &Tree, options: &SampleOptions) -> Result<(Option<usize>, f32, f32, usize)> {
     if options.samples == 0 {
         return Err(SceneError::Request {
             path: tree.source.clone(),
@@ -163,9 +185,57 @@ pub fn sample(tree: &Tree, options: &SampleOptions) -> Result<Sampled> {
         Some(c) => (tree.rig.clips[c].start, 0.0, 1),
         None => (0.0, 0.0, 1),
     };
-    let times: Vec<f32> = (0..n)
+    Ok((clip, start, period, n))
+}
+
+/// The loop's sample times.
+fn times_of(start: f32, period: f32, n: usize) -> Vec<f32> {
+    (0..n)
         .map(|s| start + period * s as f32 / n as f32)
-        .collect();
+        .collect()
+}
+
+/// The largest vertex distance between the first and the last pose of the loop (0 without
+/// motion), from the first pose.
+fn loop_gap(tree: &Tree, clip: Option<usize>, period: f32, first: &[Vec3]) -> f32 {
+    match clip {
+        Some(c) if period > 0.0 => {
+            max_distance(first, &pose_at(tree, Some(c), tree.rig.clips[c].end))
+        }
+        _ => 0.0,
+    }
+}
+
+/// [`sample`] without the poses, trajectories and average pose ([`Sampled::positions`]):
+/// the loop's clock, foliage list and motion facts (the same), each pose skinned, compared
+/// with the first and dropped.
+pub fn sample_loop(tree: &Tree, options: &SampleOptions) -> Result<Sampled> {
+    let (clip, start, period, n) = loop_of(tree, options)?;
+    let times = times_of(start, period, n);
+    let first = pose_at(tree, clip, times[0]);
+    let gap = loop_gap(tree, clip, period, &first);
+    let max_disp = times[1..]
+        .iter()
+        .map(|&t| max_distance(&first, &pose_at(tree, clip, t)))
+        .fold(gap, f32::max);
+    Ok(Sampled {
+        clip: clip.map(|c| tree.rig.clips[c].name.clone()),
+        period,
+        times,
+        vertices: tree.vertices.len(),
+        positions: Vec::new(),
+        bone_world: Vec::new(),
+        foliage: tree.foliage(),
+        centres: Vec::new(),
+        average: Vec::new(),
+        motion: motion_from(tree, gap, max_disp),
+    })
+}
+
+/// Samples the chosen clip's loop. A tree without clips is a one-frame loop.
+pub fn sample(tree: &Tree, options: &SampleOptions) -> Result<Sampled> {
+    let (clip, start, period, n) = loop_of(tree, options)?;
+    let times = times_of(start, period, n);
     let nv = tree.vertices.len();
     let nb = tree.bones.len();
     let mut positions = vec![Vec3::ZERO; n * nv];
@@ -196,12 +266,7 @@ pub fn sample(tree: &Tree, options: &SampleOptions) -> Result<Sampled> {
         .map(|v| (0..n).map(|s| positions[s * nv + v]).sum::<Vec3>() * inv)
         .collect();
     let first = &positions[..nv];
-    let loop_gap = match clip {
-        Some(c) if period > 0.0 => {
-            max_distance(first, &pose_at(tree, Some(c), tree.rig.clips[c].end))
-        }
-        _ => 0.0,
-    };
+    let loop_gap = loop_gap(tree, clip, period, first);
     let max_disp = (1..n)
         .map(|s| max_distance(first, &positions[s * nv..(s + 1) * nv]))
         .fold(loop_gap, f32::max);

@@ -207,3 +207,39 @@ fn average_pose_is_the_mean_of_the_samples() {
         assert!(mean.distance(s.average[v]) < 1e-5);
     }
 }
+
+/// The loop sampled without its poses has the full sampling's clock, foliage list and motion
+/// facts, bit for bit, and holds none of the per-sample arrays; `into_loop` gives the same.
+#[test]
+fn loop_without_poses_keeps_the_clock_and_the_motion_facts() {
+    let g = generate(Preset::Small, 4).expect("generates");
+    let tree = load(&g);
+    let options = SampleOptions {
+        clip: None,
+        samples: 24,
+    };
+    let full = sample(&tree, &options).expect("samples");
+    let bare = frond_scene::sample_loop(&tree, &options).expect("samples the loop");
+    assert!(full.has_poses() && !bare.has_poses());
+    for s in [&bare, &full.clone().into_loop()] {
+        assert_eq!(s.clip, full.clip);
+        assert_eq!(s.period.to_bits(), full.period.to_bits());
+        assert_eq!(s.times, full.times);
+        assert_eq!(s.vertices, full.vertices);
+        assert_eq!(s.foliage, full.foliage);
+        assert_eq!(s.motion.loop_gap.to_bits(), full.motion.loop_gap.to_bits());
+        assert_eq!(
+            s.motion.max_displacement.to_bits(),
+            full.motion.max_displacement.to_bits()
+        );
+        assert_eq!((s.motion.loops, s.motion.moves), (true, true));
+        assert!(s.positions.is_empty() && s.centres.is_empty());
+        assert!(s.bone_world.is_empty() && s.average.is_empty());
+    }
+    // A bad request fails the same way.
+    let none = SampleOptions {
+        clip: Some("no such clip".into()),
+        samples: 4,
+    };
+    assert!(frond_scene::sample_loop(&tree, &none).is_err());
+}

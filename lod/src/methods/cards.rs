@@ -55,6 +55,11 @@ impl ClusteringMethod for Cards {
         MethodName::Cards
     }
 
+    /// Cards keep the input's own skinning: nothing of the sampled loop is read.
+    fn needs_poses(&self) -> bool {
+        false
+    }
+
     fn build(&self, ctx: &BuildContext) -> Result<MethodOutput, LodError> {
         let foliage = part_mesh(ctx.tree, Part::Foliage);
         if foliage.triangles() == 0 {
