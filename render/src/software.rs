@@ -102,6 +102,13 @@ pub struct SoftwareTextures {
 #[derive(Clone, Debug)]
 pub(crate) struct Levels(Vec<(u32, u32, Vec<u8>)>);
 
+/// The alpha test: discarded only when `alpha < cutoff` (a NaN alpha is kept, as the renderer
+/// always kept it).
+#[inline]
+fn passes_cutoff(alpha: f32, cutoff: f32) -> bool {
+    alpha.partial_cmp(&cutoff) != Some(std::cmp::Ordering::Less)
+}
+
 /// The least and greatest alpha of each interior bilinear footprint of one alpha-only level:
 /// entry `y·w + x` bounds texels `(x..=x+1, y..=y+1)` (`[0, 255]`, deciding nothing, where
 /// the footprint would wrap). A filtered alpha lies between its footprint's bounds, and so
@@ -910,7 +917,7 @@ impl Levels {
         if let Some(fb) = fb {
             alpha += (filter(fb, b) - alpha) * lod.f;
         }
-        !(alpha / 255.0 * scale < cutoff)
+        passes_cutoff(alpha / 255.0 * scale, cutoff)
     }
 
     /// Bilinear alpha (0..1) at `(u, v)` of the one level nearer `lod` (a GPU's
@@ -1157,7 +1164,7 @@ impl Raster<'_> {
                                 _ => {
                                     let a = texture
                                         .map_or(1.0, |l| l.alpha(uv, t.lod, material.wrap, stride));
-                                    !(a * scale < cutoff)
+                                    passes_cutoff(a * scale, cutoff)
                                 }
                             };
                             if !pass {
@@ -1532,7 +1539,7 @@ mod tests {
                     let v = (k / 80) as f32 / 37.0 - 0.2;
                     for (scale, cutoff) in [(1.0, 0.5), (0.8, 0.3), (1.0, 1.0), (1.0, 0.0)] {
                         let filtered = levels.alpha([u, v], pair, [wrap; 2], 1);
-                        let expected = !(filtered * scale < cutoff);
+                        let expected = passes_cutoff(filtered * scale, cutoff);
                         let got =
                             levels.alpha_test(&bounds, [u, v], pair, [wrap; 2], [scale, cutoff]);
                         assert_eq!(got, expected, "{wrap:?} lod {lod} uv ({u}, {v}) {cutoff}");
