@@ -286,15 +286,10 @@ fn measure_errors(
             continue;
         };
         let size = image_for_screen_height(h.round().max(1.0) as u32);
-        let coverage = ctx
-            .coverage(lod, size)
+        // The depth complexities come from the metric's first renders of both.
+        let (coverage, depth, input_depth) = ctx
+            .coverage_with_depth(lod, size)
             .with_context(|| format!("{}: measuring its error", entry.file))?;
-        let depth = ctx
-            .depth_complexity(lod, size)
-            .with_context(|| format!("{}: measuring its depth complexity", entry.file))?;
-        let input_depth = ctx
-            .depth_complexity(tree, size)
-            .with_context(|| format!("{path}: measuring its depth complexity"))?;
         let within_target = coverage.mean <= max_error;
         if !within_target {
             let w = format!(

@@ -32,7 +32,7 @@
 
 use frond_render::{
     Camera, DrawScene, Lighting, Projection, RenderError, Renderer, SoftwareTextures,
-    render_coverage,
+    render_coverage, render_coverage_with_depth,
 };
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -310,6 +310,9 @@ pub struct CoverageMasks {
     /// The same pairs: mean linear RGB of each pixel's covered samples (empty vectors when
     /// drawn without colour, [`CoverageParams::colour`]).
     colour: Vec<Vec<[f32; 3]>>,
+    /// The depth complexity of the first view's first frame ([`depth_complexity`]), from its
+    /// render; None from the wgpu rasteriser.
+    pub first_depth_complexity: Option<f64>,
 }
 
 /// Renders the masks of `scenes` (one per frame) from every view of `params` (see
@@ -327,6 +330,7 @@ pub fn coverage_masks(
         .map(|d| view_camera(bounds_min, bounds_max, d, params))
         .collect::<Result<Vec<_>, _>>()?;
     let expected = params.width as usize * params.height as usize;
+    let mut first_depth_complexity = None;
     let rendered: Vec<(Vec<bool>, Vec<[f32; 3]>)> = match params.rasteriser {
         Rasteriser::Gpu => cameras
             .iter()
@@ -354,12 +358,26 @@ pub fn coverage_masks(
             let pairs: Vec<(usize, usize)> = (0..cameras.len())
                 .flat_map(|d| (0..scenes.len()).map(move |f| (d, f)))
                 .collect();
-            pairs
+            let masks: Vec<SoftwareMask> = pairs
                 .par_iter()
                 .map(|&(d, f)| {
-                    software_mask(&scenes[f], &prepared[of_frame[f]], &cameras[d], params)
+                    let first = (d, f) == (0, 0);
+                    software_mask(
+                        &scenes[f],
+                        &prepared[of_frame[f]],
+                        &cameras[d],
+                        params,
+                        first,
+                    )
                 })
-                .collect::<Result<_, _>>()?
+                .collect::<Result<_, _>>()?;
+            masks
+                .into_iter()
+                .map(|(m, rgb, depth)| {
+                    first_depth_complexity = first_depth_complexity.or(depth);
+                    (m, rgb)
+                })
+                .collect()
         }
     };
     let (mut covered, mut colour) = (Vec::new(), Vec::new());
@@ -379,6 +397,7 @@ pub fn coverage_masks(
         frames: scenes.len(),
         covered,
         colour,
+        first_depth_complexity,
     })
 }
 
@@ -528,23 +547,28 @@ fn same_textures(a: &DrawScene, b: &DrawScene) -> bool {
             .eq(b.meshes.iter().map(|m| (m.material, m.indices.is_empty())))
 }
 
-/// The binary coverage mask of `scene` at the metric's size drawn by the CPU rasteriser, and
-/// the covered pixels' colour when `params.colour` (else an empty vector).
+/// A mask, its covered pixels' colour and, for the first pair, its render's depth complexity.
+type SoftwareMask = (Vec<bool>, Vec<[f32; 3]>, Option<f64>);
+
+/// The binary coverage mask of `scene` at the metric's size drawn by the CPU rasteriser, the
+/// covered pixels' colour when `params.colour` (else an empty vector), and the render's depth
+/// complexity when `with_depth`.
 fn software_mask(
     scene: &DrawScene,
     textures: &SoftwareTextures,
     camera: &Camera,
     params: &CoverageParams,
-) -> Result<(Vec<bool>, Vec<[f32; 3]>), MetricError> {
-    let image = render_coverage(
-        scene,
-        textures,
-        projection(scene, camera, params)?,
-        params.width,
-        params.height,
-        params.supersample,
-    )?;
-    Ok((image.covered, image.colour))
+    with_depth: bool,
+) -> Result<SoftwareMask, MetricError> {
+    let view_proj = projection(scene, camera, params)?;
+    let (w, h, ss) = (params.width, params.height, params.supersample);
+    let (image, depth) = if with_depth {
+        let (image, depth) = render_coverage_with_depth(scene, textures, view_proj, w, h, ss)?;
+        (image, Some(depth))
+    } else {
+        (render_coverage(scene, textures, view_proj, w, h, ss)?, None)
+    };
+    Ok((image.covered, image.colour, depth))
 }
 
 /// The binary coverage mask of `scene` at the metric's size: rendered `supersample`× larger,

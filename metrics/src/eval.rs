@@ -256,14 +256,36 @@ impl<'a> EvalContext<'a> {
         candidate: &Tree,
         size: (u32, u32),
     ) -> Result<CoverageReport, EvalError> {
+        self.coverage_with_depth(candidate, size).map(|r| r.0)
+    }
+
+    /// [`EvalContext::coverage`], with the depth complexities of the candidate and of the
+    /// original ([`EvalContext::depth_complexity`]: the same values) read off the metric's
+    /// own first render of each, where it has them.
+    pub fn coverage_with_depth(
+        &mut self,
+        candidate: &Tree,
+        size: (u32, u32),
+    ) -> Result<(CoverageReport, f64, f64), EvalError> {
         let cc = candidate_clip(candidate, self.sampled.clip.as_deref());
         // The coverage alone: drawn without colour (no depth test, alpha only).
         let cand_masks = self.candidate_masks(candidate, cc, size, false)?;
         let all: Vec<usize> = (0..self.frame_times.len()).collect();
         let original = self.original_masks(size, false)?;
-        compare_masks(original, &cand_masks, &all).map_err(EvalError::colour(
+        let report = compare_masks(original, &cand_masks, &all).map_err(EvalError::colour(
             &candidate.source,
             "animated colour metric",
+        ))?;
+        let original_depth = original.first_depth_complexity;
+        let original_tree = self.original;
+        let depth = |masks_depth: Option<f64>, tree: &Tree| match masks_depth {
+            Some(d) => Ok(d),
+            None => self.depth_complexity(tree, size),
+        };
+        Ok((
+            report,
+            depth(cand_masks.first_depth_complexity, candidate)?,
+            depth(original_depth, original_tree)?,
         ))
     }
 

@@ -106,3 +106,39 @@ fn cpu_and_gpu_masks_agree_on_shared_trees() {
         agree(tree, 200);
     }
 }
+
+/// The masks' first render gives the depth complexity the separate measure gives (view 0,
+/// frame 0, same camera and textures), with and without colour; the wgpu path gives none.
+#[test]
+fn the_first_render_gives_the_depth_complexity() {
+    let tree = load(&frond_testdata::sample());
+    let scenes = frames(&tree, 2);
+    let (lo, hi) = (Vec3::from(tree.bounds.min), Vec3::from(tree.bounds.max));
+    for colour in [false, true] {
+        let params = CoverageParams {
+            views: 3,
+            frames: 2,
+            width: 120,
+            height: 90,
+            colour,
+            ..Default::default()
+        };
+        let separate = frond_metrics::depth_complexity(&scenes[0], lo, hi, 0, &params)
+            .expect("depth complexity");
+        let from_masks = masks(&tree, &scenes, &params).first_depth_complexity;
+        assert_eq!(from_masks, Some(separate), "colour {colour}");
+        assert!(separate > 1.0, "{separate}");
+    }
+    let gpu = CoverageParams {
+        views: 1,
+        frames: 1,
+        width: 40,
+        height: 30,
+        rasteriser: Rasteriser::Gpu,
+        ..Default::default()
+    };
+    assert_eq!(
+        masks(&tree, &scenes[..1], &gpu).first_depth_complexity,
+        None
+    );
+}

@@ -58,5 +58,8 @@ pub use frame::Frame;
 pub use pipeline::{LIGHT_DIRECTION, alpha_mip_chain, linear_mip_chain, mip_chain};
 pub use renderer::{Output, Renderer};
 pub use scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
-pub use software::{CoverageImage, Lighting, SoftwareTextures, depth_complexity, render_coverage};
+pub use software::{
+    CoverageImage, Lighting, SoftwareTextures, depth_complexity, render_coverage,
+    render_coverage_with_depth,
+};
 pub use tree::{PosedTree, TreeParts, scene_from_positions, tree_scene};

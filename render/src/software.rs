@@ -333,18 +333,33 @@ pub fn depth_complexity(
     height: u32,
     supersample: u32,
 ) -> Result<f64, RenderError> {
-    let (_, fragments, covered) = rasterise(
+    render_coverage_with_depth(scene, textures, view_proj, width, height, supersample).map(|r| r.1)
+}
+
+/// [`render_coverage`] and [`depth_complexity`] of the same render at once: the same mask, and
+/// the same depth complexity (its pixels are not saturated, so the covered samples are
+/// counted exactly). The metric's first (view, frame) pair gives both, one render fewer.
+pub fn render_coverage_with_depth(
+    scene: &DrawScene,
+    textures: &SoftwareTextures,
+    view_proj: Mat4,
+    width: u32,
+    height: u32,
+    supersample: u32,
+) -> Result<(CoverageImage, f64), RenderError> {
+    let (image, fragments, covered) = rasterise(
         scene,
         textures,
         view_proj,
         [width, height, supersample],
         false,
     )?;
-    Ok(if covered == 0 {
+    let depth = if covered == 0 {
         0.0
     } else {
         fragments / covered as f64
-    })
+    };
+    Ok((image, depth))
 }
 
 /// [`render_coverage`], the drawn triangles' area in samples, and the samples covered (all
