@@ -1544,7 +1544,7 @@ mod tests {
             .collect();
         let levels = Levels(crate::pipeline::alpha_mip_chain(w, h, &alpha));
         let bounds: Vec<AlphaBounds> = levels.0.iter().map(AlphaBounds::new).collect();
-        let mut decided = 0;
+        let mut soft = 0;
         let mut tests = 0;
         for wrap in [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat] {
             for lod in [0.0, 0.3, 1.0, 1.7, 2.5, 9.0] {
@@ -1559,13 +1559,14 @@ mod tests {
                             levels.alpha_test(&bounds, [u, v], pair, [wrap; 2], [scale, cutoff]);
                         assert_eq!(got, expected, "{wrap:?} lod {lod} uv ({u}, {v}) {cutoff}");
                         tests += 1;
-                        decided += usize::from(filtered > 0.0 && filtered < 1.0);
+                        soft += usize::from(filtered > 0.0 && filtered < 1.0);
                     }
                 }
             }
         }
-        // The texture has soft texels, so the fallback ran too.
-        assert!(decided > tests / 20, "{decided} of {tests}");
+        // Many tests fell on soft alphas (between the extremes), not only on footprints the
+        // bounds settle outright.
+        assert!(soft > tests / 20, "{soft} of {tests}");
     }
 
     /// Marking a decided pixel's samples covered changes no mask: many overlapping
