@@ -12,7 +12,7 @@
 //! and UVs as vertex attributes, and checks the result with true point-to-surface distances,
 //! because meshoptimizer's quadric estimate is far too optimistic on thin curved tubes.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, HashSet};
 
 use glam::{Mat3, Vec2, Vec3};
 use meshopt::{SimplifyOptions, SimplifyVertex};
@@ -666,6 +666,12 @@ impl WoodMesh {
                 ));
             }
         }
+        // The original triangles as vertex sets: a simplified triangle among them lies on the
+        // original surface.
+        let original_sets: HashSet<[u32; 3]> = indices
+            .chunks_exact(3)
+            .map(|t| sorted3([t[0], t[1], t[2]]))
+            .collect();
         let mut locks = border_locks(&positions, &indices);
         // One meshoptimizer run for a triangle target, then the distance checks: the surviving
         // triangles, the error (estimate and measured) when they pass, and the stray vertices.
@@ -704,9 +710,16 @@ impl WoodMesh {
             let bvh = SurfaceBvh::new(simplified.clone());
             let mut measured = estimate;
             let mut stray: Vec<u32> = Vec::new();
+            // What the simplified piece keeps of the original: a check point on a kept vertex,
+            // edge or triangle lies on it (distance 0, or float noise), which changes neither
+            // the maximum nor the strays: it needs no query (at near LODs most are kept).
+            let kept = Kept::of(&tris, global.len());
             // Each distance matters only over the running maximum (and the limit): the
             // bounded query gives the same maximum and the same strays.
             for (p, owners) in &checks {
+                if kept.holds(*owners) {
+                    continue;
+                }
                 let d = bvh.distance_beyond(*p, measured.min(limit));
                 if d > limit {
                     stray.extend_from_slice(owners);
@@ -715,7 +728,10 @@ impl WoodMesh {
                 }
             }
             let mut inward = true;
-            'outer: for s in &simplified {
+            'outer: for (s, t) in simplified.iter().zip(&tris) {
+                if original_sets.contains(&sorted3(*t)) {
+                    continue;
+                }
                 for (wa, wb, wc) in SURFACE_SAMPLES {
                     let d = original_bvh
                         .distance_beyond(s[0] * wa + s[1] * wb + s[2] * wc, measured.min(limit));
@@ -793,6 +809,52 @@ impl WoodMesh {
             if *n == Vec3::ZERO {
                 *n = a.try_normalize().unwrap_or(Vec3::Y);
             }
+        }
+    }
+}
+
+/// A triangle's vertex indices in ascending order: the triangle as a set, whatever its winding.
+fn sorted3(mut t: [u32; 3]) -> [u32; 3] {
+    t.sort_unstable();
+    t
+}
+
+/// The vertices, edges and triangles a simplified piece keeps of the original (local vertex
+/// indices), for the check points on them ([`WoodMesh::simplify`]'s distance checks).
+struct Kept {
+    vertices: Vec<bool>,
+    edges: HashSet<[u32; 2]>,
+    triangles: HashSet<[u32; 3]>,
+}
+
+impl Kept {
+    fn of(tris: &[[u32; 3]], vertices: usize) -> Kept {
+        let mut kept = Kept {
+            vertices: vec![false; vertices],
+            edges: HashSet::with_capacity(tris.len() * 3),
+            triangles: HashSet::with_capacity(tris.len()),
+        };
+        for t in tris {
+            for c in 0..3 {
+                kept.vertices[t[c] as usize] = true;
+                let (a, b) = (t[c], t[(c + 1) % 3]);
+                kept.edges.insert([a.min(b), a.max(b)]);
+            }
+            kept.triangles.insert(sorted3(*t));
+        }
+        kept
+    }
+
+    /// Whether the check point of `owners` lies on what is kept: a vertex (`[k, k, k]`), an
+    /// edge's midpoint (`[a, b, a]`) or a triangle's centroid (`[a, b, c]`).
+    fn holds(&self, owners: [u32; 3]) -> bool {
+        let [a, b, c] = owners;
+        if a == b {
+            self.vertices[a as usize]
+        } else if a == c {
+            self.edges.contains(&[a.min(b), a.max(b)])
+        } else {
+            self.triangles.contains(&sorted3(owners))
         }
     }
 }
@@ -1187,6 +1249,38 @@ mod tests {
                         "a triangle spans the switch from y = {y}"
                     );
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn kept_checks_are_the_ones_on_the_simplified_surface() {
+        // Two triangles of a fan, the simplified piece keeping the first.
+        let p = [
+            Vec3::ZERO,
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.3, 1.0, 0.1),
+            Vec3::new(-0.8, 0.6, 0.4),
+        ];
+        let kept = Kept::of(&[[0, 1, 2]], 4);
+        let surface = crate::surface_distance::SurfaceBvh::new(vec![[p[0], p[1], p[2]]]);
+        let checks: [([u32; 3], Vec3, bool); 8] = [
+            ([1, 1, 1], p[1], true),
+            ([3, 3, 3], p[3], false),
+            ([2, 0, 2], (p[2] + p[0]) * 0.5, true),
+            ([0, 2, 0], (p[0] + p[2]) * 0.5, true),
+            ([2, 3, 2], (p[2] + p[3]) * 0.5, false),
+            ([2, 0, 1], (p[0] + p[1] + p[2]) / 3.0, true),
+            ([0, 2, 3], (p[0] + p[2] + p[3]) / 3.0, false),
+            ([3, 3, 3], p[3], false),
+        ];
+        for (owners, point, on) in checks {
+            assert_eq!(kept.holds(owners), on, "{owners:?}");
+            // What is held lies on the kept surface: its query could not raise the error.
+            if on {
+                assert!(surface.distance(point) < 1e-6, "{owners:?}");
+            } else {
+                assert!(surface.distance(point) > 0.1, "{owners:?}");
             }
         }
     }

@@ -39,6 +39,87 @@ const MAX_SAMPLES_ACROSS: f32 = 512.0;
 /// the work (the sample tree's leaves span 40 pixels at 600 px).
 const CARD_SAMPLES_ACROSS: f32 = 8.0;
 
+/// What [`CardCoverage::raster`] tells about a card's covered samples.
+trait Sink {
+    /// Whether sample `s` still needs testing: a mask skips the samples it already holds.
+    fn wants(&self, s: usize) -> bool;
+    /// Sample `s` is covered by the card.
+    fn hit(&mut self, s: usize);
+}
+
+/// Every covered sample, to a closure (the cover counts of thinning).
+struct Every<F>(F);
+
+impl<F: FnMut(usize)> Sink for Every<F> {
+    #[inline]
+    fn wants(&self, _: usize) -> bool {
+        true
+    }
+
+    #[inline]
+    fn hit(&mut self, s: usize) {
+        (self.0)(s);
+    }
+}
+
+/// A coverage mask: a sample already covered is not tested again (most of a dense crown's are,
+/// many times over), which sets the same samples.
+struct Mask<'a>(&'a mut [bool]);
+
+impl Sink for Mask<'_> {
+    #[inline]
+    fn wants(&self, s: usize) -> bool {
+        !self.0[s]
+    }
+
+    #[inline]
+    fn hit(&mut self, s: usize) {
+        self.0[s] = true;
+    }
+}
+
+/// The samples `x0..x1` of the row at height `sy` (sample centres at `x + 0.5`, within
+/// `lo..hi`) that can lie inside a triangle of `edges` (counter-clockwise): each edge function
+/// is linear along the row, and its zero bounds the span, widened by a sample against rounding
+/// (every sample is still tested exactly). `None` when the row misses the triangle.
+#[inline]
+fn row_span(edges: &[(Vec2, Vec2); 3], sy: f32, lo: f32, hi: f32) -> Option<(usize, usize)> {
+    let (mut a, mut b) = (lo, hi);
+    for (p, q) in edges {
+        let d = *q - *p;
+        // w(x) = d.x·(sy − p.y) − d.y·(x + 0.5 − p.x) ≥ 0.
+        let at = d.x * (sy - p.y);
+        if d.y < 0.0 {
+            a = a.max((p.x + at / d.y - 0.5).floor() - 1.0);
+        } else if d.y > 0.0 {
+            b = b.min((p.x + at / d.y - 0.5).ceil() + 2.0);
+        } else if at < 0.0 {
+            return None;
+        }
+    }
+    (a < b).then(|| (a.max(lo) as usize, b.min(hi) as usize))
+}
+
+/// One view's cover by the cards ([`CardCoverage::cover`]).
+struct Cover {
+    count: Vec<u32>,
+    xor: Vec<u32>,
+    cards: CardSamples,
+}
+
+/// One view's covered samples of every card, card by card: card `c`'s are
+/// `samples[start[c]..start[c + 1]]`.
+struct CardSamples {
+    start: Vec<usize>,
+    samples: Vec<u32>,
+}
+
+impl CardSamples {
+    fn of(&self, card: usize) -> &[u32] {
+        &self.samples[self.start[card]..self.start[card + 1]]
+    }
+}
+
 /// One view: an orthographic projection onto `right`/`up`, sample `(0, 0)` at `origin`.
 struct View {
     right: Vec3,
@@ -211,7 +292,7 @@ impl CardCoverage {
     /// centre, covers. A sample on an edge belongs to the triangle on the edge's left or top
     /// side only (the usual fill rule), so the two triangles of a quad never both claim the
     /// samples on their shared diagonal.
-    fn raster(&self, view: &View, card: usize, scale: f32, f: &mut impl FnMut(usize)) {
+    fn raster(&self, view: &View, card: usize, scale: f32, sink: &mut impl Sink) {
         let c = &self.cards[card];
         for tri in &c.triangles {
             let mut p = tri.map(|(pos, _)| {
@@ -252,8 +333,16 @@ impl CardCoverage {
                 d.y < 0.0 || (d.y == 0.0 && d.x > 0.0)
             });
             for y in lo.y as usize..hi.y as usize {
-                for x in lo.x as usize..hi.x as usize {
-                    let s = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                let sy = y as f32 + 0.5;
+                let Some((x0, x1)) = row_span(&edges, sy, lo.x, hi.x) else {
+                    continue;
+                };
+                for x in x0..x1 {
+                    let i = y * view.width + x;
+                    if !sink.wants(i) {
+                        continue;
+                    }
+                    let s = Vec2::new(x as f32 + 0.5, sy);
                     let w = [0, 1, 2].map(|k| (edges[k].1 - edges[k].0).perp_dot(s - edges[k].0));
                     if (0..3).any(|k| w[k] < 0.0 || (w[k] == 0.0 && !owns_zero[k])) {
                         continue;
@@ -264,7 +353,7 @@ impl CardCoverage {
                             continue;
                         }
                     }
-                    f(y * view.width + x);
+                    sink.hit(i);
                 }
             }
         }
@@ -289,6 +378,35 @@ impl CardCoverage {
         step.max(1.0).log2()
     }
 
+    /// Every card's cover of `view`, rasterised once: per sample how many cards cover it and
+    /// the XOR of their indices (the one card, when one does), and each card's covered samples,
+    /// so that thinning replays a dropped card's instead of rasterising it again (oak_dense at
+    /// 200 px: 8.6 M samples, 34 MB, against 27,000 cards drawn twelve times over).
+    fn cover(&self, view: &View) -> Cover {
+        let n = self.cards.len();
+        let mut count = vec![0u32; view.width * view.height];
+        let mut xor = vec![0u32; view.width * view.height];
+        let mut cards = CardSamples {
+            start: Vec::with_capacity(n + 1),
+            samples: Vec::new(),
+        };
+        for c in 0..n {
+            cards.start.push(cards.samples.len());
+            self.raster(
+                view,
+                c,
+                1.0,
+                &mut Every(|s: usize| {
+                    count[s] += 1;
+                    xor[s] ^= c as u32;
+                    cards.samples.push(s as u32);
+                }),
+            );
+        }
+        cards.start.push(cards.samples.len());
+        Cover { count, xor, cards }
+    }
+
     /// Chooses the cards to keep: at most `max_triangles` triangles of them (at least one
     /// card), dropping first the card with the fewest samples no other card covers, per
     /// triangle it frees. `tie` orders cards that free the same (a seeded shuffle, so equal
@@ -300,31 +418,15 @@ impl CardCoverage {
         if total <= max_triangles || n <= 1 {
             return keep;
         }
-        // Per view and sample: how many cards cover it, and the XOR of their indices (the one
-        // card, when one does).
-        let mut buffers: Vec<(Vec<u32>, Vec<u32>)> = self
-            .views
-            .par_iter()
-            .map(|v| {
-                let mut count = vec![0u32; v.width * v.height];
-                let mut xor = vec![0u32; v.width * v.height];
-                for c in 0..n {
-                    self.raster(v, c, 1.0, &mut |s| {
-                        count[s] += 1;
-                        xor[s] ^= c as u32;
-                    });
-                }
-                (count, xor)
-            })
-            .collect();
+        let mut buffers: Vec<Cover> = self.views.par_iter().map(|v| self.cover(v)).collect();
         let _ = self.original.set(
             buffers
                 .iter()
-                .map(|(count, _)| count.iter().map(|&k| k > 0).collect())
+                .map(|cover| cover.count.iter().map(|&k| k > 0).collect())
                 .collect(),
         );
         let mut unique = vec![0u64; n];
-        for (count, xor) in &buffers {
+        for Cover { count, xor, .. } in &buffers {
             for (s, &k) in count.iter().enumerate() {
                 if k == 1 {
                     unique[xor[s] as usize] += 1;
@@ -352,14 +454,15 @@ impl CardCoverage {
             keep[c] = false;
             kept -= 1;
             total -= triangles[c];
-            for (v, (count, xor)) in self.views.iter().zip(buffers.iter_mut()) {
-                self.raster(v, c, 1.0, &mut |s| {
+            for Cover { count, xor, cards } in &mut buffers {
+                for &s in cards.of(c) {
+                    let s = s as usize;
                     count[s] -= 1;
                     xor[s] ^= c as u32;
                     if count[s] == 1 {
                         unique[xor[s] as usize] += 1;
                     }
-                });
+                }
             }
         }
         keep
@@ -463,7 +566,7 @@ impl CardCoverage {
     fn mask(&self, view: &View, cards: &[usize], scale: f32) -> Vec<bool> {
         let mut m = vec![false; view.width * view.height];
         for &c in cards {
-            self.raster(view, c, scale, &mut |s| m[s] = true);
+            self.raster(view, c, scale, &mut Mask(&mut m));
         }
         m
     }
@@ -598,8 +701,8 @@ pub fn card_centre(foliage: &WoodMesh, tris: &[(usize, usize)]) -> Vec3 {
 mod tests {
     use super::*;
     use frond_scene::{ImportOptions, Part, import};
-    use rand::SeedableRng;
     use rand::seq::SliceRandom;
+    use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
     fn sample() -> (Tree, WoodMesh, Vec<Vec<(usize, usize)>>) {
@@ -607,6 +710,65 @@ mod tests {
         let foliage = WoodMesh::from_tree_part(&tree, Part::Foliage);
         let pieces = foliage.pieces();
         (tree, foliage, pieces)
+    }
+
+    #[test]
+    fn row_spans_hold_every_sample_inside_the_triangle() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..500 {
+            let mut p: [Vec2; 3] = std::array::from_fn(|_| {
+                Vec2::new(rng.random_range(-5.0..45.0), rng.random_range(-5.0..45.0))
+            });
+            if (p[1] - p[0]).perp_dot(p[2] - p[0]) < 0.0 {
+                p.swap(1, 2);
+            }
+            let edges = [(p[1], p[2]), (p[2], p[0]), (p[0], p[1])];
+            for y in 0..40 {
+                let sy = y as f32 + 0.5;
+                let span = row_span(&edges, sy, 0.0, 40.0);
+                for x in 0..40usize {
+                    let s = Vec2::new(x as f32 + 0.5, sy);
+                    let inside = edges.iter().all(|(a, b)| (*b - *a).perp_dot(s - *a) >= 0.0);
+                    if inside {
+                        let (x0, x1) = span.expect("a row with an inside sample has a span");
+                        assert!(
+                            (x0..x1).contains(&x),
+                            "{p:?} row {y}: {x} outside {x0}..{x1}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_cover_records_what_each_card_rasterises_and_masks_their_union() {
+        let (tree, foliage, pieces) = sample();
+        let coverage = CardCoverage::new(
+            &tree,
+            &foliage,
+            &pieces,
+            &tree.bounds,
+            tree.height() / 200.0,
+        );
+        let view = &coverage.views[1];
+        let cover = coverage.cover(view);
+        let mut union = vec![false; view.width * view.height];
+        let mut count = vec![0u32; union.len()];
+        for c in 0..coverage.cards.len() {
+            let mut samples = Vec::new();
+            coverage.raster(view, c, 1.0, &mut Every(|s: usize| samples.push(s as u32)));
+            assert_eq!(cover.cards.of(c), samples.as_slice(), "card {c}");
+            for &s in &samples {
+                union[s as usize] = true;
+                count[s as usize] += 1;
+            }
+        }
+        assert_eq!(cover.count, count);
+        assert!(union.iter().filter(|c| **c).count() > 1000);
+        // The mask skips samples it holds: the same union.
+        let all: Vec<usize> = (0..coverage.cards.len()).collect();
+        assert_eq!(coverage.mask(view, &all, 1.0), union);
     }
 
     #[test]
