@@ -115,11 +115,18 @@ fn passes_cutoff(alpha: f32, cutoff: f32) -> bool {
 /// does a trilinear blend of two levels' (every step is a monotone lerp), so most alpha tests
 /// are decided without filtering: in a coverage render a sample is tested by every leaf card
 /// over it until one passes, and the filtering was most of the rasteriser's time.
+/// `trilinear` (with the next level, none for the last) widens each entry by every footprint
+/// of the next level that a point of the same footprint cell can read, so a trilinear test is
+/// decided from one footprint and one entry, the next level's footprint found only when the
+/// entry leaves it open.
 #[derive(Clone, Debug)]
-struct AlphaBounds(Vec<[u8; 2]>);
+struct AlphaBounds {
+    footprint: Vec<[u8; 2]>,
+    trilinear: Vec<[u8; 2]>,
+}
 
 impl AlphaBounds {
-    fn new((w, h, alpha): &(u32, u32, Vec<u8>)) -> AlphaBounds {
+    fn new((w, h, alpha): &(u32, u32, Vec<u8>), next: Option<&(u32, u32, Vec<u8>)>) -> AlphaBounds {
         let (w, h) = (*w as usize, *h as usize);
         let mut bounds = vec![[0u8, 255u8]; alpha.len()];
         for y in 0..h.saturating_sub(1) {
@@ -132,7 +139,49 @@ impl AlphaBounds {
                 ];
             }
         }
-        AlphaBounds(bounds)
+        let trilinear = next.map_or_else(Vec::new, |(nw, nh, next)| {
+            let (nw, nh) = (*nw as usize, *nh as usize);
+            // The next level's first footprint texels a point of cell `c` (of `n` a side here,
+            // `m` there) can read: `uv` within `[(c + 0.5)/n, (c + 1.5)/n)`, so
+            // `uv·m − 0.5` within this range (padded against rounding); `None` when a
+            // footprint there would leave the level (it wraps: not in the table).
+            let reach = |c: usize, n: usize, m: usize| {
+                let (n, m) = (n as f32, m as f32);
+                let lo = (c as f32 + 0.5) / n * m - 0.5 - 0.01;
+                let hi = (c as f32 + 1.5) / n * m - 0.5 + 0.01;
+                (lo >= 0.0 && hi < m - 1.0).then(|| (lo as usize, hi as usize + 1))
+            };
+            let mut out = vec![[0u8, 255u8]; alpha.len()];
+            for y in 0..h.saturating_sub(1) {
+                let Some((y0, y1)) = reach(y, h, nh) else {
+                    continue;
+                };
+                for x in 0..w - 1 {
+                    let Some((x0, x1)) = reach(x, w, nw) else {
+                        continue;
+                    };
+                    let mut r = bounds[y * w + x];
+                    for row in next[y0 * nw..(y1 + 1) * nw].chunks_exact(nw) {
+                        for &a in &row[x0..=x1] {
+                            r = [r[0].min(a), r[1].max(a)];
+                        }
+                    }
+                    out[y * w + x] = r;
+                }
+            }
+            out
+        });
+        AlphaBounds {
+            footprint: bounds,
+            trilinear,
+        }
+    }
+
+    /// Every level's bounds of a chain.
+    fn chain(levels: &Levels) -> Vec<AlphaBounds> {
+        (0..levels.0.len())
+            .map(|k| AlphaBounds::new(&levels.0[k], levels.0.get(k + 1)))
+            .collect()
     }
 }
 
@@ -222,10 +271,7 @@ impl SoftwareTextures {
         let alpha_bounds = if colour {
             Vec::new()
         } else {
-            textures
-                .iter()
-                .map(|l: &Levels| l.0.iter().map(AlphaBounds::new).collect())
-                .collect()
+            textures.iter().map(AlphaBounds::chain).collect()
         };
         Ok(SoftwareTextures {
             textures,
@@ -709,7 +755,8 @@ fn centroid_lod(s: &Setup, levels: &Levels) -> f32 {
 #[inline]
 fn floor_i64(x: f32) -> i64 {
     let i = x as i64;
-    if (i as f32) > x { i - 1 } else { i }
+    // Without a branch: which way it goes is a coin toss for texel coordinates.
+    i - i64::from((i as f32) > x)
 }
 
 /// Texel index `i` of a side of `n` texels under `wrap`.
@@ -901,20 +948,22 @@ impl Levels {
     ) -> bool {
         let (a, b) = (lod.a as usize, lod.b as usize);
         let fa = footprint(&self.0[a], uv, wrap, 1);
-        let fb = (lod.f > 0.0).then(|| footprint(&self.0[b], uv, wrap, 1));
-        // The footprints' bounds, when both are interior (then the table's entry is theirs).
+        // The footprint's bounds, when it is interior (then the table's entry is its own),
+        // with the next level's when blended with it.
         let interior = |(o, _, _): &([usize; 4], f32, f32), w: u32| {
             o[1] == o[0] + 1 && o[3] == o[2] + 1 && o[2] == o[0] + w as usize
         };
-        let mut range = interior(&fa, self.0[a].0).then(|| bounds[a].0[fa.0[0]]);
-        if let (Some(r), Some(fb)) = (range.as_mut(), &fb) {
-            *r = if interior(fb, self.0[b].0) {
-                let q = bounds[b].0[fb.0[0]];
-                [r[0].min(q[0]), r[1].max(q[1])]
+        let trilinear = lod.f > 0.0;
+        let range = interior(&fa, self.0[a].0).then(|| {
+            let table = &bounds[a];
+            if !trilinear {
+                table.footprint[fa.0[0]]
+            } else if b == a + 1 && !table.trilinear.is_empty() {
+                table.trilinear[fa.0[0]]
             } else {
                 [0, 255]
-            };
-        }
+            }
+        });
         if let Some([lo, hi]) = range {
             // Monotone in every texel: the same operations on the bounds bound the result.
             if f32::from(lo) / 255.0 * scale >= cutoff {
@@ -924,6 +973,7 @@ impl Levels {
                 return false;
             }
         }
+        let fb = trilinear.then(|| footprint(&self.0[b], uv, wrap, 1));
         let filter = |(o, fx, fy): ([usize; 4], f32, f32), level: usize| {
             let data = &self.0[level].2;
             bilerp(o.map(|k| f32::from(data[k])), fx, fy)
@@ -1000,17 +1050,19 @@ fn mapped_normal(normal: Vec3, tangent: Vec4, sign: f32, map: Vec3) -> Vec3 {
 
 /// The samples `first..=last` (offsets from the row's first, at most `len`) of a row whose
 /// weights start at `start` and change by `step` per sample that can be inside the triangle:
-/// each weight's zero crossing bounds the span, widened by one sample against rounding (the
-/// samples are still tested one by one). `None` when no sample can be.
+/// each weight's zero crossing (`−start · inv`, `inv` the step's reciprocal, 0 where the step
+/// is too small to invert safely, which leaves that edge out) bounds the span, widened by two
+/// samples against rounding (the samples are still tested one by one, so any span holding the
+/// inside ones gives the same image). `None` when no sample can be.
 #[inline]
-fn row_span(start: [f32; 3], step: [f32; 3], len: usize) -> Option<(usize, usize)> {
+fn row_span(start: [f32; 3], step: [f32; 3], inv: [f32; 3], len: usize) -> Option<(usize, usize)> {
     let (mut lo, mut hi) = (0.0f32, len as f32);
     for k in 0..3 {
-        if step[k] > 0.0 {
-            lo = lo.max(floor_i64(-start[k] / step[k]) as f32 - 1.0);
-        } else if step[k] < 0.0 {
-            hi = hi.min(floor_i64(start[k] / -step[k]) as f32 + 2.0);
-        } else if start[k] < 0.0 {
+        if inv[k] > 0.0 {
+            lo = lo.max(-start[k] * inv[k] - 2.0);
+        } else if inv[k] < 0.0 {
+            hi = hi.min(-start[k] * inv[k] + 3.0);
+        } else if step[k] == 0.0 && start[k] < 0.0 {
             return None;
         }
     }
@@ -1054,10 +1106,13 @@ impl Setup {
             -(self.y[0] - self.y[2]) * self.inv_area,
             -(self.y[1] - self.y[0]) * self.inv_area,
         ];
+        // Reciprocals once a triangle rather than a division per edge and row; steps this small
+        // bound nothing within an image.
+        let inv = step.map(|s| if s.abs() >= 1e-30 { 1.0 / s } else { 0.0 });
         let x0 = self.min[0] as usize;
         (ty0..ty1).filter_map(move |y| {
             let start = self.weights(x0 as f32 + 0.5, y as f32 + 0.5);
-            let (first, last) = row_span(start, step, self.max[0] as usize - x0)?;
+            let (first, last) = row_span(start, step, inv, self.max[0] as usize - x0)?;
             Some(RowSpan {
                 y,
                 first: x0 + first,
@@ -1543,7 +1598,7 @@ mod tests {
             })
             .collect();
         let levels = Levels(crate::pipeline::alpha_mip_chain(w, h, &alpha));
-        let bounds: Vec<AlphaBounds> = levels.0.iter().map(AlphaBounds::new).collect();
+        let bounds = AlphaBounds::chain(&levels);
         let mut soft = 0;
         let mut tests = 0;
         for wrap in [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat] {
@@ -1567,6 +1622,80 @@ mod tests {
         // Many tests fell on soft alphas (between the extremes), not only on footprints the
         // bounds settle outright.
         assert!(soft > tests / 20, "{soft} of {tests}");
+    }
+
+    /// A row's span holds every sample the weights put inside the triangle, for triangles of
+    /// every shape and size (slivers, nearly flat rows, far outside the target).
+    #[test]
+    fn row_spans_hold_every_inside_sample() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |range: f32| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 40) as f32 / (1u64 << 24) as f32 * range
+        };
+        let (sw, sh) = (96.0f32, 64.0f32);
+        let mut inside = 0;
+        for k in 0..3000 {
+            let scale = [2.0, 30.0, 400.0][k % 3];
+            let mut x = [0.0f32; 3].map(|_| next(scale) - scale / 2.0 + 48.0);
+            let mut y = [0.0f32; 3].map(|_| next(scale) - scale / 2.0 + 32.0);
+            if k % 7 == 0 {
+                y[1] = y[0] + 1e-3; // a nearly flat edge
+            }
+            let area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
+            if area.abs() < 1e-6 {
+                continue;
+            }
+            if area < 0.0 {
+                x.swap(1, 2);
+                y.swap(1, 2);
+            }
+            let min = [
+                ((x.iter().copied().fold(f32::INFINITY, f32::min) - 0.5).ceil()).max(0.0),
+                ((y.iter().copied().fold(f32::INFINITY, f32::min) - 0.5).ceil()).max(0.0),
+            ];
+            let max = [
+                ((x.iter().copied().fold(f32::NEG_INFINITY, f32::max) - 0.5).floor()).min(sw - 1.0),
+                ((y.iter().copied().fold(f32::NEG_INFINITY, f32::max) - 0.5).floor()).min(sh - 1.0),
+            ];
+            if min[0] > max[0] || min[1] > max[1] {
+                continue;
+            }
+            let t = Setup {
+                x,
+                y,
+                z: [0.0; 3],
+                q: [1.0; 3],
+                uq: [[0.0; 2]; 3],
+                nq: [Vec3::ZERO; 3],
+                tq: None,
+                normal_lod: Trilinear::default(),
+                inv_area: 1.0 / area.abs(),
+                material: 0,
+                lit: false,
+                back: false,
+                lod: Trilinear::default(),
+                min: [min[0] as i32, min[1] as i32],
+                max: [max[0] as i32, max[1] as i32],
+            };
+            let spans: Vec<RowSpan> = t.row_spans(0, sh as usize).collect();
+            for sy in min[1] as usize..=max[1] as usize {
+                for sx in min[0] as usize..=max[0] as usize {
+                    let b = t.weights(sx as f32 + 0.5, sy as f32 + 0.5);
+                    if b.iter().all(|&w| w >= 0.0) {
+                        inside += 1;
+                        let span = spans.iter().find(|s| s.y == sy);
+                        assert!(
+                            span.is_some_and(|s| (s.first..=s.last).contains(&sx)),
+                            "triangle {x:?} {y:?}: sample ({sx}, {sy}) outside its row's span"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(inside > 100_000, "{inside} inside samples");
     }
 
     /// Marking a decided pixel's samples covered changes no mask: many overlapping
