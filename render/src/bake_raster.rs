@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use crate::error::RenderError;
 use crate::pipeline::srgb_to_linear;
 use crate::scene::DrawScene;
-use crate::software::{Bands, Setup, SoftwareTextures, checked_target};
+use crate::software::{Bands, Setup, SoftwareTextures, checked_target, passes_cutoff};
 
 /// A bake render resolved to pixels, top row first.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -138,7 +138,6 @@ impl BakeRaster<'_> {
         for &ti in bin {
             let t = &self.triangles[ti as usize];
             let material = &self.scene.materials[t.material as usize];
-            let texture = material.texture.map(|i| &self.textures.textures[i]);
             for span in t.row_spans(y0, y1) {
                 let row = (span.y - y0) * self.width;
                 for x in span.first..=span.last {
@@ -153,9 +152,18 @@ impl BakeRaster<'_> {
                     }
                     if let Some(cutoff) = material.alpha_cutoff {
                         let (uv, _) = t.uv(b);
-                        let a = texture
-                            .map_or(1.0, |l| l.alpha_nearest_level(uv, t.lod, material.wrap, 4));
-                        if a * material.base_color[3] < cutoff {
+                        let scale = material.base_color[3];
+                        let pass = match material.texture {
+                            Some(i) => self.textures.bake_alpha_test(
+                                i,
+                                uv,
+                                t.lod,
+                                material.wrap,
+                                [scale, cutoff],
+                            ),
+                            None => passes_cutoff(scale, cutoff),
+                        };
+                        if !pass {
                             continue;
                         }
                     }

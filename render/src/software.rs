@@ -105,7 +105,7 @@ pub(crate) struct Levels(Vec<(u32, u32, Vec<u8>)>);
 /// The alpha test: discarded only when `alpha < cutoff` (a NaN alpha is kept, as the renderer
 /// always kept it).
 #[inline]
-fn passes_cutoff(alpha: f32, cutoff: f32) -> bool {
+pub(crate) fn passes_cutoff(alpha: f32, cutoff: f32) -> bool {
     alpha.partial_cmp(&cutoff) != Some(std::cmp::Ordering::Less)
 }
 
@@ -214,7 +214,58 @@ impl SoftwareTextures {
     /// atlas's tiles, whichever meshes each tile holds.
     pub fn for_bake(textures: &[DrawTexture]) -> Result<SoftwareTextures, RenderError> {
         let n = textures.len();
-        Self::prepare(textures, vec![true; n], vec![false; n], true)
+        let mut prepared = Self::prepare(textures, vec![true; n], vec![false; n], true)?;
+        // The bake's alpha test reads one level's alpha channel: its footprints' bounds.
+        prepared.alpha_bounds = prepared
+            .textures
+            .par_iter()
+            .map(|levels| {
+                levels
+                    .0
+                    .iter()
+                    .map(|(w, h, rgba)| {
+                        let alpha = rgba.chunks_exact(4).map(|p| p[3]).collect();
+                        AlphaBounds::new(&(*w, *h, alpha), None)
+                    })
+                    .collect()
+            })
+            .collect();
+        Ok(prepared)
+    }
+
+    /// The bake's alpha test at `uv` of `texture`'s level nearer `lod`
+    /// ([`Levels::alpha_nearest_level`]): `alpha · scale ≥ cutoff`, decided from the
+    /// footprint's bounds where they settle it (prepared by [`SoftwareTextures::for_bake`]).
+    #[inline]
+    pub(crate) fn bake_alpha_test(
+        &self,
+        texture: usize,
+        uv: [f32; 2],
+        lod: Trilinear,
+        wrap: [Wrap; 2],
+        [scale, cutoff]: [f32; 2],
+    ) -> bool {
+        let levels = &self.textures[texture];
+        let level = if lod.f < 0.5 { lod.a } else { lod.b } as usize;
+        let (o, fx, fy) = footprint(&levels.0[level], uv, wrap, 4);
+        let w = levels.0[level].0 as usize;
+        if let Some(bounds) = self.alpha_bounds.get(texture)
+            && o[1] == o[0] + 4
+            && o[3] == o[2] + 4
+            && o[2] == o[0] + 4 * w
+        {
+            let [lo, hi] = bounds[level].footprint[o[0] / 4];
+            // Monotone in every texel: the same operations on the bounds bound the result.
+            if f32::from(lo) / 255.0 * scale >= cutoff {
+                return true;
+            }
+            if f32::from(hi) / 255.0 * scale < cutoff {
+                return false;
+            }
+        }
+        let data = &levels.0[level].2;
+        let alpha = bilerp(o.map(|k| f32::from(data[k + 3])), fx, fy) / 255.0;
+        passes_cutoff(alpha * scale, cutoff)
     }
 
     /// The mip chains of the `used` textures (colour or alpha alone) and of the `normal_map`
@@ -986,8 +1037,9 @@ impl Levels {
     }
 
     /// Bilinear alpha (0..1) at `(u, v)` of the one level nearer `lod` (a GPU's
-    /// `LINEAR_MIPMAP_NEAREST`): half the fetches of [`Levels::alpha`].
-    #[inline]
+    /// `LINEAR_MIPMAP_NEAREST`): half the fetches of [`Levels::alpha`]. The bake tests alpha so
+    /// ([`SoftwareTextures::bake_alpha_test`]); kept as the test's reference.
+    #[cfg(test)]
     pub(crate) fn alpha_nearest_level(
         &self,
         uv: [f32; 2],
@@ -1696,6 +1748,50 @@ mod tests {
             }
         }
         assert!(inside > 100_000, "{inside} inside samples");
+    }
+
+    /// The bake's alpha test decided from the footprints' bounds answers as filtering the
+    /// nearer level does, at every level pair, inside and across the edges under each wrap.
+    #[test]
+    fn bake_alpha_test_matches_the_nearer_levels_filter() {
+        let (w, h) = (37u32, 20u32);
+        let rgba: Vec<u8> = (0..w * h)
+            .flat_map(|i| {
+                let (x, y) = ((i % w) as f32 - 18.0, (i / w) as f32 - 10.0);
+                let r = (x * x + y * y).sqrt();
+                let noise = (i.wrapping_mul(2_654_435_761) >> 27) as f32;
+                let a = (255.0 - (r - 6.0).max(0.0) * 40.0 + noise).clamp(0.0, 255.0) as u8;
+                [30, 200, 90, a]
+            })
+            .collect();
+        let prepared = SoftwareTextures::for_bake(&[DrawTexture {
+            width: w,
+            height: h,
+            rgba,
+        }])
+        .expect("textures");
+        let levels = &prepared.textures[0];
+        let mut soft = 0;
+        let mut tests = 0;
+        for wrap in [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat] {
+            for lod in [0.0, 0.3, 0.7, 1.7, 2.5, 9.0] {
+                let pair = levels.pair(lod);
+                for k in 0..4000u32 {
+                    let u = (k % 80) as f32 / 53.0 - 0.3;
+                    let v = (k / 80) as f32 / 37.0 - 0.2;
+                    for (scale, cutoff) in [(1.0, 0.5), (0.8, 0.3), (1.0, 1.0), (1.0, 0.0)] {
+                        let filtered = levels.alpha_nearest_level([u, v], pair, [wrap; 2], 4);
+                        let expected = passes_cutoff(filtered * scale, cutoff);
+                        let got =
+                            prepared.bake_alpha_test(0, [u, v], pair, [wrap; 2], [scale, cutoff]);
+                        assert_eq!(got, expected, "{wrap:?} lod {lod} uv ({u}, {v}) {cutoff}");
+                        tests += 1;
+                        soft += usize::from(filtered > 0.0 && filtered < 1.0);
+                    }
+                }
+            }
+        }
+        assert!(soft > tests / 20, "{soft} of {tests}");
     }
 
     /// Marking a decided pixel's samples covered changes no mask: many overlapping
