@@ -1634,14 +1634,11 @@ mod tests {
         assert!(SoftwareTextures::new(&textured, false).is_err());
     }
 
-    /// The alpha test decided from the footprints' bounds answers as filtering does, at every
-    /// level pair, inside and across the edges under each wrap, on a texture of hard and soft
-    /// edges (a leaf's), at cutoffs and scales around its values.
-    #[test]
-    fn bounded_alpha_test_matches_the_filtered_one() {
+    /// A 37×20 alpha: a disc of opaque texels with a soft rim, and noise — every kind of
+    /// footprint (a leaf's hard and soft edges).
+    fn leaf_alpha() -> (u32, u32, Vec<u8>) {
         let (w, h) = (37u32, 20u32);
-        // A disc of opaque texels with a soft rim, and noise: every kind of footprint.
-        let alpha: Vec<u8> = (0..w * h)
+        let alpha = (0..w * h)
             .map(|i| {
                 let (x, y) = ((i % w) as f32 - 18.0, (i / w) as f32 - 10.0);
                 let r = (x * x + y * y).sqrt();
@@ -1649,31 +1646,53 @@ mod tests {
                 (255.0 - (r - 6.0).max(0.0) * 40.0 + noise).clamp(0.0, 255.0) as u8
             })
             .collect();
-        let levels = Levels(crate::pipeline::alpha_mip_chain(w, h, &alpha));
-        let bounds = AlphaBounds::chain(&levels);
+        (w, h, alpha)
+    }
+
+    /// Asserts that `test` (uv, level pair, wrap, `[scale, cutoff]`) answers as the `filtered`
+    /// alpha does, at level pairs of `levels` from `lods`, inside and across the edges under
+    /// each wrap, at cutoffs and scales around the alphas, many of them soft (between the
+    /// extremes: not only footprints the bounds settle outright).
+    fn assert_alpha_tests_match(
+        levels: &Levels,
+        lods: [f32; 6],
+        filtered: impl Fn([f32; 2], Trilinear, Wrap) -> f32,
+        test: impl Fn([f32; 2], Trilinear, Wrap, [f32; 2]) -> bool,
+    ) {
         let mut soft = 0;
         let mut tests = 0;
         for wrap in [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat] {
-            for lod in [0.0, 0.3, 1.0, 1.7, 2.5, 9.0] {
+            for lod in lods {
                 let pair = levels.pair(lod);
                 for k in 0..4000u32 {
-                    let u = (k % 80) as f32 / 53.0 - 0.3;
-                    let v = (k / 80) as f32 / 37.0 - 0.2;
+                    let uv = [(k % 80) as f32 / 53.0 - 0.3, (k / 80) as f32 / 37.0 - 0.2];
+                    let alpha = filtered(uv, pair, wrap);
                     for (scale, cutoff) in [(1.0, 0.5), (0.8, 0.3), (1.0, 1.0), (1.0, 0.0)] {
-                        let filtered = levels.alpha([u, v], pair, [wrap; 2], 1);
-                        let expected = passes_cutoff(filtered * scale, cutoff);
-                        let got =
-                            levels.alpha_test(&bounds, [u, v], pair, [wrap; 2], [scale, cutoff]);
-                        assert_eq!(got, expected, "{wrap:?} lod {lod} uv ({u}, {v}) {cutoff}");
+                        let expected = passes_cutoff(alpha * scale, cutoff);
+                        let got = test(uv, pair, wrap, [scale, cutoff]);
+                        assert_eq!(got, expected, "{wrap:?} lod {lod} uv {uv:?} {cutoff}");
                         tests += 1;
-                        soft += usize::from(filtered > 0.0 && filtered < 1.0);
+                        soft += usize::from(alpha > 0.0 && alpha < 1.0);
                     }
                 }
             }
         }
-        // Many tests fell on soft alphas (between the extremes), not only on footprints the
-        // bounds settle outright.
         assert!(soft > tests / 20, "{soft} of {tests}");
+    }
+
+    /// The alpha test decided from the footprints' bounds (trilinear: one footprint and the
+    /// widened entry) answers as filtering does.
+    #[test]
+    fn bounded_alpha_test_matches_the_filtered_one() {
+        let (w, h, alpha) = leaf_alpha();
+        let levels = Levels(crate::pipeline::alpha_mip_chain(w, h, &alpha));
+        let bounds = AlphaBounds::chain(&levels);
+        assert_alpha_tests_match(
+            &levels,
+            [0.0, 0.3, 1.0, 1.7, 2.5, 9.0],
+            |uv, pair, wrap| levels.alpha(uv, pair, [wrap; 2], 1),
+            |uv, pair, wrap, test| levels.alpha_test(&bounds, uv, pair, [wrap; 2], test),
+        );
     }
 
     /// A row's span holds every sample the weights put inside the triangle, for triangles of
@@ -1751,19 +1770,11 @@ mod tests {
     }
 
     /// The bake's alpha test decided from the footprints' bounds answers as filtering the
-    /// nearer level does, at every level pair, inside and across the edges under each wrap.
+    /// nearer level does.
     #[test]
     fn bake_alpha_test_matches_the_nearer_levels_filter() {
-        let (w, h) = (37u32, 20u32);
-        let rgba: Vec<u8> = (0..w * h)
-            .flat_map(|i| {
-                let (x, y) = ((i % w) as f32 - 18.0, (i / w) as f32 - 10.0);
-                let r = (x * x + y * y).sqrt();
-                let noise = (i.wrapping_mul(2_654_435_761) >> 27) as f32;
-                let a = (255.0 - (r - 6.0).max(0.0) * 40.0 + noise).clamp(0.0, 255.0) as u8;
-                [30, 200, 90, a]
-            })
-            .collect();
+        let (w, h, alpha) = leaf_alpha();
+        let rgba = alpha.iter().flat_map(|&a| [30, 200, 90, a]).collect();
         let prepared = SoftwareTextures::for_bake(&[DrawTexture {
             width: w,
             height: h,
@@ -1771,27 +1782,12 @@ mod tests {
         }])
         .expect("textures");
         let levels = &prepared.textures[0];
-        let mut soft = 0;
-        let mut tests = 0;
-        for wrap in [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat] {
-            for lod in [0.0, 0.3, 0.7, 1.7, 2.5, 9.0] {
-                let pair = levels.pair(lod);
-                for k in 0..4000u32 {
-                    let u = (k % 80) as f32 / 53.0 - 0.3;
-                    let v = (k / 80) as f32 / 37.0 - 0.2;
-                    for (scale, cutoff) in [(1.0, 0.5), (0.8, 0.3), (1.0, 1.0), (1.0, 0.0)] {
-                        let filtered = levels.alpha_nearest_level([u, v], pair, [wrap; 2], 4);
-                        let expected = passes_cutoff(filtered * scale, cutoff);
-                        let got =
-                            prepared.bake_alpha_test(0, [u, v], pair, [wrap; 2], [scale, cutoff]);
-                        assert_eq!(got, expected, "{wrap:?} lod {lod} uv ({u}, {v}) {cutoff}");
-                        tests += 1;
-                        soft += usize::from(filtered > 0.0 && filtered < 1.0);
-                    }
-                }
-            }
-        }
-        assert!(soft > tests / 20, "{soft} of {tests}");
+        assert_alpha_tests_match(
+            levels,
+            [0.0, 0.3, 0.7, 1.7, 2.5, 9.0],
+            |uv, pair, wrap| levels.alpha_nearest_level(uv, pair, [wrap; 2], 4),
+            |uv, pair, wrap, test| prepared.bake_alpha_test(0, uv, pair, [wrap; 2], test),
+        );
     }
 
     /// Marking a decided pixel's samples covered changes no mask: many overlapping
