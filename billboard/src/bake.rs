@@ -253,9 +253,7 @@ pub fn bake_cloud(
         preserve_coverage(&mut samples, &cells, ss * ss, cutoff_samples(params));
     }
 
-    let normals: Vec<Vec3> = quads.iter().map(front_normal).collect();
-    let mut atlas = dilate(samples, &cells, &normals, params.padding);
-    to_tangent_space(&mut atlas, &cells, quads, params.padding);
+    let atlas = finish_cells(samples, &cells, quads, params.padding);
     let uv_rects = cells.iter().map(|c| uv_rect(c, width, height)).collect();
     let texture_bytes = atlas.color.len() + atlas.normal.len();
     tracing::debug!(
@@ -1052,26 +1050,39 @@ fn encode_normal(n: Vec3, alpha: u8) -> [u8; 4] {
     [e(n.x), e(n.y), e(n.z), alpha]
 }
 
-/// One dilated texel: atlas index, colour, normal.
-type Fill = (usize, [u8; 3], [u8; 3]);
+/// A quad's padded cell in the atlas: texel columns `x0..x1`, rows `y0..y1`. Padded cells
+/// are disjoint.
+fn padded_rect(cell: &Cell, padding: u32, width: u32, height: u32) -> [usize; 4] {
+    [
+        cell.x.saturating_sub(padding) as usize,
+        ((cell.x + cell.width + padding).min(width)) as usize,
+        cell.y.saturating_sub(padding) as usize,
+        ((cell.y + cell.height + padding).min(height)) as usize,
+    ]
+}
 
-/// Fills every texel of each quad's padded cell that no sample covered with the colour and
-/// normal of the nearest covered texel of that quad (breadth-first over 8-neighbours, ties
-/// broken by a fixed order), alpha staying 0; a quad with nothing covered gets the mean
-/// covered colour of the atlas and its own front normal (improved-billboard-cloud §4 item 6).
-fn dilate(mut d: Downsampled, cells: &[Cell], quad_normals: &[Vec3], padding: u32) -> Atlas {
+/// Finishes each quad's padded cell, the cells in parallel, each texel written once:
+/// - dilation: every texel no sample covered takes the colour and normal of the nearest
+///   covered texel of that quad (breadth-first over 8-neighbours, ties broken by a fixed
+///   order), alpha staying 0; a quad with nothing covered gets the mean covered colour of the
+///   atlas and its own front normal (improved-billboard-cloud §4 item 6);
+/// - tangent space: the normal, baked and dilated in world space, is rewritten in the quad's
+///   tangent frame (`axis_u`, `axis_v`, front normal): what glTF's `normalTexture` holds, the
+///   tangents engines derive from the billboard's UVs running along the same axes.
+fn finish_cells(d: Downsampled, cells: &[Cell], quads: &[Quad], padding: u32) -> Atlas {
     let width = d.width as usize;
     let fallback = mean_color(&d);
-    let fills: Vec<Vec<Fill>> = cells
+    let decode = |v: u8| f32::from(v) / 255.0 * 2.0 - 1.0;
+    let rgb = |buf: &[u8], i: usize| [buf[i * 4], buf[i * 4 + 1], buf[i * 4 + 2]];
+    // Per cell, its padded texels' final colour and normal, row by row.
+    let finished: Vec<Vec<[u8; 6]>> = cells
         .par_iter()
-        .zip(quad_normals.par_iter())
-        .map(|(cell, &quad_normal)| {
-            let [nx, ny, nz, _] = encode_normal(quad_normal, 0);
+        .zip(quads.par_iter())
+        .map(|(cell, quad)| {
+            let front = front_normal(quad);
+            let [nx, ny, nz, _] = encode_normal(front, 0);
             let default_normal = [nx, ny, nz];
-            let x0 = cell.x.saturating_sub(padding) as usize;
-            let y0 = cell.y.saturating_sub(padding) as usize;
-            let x1 = ((cell.x + cell.width + padding) as usize).min(width);
-            let y1 = ((cell.y + cell.height + padding).min(d.height)) as usize;
+            let [x0, x1, y0, y1] = padded_rect(cell, padding, d.width, d.height);
             let (cw, ch) = (x1 - x0, y1 - y0);
             // Per cell texel: index of the source texel (in the atlas) it copies.
             let mut source = vec![usize::MAX; cw * ch];
@@ -1085,16 +1096,7 @@ fn dilate(mut d: Downsampled, cells: &[Cell], quad_normals: &[Vec3], padding: u3
                     }
                 }
             }
-            let mut fills = Vec::new();
-            if queue.is_empty() {
-                for y in 0..ch {
-                    for x in 0..cw {
-                        let i = (y0 + y) * width + x0 + x;
-                        fills.push((i, fallback, default_normal));
-                    }
-                }
-                return fills;
-            }
+            let empty = queue.is_empty();
             while let Some((x, y)) = queue.pop_front() {
                 let src = source[y * cw + x];
                 for (dx, dy) in [
@@ -1118,87 +1120,52 @@ fn dilate(mut d: Downsampled, cells: &[Cell], quad_normals: &[Vec3], padding: u3
                     }
                 }
             }
-            let rgb = |buf: &[u8], i: usize| [buf[i * 4], buf[i * 4 + 1], buf[i * 4 + 2]];
-            for y in 0..ch {
-                for x in 0..cw {
-                    let i = (y0 + y) * width + x0 + x;
-                    let src = source[y * cw + x];
-                    let mut n = rgb(&d.normal, src);
-                    if n == [0, 0, 0] {
-                        n = default_normal;
-                    }
-                    if i != src || n != rgb(&d.normal, i) {
-                        fills.push((i, rgb(&d.color, src), n));
-                    }
-                }
-            }
-            fills
+            let (u, v) = (
+                quad.axis_u.normalize_or_zero(),
+                quad.axis_v.normalize_or_zero(),
+            );
+            source
+                .iter()
+                .map(|&src| {
+                    let (colour, n) = if empty {
+                        (fallback, default_normal)
+                    } else {
+                        let n = rgb(&d.normal, src);
+                        (
+                            rgb(&d.color, src),
+                            if n == [0, 0, 0] { default_normal } else { n },
+                        )
+                    };
+                    let n = Vec3::new(decode(n[0]), decode(n[1]), decode(n[2])).normalize_or(front);
+                    let t = Vec3::new(n.dot(u), n.dot(v), n.dot(front)).normalize_or(Vec3::Z);
+                    let [r, g, b, _] = encode_normal(t, 0);
+                    [colour[0], colour[1], colour[2], r, g, b]
+                })
+                .collect()
         })
         .collect();
-    for cell_fills in fills {
-        for (i, c, n) in cell_fills {
-            d.color[i * 4..i * 4 + 3].copy_from_slice(&c);
-            d.normal[i * 4..i * 4 + 3].copy_from_slice(&n);
+    let Downsampled {
+        mut color,
+        mut normal,
+        ..
+    } = d;
+    for (cell, texels) in cells.iter().zip(finished) {
+        let [x0, x1, y0, _] = padded_rect(cell, padding, d.width, d.height);
+        let cw = x1 - x0;
+        for (row, texels) in texels.chunks_exact(cw.max(1)).enumerate() {
+            let first = (y0 + row) * width + x0;
+            for (k, t) in texels.iter().enumerate() {
+                let i = (first + k) * 4;
+                color[i..i + 3].copy_from_slice(&t[..3]);
+                normal[i..i + 3].copy_from_slice(&t[3..]);
+            }
         }
     }
     Atlas {
         width: d.width,
         height: d.height,
-        color: d.color,
-        normal: d.normal,
-    }
-}
-
-/// Rewrites each quad's padded cell of the normal atlas from world space (as baked and
-/// dilated) into the quad's tangent frame (`axis_u`, `axis_v`, front normal): what glTF's
-/// `normalTexture` holds, the tangents engines derive from the billboard's UVs running along
-/// the same axes.
-fn to_tangent_space(atlas: &mut Atlas, cells: &[Cell], quads: &[Quad], padding: u32) {
-    let width = atlas.width as usize;
-    let height = atlas.height;
-    let decode = |v: u8| f32::from(v) / 255.0 * 2.0 - 1.0;
-    let source = &atlas.normal;
-    // Per cell (padded cells are disjoint): its rows' first texel and new rgb values, computed
-    // in parallel, then written.
-    let converted: Vec<Vec<(usize, Vec<[u8; 3]>)>> = cells
-        .par_iter()
-        .zip(quads.par_iter())
-        .map(|(cell, quad)| {
-            let (u, v, w) = (
-                quad.axis_u.normalize_or_zero(),
-                quad.axis_v.normalize_or_zero(),
-                front_normal(quad),
-            );
-            let x0 = cell.x.saturating_sub(padding) as usize;
-            let y0 = cell.y.saturating_sub(padding) as usize;
-            let x1 = ((cell.x + cell.width + padding) as usize).min(width);
-            let y1 = ((cell.y + cell.height + padding).min(height)) as usize;
-            (y0..y1)
-                .map(|y| {
-                    let row = (x0..x1)
-                        .map(|x| {
-                            let i = (y * width + x) * 4;
-                            let n = Vec3::new(
-                                decode(source[i]),
-                                decode(source[i + 1]),
-                                decode(source[i + 2]),
-                            )
-                            .normalize_or(w);
-                            let t = Vec3::new(n.dot(u), n.dot(v), n.dot(w)).normalize_or(Vec3::Z);
-                            let [r, g, b, _] = encode_normal(t, 0);
-                            [r, g, b]
-                        })
-                        .collect();
-                    (y * width + x0, row)
-                })
-                .collect()
-        })
-        .collect();
-    for (first, row) in converted.into_iter().flatten() {
-        for (k, rgb) in row.into_iter().enumerate() {
-            let i = (first + k) * 4;
-            atlas.normal[i..i + 3].copy_from_slice(&rgb);
-        }
+        color,
+        normal,
     }
 }
 
