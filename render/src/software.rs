@@ -88,7 +88,9 @@ impl Lighting {
 pub struct SoftwareTextures {
     pub(crate) textures: Vec<Levels>,
     /// Per texture and level, the alpha bounds of every bilinear footprint
-    /// ([`AlphaBounds`]) when colour is not drawn (coverage renders); empty otherwise.
+    /// ([`AlphaBounds`]): of the alpha-only levels when colour is not drawn (coverage renders),
+    /// of the RGBA levels' alpha when prepared for the bake ([`SoftwareTextures::for_bake`],
+    /// footprints only); empty otherwise.
     alpha_bounds: Vec<Vec<AlphaBounds>>,
     /// Per texture, its linear box chain when a drawn material uses it as a normal map and
     /// colour is drawn (lighting needs the normals); empty otherwise.
@@ -1232,6 +1234,8 @@ impl Raster<'_> {
             let texture = material.texture.map(|i| &self.textures.textures[i]);
             let bounds = material
                 .texture
+                // A colour render's levels are RGBA: the alpha-only tables are not theirs.
+                .filter(|_| !colour)
                 .and_then(|i| self.textures.alpha_bounds.get(i))
                 .map(Vec::as_slice);
             let normal_map = material
@@ -1788,6 +1792,39 @@ mod tests {
             |uv, pair, wrap| levels.alpha_nearest_level(uv, pair, [wrap; 2], 4),
             |uv, pair, wrap, test| prepared.bake_alpha_test(0, uv, pair, [wrap; 2], test),
         );
+    }
+
+    /// Textures prepared for the bake (RGBA levels with their alpha's bounds) draw a colour
+    /// render exactly as the colour preparation does: the coverage renders' alpha-only bounds
+    /// never apply to RGBA levels.
+    #[test]
+    fn bake_prepared_textures_draw_colour_renders_unchanged() {
+        let (w, h, alpha) = leaf_alpha();
+        let scene = DrawScene {
+            meshes: vec![quad(-0.9, 0.8, 0.4, false, 0)],
+            materials: vec![DrawMaterial {
+                texture: Some(0),
+                alpha_cutoff: Some(0.5),
+                ..DrawMaterial::opaque([1.0; 4])
+            }],
+            textures: vec![DrawTexture {
+                width: w,
+                height: h,
+                rgba: alpha.iter().flat_map(|&a| [40, 180, 70, a]).collect(),
+            }],
+        };
+        let colour = SoftwareTextures::new(&scene, true).expect("textures");
+        let bake = SoftwareTextures::for_bake(&scene.textures).expect("textures");
+        let draw = |t: &SoftwareTextures| {
+            render_coverage(&scene, t, Mat4::IDENTITY, 60, 40, 2).expect("render")
+        };
+        let image = draw(&colour);
+        let covered = image.covered.iter().filter(|c| **c).count();
+        assert!(
+            covered > 100 && covered < 60 * 40,
+            "{covered} pixels covered"
+        );
+        assert_eq!(draw(&bake), image);
     }
 
     /// Marking a decided pixel's samples covered changes no mask: many overlapping
