@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use crate::error::RenderError;
 use crate::pipeline::srgb_to_linear;
 use crate::scene::DrawScene;
-use crate::software::{Bands, Setup, SoftwareTextures, checked_target, passes_cutoff};
+use crate::software::{AlphaCutoff, Bands, Setup, SoftwareTextures, checked_target};
 
 /// A bake render resolved to pixels, top row first.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -76,6 +76,7 @@ pub fn render_bake(
     let raster = BakeRaster {
         scene,
         textures,
+        cutoffs: AlphaCutoff::of_materials(scene),
         triangles: &triangles,
         width: sw,
         ss,
@@ -119,6 +120,8 @@ struct Scratch {
 struct BakeRaster<'a> {
     scene: &'a DrawScene,
     textures: &'a SoftwareTextures,
+    /// Per material, its alpha test.
+    cutoffs: Vec<Option<AlphaCutoff>>,
     triangles: &'a [Setup],
     /// Samples per row.
     width: usize,
@@ -138,6 +141,7 @@ impl BakeRaster<'_> {
         for &ti in bin {
             let t = &self.triangles[ti as usize];
             let material = &self.scene.materials[t.material as usize];
+            let cutoff = self.cutoffs[t.material as usize].as_ref();
             for span in t.row_spans(y0, y1) {
                 let row = (span.y - y0) * self.width;
                 for x in span.first..=span.last {
@@ -150,18 +154,14 @@ impl BakeRaster<'_> {
                     if z >= depth[s] {
                         continue;
                     }
-                    if let Some(cutoff) = material.alpha_cutoff {
+                    if let Some(cutoff) = cutoff {
                         let (uv, _) = t.uv(b);
-                        let scale = material.base_color[3];
                         let pass = match material.texture {
-                            Some(i) => self.textures.bake_alpha_test(
-                                i,
-                                uv,
-                                t.lod,
-                                material.wrap,
-                                [scale, cutoff],
-                            ),
-                            None => passes_cutoff(scale, cutoff),
+                            Some(i) => {
+                                self.textures
+                                    .bake_alpha_test(i, uv, t.lod, material.wrap, cutoff)
+                            }
+                            None => cutoff.passes(1.0),
                         };
                         if !pass {
                             continue;

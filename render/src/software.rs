@@ -111,6 +111,61 @@ pub(crate) fn passes_cutoff(alpha: f32, cutoff: f32) -> bool {
     alpha.partial_cmp(&cutoff) != Some(std::cmp::Ordering::Less)
 }
 
+/// A material's alpha test, `alpha · scale ≥ cutoff` ([`passes_cutoff`]), with its answers
+/// for footprint bounds tabulated: the bounds are bytes, so whether a bound settles the test
+/// is looked up rather than computed (a division and two conversions a sample, most of a
+/// coverage render's samples being decided so).
+pub(crate) struct AlphaCutoff {
+    scale: f32,
+    cutoff: f32,
+    /// Per byte `b`: `b/255 · scale ≥ cutoff` (a footprint whose least alpha is `b` passes).
+    pass: [bool; 256],
+    /// Per byte `b`: `b/255 · scale < cutoff` (a footprint whose greatest alpha is `b` fails).
+    fail: [bool; 256],
+}
+
+impl AlphaCutoff {
+    pub(crate) fn new(scale: f32, cutoff: f32) -> AlphaCutoff {
+        let at = |b: usize| f32::from(b as u8) / 255.0 * scale;
+        AlphaCutoff {
+            scale,
+            cutoff,
+            pass: std::array::from_fn(|b| at(b) >= cutoff),
+            fail: std::array::from_fn(|b| at(b) < cutoff),
+        }
+    }
+
+    /// The test's answer for every alpha within the footprint bounds `[lo, hi]` (bytes), when
+    /// they settle it: monotone in every texel, a filtered alpha lies within its footprint's
+    /// bounds, and the same operations on the bounds bound the result.
+    #[inline]
+    fn decided(&self, [lo, hi]: [u8; 2]) -> Option<bool> {
+        if self.pass[usize::from(lo)] {
+            Some(true)
+        } else if self.fail[usize::from(hi)] {
+            Some(false)
+        } else {
+            None
+        }
+    }
+
+    /// The test of a filtered `alpha` (0..1).
+    #[inline]
+    pub(crate) fn passes(&self, alpha: f32) -> bool {
+        passes_cutoff(alpha * self.scale, self.cutoff)
+    }
+
+    /// Each material's test of `scene` (its base colour's alpha the scale), `None` for a
+    /// material without one.
+    pub(crate) fn of_materials(scene: &DrawScene) -> Vec<Option<AlphaCutoff>> {
+        scene
+            .materials
+            .iter()
+            .map(|m| m.alpha_cutoff.map(|c| AlphaCutoff::new(m.base_color[3], c)))
+            .collect()
+    }
+}
+
 /// The least and greatest alpha of each interior bilinear footprint of one alpha-only level:
 /// entry `y·w + x` bounds texels `(x..=x+1, y..=y+1)` (`[0, 255]`, deciding nothing, where
 /// the footprint would wrap). A filtered alpha lies between its footprint's bounds, and so
@@ -179,6 +234,17 @@ impl AlphaBounds {
         }
     }
 
+    /// The entry of `level` (these bounds') for the bilinear footprint at `uv`, as
+    /// [`footprint`] finds it, when that lies on the level: the last row and column hold
+    /// `[0, 255]` (their footprints wrap).
+    #[inline(always)]
+    fn cell(&self, (w, h, _): &(u32, u32, Vec<u8>), uv: [f32; 2]) -> Option<usize> {
+        let x0 = floor_i64(uv[0] * *w as f32 - 0.5);
+        let y0 = floor_i64(uv[1] * *h as f32 - 0.5);
+        ((0..i64::from(*w)).contains(&x0) && (0..i64::from(*h)).contains(&y0))
+            .then(|| y0 as usize * *w as usize + x0 as usize)
+    }
+
     /// Every level's bounds of a chain.
     fn chain(levels: &Levels) -> Vec<AlphaBounds> {
         (0..levels.0.len())
@@ -245,7 +311,7 @@ impl SoftwareTextures {
         uv: [f32; 2],
         lod: Trilinear,
         wrap: [Wrap; 2],
-        [scale, cutoff]: [f32; 2],
+        cutoff: &AlphaCutoff,
     ) -> bool {
         let levels = &self.textures[texture];
         let level = if lod.f < 0.5 { lod.a } else { lod.b } as usize;
@@ -255,19 +321,13 @@ impl SoftwareTextures {
             && o[1] == o[0] + 4
             && o[3] == o[2] + 4
             && o[2] == o[0] + 4 * w
+            && let Some(pass) = cutoff.decided(bounds[level].footprint[o[0] / 4])
         {
-            let [lo, hi] = bounds[level].footprint[o[0] / 4];
-            // Monotone in every texel: the same operations on the bounds bound the result.
-            if f32::from(lo) / 255.0 * scale >= cutoff {
-                return true;
-            }
-            if f32::from(hi) / 255.0 * scale < cutoff {
-                return false;
-            }
+            return pass;
         }
         let data = &levels.0[level].2;
         let alpha = bilerp(o.map(|k| f32::from(data[k + 3])), fx, fy) / 255.0;
-        passes_cutoff(alpha * scale, cutoff)
+        cutoff.passes(alpha)
     }
 
     /// The mip chains of the `used` textures (colour or alpha alone) and of the `normal_map`
@@ -480,6 +540,7 @@ fn rasterise(
     let raster = Raster {
         scene,
         textures,
+        cutoffs: AlphaCutoff::of_materials(scene),
         triangles: &triangles,
         width: sw,
         ss: ss as usize,
@@ -905,7 +966,7 @@ fn bilinear_rgb(
 /// `uv` reads — top-left, top-right, bottom-left, bottom-right — and the horizontal and
 /// vertical weights of the second of each pair; they wrap under `wrap` only when the
 /// footprint leaves the level.
-#[inline]
+#[inline(always)]
 fn footprint(
     level: &(u32, u32, Vec<u8>),
     uv: [f32; 2],
@@ -997,35 +1058,25 @@ impl Levels {
         uv: [f32; 2],
         lod: Trilinear,
         wrap: [Wrap; 2],
-        [scale, cutoff]: [f32; 2],
+        cutoff: &AlphaCutoff,
     ) -> bool {
         let (a, b) = (lod.a as usize, lod.b as usize);
-        let fa = footprint(&self.0[a], uv, wrap, 1);
-        // The footprint's bounds, when it is interior (then the table's entry is its own),
-        // with the next level's when blended with it.
-        let interior = |(o, _, _): &([usize; 4], f32, f32), w: u32| {
-            o[1] == o[0] + 1 && o[3] == o[2] + 1 && o[2] == o[0] + w as usize
-        };
         let trilinear = lod.f > 0.0;
-        let range = interior(&fa, self.0[a].0).then(|| {
-            let table = &bounds[a];
-            if !trilinear {
-                table.footprint[fa.0[0]]
+        // The first footprint's entry (a footprint off the level is filtered below).
+        let table = &bounds[a];
+        if let Some(cell) = table.cell(&self.0[a], uv) {
+            let range = if !trilinear {
+                table.footprint[cell]
             } else if b == a + 1 && !table.trilinear.is_empty() {
-                table.trilinear[fa.0[0]]
+                table.trilinear[cell]
             } else {
                 [0, 255]
-            }
-        });
-        if let Some([lo, hi]) = range {
-            // Monotone in every texel: the same operations on the bounds bound the result.
-            if f32::from(lo) / 255.0 * scale >= cutoff {
-                return true;
-            }
-            if f32::from(hi) / 255.0 * scale < cutoff {
-                return false;
+            };
+            if let Some(pass) = cutoff.decided(range) {
+                return pass;
             }
         }
+        let fa = footprint(&self.0[a], uv, wrap, 1);
         let fb = trilinear.then(|| footprint(&self.0[b], uv, wrap, 1));
         let filter = |(o, fx, fy): ([usize; 4], f32, f32), level: usize| {
             let data = &self.0[level].2;
@@ -1035,7 +1086,7 @@ impl Levels {
         if let Some(fb) = fb {
             alpha += (filter(fb, b) - alpha) * lod.f;
         }
-        passes_cutoff(alpha / 255.0 * scale, cutoff)
+        cutoff.passes(alpha / 255.0)
     }
 
     /// Bilinear alpha (0..1) at `(u, v)` of the one level nearer `lod` (a GPU's
@@ -1105,23 +1156,31 @@ fn mapped_normal(normal: Vec3, tangent: Vec4, sign: f32, map: Vec3) -> Vec3 {
 /// The samples `first..=last` (offsets from the row's first, at most `len`) of a row whose
 /// weights start at `start` and change by `step` per sample that can be inside the triangle:
 /// each weight's zero crossing (`−start · inv`, `inv` the step's reciprocal, 0 where the step
-/// is too small to invert safely, which leaves that edge out) bounds the span, widened by two
-/// samples against rounding (the samples are still tested one by one, so any span holding the
-/// inside ones gives the same image). `None` when no sample can be.
+/// is too small to invert safely, which leaves that edge out) bounds the span, widened by
+/// [`SPAN_SLACK`] samples against rounding (the samples are still tested one by one, so any
+/// span holding the inside ones gives the same image). `None` when no sample can be.
 #[inline]
 fn row_span(start: [f32; 3], step: [f32; 3], inv: [f32; 3], len: usize) -> Option<(usize, usize)> {
     let (mut lo, mut hi) = (0.0f32, len as f32);
     for k in 0..3 {
         if inv[k] > 0.0 {
-            lo = lo.max(-start[k] * inv[k] - 2.0);
+            lo = lo.max(-start[k] * inv[k] - SPAN_SLACK);
         } else if inv[k] < 0.0 {
-            hi = hi.min(-start[k] * inv[k] + 3.0);
+            hi = hi.min(-start[k] * inv[k] + SPAN_SLACK);
         } else if step[k] == 0.0 && start[k] < 0.0 {
             return None;
         }
     }
-    (lo <= hi && hi >= 0.0).then(|| (lo.max(0.0) as usize, (hi as usize).min(len)))
+    // The first sample at or after `lo` (a ceiling: `lo` is at least 0 here).
+    let first = lo as usize + usize::from((lo as usize as f32) < lo);
+    (lo <= hi && hi >= 0.0).then(|| (first, (hi as usize).min(len)))
 }
+
+/// How far a row's span reaches past its edges' computed zero crossings, in samples. The
+/// crossing's rounding error is a few units in the last place of its offset (under 10⁻³
+/// samples across the largest target) and a weight's own rounding moves the sample it turns
+/// negative at by as little: a quarter sample is hundreds of times that.
+const SPAN_SLACK: f32 = 0.25;
 
 /// One sample row of a triangle: the samples `first..=last` it may cover (see [`row_span`])
 /// and the weights along the row.
@@ -1183,6 +1242,8 @@ impl Setup {
 struct Raster<'a> {
     scene: &'a DrawScene,
     textures: &'a SoftwareTextures,
+    /// Per material, its alpha test.
+    cutoffs: Vec<Option<AlphaCutoff>>,
     triangles: &'a [Setup],
     /// Samples per row.
     width: usize,
@@ -1231,6 +1292,7 @@ impl Raster<'_> {
         for &t in bin {
             let t = &self.triangles[t as usize];
             let material = &self.scene.materials[t.material as usize];
+            let cutoff = self.cutoffs[t.material as usize].as_ref();
             let texture = material.texture.map(|i| &self.textures.textures[i]);
             let bounds = material
                 .texture
@@ -1281,17 +1343,15 @@ impl Raster<'_> {
                             continue;
                         }
                         let (uv, q) = t.uv(b);
-                        if let Some(cutoff) = material.alpha_cutoff {
-                            let scale = material.base_color[3];
+                        if let Some(cutoff) = cutoff {
                             let pass = match (texture, bounds) {
                                 (Some(l), Some(bounds)) => {
-                                    l.alpha_test(bounds, uv, t.lod, material.wrap, [scale, cutoff])
+                                    l.alpha_test(bounds, uv, t.lod, material.wrap, cutoff)
                                 }
-                                _ => {
-                                    let a = texture
-                                        .map_or(1.0, |l| l.alpha(uv, t.lod, material.wrap, stride));
-                                    passes_cutoff(a * scale, cutoff)
-                                }
+                                _ => cutoff
+                                    .passes(texture.map_or(1.0, |l| {
+                                        l.alpha(uv, t.lod, material.wrap, stride)
+                                    })),
                             };
                             if !pass {
                                 continue;
@@ -1695,12 +1755,21 @@ mod tests {
             &levels,
             [0.0, 0.3, 1.0, 1.7, 2.5, 9.0],
             |uv, pair, wrap| levels.alpha(uv, pair, [wrap; 2], 1),
-            |uv, pair, wrap, test| levels.alpha_test(&bounds, uv, pair, [wrap; 2], test),
+            |uv, pair, wrap, [scale, cutoff]| {
+                levels.alpha_test(
+                    &bounds,
+                    uv,
+                    pair,
+                    [wrap; 2],
+                    &AlphaCutoff::new(scale, cutoff),
+                )
+            },
         );
     }
 
-    /// A row's span holds every sample the weights put inside the triangle, for triangles of
-    /// every shape and size (slivers, nearly flat rows, far outside the target).
+    /// A row's span holds every sample the weights put inside the triangle, and at most one
+    /// more at either end, for triangles of every shape and size (slivers, nearly flat rows,
+    /// far outside the target).
     #[test]
     fn row_spans_hold_every_inside_sample() {
         let mut seed = 0x2545_f491_4f6c_dd1du64;
@@ -1711,7 +1780,7 @@ mod tests {
             (seed >> 40) as f32 / (1u64 << 24) as f32 * range
         };
         let (sw, sh) = (96.0f32, 64.0f32);
-        let mut inside = 0;
+        let (mut inside, mut tight) = (0, 0);
         for k in 0..3000 {
             let scale = [2.0, 30.0, 400.0][k % 3];
             let mut x = [0.0f32; 3].map(|_| next(scale) - scale / 2.0 + 48.0);
@@ -1757,20 +1826,40 @@ mod tests {
             };
             let spans: Vec<RowSpan> = t.row_spans(0, sh as usize).collect();
             for sy in min[1] as usize..=max[1] as usize {
+                let span = spans.iter().find(|s| s.y == sy);
+                let mut held = None::<(usize, usize)>;
                 for sx in min[0] as usize..=max[0] as usize {
+                    // Inside by the weights from scratch, or as a span steps them along the
+                    // row (which the renderers test).
                     let b = t.weights(sx as f32 + 0.5, sy as f32 + 0.5);
-                    if b.iter().all(|&w| w >= 0.0) {
+                    let stepped = span.map(|s| {
+                        let k = sx as f32 - s.x0 as f32;
+                        [0, 1, 2].map(|e| s.start[e] + s.step[e] * k)
+                    });
+                    let all = |b: [f32; 3]| b.iter().all(|&w| w >= 0.0);
+                    if all(b) || stepped.is_some_and(all) {
                         inside += 1;
-                        let span = spans.iter().find(|s| s.y == sy);
                         assert!(
                             span.is_some_and(|s| (s.first..=s.last).contains(&sx)),
                             "triangle {x:?} {y:?}: sample ({sx}, {sy}) outside its row's span"
                         );
+                        held = Some(held.map_or((sx, sx), |(a, _)| (a, sx)));
                     }
+                }
+                // Tight: at most a sample past the inside ones at either end.
+                if let (Some(s), Some((a, b))) = (span, held) {
+                    assert!(
+                        s.first + 1 >= a && s.last <= b + 1,
+                        "triangle {x:?} {y:?}: row {sy} spans {}..={} for {a}..={b}",
+                        s.first,
+                        s.last
+                    );
+                    tight += 1;
                 }
             }
         }
         assert!(inside > 100_000, "{inside} inside samples");
+        assert!(tight > 10_000, "{tight} rows");
     }
 
     /// The bake's alpha test decided from the footprints' bounds answers as filtering the
@@ -1790,7 +1879,9 @@ mod tests {
             levels,
             [0.0, 0.3, 0.7, 1.7, 2.5, 9.0],
             |uv, pair, wrap| levels.alpha_nearest_level(uv, pair, [wrap; 2], 4),
-            |uv, pair, wrap, test| prepared.bake_alpha_test(0, uv, pair, [wrap; 2], test),
+            |uv, pair, wrap, [scale, cutoff]| {
+                prepared.bake_alpha_test(0, uv, pair, [wrap; 2], &AlphaCutoff::new(scale, cutoff))
+            },
         );
     }
 
