@@ -152,21 +152,55 @@ pub fn run_lod(
     };
     // LOD0 is the input itself (its file passes the input through): not read again.
     let lods: Vec<&Tree> = std::iter::once(tree).chain(&read_back).collect();
-    if let Some(max_error) = req.measure {
-        progress("measuring each LOD's error");
-        let t = Instant::now();
-        measure_errors(renderer, tree, &lods, &mut report, max_error)?;
-        report.timings_s["measure"] = serde_json::json!(t.elapsed().as_secs_f64());
+    // The preview's pictures do not depend on the measured errors (its page's text does):
+    // they are rendered while the LODs are measured, from the report as it stands.
+    let snapshot = req.preview.then(|| report.clone());
+    let combined = written
+        .files
+        .iter()
+        .find(|(rel, _)| *rel == report.combined)
+        .map(|(_, bytes)| bytes.as_slice())
+        .with_context(|| format!("{}: not among the files written", report.combined))?;
+    let preview_request = |report| frond_preview::LodPreviewRequest {
+        report,
+        lods: &lods,
+        combined,
+        resolution: req.resolution,
+        flip_frames: PREVIEW_FLIP_FRAMES,
+        viewer: req.preview_viewer.as_deref(),
+    };
+    match (req.measure, req.preview) {
+        (Some(_), true) => progress("measuring each LOD's error and rendering the preview page"),
+        (Some(_), false) => progress("measuring each LOD's error"),
+        (None, true) => progress("rendering the preview page"),
+        (None, false) => {}
     }
-    if req.preview {
-        progress("rendering the preview page");
-        let combined = written
-            .files
-            .iter()
-            .find(|(rel, _)| *rel == report.combined)
-            .map(|(_, bytes)| bytes.as_slice())
-            .with_context(|| format!("{}: not among the files written", report.combined))?;
-        write_preview(renderer, req, &lods, combined, &mut set, &mut report)?;
+    let input_path = tree.source.display().to_string();
+    let (measured, pictures) = rayon::join(
+        || -> Result<()> {
+            if let Some(max_error) = req.measure {
+                let t = Instant::now();
+                measure_errors(renderer, tree, &lods, &mut report, max_error)?;
+                report.timings_s["measure"] = serde_json::json!(t.elapsed().as_secs_f64());
+            }
+            Ok(())
+        },
+        || {
+            snapshot.as_ref().map(|snapshot| {
+                frond_preview::lod_pictures(renderer, &preview_request(snapshot))
+                    .with_context(|| format!("{input_path}: rendering the preview page"))
+            })
+        },
+    );
+    measured?;
+    if let Some(pictures) = pictures {
+        let preview = frond_preview::lod_page(&preview_request(&report), pictures?)
+            .with_context(|| format!("{input_path}: writing the preview page"))?;
+        for (rel, bytes) in &preview.files {
+            set.stage(rel, bytes)?;
+            report.files.insert(report.files.len() - 1, rel.clone());
+        }
+        report.timings_s["preview"] = serde_json::json!(preview.seconds);
     }
     // Everything up to the report, measuring and the preview included.
     report.timings_s["wall"] = serde_json::json!(t_start.elapsed().as_secs_f64());
@@ -218,38 +252,6 @@ fn read_back_lods(set: &OutputSet, report: &LodReport) -> Result<Vec<Tree>> {
         lods.push(lod);
     }
     Ok(lods)
-}
-
-/// Renders `<name>_preview.html` and its pictures from the written LODs (`lods`: the input,
-/// then the others read back) and the combined file's bytes, and stages them with the set; the
-/// report lists them and the time it took.
-fn write_preview(
-    renderer: &Renderer,
-    req: &LodRequest,
-    lods: &[&Tree],
-    combined: &[u8],
-    set: &mut OutputSet,
-    report: &mut LodReport,
-) -> Result<()> {
-    let input = lods[0];
-    let preview = frond_preview::lod_preview(
-        renderer,
-        &frond_preview::LodPreviewRequest {
-            report,
-            lods,
-            combined,
-            resolution: req.resolution,
-            flip_frames: PREVIEW_FLIP_FRAMES,
-            viewer: req.preview_viewer.as_deref(),
-        },
-    )
-    .with_context(|| format!("{}: rendering the preview page", input.source.display()))?;
-    for (rel, bytes) in &preview.files {
-        set.stage(rel, bytes)?;
-        report.files.insert(report.files.len() - 1, rel.clone());
-    }
-    report.timings_s["preview"] = serde_json::json!(preview.seconds);
-    Ok(())
 }
 
 /// Frames of each LOD's wind flip-book on the preview page.

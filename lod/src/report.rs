@@ -117,7 +117,7 @@ pub struct LodTimings {
 }
 
 /// `<name>_report.json`.
-#[derive(Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
 pub struct LodReport {
     pub input: String,
     pub name: String,

@@ -19,5 +19,8 @@ pub mod units;
 pub mod viewer;
 
 pub use error::PreviewError;
-pub use lod_page::{LodPreviewRequest, PreviewFiles, lod_preview, preview_name};
+pub use lod_page::{
+    LodPreviewPictures, LodPreviewRequest, PreviewFiles, lod_page, lod_pictures, lod_preview,
+    preview_name,
+};
 pub use viewer::{VIEWER_DIR, viewer_files};

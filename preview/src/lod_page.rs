@@ -85,6 +85,25 @@ pub fn lod_preview(
     renderer: &Renderer,
     req: &LodPreviewRequest,
 ) -> Result<PreviewFiles, PreviewError> {
+    let pictures = lod_pictures(renderer, req)?;
+    lod_page(req, pictures)
+}
+
+/// Every LOD's pictures for the page of a `frond lod` run ([`lod_pictures`]), not yet placed
+/// on it.
+pub struct LodPreviewPictures {
+    pictures: Vec<LodPictures>,
+    seconds: f64,
+}
+
+/// Renders the pictures of the page of a `frond lod` run: what they show does not depend on
+/// the measured errors (only the page's text does), so `frond lod` renders them while it
+/// measures, from a report whose errors are not filled yet, and [`lod_page`] writes the page
+/// with the final report.
+pub fn lod_pictures(
+    renderer: &Renderer,
+    req: &LodPreviewRequest,
+) -> Result<LodPreviewPictures, PreviewError> {
     let t0 = Instant::now();
     let report = req.report;
     if req.lods.len() != report.lods.len() {
@@ -113,9 +132,30 @@ pub fn lod_preview(
     let pictures: Vec<LodPictures> = (0..req.lods.len())
         .map(|k| {
             let h = report.lods[k].screen_height.unwrap_or(lod0_height);
-            lod_pictures(renderer, req, &camera, reference.scene(), k, h, &dir)
+            lod_pictures_of(renderer, req, &camera, reference.scene(), k, h, &dir)
         })
         .collect::<Result<_, _>>()?;
+    Ok(LodPreviewPictures {
+        pictures,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The page of a `frond lod` run with its `pictures` ([`lod_pictures`], for the same LODs):
+/// the page's files, the pictures among them; `seconds` counts the pictures' rendering too.
+pub fn lod_page(
+    req: &LodPreviewRequest,
+    pictures: LodPreviewPictures,
+) -> Result<PreviewFiles, PreviewError> {
+    let t0 = Instant::now();
+    let report = req.report;
+    let LodPreviewPictures { pictures, seconds } = pictures;
+    if pictures.len() != report.lods.len() {
+        return Err(PreviewError::LodCount {
+            report: report.lods.len(),
+            given: pictures.len(),
+        });
+    }
     let combined_error = |reason| PreviewError::Combined {
         file: report.combined.clone(),
         reason,
@@ -162,13 +202,13 @@ pub fn lod_preview(
     files.push((preview_name(&report.name), page(&title, &body).into_bytes()));
     Ok(PreviewFiles {
         files,
-        seconds: t0.elapsed().as_secs_f64(),
+        seconds: seconds + t0.elapsed().as_secs_f64(),
     })
 }
 
 /// LOD `k`'s still at `h` pixels (and LOD0's at the same size, with the difference, for k > 0),
 /// its flip-book and its atlas.
-fn lod_pictures(
+fn lod_pictures_of(
     renderer: &Renderer,
     req: &LodPreviewRequest,
     camera: &frond_render::Camera,
