@@ -4,6 +4,8 @@
 
 use std::time::Instant;
 
+use rayon::prelude::*;
+
 use frond_lod::{Chain, ChainLod, LodEntry};
 use frond_scene::Tree;
 
@@ -197,8 +199,8 @@ pub fn chain_files(
         .enumerate()
         .map(|(k, (lod, m))| lod_input(tree, lod, m, prefix(k), options.billboard_normals))
         .collect();
-    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
-    for (k, input) in inputs.iter().enumerate() {
+    // Every LOD's file and the combined one are written at once: each is its own bytes.
+    let write_lod = |k: usize, input: &LodInput, entry: &mut LodEntry| {
         let t0 = Instant::now();
         let at = |e| (format!("writing LOD{k}"), e);
         let file = write_glb(
@@ -213,10 +215,9 @@ pub fn chain_files(
             },
         )
         .map_err(at)?;
-        let entry = &mut entries[k];
         entry.file = format!("{}.glb", prefix(k));
         entry.bones = file.joints.first().copied().unwrap_or(0);
-        files.push((entry.file.clone(), file.glb));
+        let mut files = vec![(entry.file.clone(), file.glb)];
         files.extend(file.external);
         sidecars(
             &chain.lods[k],
@@ -229,20 +230,38 @@ pub fn chain_files(
         )
         .map_err(at)?;
         entry.timings_s.export = t0.elapsed().as_secs_f64();
-    }
-    let combined = write_named_glb(
-        &inputs,
-        &FileOptions {
-            external_textures: options.external_textures.then(|| format!("{name}_lods_")),
-            textures: options.textures,
-            loop_hint: options.loop_hint,
-            compress: options.compress,
-            msft_lod: options.msft_lod.clone(),
-            extras: Some(options.extras.clone()),
+        Ok(files)
+    };
+    let (lod_files, combined) = rayon::join(
+        || {
+            inputs
+                .par_iter()
+                .zip(entries.par_iter_mut())
+                .enumerate()
+                .map(|(k, (input, entry))| write_lod(k, input, entry))
+                .collect::<Vec<Result<_, (String, ExportError)>>>()
         },
-        name,
-    )
-    .map_err(|e| ("writing the combined file".to_string(), e))?;
+        || {
+            write_named_glb(
+                &inputs,
+                &FileOptions {
+                    external_textures: options.external_textures.then(|| format!("{name}_lods_")),
+                    textures: options.textures,
+                    loop_hint: options.loop_hint,
+                    compress: options.compress,
+                    msft_lod: options.msft_lod.clone(),
+                    extras: Some(options.extras.clone()),
+                },
+                name,
+            )
+        },
+    );
+    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
+    // The first LOD's error, whichever finished first.
+    for lod in lod_files {
+        files.extend(lod?);
+    }
+    let combined = combined.map_err(|e| ("writing the combined file".to_string(), e))?;
     let combined_name = format!("{name}_lods.glb");
     files.push((combined_name.clone(), combined.glb));
     files.extend(combined.external);
