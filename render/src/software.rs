@@ -127,11 +127,13 @@ pub(crate) struct AlphaCutoff {
 impl AlphaCutoff {
     pub(crate) fn new(scale: f32, cutoff: f32) -> AlphaCutoff {
         let at = |b: usize| f32::from(b as u8) / 255.0 * scale;
+        // A negative (or NaN) scale reverses the test's order: bounds then settle nothing.
+        let monotone = scale >= 0.0;
         AlphaCutoff {
             scale,
             cutoff,
-            pass: std::array::from_fn(|b| at(b) >= cutoff),
-            fail: std::array::from_fn(|b| at(b) < cutoff),
+            pass: std::array::from_fn(|b| monotone && at(b) >= cutoff),
+            fail: std::array::from_fn(|b| monotone && at(b) < cutoff),
         }
     }
 
@@ -1731,7 +1733,9 @@ mod tests {
                 for k in 0..4000u32 {
                     let uv = [(k % 80) as f32 / 53.0 - 0.3, (k / 80) as f32 / 37.0 - 0.2];
                     let alpha = filtered(uv, pair, wrap);
-                    for (scale, cutoff) in [(1.0, 0.5), (0.8, 0.3), (1.0, 1.0), (1.0, 0.0)] {
+                    for (scale, cutoff) in
+                        [(1.0, 0.5), (0.8, 0.3), (1.0, 1.0), (1.0, 0.0), (-0.5, -0.2)]
+                    {
                         let expected = passes_cutoff(alpha * scale, cutoff);
                         let got = test(uv, pair, wrap, [scale, cutoff]);
                         assert_eq!(got, expected, "{wrap:?} lod {lod} uv {uv:?} {cutoff}");
