@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use crate::error::RenderError;
 use crate::pipeline::srgb_to_linear;
 use crate::scene::DrawScene;
-use crate::software::{AlphaCutoff, Bands, Setup, SoftwareTextures, checked_target};
+use crate::software::{AlphaCutoff, Bands, Setup, Shading, SoftwareTextures, checked_target};
 
 /// A bake render resolved to pixels, top row first.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -70,6 +70,7 @@ pub fn render_bake(
     let ss = supersample.max(1) as usize;
     let Bands {
         triangles,
+        shading,
         bins,
         rows: band_rows,
     } = Bands::new(scene, textures, view_proj, [sw, sh], ss);
@@ -78,6 +79,7 @@ pub fn render_bake(
         textures,
         cutoffs: AlphaCutoff::of_materials(scene),
         triangles: &triangles,
+        shading: &shading,
         width: sw,
         ss,
     };
@@ -123,6 +125,8 @@ struct BakeRaster<'a> {
     /// Per material, its alpha test.
     cutoffs: Vec<Option<AlphaCutoff>>,
     triangles: &'a [Setup],
+    /// Per triangle, its shading (the textures are prepared with colour).
+    shading: &'a [Shading],
     /// Samples per row.
     width: usize,
     ss: usize,
@@ -212,7 +216,8 @@ impl BakeRaster<'_> {
                             material.base_color[2],
                         );
                         colour += (texel * base).clamp(Vec3::ZERO, Vec3::ONE);
-                        let n = (b[0] * t.nq[0] + b[1] * t.nq[1] + b[2] * t.nq[2]) / q;
+                        let nq = &self.shading[ti as usize].nq;
+                        let n = (b[0] * nq[0] + b[1] * nq[1] + b[2] * nq[2]) / q;
                         if n.length_squared() > 1e-12 {
                             let n = n.normalize();
                             normal += if t.back { -n } else { n };

@@ -415,12 +415,6 @@ pub(crate) struct Setup {
     pub(crate) q: [f32; 3],
     /// Texture coordinates divided by `w`.
     pub(crate) uq: [[f32; 2]; 3],
-    /// Normals divided by `w` (zero for unlit meshes).
-    pub(crate) nq: [Vec3; 3],
-    /// Tangents (xyz divided by `w`, w the bitangent's sign) when the normal map applies.
-    pub(crate) tq: Option<[Vec4; 3]>,
-    /// The normal map's two mip levels and the second's weight, chosen at the centroid.
-    pub(crate) normal_lod: Trilinear,
     /// `1 / (twice the signed area)`, positive (vertices ordered so that it is).
     pub(crate) inv_area: f32,
     pub(crate) material: u32,
@@ -432,6 +426,19 @@ pub(crate) struct Setup {
     /// Inclusive sample bounds.
     pub(crate) min: [i32; 2],
     pub(crate) max: [i32; 2],
+}
+
+/// A triangle's shading attributes, beside its [`Setup`] in renders that shade (colour, or a
+/// bake's normals): a coverage render reads none of them, and leaving them out halves what it
+/// writes and reads back per triangle.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Shading {
+    /// Normals divided by `w` (zero for unlit meshes).
+    pub(crate) nq: [Vec3; 3],
+    /// Tangents (xyz divided by `w`, w the bitangent's sign) when the normal map applies.
+    pub(crate) tq: Option<[Vec4; 3]>,
+    /// The normal map's two mip levels and the second's weight, chosen at the centroid.
+    pub(crate) normal_lod: Trilinear,
 }
 
 /// A vertex in clip space with its attributes, for near/far clipping.
@@ -536,6 +543,7 @@ fn rasterise(
     let ss = supersample.max(1);
     let Bands {
         triangles,
+        shading,
         bins,
         rows: band_rows,
     } = Bands::new(scene, textures, view_proj, [sw, sh], ss as usize);
@@ -544,6 +552,7 @@ fn rasterise(
         textures,
         cutoffs: AlphaCutoff::of_materials(scene),
         triangles: &triangles,
+        shading: &shading,
         width: sw,
         ss: ss as usize,
         saturate: saturate && !textures.colour,
@@ -616,6 +625,9 @@ pub(crate) fn checked_target(
 /// unit of parallel work of both CPU rasterisers.
 pub(crate) struct Bands {
     pub(crate) triangles: Vec<Setup>,
+    /// Per triangle, its shading attributes when the textures were prepared with colour
+    /// (empty otherwise).
+    pub(crate) shading: Vec<Shading>,
     /// Per band, the triangles whose bounds reach it, in draw order.
     pub(crate) bins: Vec<Vec<u32>>,
     /// Sample rows per band.
@@ -632,7 +644,7 @@ impl Bands {
         [sw, sh]: [usize; 2],
         ss: usize,
     ) -> Bands {
-        let triangles = setup(scene, textures, view_proj, sw as f32, sh as f32);
+        let (triangles, shading) = setup(scene, textures, view_proj, sw as f32, sh as f32);
         let rows = BAND_PIXELS * ss;
         let mut bins: Vec<Vec<u32>> = vec![Vec::new(); sh.div_ceil(rows)];
         for (i, t) in triangles.iter().enumerate() {
@@ -644,6 +656,7 @@ impl Bands {
         }
         Bands {
             triangles,
+            shading,
             bins,
             rows,
         }
@@ -658,17 +671,21 @@ struct Band {
 }
 
 /// Transforms, clips (near and far planes), culls and sets up every triangle of `scene`, in
-/// draw order, for a target of `sw`×`sh` samples.
+/// draw order, for a target of `sw`×`sh` samples, with their shading when the textures were
+/// prepared with colour.
 fn setup(
     scene: &DrawScene,
     textures: &SoftwareTextures,
     view_proj: Mat4,
     sw: f32,
     sh: f32,
-) -> Vec<Setup> {
+) -> (Vec<Setup>, Vec<Shading>) {
     // Reserved up front: growing it (tens of megabytes for a large tree) was a tenth of a small
     // render's time.
-    let mut out = Vec::with_capacity(scene.meshes.iter().map(|m| m.indices.len() / 3).sum());
+    let count = scene.meshes.iter().map(|m| m.indices.len() / 3).sum();
+    let shade = textures.colour;
+    let mut out = Vec::with_capacity(count);
+    let mut shading = Vec::with_capacity(if shade { count } else { 0 });
     for mesh in &scene.meshes {
         let material = &scene.materials[mesh.material];
         let clip: Vec<Vec4> = mesh
@@ -702,10 +719,14 @@ fn setup(
             let corners = [vertex(0), vertex(1), vertex(2)];
             let inside = |v: &ClipVertex| v.clip.z >= 0.0 && v.clip.z <= v.clip.w;
             let mut push = |c: [&ClipVertex; 3]| {
-                if let Some(mut s) = setup_triangle(c, material, [texture, normal_map], lit, sw, sh)
+                if let Some((mut s, sh)) =
+                    setup_triangle(c, material, [texture, normal_map], [lit, shade], sw, sh)
                 {
                     s.material = mesh.material as u32;
                     out.push(s);
+                    if shade {
+                        shading.push(sh);
+                    }
                 }
             };
             if corners.iter().all(inside) {
@@ -718,7 +739,7 @@ fn setup(
             }
         }
     }
-    out
+    (out, shading)
 }
 
 /// `polygon` clipped to `0 ≤ z ≤ w` (wgpu's depth range), Sutherland–Hodgman.
@@ -752,10 +773,10 @@ fn setup_triangle(
     corners: [&ClipVertex; 3],
     material: &DrawMaterial,
     [texture, normal_map]: [Option<&Levels>; 2],
-    lit: bool,
+    [lit, shade]: [bool; 2],
     sw: f32,
     sh: f32,
-) -> Option<Setup> {
+) -> Option<(Setup, Shading)> {
     let mut v = corners.map(|c| {
         let q = 1.0 / c.clip.w;
         (
@@ -764,8 +785,7 @@ fn setup_triangle(
             c.clip.z * q,
             q,
             [c.uv[0] * q, c.uv[1] * q],
-            c.normal * q,
-            c.tangent.truncate().extend(0.0) * q + Vec4::new(0.0, 0.0, 0.0, c.tangent.w),
+            c,
         )
     });
     if v.iter()
@@ -804,9 +824,6 @@ fn setup_triangle(
         z: v.map(|c| c.2),
         q: v.map(|c| c.3),
         uq: v.map(|c| c.4),
-        nq: v.map(|c| c.5),
-        tq: normal_map.map(|_| v.map(|c| c.6)),
-        normal_lod: Trilinear::default(),
         inv_area: 1.0 / area,
         material: 0,
         lit,
@@ -818,10 +835,20 @@ fn setup_triangle(
     if let Some(levels) = texture {
         s.lod = levels.pair(centroid_lod(&s, levels));
     }
-    if let Some(levels) = normal_map {
-        s.normal_lod = levels.pair(centroid_lod(&s, levels));
+    let mut shading = Shading::default();
+    if shade {
+        // In the vertices' final order (swapped to make the area positive).
+        shading.nq = v.map(|c| c.5.normal * c.3);
+        shading.tq = normal_map.map(|_| {
+            v.map(|c| {
+                c.5.tangent.truncate().extend(0.0) * c.3 + Vec4::new(0.0, 0.0, 0.0, c.5.tangent.w)
+            })
+        });
+        if let Some(levels) = normal_map {
+            shading.normal_lod = levels.pair(centroid_lod(&s, levels));
+        }
     }
-    Some(s)
+    Some((s, shading))
 }
 
 impl Setup {
@@ -1247,6 +1274,8 @@ struct Raster<'a> {
     /// Per material, its alpha test.
     cutoffs: Vec<Option<AlphaCutoff>>,
     triangles: &'a [Setup],
+    /// Per triangle, its shading (colour renders; empty otherwise).
+    shading: &'a [Shading],
     /// Samples per row.
     width: usize,
     ss: usize,
@@ -1291,8 +1320,10 @@ impl Raster<'_> {
         let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
         let light = Vec3::from(LIGHT_DIRECTION);
         let stride = if colour { 4 } else { 1 };
-        for &t in bin {
-            let t = &self.triangles[t as usize];
+        for &ti in bin {
+            let t = &self.triangles[ti as usize];
+            // Colour renders' triangles have their shading; coverage renders read none.
+            let shading = self.shading.get(ti as usize);
             let material = &self.scene.materials[t.material as usize];
             let cutoff = self.cutoffs[t.material as usize].as_ref();
             let texture = material.texture.map(|i| &self.textures.textures[i]);
@@ -1304,7 +1335,7 @@ impl Raster<'_> {
                 .map(Vec::as_slice);
             let normal_map = material
                 .normal_texture
-                .filter(|_| t.tq.is_some())
+                .filter(|_| shading.is_some_and(|s| s.tq.is_some()))
                 .map(|i| &self.textures.normal_maps[i]);
             for span in t.row_spans(y0, y1) {
                 let sy = span.y;
@@ -1382,15 +1413,15 @@ impl Raster<'_> {
                             let texel = texture
                                 .map_or(Vec3::ONE, |l| l.rgb(uv, t.lod, material.wrap, &linear));
                             let mut shade = 1.0;
-                            if t.lit {
+                            if let Some(sh) = shading.filter(|_| t.lit) {
                                 let mut normal =
-                                    (b[0] * t.nq[0] + b[1] * t.nq[1] + b[2] * t.nq[2]) / q;
-                                if let (Some(tq), Some(map)) = (t.tq, normal_map) {
+                                    (b[0] * sh.nq[0] + b[1] * sh.nq[1] + b[2] * sh.nq[2]) / q;
+                                if let (Some(tq), Some(map)) = (sh.tq, normal_map) {
                                     normal = mapped_normal(
                                         normal,
                                         (b[0] * tq[0] + b[1] * tq[1] + b[2] * tq[2]) / q,
                                         tq[0].w,
-                                        map.normal(uv, t.normal_lod, material.wrap),
+                                        map.normal(uv, sh.normal_lod, material.wrap),
                                     );
                                 }
                                 if normal.length_squared() > 1e-12 {
@@ -1817,9 +1848,6 @@ mod tests {
                 z: [0.0; 3],
                 q: [1.0; 3],
                 uq: [[0.0; 2]; 3],
-                nq: [Vec3::ZERO; 3],
-                tq: None,
-                normal_lod: Trilinear::default(),
                 inv_area: 1.0 / area.abs(),
                 material: 0,
                 lit: false,
