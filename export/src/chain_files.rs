@@ -257,7 +257,7 @@ pub fn chain_files(
         },
     );
     let mut files: Vec<(String, Vec<u8>)> = Vec::new();
-    // The first LOD's error, whichever finished first.
+    // The error of the first LOD in order that failed, whichever order they finished in.
     for lod in lod_files {
         files.extend(lod?);
     }

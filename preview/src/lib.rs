@@ -20,7 +20,6 @@ pub mod viewer;
 
 pub use error::PreviewError;
 pub use lod_page::{
-    LodPreviewPictures, LodPreviewRequest, PreviewFiles, lod_page, lod_pictures, lod_preview,
-    preview_name,
+    LodPreviewPictures, LodPreviewRequest, PreviewFiles, lod_page, lod_pictures, preview_name,
 };
 pub use viewer::{VIEWER_DIR, viewer_files};

@@ -79,16 +79,6 @@ struct LodPictures {
     difference: PixelDifference,
 }
 
-/// Renders the pictures and writes the page of a `frond lod` run. Deterministic: the same
-/// files give the same bytes.
-pub fn lod_preview(
-    renderer: &Renderer,
-    req: &LodPreviewRequest,
-) -> Result<PreviewFiles, PreviewError> {
-    let pictures = lod_pictures(renderer, req)?;
-    lod_page(req, pictures)
-}
-
 /// Every LOD's pictures for the page of a `frond lod` run ([`lod_pictures`]), not yet placed
 /// on it.
 pub struct LodPreviewPictures {
@@ -99,7 +89,7 @@ pub struct LodPreviewPictures {
 /// Renders the pictures of the page of a `frond lod` run: what they show does not depend on
 /// the measured errors (only the page's text does), so `frond lod` renders them while it
 /// measures, from a report whose errors are not filled yet, and [`lod_page`] writes the page
-/// with the final report.
+/// with the final report. Deterministic: the same files give the same bytes.
 pub fn lod_pictures(
     renderer: &Renderer,
     req: &LodPreviewRequest,

@@ -236,11 +236,11 @@ impl AlphaBounds {
         }
     }
 
-    /// The entry of `level` (these bounds') for the bilinear footprint at `uv`, as
-    /// [`footprint`] finds it, when that lies on the level: the last row and column hold
-    /// `[0, 255]` (their footprints wrap).
+    /// The entry of a level's bounds for the bilinear footprint at `uv` (the level's texels
+    /// RGBA or alpha alone: only its size counts), as [`footprint`] finds it, when that lies
+    /// on the level: the last row and column hold `[0, 255]` (their footprints wrap).
     #[inline(always)]
-    fn cell(&self, (w, h, _): &(u32, u32, Vec<u8>), uv: [f32; 2]) -> Option<usize> {
+    fn cell((w, h, _): &(u32, u32, Vec<u8>), uv: [f32; 2]) -> Option<usize> {
         let x0 = floor_i64(uv[0] * *w as f32 - 0.5);
         let y0 = floor_i64(uv[1] * *h as f32 - 0.5);
         ((0..i64::from(*w)).contains(&x0) && (0..i64::from(*h)).contains(&y0))
@@ -317,16 +317,13 @@ impl SoftwareTextures {
     ) -> bool {
         let levels = &self.textures[texture];
         let level = if lod.f < 0.5 { lod.a } else { lod.b } as usize;
-        let (o, fx, fy) = footprint(&levels.0[level], uv, wrap, 4);
-        let w = levels.0[level].0 as usize;
         if let Some(bounds) = self.alpha_bounds.get(texture)
-            && o[1] == o[0] + 4
-            && o[3] == o[2] + 4
-            && o[2] == o[0] + 4 * w
-            && let Some(pass) = cutoff.decided(bounds[level].footprint[o[0] / 4])
+            && let Some(cell) = AlphaBounds::cell(&levels.0[level], uv)
+            && let Some(pass) = cutoff.decided(bounds[level].footprint[cell])
         {
             return pass;
         }
+        let (o, fx, fy) = footprint(&levels.0[level], uv, wrap, 4);
         let data = &levels.0[level].2;
         let alpha = bilerp(o.map(|k| f32::from(data[k + 3])), fx, fy) / 255.0;
         cutoff.passes(alpha)
@@ -1093,7 +1090,7 @@ impl Levels {
         let trilinear = lod.f > 0.0;
         // The first footprint's entry (a footprint off the level is filtered below).
         let table = &bounds[a];
-        if let Some(cell) = table.cell(&self.0[a], uv) {
+        if let Some(cell) = AlphaBounds::cell(&self.0[a], uv) {
             let range = if !trilinear {
                 table.footprint[cell]
             } else if b == a + 1 && !table.trilinear.is_empty() {
