@@ -70,7 +70,7 @@ pub fn run_lod(
     tree: &Tree,
     req: &LodRequest,
     out_dir: &Path,
-    progress: &dyn Fn(&str),
+    progress: &(dyn Fn(&str) + Sync),
 ) -> Result<LodReport> {
     let path = tree.source.display().to_string();
     let t_start = Instant::now();
@@ -83,14 +83,32 @@ pub fn run_lod(
         .collect();
     expected.push(format!("{name}_lods.glb"));
     set.check_names(&expected)?;
-    let chain =
-        build_chain(renderer, tree, &req.chain, &levels, progress).map_err(|(lod, e)| {
-            let e = anyhow::Error::new(e);
-            match lod {
-                Some(k) => e.context(format!("{path}: building LOD{k}")),
-                None => e,
-            }
-        })?;
+    // The input's renders the measure compares the LODs with need nothing the build makes:
+    // they are drawn while the LODs are built, on the cores the build leaves idle.
+    let mut measure = req
+        .measure
+        .map(|_| measure_context(renderer, tree, req.chain.clip.clone()))
+        .transpose()?;
+    let sizes: Vec<(u32, u32)> = levels
+        .iter()
+        .map(|l| measure_size(l.screen_height))
+        .collect();
+    let (chain, prepared) = rayon::join(
+        || build_chain(renderer, tree, &req.chain, &levels, progress),
+        || {
+            measure
+                .as_mut()
+                .map_or(Ok(()), |ctx| ctx.prepare_coverage(&sizes))
+        },
+    );
+    let chain = chain.map_err(|(lod, e)| {
+        let e = anyhow::Error::new(e);
+        match lod {
+            Some(k) => e.context(format!("{path}: building LOD{k}")),
+            None => e,
+        }
+    })?;
+    prepared.with_context(|| format!("{path}: rendering the input to measure the LODs"))?;
     progress("writing files");
     let written = chain_files(
         tree,
@@ -180,7 +198,12 @@ pub fn run_lod(
         || -> Result<()> {
             if let Some(max_error) = req.measure {
                 let t = Instant::now();
-                measure_errors(renderer, tree, &lods, &mut report, max_error)?;
+                // Sampled with the request's clip: the chain's, unless it resolved otherwise.
+                let ctx = match measure.as_mut() {
+                    Some(ctx) if ctx.clip() == report.clip.as_deref() => ctx,
+                    _ => measure.insert(measure_context(renderer, tree, report.clip.clone())?),
+                };
+                measure_errors(ctx, &lods, &mut report, max_error)?;
                 report.timings_s["measure"] = serde_json::json!(t.elapsed().as_secs_f64());
             }
             Ok(())
@@ -261,33 +284,16 @@ const PREVIEW_FLIP_FRAMES: u32 = 12;
 /// screen height, on its written file read back (`lods`, the report's order), and warns (in
 /// the log and the report) about every LOD over `max_error`.
 fn measure_errors(
-    renderer: &Renderer,
-    tree: &Tree,
+    ctx: &mut EvalContext,
     lods: &[&Tree],
     report: &mut LodReport,
     max_error: f64,
 ) -> Result<()> {
-    let path = tree.source.display().to_string();
-    let unlimited = unlimited();
-    let req = EvalRequest {
-        views: MEASURE_VIEWS,
-        frames: MEASURE_FRAMES,
-        // Unused here: each LOD is measured at its own size (`EvalContext::coverage`).
-        size: (0, 0),
-        // Only the loop's start and period are used: the frames' times.
-        samples: 2,
-        clip: report.clip.clone(),
-        limits: unlimited,
-        white_albedo: false,
-        lighting: Default::default(),
-    };
-    let mut ctx = EvalContext::new(renderer, tree, &req)
-        .with_context(|| format!("{path}: sampling the input to measure the LODs"))?;
     for (entry, lod) in report.lods.iter_mut().zip(lods) {
         let Some(h) = entry.screen_height else {
             continue;
         };
-        let size = image_for_screen_height(h.round().max(1.0) as u32);
+        let size = measure_size(h);
         // The depth complexities come from the metric's first renders of both.
         let (coverage, depth, input_depth) = ctx
             .coverage_with_depth(lod, size)
@@ -314,6 +320,38 @@ fn measure_errors(
         });
     }
     Ok(())
+}
+
+/// The context `frond lod` measures its LODs in: the input's loop sampled for `clip`, with the
+/// views and frames of [`MEASURE_VIEWS`] and [`MEASURE_FRAMES`].
+fn measure_context<'a>(
+    renderer: &'a Renderer,
+    tree: &'a Tree,
+    clip: Option<String>,
+) -> Result<EvalContext<'a>> {
+    let req = EvalRequest {
+        views: MEASURE_VIEWS,
+        frames: MEASURE_FRAMES,
+        // Unused here: each LOD is measured at its own size (`EvalContext::coverage`).
+        size: (0, 0),
+        // Only the loop's start and period are used: the frames' times.
+        samples: 2,
+        clip,
+        limits: unlimited(),
+        white_albedo: false,
+        lighting: Default::default(),
+    };
+    EvalContext::new(renderer, tree, &req).with_context(|| {
+        format!(
+            "{}: sampling the input to measure the LODs",
+            tree.source.display()
+        )
+    })
+}
+
+/// The image size a LOD `screen_height` pixels high is measured at.
+fn measure_size(screen_height: f32) -> (u32, u32) {
+    image_for_screen_height(screen_height.round().max(1.0) as u32)
 }
 
 /// Limits for reading frond's own files: none is a safety matter (the input passed its own).

@@ -174,6 +174,21 @@ impl<'a> EvalContext<'a> {
         &self.original.source
     }
 
+    /// The name of the clip the original plays, as its loop was sampled.
+    pub fn clip(&self) -> Option<&str> {
+        self.sampled.clip.as_deref()
+    }
+
+    /// Renders the original's coverage masks (without colour, as [`EvalContext::coverage`]
+    /// draws them) at each of `sizes` now rather than on first use: `frond lod` draws them while
+    /// it builds the LODs they are compared with.
+    pub fn prepare_coverage(&mut self, sizes: &[(u32, u32)]) -> Result<(), EvalError> {
+        for &size in sizes {
+            self.original_masks(size, false)?;
+        }
+        Ok(())
+    }
+
     fn params(&self, size: (u32, u32), colour: bool) -> CoverageParams {
         CoverageParams {
             views: self.views,
