@@ -108,6 +108,19 @@ struct Node {
     /// A leaf's alive triangles as bits (bit `k`: stored triangle `start + k`), so a leaf's
     /// test loop visits only the alive triangles near a candidate's plane.
     alive_bits: u32,
+    /// A leaf's entry in [`Bvh::leaves`].
+    slot: u32,
+}
+
+/// A leaf's triangle centroids and radii in fixed-size arrays (entries past the leaf's
+/// triangles are zero, and their `alive_bits` clear): a candidate's distances and masks over
+/// the leaf are loops of constant length, which the compiler turns into vector code.
+#[derive(Clone, Debug)]
+struct LeafBlock {
+    cx: [f32; LEAF_SIZE],
+    cy: [f32; LEAF_SIZE],
+    cz: [f32; LEAF_SIZE],
+    radius: [f32; LEAF_SIZE],
 }
 
 const LEAF_SIZE: usize = 32;
@@ -116,6 +129,8 @@ const _: () = assert!(LEAF_SIZE <= 32);
 
 struct Bvh {
     nodes: Vec<Node>,
+    /// Per leaf ([`Node::slot`]), its triangles' centroids and radii.
+    leaves: Vec<LeafBlock>,
     /// Leaf node of each stored triangle.
     leaf_of: Vec<u32>,
 }
@@ -146,8 +161,25 @@ impl Bvh {
             leaf_sorted[pos] = leaf_of[i as usize];
         }
         *t = reorder(&order);
+        let mut leaves = Vec::new();
+        for node in nodes.iter_mut().filter(|n| n.left == 0) {
+            let (a, b) = (node.start as usize, node.end as usize);
+            let block = |v: &[f32]| {
+                let mut out = [0.0f32; LEAF_SIZE];
+                out[..b - a].copy_from_slice(&v[a..b]);
+                out
+            };
+            node.slot = leaves.len() as u32;
+            leaves.push(LeafBlock {
+                cx: block(&t.cx),
+                cy: block(&t.cy),
+                cz: block(&t.cz),
+                radius: block(&t.radius),
+            });
+        }
         Bvh {
             nodes,
+            leaves,
             leaf_of: leaf_sorted,
         }
     }
@@ -205,6 +237,7 @@ fn build_node(
         } else {
             0
         },
+        slot: 0,
     });
     if end - start <= LEAF_SIZE {
         for &i in &order[start..end] {
@@ -313,7 +346,6 @@ impl Search<'_> {
         let mut stack: Vec<(u32, usize, usize)> = vec![(0, 0, lists.len())];
         let mut partial: Vec<u16> = Vec::with_capacity(cands.len());
         let mut inside: Vec<u16> = Vec::with_capacity(cands.len());
-        let mut dc = [0.0f32; LEAF_SIZE];
         while let Some((ni, a, b)) = stack.pop() {
             let node = &self.bvh.nodes[ni as usize];
             if node.alive == 0 {
@@ -363,22 +395,19 @@ impl Search<'_> {
                 stack.push((node.left, rb, lb));
                 continue;
             }
-            let len = e0 - s0;
-            let (cx, cy, cz) = (&t.cx[s0..e0], &t.cy[s0..e0], &t.cz[s0..e0]);
-            let radius = &t.radius[s0..e0];
+            let leaf = &self.bvh.leaves[node.slot as usize];
+            let (near, far) = (eps + m, eps - m);
             for &c in &partial {
                 let (n, rho) = cands[c as usize];
-                for (k, out) in dc.iter_mut().take(len).enumerate() {
-                    *out = (n.x * cx[k] + n.y * cy[k] + n.z * cz[k] - rho).abs();
-                }
                 // Bit masks of the leaf's triangles whose centroid is near enough to be valid
                 // (`maybe`) and of those valid by their bounding sphere alone (`sure`); the
                 // exact test runs only on the rest. Bits are visited in storage order, so the
                 // sum is the one `score_tree` makes.
                 let (mut maybe, mut sure) = (0u32, 0u32);
-                for k in 0..len {
-                    maybe |= u32::from(dc[k] <= eps + m) << k;
-                    sure |= u32::from(dc[k] + radius[k] < eps - m) << k;
+                for k in 0..LEAF_SIZE {
+                    let dc = (n.x * leaf.cx[k] + n.y * leaf.cy[k] + n.z * leaf.cz[k] - rho).abs();
+                    maybe |= u32::from(dc <= near) << k;
+                    sure |= u32::from(dc + leaf.radius[k] < far) << k;
                 }
                 let acc = &mut d[c as usize];
                 let mut bits = maybe & node.alive_bits;
