@@ -93,14 +93,17 @@ pub fn run_lod(
         .iter()
         .map(|l| measure_size(l.screen_height))
         .collect();
-    let (chain, prepared) = rayon::join(
+    let (chain, (prepared, t_prepare)) = rayon::join(
         || build_chain(renderer, tree, &req.chain, &levels, progress),
         || {
-            measure
+            let t = Instant::now();
+            let prepared = measure
                 .as_mut()
-                .map_or(Ok(()), |ctx| ctx.prepare_coverage(&sizes))
+                .map_or(Ok(()), |ctx| ctx.prepare_coverage(&sizes));
+            (prepared, t.elapsed().as_secs_f64())
         },
     );
+    let t_joined = Instant::now();
     let chain = chain.map_err(|(lod, e)| {
         let e = anyhow::Error::new(e);
         match lod {
@@ -153,10 +156,15 @@ pub fn run_lod(
         timings_s: serde_json::json!({
             "sample": chain.t_sample,
             "build": chain.t_build,
-            "export": total - chain.t_sample - chain.t_build,
+            // From the build's end and the input's renders' (the later), to the files.
+            "export": (t_written - t_joined).as_secs_f64(),
             "total": total,
         }),
     };
+    if measure.is_some() {
+        // Seconds drawing the input's renders for the measure, alongside the build.
+        report.timings_s["measure_input"] = serde_json::json!(t_prepare);
+    }
     report.files.push(report_name(&name));
     fill_switching(tree, req, &mut report);
     for (rel, bytes) in &written.files {
