@@ -21,6 +21,15 @@ fn the_report_gives_each_lods_error_as_frond_eval_measures_it() {
     let lods = report["lods"].as_array().expect("lods");
     assert_eq!(lods.len(), 3);
     assert!(lods[0]["error"].is_null(), "LOD0 is the input");
+    // The input's renders, drawn beside the build, are timed apart; the export's time is its own.
+    let t = &report["timings_s"];
+    let secs = |key: &str| {
+        t[key]
+            .as_f64()
+            .unwrap_or_else(|| panic!("timings_s.{key}: {t}"))
+    };
+    assert!(secs("measure_input") > 0.0, "{t}");
+    assert!((0.0..secs("total")).contains(&secs("export")), "{t}");
     let sample = root().join("samples/sapling.glb");
     // The card LODs' errors when coverage-driven thinning was written: 0.093 and 0.216.
     for (lod, (h, bound)) in lods[1..].iter().zip([(200u32, 0.12), (60, 0.26)]) {

@@ -77,12 +77,6 @@ struct Tris {
     id: Vec<u32>,
     v: Vec<[Vec3A; 3]>,
     centroid: Vec<Vec3A>,
-    /// Centroid coordinates as separate arrays, so a leaf's distances vectorise.
-    cx: Vec<f32>,
-    cy: Vec<f32>,
-    cz: Vec<f32>,
-    /// Largest vertex distance from the centroid.
-    radius: Vec<f32>,
     /// area × unit normal.
     area_normal: Vec<Vec3A>,
     alive: Vec<bool>,
@@ -112,15 +106,46 @@ struct Node {
     slot: u32,
 }
 
-/// A leaf's triangle centroids and radii in fixed-size arrays (entries past the leaf's
-/// triangles are zero, and their `alive_bits` clear): a candidate's distances and masks over
-/// the leaf are loops of constant length, which the compiler turns into vector code.
+/// A leaf's triangle centroids, coordinate by coordinate, and radii (largest vertex distance
+/// from the centroid) in fixed-size arrays (entries past the leaf's triangles are zero, and
+/// their `alive_bits` clear): a candidate's distances and masks over the leaf are loops of
+/// constant length, which the compiler turns into vector code.
 #[derive(Clone, Debug)]
 struct LeafBlock {
     cx: [f32; LEAF_SIZE],
     cy: [f32; LEAF_SIZE],
     cz: [f32; LEAF_SIZE],
     radius: [f32; LEAF_SIZE],
+}
+
+impl LeafBlock {
+    /// The block of stored triangles `a..b` of `t`.
+    fn new(t: &Tris, a: usize, b: usize) -> LeafBlock {
+        let block = |f: &dyn Fn(usize) -> f32| {
+            let mut out = [0.0f32; LEAF_SIZE];
+            for (k, o) in out.iter_mut().take(b - a).enumerate() {
+                *o = f(a + k);
+            }
+            out
+        };
+        LeafBlock {
+            cx: block(&|i| t.centroid[i].x),
+            cy: block(&|i| t.centroid[i].y),
+            cz: block(&|i| t.centroid[i].z),
+            radius: block(&|i| {
+                t.v[i]
+                    .iter()
+                    .map(|p| p.distance(t.centroid[i]))
+                    .fold(0.0, f32::max)
+            }),
+        }
+    }
+
+    /// Distance of centroid `k` from the plane `n·x = rho`.
+    #[inline(always)]
+    fn distance(&self, k: usize, n: Vec3A, rho: f32) -> f32 {
+        (n.x * self.cx[k] + n.y * self.cy[k] + n.z * self.cz[k] - rho).abs()
+    }
 }
 
 const LEAF_SIZE: usize = 32;
@@ -148,10 +173,6 @@ impl Bvh {
                 id: o.iter().map(|&i| t.id[i as usize]).collect(),
                 v: o.iter().map(|&i| t.v[i as usize]).collect(),
                 centroid: o.iter().map(|&i| t.centroid[i as usize]).collect(),
-                cx: o.iter().map(|&i| t.centroid[i as usize].x).collect(),
-                cy: o.iter().map(|&i| t.centroid[i as usize].y).collect(),
-                cz: o.iter().map(|&i| t.centroid[i as usize].z).collect(),
-                radius: o.iter().map(|&i| t.radius[i as usize]).collect(),
                 area_normal: o.iter().map(|&i| t.area_normal[i as usize]).collect(),
                 alive: o.iter().map(|&i| t.alive[i as usize]).collect(),
             }
@@ -163,19 +184,8 @@ impl Bvh {
         *t = reorder(&order);
         let mut leaves = Vec::new();
         for node in nodes.iter_mut().filter(|n| n.left == 0) {
-            let (a, b) = (node.start as usize, node.end as usize);
-            let block = |v: &[f32]| {
-                let mut out = [0.0f32; LEAF_SIZE];
-                out[..b - a].copy_from_slice(&v[a..b]);
-                out
-            };
             node.slot = leaves.len() as u32;
-            leaves.push(LeafBlock {
-                cx: block(&t.cx),
-                cy: block(&t.cy),
-                cz: block(&t.cz),
-                radius: block(&t.radius),
-            });
+            leaves.push(LeafBlock::new(t, node.start as usize, node.end as usize));
         }
         Bvh {
             nodes,
@@ -346,6 +356,7 @@ impl Search<'_> {
         let mut stack: Vec<(u32, usize, usize)> = vec![(0, 0, lists.len())];
         let mut partial: Vec<u16> = Vec::with_capacity(cands.len());
         let mut inside: Vec<u16> = Vec::with_capacity(cands.len());
+        let (near, far) = (eps + m, eps - m);
         while let Some((ni, a, b)) = stack.pop() {
             let node = &self.bvh.nodes[ni as usize];
             if node.alive == 0 {
@@ -396,7 +407,6 @@ impl Search<'_> {
                 continue;
             }
             let leaf = &self.bvh.leaves[node.slot as usize];
-            let (near, far) = (eps + m, eps - m);
             for &c in &partial {
                 let (n, rho) = cands[c as usize];
                 // Bit masks of the leaf's triangles whose centroid is near enough to be valid
@@ -405,7 +415,7 @@ impl Search<'_> {
                 // sum is the one `score_tree` makes.
                 let (mut maybe, mut sure) = (0u32, 0u32);
                 for k in 0..LEAF_SIZE {
-                    let dc = (n.x * leaf.cx[k] + n.y * leaf.cy[k] + n.z * leaf.cz[k] - rho).abs();
+                    let dc = leaf.distance(k, n, rho);
                     maybe |= u32::from(dc <= near) << k;
                     sure |= u32::from(dc + leaf.radius[k] < far) << k;
                 }
@@ -447,25 +457,23 @@ impl Search<'_> {
                 continue;
             }
             let (a, b) = (node.start as usize, node.end as usize);
-            let mut dc = [0.0f32; LEAF_SIZE];
-            if !inside {
-                let (cx, cy, cz) = (&t.cx[a..b], &t.cy[a..b], &t.cz[a..b]);
-                for (k, out) in dc.iter_mut().take(b - a).enumerate() {
-                    *out = (n.x * cx[k] + n.y * cy[k] + n.z * cz[k] - rho).abs();
-                }
-            }
+            // Not inside: a leaf (an inner node was split above).
+            let leaf = (!inside).then(|| &self.bvh.leaves[node.slot as usize]);
             for i in a..b {
                 if !t.alive[i] {
                     continue;
                 }
-                let ok = inside || {
-                    let dc = dc[i - a];
-                    if dc > eps + m {
-                        false
-                    } else if dc + t.radius[i] < eps - m {
-                        true
-                    } else {
-                        valid_exact(&t.v[i], n, rho, eps)
+                let ok = match leaf {
+                    None => true,
+                    Some(leaf) => {
+                        let dc = leaf.distance(i - a, n, rho);
+                        if dc > eps + m {
+                            false
+                        } else if dc + leaf.radius[i - a] < eps - m {
+                            true
+                        } else {
+                            valid_exact(&t.v[i], n, rho, eps)
+                        }
                     }
                 };
                 if ok {
@@ -587,10 +595,6 @@ pub fn search_planes(soup: &TriangleSoup, params: &SearchParams, scale: f32) -> 
             .iter()
             .map(|v| Vec3A::from((v[0] + v[1] + v[2]) / 3.0))
             .collect(),
-        cx: Vec::new(),
-        cy: Vec::new(),
-        cz: Vec::new(),
-        radius: Vec::with_capacity(n),
         area_normal: soup
             .positions
             .iter()
@@ -598,14 +602,6 @@ pub fn search_planes(soup: &TriangleSoup, params: &SearchParams, scale: f32) -> 
             .collect(),
         alive: vec![true; n],
     };
-    t.radius = (0..n)
-        .map(|i| {
-            t.v[i]
-                .iter()
-                .map(|p| p.distance(t.centroid[i]))
-                .fold(0.0, f32::max)
-        })
-        .collect();
     let min_area = (scale * scale * 1e-12).max(f32::MIN_POSITIVE);
     let bvh = Bvh::build(&mut t);
     let mut s = Search {
