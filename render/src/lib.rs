@@ -47,6 +47,7 @@ mod frame;
 mod pipeline;
 mod readback;
 mod renderer;
+mod sample_lanes;
 mod scene;
 mod software;
 mod tree;

@@ -30,6 +30,7 @@ use crate::error::RenderError;
 use crate::pipeline::{
     LIGHT_DIRECTION, alpha_mip_chain, linear_mip_chain, mip_chain, srgb_to_linear,
 };
+use crate::sample_lanes::{self, LaneFilter, LaneLevel, LaneTest, TriangleLanes};
 use crate::scene::{DrawMaterial, DrawScene, DrawTexture};
 
 /// Most samples per side of the supersampled image (coordinates stay exact in `f32`).
@@ -151,6 +152,18 @@ impl AlphaCutoff {
         }
     }
 
+    /// The tables as thresholds, `(pass_from, fail_below)`: a footprint whose least alpha is at
+    /// least the first passes, one whose greatest is below the second fails (what
+    /// [`AlphaCutoff::decided`] looks up, as two comparisons for the eight-sample test). `None`
+    /// where the tables are not of that shape (they always are: the test is monotone).
+    fn thresholds(&self) -> Option<(u16, u16)> {
+        let pass_from = self.pass.iter().position(|&p| p).unwrap_or(256);
+        let fail_below = self.fail.iter().take_while(|&&f| f).count();
+        let shaped =
+            (0..256).all(|b| self.pass[b] == (b >= pass_from) && self.fail[b] == (b < fail_below));
+        shaped.then_some((pass_from as u16, fail_below as u16))
+    }
+
     /// The test of a filtered `alpha` (0..1).
     #[inline]
     pub(crate) fn passes(&self, alpha: f32) -> bool {
@@ -187,7 +200,9 @@ struct AlphaBounds {
 impl AlphaBounds {
     fn new((w, h, alpha): &(u32, u32, Vec<u8>), next: Option<&(u32, u32, Vec<u8>)>) -> AlphaBounds {
         let (w, h) = (*w as usize, *h as usize);
-        let mut bounds = vec![[0u8, 255u8]; alpha.len()];
+        // One entry more than the footprints: the eight-sample test reads each entry as four
+        // bytes (`crate::sample_lanes`), the last one's with this padding.
+        let mut bounds = vec![[0u8, 255u8]; alpha.len() + 1];
         for y in 0..h.saturating_sub(1) {
             let (top, bottom) = (&alpha[y * w..(y + 1) * w], &alpha[(y + 1) * w..(y + 2) * w]);
             for x in 0..w - 1 {
@@ -210,7 +225,7 @@ impl AlphaBounds {
                 let hi = (c as f32 + 1.5) / n * m - 0.5 + 0.01;
                 (lo >= 0.0 && hi < m - 1.0).then(|| (lo as usize, hi as usize + 1))
             };
-            let mut out = vec![[0u8, 255u8]; alpha.len()];
+            let mut out = vec![[0u8, 255u8]; alpha.len() + 1];
             for y in 0..h.saturating_sub(1) {
                 let Some((y0, y1)) = reach(y, h, nh) else {
                     continue;
@@ -478,6 +493,7 @@ pub fn render_coverage(
         view_proj,
         [width, height, supersample],
         true,
+        true,
     )
     .map(|r| r.0)
 }
@@ -518,6 +534,7 @@ pub fn render_coverage_with_depth(
         view_proj,
         [width, height, supersample],
         false,
+        true,
     )?;
     let depth = if covered == 0 {
         0.0
@@ -535,6 +552,7 @@ fn rasterise(
     view_proj: Mat4,
     [width, height, supersample]: [u32; 3],
     saturate: bool,
+    lanes: bool,
 ) -> Result<(CoverageImage, f64, u64), RenderError> {
     let (sw, sh) = checked_target(scene, textures, view_proj, [width, height, supersample])?;
     let ss = supersample.max(1);
@@ -544,10 +562,16 @@ fn rasterise(
         bins,
         rows: band_rows,
     } = Bands::new(scene, textures, view_proj, [sw, sh], ss as usize);
+    let cutoffs = AlphaCutoff::of_materials(scene);
     let raster = Raster {
         scene,
         textures,
-        cutoffs: AlphaCutoff::of_materials(scene),
+        thresholds: cutoffs
+            .iter()
+            .map(|c| c.as_ref().and_then(AlphaCutoff::thresholds))
+            .collect(),
+        cutoffs,
+        lanes: lanes && sample_lanes::available(),
         triangles: &triangles,
         shading: &shading,
         width: sw,
@@ -1268,8 +1292,12 @@ impl Setup {
 struct Raster<'a> {
     scene: &'a DrawScene,
     textures: &'a SoftwareTextures,
-    /// Per material, its alpha test.
+    /// Per material, its alpha test …
     cutoffs: Vec<Option<AlphaCutoff>>,
+    /// … and that test's [`AlphaCutoff::thresholds`].
+    thresholds: Vec<Option<(u16, u16)>>,
+    /// Coverage renders test eight samples at once ([`sample_lanes`]) where the machine can.
+    lanes: bool,
     triangles: &'a [Setup],
     /// Per triangle, its shading (colour renders; empty otherwise).
     shading: &'a [Shading],
@@ -1287,6 +1315,29 @@ impl Raster<'_> {
     /// Sample rows `y0..y1` (whole pixel rows) drawn with the triangles `bin`, resolved to
     /// pixels: coverage, and colour when the textures were prepared with it.
     fn band(&self, y0: usize, y1: usize, bin: &[u32]) -> Band {
+        #[cfg(target_arch = "x86_64")]
+        if self.lanes {
+            // SAFETY: `self.lanes` holds only where `sample_lanes::available` (AVX2).
+            return unsafe { self.band_avx2(y0, y1, bin) };
+        }
+        self.band_body(y0, y1, bin)
+    }
+
+    /// [`Raster::band`] compiled for AVX2, so that the eight-sample test inlines into it. The
+    /// compiler fuses no multiply with an add (that needs FMA, which this does not enable,
+    /// and Rust never contracts): every operation rounds as in the scalar build.
+    ///
+    /// # Safety
+    /// The machine must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn band_avx2(&self, y0: usize, y1: usize, bin: &[u32]) -> Band {
+        self.band_body(y0, y1, bin)
+    }
+
+    /// [`Raster::band`]'s work, for each instruction set it is compiled for.
+    #[inline(always)]
+    fn band_body(&self, y0: usize, y1: usize, bin: &[u32]) -> Band {
         let colour = self.textures.colour;
         let rows = y1 - y0;
         let n = rows * self.width;
@@ -1304,16 +1355,12 @@ impl Raster<'_> {
         } else {
             Vec::new()
         };
-        let ss = self.ss;
         // Per pixel of the band, its covered samples (when saturating).
-        let pixels_across = self.width / ss;
         let mut pixel_count = if self.saturate {
-            vec![0u32; (rows / ss) * pixels_across]
+            vec![0u32; (rows / self.ss) * (self.width / self.ss)]
         } else {
             Vec::new()
         };
-        // `2·count ≥ ss²`, the resolve's rule, first holds at this count.
-        let decided = (ss * ss).div_ceil(2);
         let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
         let light = Vec3::from(LIGHT_DIRECTION);
         let stride = if colour { 4 } else { 1 };
@@ -1334,10 +1381,60 @@ impl Raster<'_> {
                 .normal_texture
                 .filter(|_| shading.is_some_and(|s| s.tq.is_some()))
                 .map(|i| &self.textures.normal_maps[i]);
+            let lanes = if self.lanes && !colour {
+                self.triangle_lanes(t, cutoff, texture, bounds, material.wrap)
+            } else {
+                None
+            };
             for span in t.row_spans(y0, y1) {
                 let sy = span.y;
                 let row = (sy - y0) * self.width;
                 let row_word = (sy - y0) * words;
+                if let Some(lanes) = &lanes {
+                    // Eight samples at a time, aligned so that they share a coverage word.
+                    let mut x = span.first & !7;
+                    while x <= span.last {
+                        let (word, shift) = (x / 64, x % 64);
+                        let mut todo = !(covered[row_word + word] >> shift) as u32 & 0xff;
+                        if x < span.first {
+                            todo &= 0xff << (span.first - x);
+                        }
+                        if span.last < x + 7 {
+                            todo &= 0xff >> (x + 7 - span.last);
+                        }
+                        if todo != 0 {
+                            let k0 = x as i32 - span.x0 as i32;
+                            // SAFETY: `self.lanes` holds only where `sample_lanes::available`,
+                            // and a table test's table is an `AlphaBounds` one (padded).
+                            let r = unsafe { lanes.test(k0, span.start, span.step) };
+                            let mut hits = r.pass & todo;
+                            let mut open = r.open & todo;
+                            while open != 0 {
+                                let i = open.trailing_zeros() as usize;
+                                open &= open - 1;
+                                if let (Some(l), Some(bounds), Some(cutoff)) =
+                                    (texture, bounds, cutoff)
+                                    && l.alpha_test(
+                                        bounds,
+                                        [r.u[i], r.v[i]],
+                                        t.lod,
+                                        material.wrap,
+                                        cutoff,
+                                    )
+                                {
+                                    hits |= 1 << i;
+                                }
+                            }
+                            while hits != 0 {
+                                let i = hits.trailing_zeros() as usize;
+                                hits &= hits - 1;
+                                self.cover(&mut covered, &mut pixel_count, sy - y0, x + i);
+                            }
+                        }
+                        x += 8;
+                    }
+                    continue;
+                }
                 let (mut sx, end) = (span.first, span.last);
                 while sx <= end {
                     let word = sx / 64;
@@ -1387,19 +1484,7 @@ impl Raster<'_> {
                                 continue;
                             }
                         }
-                        covered[row_word + word] |= 1 << bit;
-                        if self.saturate {
-                            let (py, px) = ((sy - y0) / ss, x / ss);
-                            let count = &mut pixel_count[py * pixels_across + px];
-                            *count += 1;
-                            if *count as usize == decided {
-                                for r in py * ss..(py + 1) * ss {
-                                    for c in px * ss..(px + 1) * ss {
-                                        covered[r * words + c / 64] |= 1 << (c % 64);
-                                    }
-                                }
-                            }
-                        }
+                        self.cover(&mut covered, &mut pixel_count, sy - y0, x);
                         if colour {
                             depth[s] = z;
                             let base = Vec3::new(
@@ -1440,6 +1525,89 @@ impl Raster<'_> {
             colour,
             covered_samples: covered.iter().map(|w| u64::from(w.count_ones())).sum(),
         }
+    }
+
+    /// Marks sample `x` of the band's sample row `row` covered (`covered`: the band's bits, 64
+    /// to a word) and, when saturating, counts it for its pixel (`pixel_count`, the band's),
+    /// marking the pixel's other samples once half of them are.
+    #[inline(always)]
+    fn cover(&self, covered: &mut [u64], pixel_count: &mut [u32], row: usize, x: usize) {
+        let words = self.width.div_ceil(64);
+        covered[row * words + x / 64] |= 1 << (x % 64);
+        if self.saturate {
+            let ss = self.ss;
+            let (py, px) = (row / ss, x / ss);
+            let count = &mut pixel_count[py * (self.width / ss) + px];
+            *count += 1;
+            // `2·count ≥ ss²`, the resolve's rule, first holds at this count.
+            if *count as usize == (ss * ss).div_ceil(2) {
+                for r in py * ss..(py + 1) * ss {
+                    for c in px * ss..(px + 1) * ss {
+                        covered[r * words + c / 64] |= 1 << (c % 64);
+                    }
+                }
+            }
+        }
+    }
+
+    /// A coverage render's eight-sample test of triangle `t` (its material's `cutoff`, alpha
+    /// `texture` and its `bounds`, sampled with `wrap`), when its alpha test is one the lanes decide as the scalar
+    /// path does: none, or a bounds table (the one [`Levels::alpha_test`] reads first for
+    /// the triangle's levels). `None` sends the triangle to the scalar loop.
+    fn triangle_lanes<'b>(
+        &self,
+        t: &Setup,
+        cutoff: Option<&AlphaCutoff>,
+        texture: Option<&'b Levels>,
+        bounds: Option<&'b [AlphaBounds]>,
+        wrap: [Wrap; 2],
+    ) -> Option<TriangleLanes<'b>> {
+        let test = match cutoff {
+            None => LaneTest::Opaque,
+            Some(_) => {
+                let (levels, bounds) = (texture?, bounds?);
+                let (pass_from, fail_below) = self.thresholds[t.material as usize]?;
+                let (a, b) = (t.lod.a as usize, t.lod.b as usize);
+                let trilinear = t.lod.f > 0.0;
+                let table = &bounds[a];
+                let entries = if !trilinear {
+                    &table.footprint
+                } else if b == a + 1 && !table.trilinear.is_empty() {
+                    &table.trilinear
+                } else {
+                    return None;
+                };
+                let level = |k: usize| {
+                    let (width, height, texels) = &levels.0[k];
+                    LaneLevel {
+                        texels,
+                        width: *width,
+                        height: *height,
+                        wrap,
+                    }
+                };
+                let cutoff = cutoff?;
+                LaneTest::Table {
+                    table: entries,
+                    width: levels.0[a].0,
+                    height: levels.0[a].1,
+                    pass_from,
+                    fail_below,
+                    filter: LaneFilter {
+                        a: level(a),
+                        b: trilinear.then(|| level(b)),
+                        f: t.lod.f,
+                        scale: cutoff.scale,
+                        cutoff: cutoff.cutoff,
+                    },
+                }
+            }
+        };
+        Some(TriangleLanes {
+            q: t.q,
+            uq: t.uq,
+            test,
+        })
     }
 
     /// Pixels of a band of `rows` sample rows (`covered`: bits, 64 to a word, rows padded to
@@ -1483,6 +1651,7 @@ impl Raster<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::{Camera, Projection};
     use crate::scene::DrawMesh;
 
     /// A quad over NDC `[x0, x1] × [-1, 1]` at depth `z`, counter-clockwise (front) unless
@@ -1730,6 +1899,111 @@ mod tests {
 
     /// A 37×20 alpha: a disc of opaque texels with a soft rim, and noise — every kind of
     /// footprint (a leaf's hard and soft edges).
+    /// A perspective view of `cards` random leaf cards (random sizes, so that many mip levels
+    /// and trilinear blends are drawn; texture coordinates reaching past the edges under each
+    /// wrap mode; alpha tests with several cutoffs and scales, and an opaque material).
+    fn random_cards(cards: usize, seed: u64) -> (DrawScene, Mat4) {
+        let mut state = seed;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (w, h, alpha) = leaf_alpha();
+        let rgba = alpha.iter().flat_map(|&a| [40, 160, 30, a]).collect();
+        let wraps = [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat];
+        let mut materials: Vec<DrawMaterial> = (0..9)
+            .map(|m| DrawMaterial {
+                texture: Some(0),
+                alpha_cutoff: Some([0.3, 0.5, 0.8][m % 3]),
+                base_color: [1.0, 1.0, 1.0, [1.0, 0.7, 1.3][m / 3]],
+                double_sided: true,
+                wrap: [wraps[m % 3], wraps[m / 3]],
+                ..DrawMaterial::opaque([1.0; 4])
+            })
+            .collect();
+        materials.push(DrawMaterial::opaque([1.0; 4]));
+        let meshes = (0..cards)
+            .map(|i| {
+                let centre = Vec3::new(next() * 8.0 - 4.0, next() * 6.0 - 3.0, next() * 9.0);
+                let size = 0.02 + next() * next() * 2.0;
+                let (a, b) = (next() * 6.3, next() * 6.3);
+                let right = Vec3::new(a.cos(), a.sin() * b.cos(), a.sin() * b.sin()) * size;
+                let up = right.any_orthonormal_vector() * size;
+                let corners = [-right - up, right - up, right + up, -right + up]
+                    .map(|c| (centre + c).to_array());
+                // Mostly the unit square, sometimes shifted or scaled past it.
+                let (off, span) = if i % 4 == 0 {
+                    (next() * 2.0 - 1.0, 0.5 + next() * 2.0)
+                } else {
+                    (0.0, 1.0)
+                };
+                DrawMesh {
+                    positions: corners.to_vec(),
+                    normals: None,
+                    tangents: None,
+                    uvs: Some(
+                        [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]
+                            .map(|[u, v]| [off + u * span, off + v * span])
+                            .to_vec(),
+                    ),
+                    indices: vec![0, 1, 2, 0, 2, 3],
+                    material: i % materials.len(),
+                }
+            })
+            .collect();
+        let scene = DrawScene {
+            meshes,
+            materials,
+            textures: vec![DrawTexture {
+                width: w,
+                height: h,
+                rgba,
+            }],
+        };
+        let (min, max) = scene.bounds().expect("cards");
+        let camera = Camera::framing(
+            min,
+            max,
+            20.0,
+            10.0,
+            Projection::Perspective { fov_y_deg: 50.0 },
+        );
+        let view_proj = camera.view_proj_for_bounds(4.0 / 3.0, min, max);
+        (scene, view_proj)
+    }
+
+    #[test]
+    fn eight_sample_lanes_draw_what_the_scalar_path_draws() {
+        if !sample_lanes::available() {
+            eprintln!("skipped: this machine has no AVX2, so the lanes are never used");
+            return;
+        }
+        for (cards, seed) in [(60, 1), (400, 2), (2000, 3)] {
+            let (scene, view_proj) = random_cards(cards, seed);
+            let textures = SoftwareTextures::new(&scene, false).expect("textures");
+            for (w, h, ss) in [(40, 30, 1), (120, 90, 4), (400, 300, 2), (800, 600, 4)] {
+                for saturate in [true, false] {
+                    let draw = |lanes| {
+                        rasterise(&scene, &textures, view_proj, [w, h, ss], saturate, lanes)
+                            .expect("render")
+                    };
+                    let (scalar, lanes) = (draw(false), draw(true));
+                    let what = format!("{cards} cards, {w}x{h}, {ss}x, saturate {saturate}");
+                    assert!(count(&scalar.0) > 0, "{what}: nothing drawn");
+                    let differ = (scalar.0.covered.iter())
+                        .zip(&lanes.0.covered)
+                        .filter(|(a, b)| a != b)
+                        .count();
+                    assert_eq!(differ, 0, "{what}: pixels that differ");
+                    assert_eq!(scalar.1, lanes.1, "{what}: area");
+                    assert_eq!(scalar.2, lanes.2, "{what}: covered samples");
+                }
+            }
+        }
+    }
+
     fn leaf_alpha() -> (u32, u32, Vec<u8>) {
         let (w, h) = (37u32, 20u32);
         let alpha = (0..w * h)
@@ -1983,8 +2257,9 @@ mod tests {
         let textures = SoftwareTextures::new(&scene, false).expect("textures");
         for ss in [1, 2, 3, 4] {
             let size = [61, 47, ss];
-            let saturated = rasterise(&scene, &textures, Mat4::IDENTITY, size, true).expect("r");
-            let exact = rasterise(&scene, &textures, Mat4::IDENTITY, size, false).expect("r");
+            let saturated =
+                rasterise(&scene, &textures, Mat4::IDENTITY, size, true, true).expect("r");
+            let exact = rasterise(&scene, &textures, Mat4::IDENTITY, size, false, true).expect("r");
             assert_eq!(saturated.0.covered, exact.0.covered, "{ss}x");
             let covered = exact.0.covered.iter().filter(|&&c| c).count();
             assert!(covered > 100 && covered < 61 * 47, "{ss}x: {covered}");
