@@ -1221,9 +1221,11 @@ fn row_span(start: [f32; 3], step: [f32; 3], inv: [f32; 3], len: usize) -> Optio
             return None;
         }
     }
-    // The first sample at or after `lo` (a ceiling: `lo` is at least 0 here).
-    let first = lo as usize + usize::from((lo as usize as f32) < lo);
-    (lo <= hi && hi >= 0.0).then(|| (first, (hi as usize).min(len)))
+    // The first sample at or after `lo` (a ceiling: `lo` is at least 0 here). Converted
+    // through `i64`: one instruction, where a float's conversion to `usize` is a sequence
+    // (x86-64 has no unsigned one before AVX-512); both are at least 0 where used.
+    let first = lo as i64 as usize + usize::from((lo as i64 as f32) < lo);
+    (lo <= hi && hi >= 0.0).then(|| (first, (hi as i64 as usize).min(len)))
 }
 
 /// How far a row's span reaches past its edges' computed zero crossings, in samples. The
