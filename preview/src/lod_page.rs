@@ -118,13 +118,23 @@ pub fn lod_pictures(
         .iter()
         .find_map(|e| e.screen_height)
         .unwrap_or(LOD0_HEIGHT);
-    // One LOD's pictures at a time: the renderer spreads each frame over the threads.
-    let pictures: Vec<LodPictures> = (0..req.lods.len())
-        .map(|k| {
-            let h = report.lods[k].screen_height.unwrap_or(lod0_height);
-            lod_pictures_of(renderer, req, &camera, reference.scene(), k, h, &dir)
-        })
-        .collect::<Result<_, _>>()?;
+    // One LOD's pictures at a time: the renderer spreads each frame over the threads. LOD0's
+    // still is the reference of the LODs drawn at its size (the same pose, camera and size:
+    // the same picture), rendered once.
+    let mut pictures: Vec<LodPictures> = Vec::with_capacity(req.lods.len());
+    let mut lod0_still: Option<Frame> = None;
+    for k in 0..req.lods.len() {
+        let h = report.lods[k].screen_height.unwrap_or(lod0_height);
+        let reference = Reference {
+            scene: reference.scene(),
+            still: lod0_still.as_ref(),
+        };
+        let (p, still) = lod_pictures_of(renderer, req, &camera, reference, k, h, &dir)?;
+        if k == 0 {
+            lod0_still = Some(still);
+        }
+        pictures.push(p);
+    }
     Ok(LodPreviewPictures {
         pictures,
         seconds: t0.elapsed().as_secs_f64(),
@@ -202,11 +212,11 @@ fn lod_pictures_of(
     renderer: &Renderer,
     req: &LodPreviewRequest,
     camera: &frond_render::Camera,
-    reference: &DrawScene,
+    reference: Reference,
     k: usize,
     h: f32,
     dir: &str,
-) -> Result<LodPictures, PreviewError> {
+) -> Result<(LodPictures, Frame), PreviewError> {
     let report = req.report;
     let tree = req.lods[k];
     let (clip, start) = clip_start(tree, report.clip.as_deref());
@@ -217,7 +227,21 @@ fn lod_pictures_of(
     let mut diff = PixelDifference::default();
     let rect;
     if k > 0 {
-        let reference = render_pose(renderer, req.lods[0], reference, camera, size, "still")?;
+        let rendered;
+        let reference = match reference.still.filter(|f| (f.width, f.height) == size) {
+            Some(still) => still,
+            None => {
+                rendered = render_pose(
+                    renderer,
+                    req.lods[0],
+                    reference.scene,
+                    camera,
+                    size,
+                    "still",
+                )?;
+                &rendered
+            }
+        };
         rect = covered_box(&[&reference, &still], 2);
         let (rgba, d) = difference(&reference, &still);
         diff = d;
@@ -280,7 +304,7 @@ fn lod_pictures_of(
         files.push((format!("{dir}/lod{k}_atlas.png"), picture.png));
         atlas = Some(picture.size);
     }
-    Ok(LodPictures {
+    let pictures = LodPictures {
         files,
         still: [rect[2], rect[3]],
         screen_height: size.1,
@@ -288,7 +312,16 @@ fn lod_pictures_of(
         flip_frames: n,
         atlas,
         difference: diff,
-    })
+    };
+    Ok((pictures, still))
+}
+
+/// What LOD `k > 0` is compared with: LOD0's scene at the start of its clip, and its still
+/// when already rendered (at LOD0's own size: reused where LOD `k` is drawn at that size).
+#[derive(Clone, Copy)]
+struct Reference<'a> {
+    scene: &'a DrawScene,
+    still: Option<&'a Frame>,
 }
 
 /// The LOD's clip of the run's clip `name` (as `frond eval` picks it) and the time it starts.
