@@ -190,13 +190,16 @@ impl AlphaMap {
     /// Alpha (0..1) at `uv` (outside [0, 1] as `wrap` says) at the level pair `(k, frac)`
     /// ([`AlphaMap::level`]): nearest texel of the two levels, blended linearly between them
     /// (the renderer's trilinear filter, point-sampled within a level).
+    #[inline(always)]
     fn at(&self, uv: Vec2, (k, frac): (usize, f32), wrap: [Wrap; 2]) -> f32 {
         // Inside the texture (nearly always) without the wrap's remainder: a libm call in
         // this hot loop.
         let index = |x: f32, n: usize, w: Wrap| {
             let t = x * n as f32;
             if (0.0..n as f32).contains(&t) {
-                t as usize
+                // Through `i32` (`t` is below the side): one instruction where a conversion
+                // to `usize` is a sequence.
+                t as i32 as usize
             } else {
                 w.texel(t, n as u32) as usize
             }
@@ -293,6 +296,29 @@ impl CardCoverage {
     /// side only (the usual fill rule), so the two triangles of a quad never both claim the
     /// samples on their shared diagonal.
     fn raster(&self, view: &View, card: usize, scale: f32, sink: &mut impl Sink) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the machine has AVX2, just checked.
+            return unsafe { self.raster_avx2(view, card, scale, sink) };
+        }
+        self.raster_body(view, card, scale, sink);
+    }
+
+    /// [`CardCoverage::raster`] compiled for AVX2 (rounding and conversions are single
+    /// instructions there, library calls or sequences on baseline x86-64): the same
+    /// operations, rounded the same (no fused multiply-add is enabled), so the same samples.
+    ///
+    /// # Safety
+    /// The machine must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn raster_avx2(&self, view: &View, card: usize, scale: f32, sink: &mut impl Sink) {
+        self.raster_body(view, card, scale, sink);
+    }
+
+    /// [`CardCoverage::raster`]'s work, for each instruction set it is compiled for.
+    #[inline(always)]
+    fn raster_body(&self, view: &View, card: usize, scale: f32, sink: &mut impl Sink) {
         let c = &self.cards[card];
         for tri in &c.triangles {
             let mut p = tri.map(|(pos, _)| {
