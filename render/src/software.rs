@@ -12,7 +12,9 @@
 //! does not depend on which surface is in front), reads one alpha channel per fragment, and
 //! keeps only a band of the supersampled image in memory at a time. Bands are rasterised in
 //! parallel and independently, so the image is the same whatever the thread count, and the
-//! same from machine to machine (no driver in the loop).
+//! same from machine to machine (no driver in the loop). Where the machine has AVX2, coverage
+//! renders test eight samples of a row at once ([`crate::sample_lanes`]) with the same
+//! operations in the same order: the same bits.
 //!
 //! It follows the wgpu path's conventions (see the crate docs): wgpu clip space (z in [0, 1]),
 //! counter-clockwise front faces, back faces culled unless the material is double-sided,
