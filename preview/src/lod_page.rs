@@ -242,8 +242,8 @@ fn lod_pictures_of(
                 &rendered
             }
         };
-        rect = covered_box(&[&reference, &still], 2);
-        let (rgba, d) = difference(&reference, &still);
+        rect = covered_box(&[reference, &still], 2);
+        let (rgba, d) = difference(reference, &still);
         diff = d;
         files.push((
             format!("{dir}/lod{k}_lod0.png"),
