@@ -1395,14 +1395,16 @@ impl Raster<'_> {
                 let row = (sy - y0) * self.width;
                 let row_word = (sy - y0) * words;
                 if let Some(lanes) = &lanes {
-                    // Eight samples at a time, aligned so that they share a coverage word.
-                    let mut x = span.first & !7;
+                    // Eight samples at a time from the span's first: their coverage bits are
+                    // read across the word boundary where they straddle one.
+                    let mut x = span.first;
                     while x <= span.last {
                         let (word, shift) = (x / 64, x % 64);
-                        let mut todo = !(covered[row_word + word] >> shift) as u32 & 0xff;
-                        if x < span.first {
-                            todo &= 0xff << (span.first - x);
+                        let mut bits = covered[row_word + word] >> shift;
+                        if shift > 56 && word + 1 < words {
+                            bits |= covered[row_word + word + 1] << (64 - shift);
                         }
+                        let mut todo = !bits as u32 & 0xff;
                         if span.last < x + 7 {
                             todo &= 0xff >> (x + 7 - span.last);
                         }
