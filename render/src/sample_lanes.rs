@@ -3,8 +3,10 @@
 //! footprint bounds table ([`crate::software`]'s `AlphaBounds`), the three steps that were
 //! most of oak_dense's measure (issue 20). Each lane does exactly the scalar rasteriser's
 //! operations in its order (a multiply, then an add: no fused multiply-add, which would round
-//! differently), so both paths give the same bits and the same masks on every machine; a lane
-//! the table leaves open is handed back, with its coordinates, to the scalar filter.
+//! differently), so both paths give the same bits and the same masks on every machine. The
+//! samples the table leaves open are filtered here too (the trilinear filter and its edge
+//! wrap); only a footprint reaching further off its level goes back, with its coordinates, to
+//! the scalar filter.
 //!
 //! Hand-written because what it vectorises is a gather from a per-texture table keyed by
 //! computed texel coordinates, which no SIMD crate's safe API expresses and which the
@@ -29,15 +31,13 @@ pub(crate) struct TriangleLanes<'a> {
 pub(crate) enum LaneTest<'a> {
     /// No alpha test: every sample inside the triangle is covered.
     Opaque,
-    /// A bounds table of a `width`×`height` level (each entry `[least, greatest]` alpha of a
-    /// footprint, one padding entry past the last so that a 4-byte gather of the last entry
-    /// stays within it): a footprint passes when its least alpha is at least `pass_from` and
-    /// fails when its greatest is below `fail_below`; the samples it leaves open are
-    /// `filter`ed.
+    /// A bounds table of the filter's first level, `filter.a` (each entry `[least, greatest]`
+    /// alpha of a footprint, one padding entry past the last so that a 4-byte gather of the
+    /// last entry stays within it): a footprint passes when its least alpha is at least
+    /// `pass_from` and fails when its greatest is below `fail_below`; the samples it leaves
+    /// open are `filter`ed.
     Table {
         table: &'a [[u8; 2]],
-        width: u32,
-        height: u32,
         pass_from: u16,
         fail_below: u16,
         filter: LaneFilter<'a>,
@@ -246,8 +246,6 @@ impl TriangleLanes<'_> {
         }
         let LaneTest::Table {
             table,
-            width,
-            height,
             pass_from,
             fail_below,
             filter,
@@ -265,6 +263,7 @@ impl TriangleLanes<'_> {
         let v = _mm256_div_ps(dot(self.uq.map(|t| t[1])), q);
         // The footprint's cell: `floor(u·w − 0.5)`, kept when on the level (a NaN is not, and
         // goes to the filter, which places it as the scalar path does).
+        let (width, height) = (filter.a.width, filter.a.height);
         let (wf, hf) = (_mm256_set1_ps(width as f32), _mm256_set1_ps(height as f32));
         let half = _mm256_set1_ps(0.5);
         let fx = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(u, wf), half));

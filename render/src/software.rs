@@ -125,6 +125,8 @@ pub(crate) struct AlphaCutoff {
     pass: [bool; 256],
     /// Per byte `b`: `b/255 · scale < cutoff` (a footprint whose greatest alpha is `b` fails).
     fail: [bool; 256],
+    /// The two tables as thresholds ([`AlphaCutoff::thresholds`]).
+    thresholds: Option<(u16, u16)>,
 }
 
 impl AlphaCutoff {
@@ -132,11 +134,14 @@ impl AlphaCutoff {
         let at = |b: usize| f32::from(b as u8) / 255.0 * scale;
         // A negative (or NaN) scale reverses the test's order: bounds then settle nothing.
         let monotone = scale >= 0.0;
+        let pass = std::array::from_fn(|b| monotone && at(b) >= cutoff);
+        let fail = std::array::from_fn(|b| monotone && at(b) < cutoff);
         AlphaCutoff {
             scale,
             cutoff,
-            pass: std::array::from_fn(|b| monotone && at(b) >= cutoff),
-            fail: std::array::from_fn(|b| monotone && at(b) < cutoff),
+            pass,
+            fail,
+            thresholds: Self::thresholds(&pass, &fail),
         }
     }
 
@@ -154,15 +159,14 @@ impl AlphaCutoff {
         }
     }
 
-    /// The tables as thresholds, `(pass_from, fail_below)`: a footprint whose least alpha is at
-    /// least the first passes, one whose greatest is below the second fails (what
-    /// [`AlphaCutoff::decided`] looks up, as two comparisons for the eight-sample test). `None`
-    /// where the tables are not of that shape (they always are: the test is monotone).
-    fn thresholds(&self) -> Option<(u16, u16)> {
-        let pass_from = self.pass.iter().position(|&p| p).unwrap_or(256);
-        let fail_below = self.fail.iter().take_while(|&&f| f).count();
-        let shaped =
-            (0..256).all(|b| self.pass[b] == (b >= pass_from) && self.fail[b] == (b < fail_below));
+    /// The `pass` and `fail` tables as thresholds, `(pass_from, fail_below)`: a footprint whose
+    /// least alpha is at least the first passes, one whose greatest is below the second fails
+    /// (what [`AlphaCutoff::decided`] looks up, as two comparisons for the eight-sample test).
+    /// `None` where the tables are not of that shape (they always are: the test is monotone).
+    fn thresholds(pass: &[bool; 256], fail: &[bool; 256]) -> Option<(u16, u16)> {
+        let pass_from = pass.iter().position(|&p| p).unwrap_or(256);
+        let fail_below = fail.iter().take_while(|&&f| f).count();
+        let shaped = (0..256).all(|b| pass[b] == (b >= pass_from) && fail[b] == (b < fail_below));
         shaped.then_some((pass_from as u16, fail_below as u16))
     }
 
@@ -558,30 +562,10 @@ fn rasterise(
 ) -> Result<(CoverageImage, f64, u64), RenderError> {
     let (sw, sh) = checked_target(scene, textures, view_proj, [width, height, supersample])?;
     let ss = supersample.max(1);
-    let Bands {
-        triangles,
-        shading,
-        bins,
-        rows: band_rows,
-    } = Bands::new(scene, textures, view_proj, [sw, sh], ss as usize);
-    let cutoffs = AlphaCutoff::of_materials(scene);
-    let raster = Raster {
-        scene,
-        textures,
-        thresholds: cutoffs
-            .iter()
-            .map(|c| c.as_ref().and_then(AlphaCutoff::thresholds))
-            .collect(),
-        cutoffs,
-        lanes: lanes && sample_lanes::available(),
-        triangles: &triangles,
-        shading: &shading,
-        width: sw,
-        ss: ss as usize,
-        saturate: saturate && !textures.colour,
-    };
-    let resolved: Vec<Band> = bins
-        .par_iter()
+    let bands = Bands::new(scene, textures, view_proj, [sw, sh], ss as usize);
+    let raster = Raster::new(scene, textures, &bands, sw, ss as usize, [saturate, lanes]);
+    let band_rows = bands.rows;
+    let resolved: Vec<Band> = (bands.bins.par_iter())
         .enumerate()
         .map(|(b, bin)| raster.band(b * band_rows, ((b + 1) * band_rows).min(sh), bin))
         .collect();
@@ -597,7 +581,9 @@ fn rasterise(
         image.colour.extend(band.colour);
         covered_samples += band.covered_samples;
     }
-    let area: f64 = triangles.iter().map(|t| 0.5 / f64::from(t.inv_area)).sum();
+    let area: f64 = (bands.triangles.iter())
+        .map(|t| 0.5 / f64::from(t.inv_area))
+        .sum();
     Ok((image, area, covered_samples))
 }
 
@@ -1296,10 +1282,8 @@ impl Setup {
 struct Raster<'a> {
     scene: &'a DrawScene,
     textures: &'a SoftwareTextures,
-    /// Per material, its alpha test …
+    /// Per material, its alpha test.
     cutoffs: Vec<Option<AlphaCutoff>>,
-    /// … and that test's [`AlphaCutoff::thresholds`].
-    thresholds: Vec<Option<(u16, u16)>>,
     /// Coverage renders test eight samples at once ([`sample_lanes`]) where the machine can.
     lanes: bool,
     triangles: &'a [Setup],
@@ -1315,7 +1299,31 @@ struct Raster<'a> {
     saturate: bool,
 }
 
-impl Raster<'_> {
+impl<'a> Raster<'a> {
+    /// The raster of `bands` (set up from `scene` for a target `width` samples wide, `ss` a
+    /// pixel side): `saturate` when the mask alone is wanted (see [`Raster::saturate`]),
+    /// `lanes` to test eight samples at once where the machine can.
+    fn new(
+        scene: &'a DrawScene,
+        textures: &'a SoftwareTextures,
+        bands: &'a Bands,
+        width: usize,
+        ss: usize,
+        [saturate, lanes]: [bool; 2],
+    ) -> Raster<'a> {
+        Raster {
+            scene,
+            textures,
+            cutoffs: AlphaCutoff::of_materials(scene),
+            lanes: lanes && sample_lanes::available(),
+            triangles: &bands.triangles,
+            shading: &bands.shading,
+            width,
+            ss,
+            saturate: saturate && !textures.colour,
+        }
+    }
+
     /// Sample rows `y0..y1` (whole pixel rows) drawn with the triangles `bin`, resolved to
     /// pixels: coverage, and colour when the textures were prepared with it.
     fn band(&self, y0: usize, y1: usize, bin: &[u32]) -> Band {
@@ -1386,7 +1394,7 @@ impl Raster<'_> {
                 .filter(|_| shading.is_some_and(|s| s.tq.is_some()))
                 .map(|i| &self.textures.normal_maps[i]);
             let lanes = if self.lanes && !colour {
-                self.triangle_lanes(t, cutoff, texture, bounds, material.wrap)
+                self.triangle_lanes(t)
             } else {
                 None
             };
@@ -1556,23 +1564,19 @@ impl Raster<'_> {
         }
     }
 
-    /// A coverage render's eight-sample test of triangle `t` (its material's `cutoff`, alpha
-    /// `texture` and its `bounds`, sampled with `wrap`), when its alpha test is one the lanes decide as the scalar
-    /// path does: none, or a bounds table (the one [`Levels::alpha_test`] reads first for
-    /// the triangle's levels). `None` sends the triangle to the scalar loop.
-    fn triangle_lanes<'b>(
-        &self,
-        t: &Setup,
-        cutoff: Option<&AlphaCutoff>,
-        texture: Option<&'b Levels>,
-        bounds: Option<&'b [AlphaBounds]>,
-        wrap: [Wrap; 2],
-    ) -> Option<TriangleLanes<'b>> {
-        let test = match cutoff {
+    /// A coverage render's eight-sample test of triangle `t`, when its material's alpha test
+    /// is one the lanes decide as the scalar path does: none, or a bounds table (the one
+    /// [`Levels::alpha_test`] reads first for the triangle's levels) and the filter behind it.
+    /// `None` sends the triangle to the scalar loop.
+    fn triangle_lanes(&self, t: &Setup) -> Option<TriangleLanes<'_>> {
+        let material = &self.scene.materials[t.material as usize];
+        let test = match &self.cutoffs[t.material as usize] {
             None => LaneTest::Opaque,
-            Some(_) => {
-                let (levels, bounds) = (texture?, bounds?);
-                let (pass_from, fail_below) = self.thresholds[t.material as usize]?;
+            Some(cutoff) => {
+                let texture = material.texture?;
+                let levels = &self.textures.textures[texture];
+                let bounds = self.textures.alpha_bounds.get(texture)?;
+                let (pass_from, fail_below) = cutoff.thresholds?;
                 let (a, b) = (t.lod.a as usize, t.lod.b as usize);
                 let trilinear = t.lod.f > 0.0;
                 let table = &bounds[a];
@@ -1589,14 +1593,11 @@ impl Raster<'_> {
                         texels,
                         width: *width,
                         height: *height,
-                        wrap,
+                        wrap: material.wrap,
                     }
                 };
-                let cutoff = cutoff?;
                 LaneTest::Table {
                     table: entries,
-                    width: levels.0[a].0,
-                    height: levels.0[a].1,
                     pass_from,
                     fail_below,
                     filter: LaneFilter {
@@ -1903,8 +1904,6 @@ mod tests {
         assert!(SoftwareTextures::new(&textured, false).is_err());
     }
 
-    /// A 37×20 alpha: a disc of opaque texels with a soft rim, and noise — every kind of
-    /// footprint (a leaf's hard and soft edges).
     /// A perspective view of `cards` random leaf cards (random sizes, so that many mip levels
     /// and trilinear blends are drawn; texture coordinates reaching past the edges under each
     /// wrap mode; alpha tests with several cutoffs and scales, and an opaque material).
@@ -1986,10 +1985,33 @@ mod tests {
             eprintln!("skipped: this machine has no AVX2, so the lanes are never used");
             return;
         }
+        // Triangles drawn opaque, bilinear, trilinear by the lanes, and by the scalar loop.
+        let mut drawn = [0usize; 4];
         for (cards, seed) in [(60, 1), (400, 2), (2000, 3)] {
             let (scene, view_proj) = random_cards(cards, seed);
             let textures = SoftwareTextures::new(&scene, false).expect("textures");
             for (w, h, ss) in [(40, 30, 1), (120, 90, 4), (400, 300, 2), (800, 600, 4)] {
+                // The lanes draw most triangles, of every kind (not only the scalar loop).
+                let [sw, sh] = [w * ss, h * ss].map(|n| n as usize);
+                let bands = Bands::new(&scene, &textures, view_proj, [sw, sh], ss as usize);
+                let raster = Raster::new(&scene, &textures, &bands, sw, ss as usize, [true; 2]);
+                let kinds = bands.triangles.iter().map(|t| {
+                    raster.triangle_lanes(t).map(|l| match l.test {
+                        LaneTest::Opaque => 0,
+                        LaneTest::Table { filter, .. } => 1 + usize::from(filter.b.is_some()),
+                    })
+                });
+                let mut counts = [0usize; 4];
+                for kind in kinds {
+                    counts[kind.unwrap_or(3)] += 1;
+                }
+                assert!(
+                    counts[3] < bands.triangles.len() / 4,
+                    "{cards} cards, {w}x{h}: {counts:?} (opaque, bilinear, trilinear, scalar)"
+                );
+                for (all, n) in drawn.iter_mut().zip(counts) {
+                    *all += n;
+                }
                 for saturate in [true, false] {
                     let draw = |lanes| {
                         rasterise(&scene, &textures, view_proj, [w, h, ss], saturate, lanes)
@@ -2008,8 +2030,11 @@ mod tests {
                 }
             }
         }
+        assert!(drawn[..3].iter().all(|&n| n > 0), "{drawn:?}");
     }
 
+    /// A 37×20 alpha: a disc of opaque texels with a soft rim, and noise — every kind of
+    /// footprint (a leaf's hard and soft edges).
     fn leaf_alpha() -> (u32, u32, Vec<u8>) {
         let (w, h) = (37u32, 20u32);
         let alpha = (0..w * h)
