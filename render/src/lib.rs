@@ -51,6 +51,7 @@ mod sample_lanes;
 mod scene;
 mod software;
 mod tree;
+mod uv_hull;
 
 pub use bake_raster::{BakeImage, render_bake};
 pub use camera::{Camera, Projection};

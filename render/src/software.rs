@@ -34,6 +34,7 @@ use crate::pipeline::{
 };
 use crate::sample_lanes::{self, LaneFilter, LaneLevel, LaneTest, TriangleLanes};
 use crate::scene::{DrawMaterial, DrawScene, DrawTexture};
+use crate::uv_hull::{TriangleHull, UvHull};
 
 /// Most samples per side of the supersampled image (coordinates stay exact in `f32`).
 pub(crate) const MAX_SIDE: u64 = 1 << 15;
@@ -98,8 +99,21 @@ pub struct SoftwareTextures {
     /// Per texture, its linear box chain when a drawn material uses it as a normal map and
     /// colour is drawn (lighting needs the normals); empty otherwise.
     normal_maps: Vec<Levels>,
+    /// Where the alpha tests of the scene's materials can pass, per texture level
+    /// ([`UvHull`]): coverage renders only (empty when colour is drawn).
+    uv_hulls: Vec<TextureHulls>,
     pub(crate) colour: bool,
     lighting: Lighting,
+}
+
+/// The [`UvHull`] of every level of one texture under one material's wrap and alpha test.
+#[derive(Clone, Debug)]
+struct TextureHulls {
+    texture: usize,
+    wrap: [Wrap; 2],
+    /// The test's `fail_below` ([`AlphaCutoff::thresholds`]).
+    fail_below: u16,
+    levels: Vec<UvHull>,
 }
 
 /// One texture's mip chain, level 0 first: `(width, height, texels)`, one alpha byte a texel,
@@ -297,7 +311,36 @@ impl SoftwareTextures {
                 *u = true;
             }
         }
-        Self::prepare(&scene.textures, used, normal_map, colour)
+        let mut prepared = Self::prepare(&scene.textures, used, normal_map, colour)?;
+        if !colour {
+            prepared.uv_hulls = prepared.hulls_of(scene);
+        }
+        Ok(prepared)
+    }
+
+    /// The octagons of the textured, alpha-tested materials of `scene` (one per texture, wrap
+    /// and failing threshold), every level of each.
+    fn hulls_of(&self, scene: &DrawScene) -> Vec<TextureHulls> {
+        let mut keys: Vec<(usize, [Wrap; 2], u16)> = Vec::new();
+        for (material, cutoff) in scene.materials.iter().zip(AlphaCutoff::of_materials(scene)) {
+            if let (Some(texture), Some((_, fail_below))) =
+                (material.texture, cutoff.and_then(|c| c.thresholds))
+                && self.textures.get(texture).is_some_and(|l| !l.0.is_empty())
+                && !keys.contains(&(texture, material.wrap, fail_below))
+            {
+                keys.push((texture, material.wrap, fail_below));
+            }
+        }
+        keys.into_par_iter()
+            .map(|(texture, wrap, fail_below)| TextureHulls {
+                texture,
+                wrap,
+                fail_below,
+                levels: (self.textures[texture].0.iter())
+                    .map(|level| UvHull::of_level(level, wrap, fail_below))
+                    .collect(),
+            })
+            .collect()
     }
 
     /// Every one of `textures` prepared for colour renders without normal maps, as the
@@ -410,6 +453,7 @@ impl SoftwareTextures {
             textures,
             alpha_bounds,
             normal_maps,
+            uv_hulls: Vec::new(),
             colour,
             lighting: Lighting::TwoSided,
         })
@@ -498,8 +542,7 @@ pub fn render_coverage(
         textures,
         view_proj,
         [width, height, supersample],
-        true,
-        true,
+        Shortcuts::ALL,
     )
     .map(|r| r.0)
 }
@@ -539,8 +582,10 @@ pub fn render_coverage_with_depth(
         textures,
         view_proj,
         [width, height, supersample],
-        false,
-        true,
+        Shortcuts {
+            saturate: false,
+            ..Shortcuts::ALL
+        },
     )?;
     let depth = if covered == 0 {
         0.0
@@ -550,20 +595,39 @@ pub fn render_coverage_with_depth(
     Ok((image, depth))
 }
 
+/// The shortcuts a coverage render takes, each giving the same image (tests compare them):
+/// see [`Raster::saturate`], [`Raster::lanes`], [`Raster::hulls`] and
+/// [`Raster::covered_rows`].
+#[derive(Clone, Copy, Debug)]
+struct Shortcuts {
+    saturate: bool,
+    lanes: bool,
+    hulls: bool,
+    covered_rows: bool,
+}
+
+impl Shortcuts {
+    const ALL: Shortcuts = Shortcuts {
+        saturate: true,
+        lanes: true,
+        hulls: true,
+        covered_rows: true,
+    };
+}
+
 /// [`render_coverage`], the drawn triangles' area in samples, and the samples covered (all
-/// of a decided pixel's when `saturate`, see [`Raster::saturate`]).
+/// of a decided pixel's when `shortcuts.saturate`, see [`Raster::saturate`]).
 fn rasterise(
     scene: &DrawScene,
     textures: &SoftwareTextures,
     view_proj: Mat4,
     [width, height, supersample]: [u32; 3],
-    saturate: bool,
-    lanes: bool,
+    shortcuts: Shortcuts,
 ) -> Result<(CoverageImage, f64, u64), RenderError> {
     let (sw, sh) = checked_target(scene, textures, view_proj, [width, height, supersample])?;
     let ss = supersample.max(1);
     let bands = Bands::new(scene, textures, view_proj, [sw, sh], ss as usize);
-    let raster = Raster::new(scene, textures, &bands, sw, ss as usize, [saturate, lanes]);
+    let raster = Raster::new(scene, textures, &bands, sw, ss as usize, shortcuts);
     let band_rows = bands.rows;
     let resolved: Vec<Band> = (bands.bins.par_iter())
         .enumerate()
@@ -913,7 +977,7 @@ fn floor_i64(x: f32) -> i64 {
 
 /// Texel index `i` of a side of `n` texels under `wrap`.
 #[inline]
-fn wrap_index(i: i64, n: u32, wrap: Wrap) -> usize {
+pub(crate) fn wrap_index(i: i64, n: u32, wrap: Wrap) -> usize {
     let n = i64::from(n.max(1));
     if (0..n).contains(&i) {
         return i as usize;
@@ -1249,11 +1313,30 @@ impl RowSpan {
     }
 }
 
+/// What every row of one triangle's walk shares: its weights' change per sample along a row
+/// and their reciprocals.
+pub(crate) struct RowWalk {
+    step: [f32; 3],
+    inv: [f32; 3],
+}
+
 impl Setup {
     /// The sample rows of `y0..y1` the triangle may cover, each with its span of samples.
     pub(crate) fn row_spans(&self, y0: usize, y1: usize) -> impl Iterator<Item = RowSpan> + '_ {
-        let ty0 = (self.min[1] as usize).max(y0);
-        let ty1 = (self.max[1] as usize + 1).min(y1);
+        let walk = self.row_walk();
+        self.rows(y0, y1)
+            .filter_map(move |y| self.row_span(&walk, y))
+    }
+
+    /// The sample rows of `y0..y1` within the triangle's bounds.
+    #[inline]
+    pub(crate) fn rows(&self, y0: usize, y1: usize) -> std::ops::Range<usize> {
+        (self.min[1] as usize).max(y0)..(self.max[1] as usize + 1).min(y1)
+    }
+
+    /// What [`Setup::row_span`] needs of the triangle for every row.
+    #[inline]
+    pub(crate) fn row_walk(&self) -> RowWalk {
         let step = [
             -(self.y[2] - self.y[1]) * self.inv_area,
             -(self.y[0] - self.y[2]) * self.inv_area,
@@ -1262,18 +1345,22 @@ impl Setup {
         // Reciprocals once a triangle rather than a division per edge and row; steps this small
         // bound nothing within an image.
         let inv = step.map(|s| if s.abs() >= 1e-30 { 1.0 / s } else { 0.0 });
+        RowWalk { step, inv }
+    }
+
+    /// Sample row `y`'s span, `None` when the triangle covers no sample of it.
+    #[inline]
+    pub(crate) fn row_span(&self, walk: &RowWalk, y: usize) -> Option<RowSpan> {
         let x0 = self.min[0] as usize;
-        (ty0..ty1).filter_map(move |y| {
-            let start = self.weights(x0 as f32 + 0.5, y as f32 + 0.5);
-            let (first, last) = row_span(start, step, inv, self.max[0] as usize - x0)?;
-            Some(RowSpan {
-                y,
-                first: x0 + first,
-                last: x0 + last,
-                x0,
-                start,
-                step,
-            })
+        let start = self.weights(x0 as f32 + 0.5, y as f32 + 0.5);
+        let (first, last) = row_span(start, walk.step, walk.inv, self.max[0] as usize - x0)?;
+        Some(RowSpan {
+            y,
+            first: x0 + first,
+            last: x0 + last,
+            x0,
+            start,
+            step: walk.step,
         })
     }
 }
@@ -1286,6 +1373,13 @@ struct Raster<'a> {
     cutoffs: Vec<Option<AlphaCutoff>>,
     /// Coverage renders test eight samples at once ([`sample_lanes`]) where the machine can.
     lanes: bool,
+    /// Per material, the [`UvHull`] of each level of its texture where its alpha test can pass
+    /// (coverage renders of alpha-tested textured materials): a triangle's rows are walked
+    /// only where its texture coordinates lie within its levels' octagon.
+    hulls: Vec<Option<&'a [UvHull]>>,
+    /// Coverage renders skip a triangle's row where the samples within its bounds are all
+    /// covered, before finding the row's span (most rows of the leaf cards inside a crown).
+    covered_rows: bool,
     triangles: &'a [Setup],
     /// Per triangle, its shading (colour renders; empty otherwise).
     shading: &'a [Shading],
@@ -1301,20 +1395,40 @@ struct Raster<'a> {
 
 impl<'a> Raster<'a> {
     /// The raster of `bands` (set up from `scene` for a target `width` samples wide, `ss` a
-    /// pixel side): `saturate` when the mask alone is wanted (see [`Raster::saturate`]),
-    /// `lanes` to test eight samples at once where the machine can.
+    /// pixel side), with the `shortcuts` asked for: `saturate` when the mask alone is wanted
+    /// (see [`Raster::saturate`]), `lanes` to test eight samples at once where the machine
+    /// can, `hulls` to walk only the parts of triangles where the alpha test can pass,
+    /// `covered_rows` to skip rows covered already.
     fn new(
         scene: &'a DrawScene,
         textures: &'a SoftwareTextures,
         bands: &'a Bands,
         width: usize,
         ss: usize,
-        [saturate, lanes]: [bool; 2],
+        Shortcuts {
+            saturate,
+            lanes,
+            hulls,
+            covered_rows,
+        }: Shortcuts,
     ) -> Raster<'a> {
+        let cutoffs = AlphaCutoff::of_materials(scene);
+        let hulls = (scene.materials.iter().zip(&cutoffs))
+            .map(|(material, cutoff)| {
+                let texture = material.texture?;
+                let (_, fail_below) = cutoff.as_ref()?.thresholds?;
+                let found = textures.uv_hulls.iter().find(|h| {
+                    (h.texture, h.wrap, h.fail_below) == (texture, material.wrap, fail_below)
+                });
+                found.filter(|_| hulls).map(|h| h.levels.as_slice())
+            })
+            .collect();
         Raster {
             scene,
             textures,
-            cutoffs: AlphaCutoff::of_materials(scene),
+            cutoffs,
+            hulls,
+            covered_rows: covered_rows && !textures.colour,
             lanes: lanes && sample_lanes::available(),
             triangles: &bands.triangles,
             shading: &bands.shading,
@@ -1398,23 +1512,68 @@ impl<'a> Raster<'a> {
             } else {
                 None
             };
-            for span in t.row_spans(y0, y1) {
-                let sy = span.y;
+            // Where the alpha test can pass (coverage renders: the octagons are fitted to
+            // the alpha-only levels).
+            let hull = match self.hulls[t.material as usize].filter(|_| !colour) {
+                Some(levels) => {
+                    let (a, b) = (t.lod.a as usize, t.lod.b as usize);
+                    let octagon = if t.lod.f > 0.0 {
+                        levels[a].union(levels[b])
+                    } else {
+                        levels[a]
+                    };
+                    match octagon.rows(t) {
+                        TriangleHull::Empty => continue,
+                        TriangleHull::Rows(rows) => Some(rows),
+                        TriangleHull::Unbounded => None,
+                    }
+                }
+                None => None,
+            };
+            // The words of a row that the triangle's bounds reach, when they are one or two:
+            // a row whose bounds are covered already is skipped before its span is found.
+            let (bx0, bx1) = (t.min[0] as usize, t.max[0] as usize);
+            let bounds_words = (self.covered_rows && bx1 / 64 - bx0 / 64 <= 1).then(|| {
+                let (w0, w1) = (bx0 / 64, bx1 / 64);
+                let (m0, m1) = (u64::MAX << (bx0 % 64), u64::MAX >> (63 - bx1 % 64));
+                if w0 == w1 {
+                    [(w0, m0 & m1), (w1, m0 & m1)]
+                } else {
+                    [(w0, m0), (w1, m1)]
+                }
+            });
+            let walk = t.row_walk();
+            for sy in t.rows(y0, y1) {
                 let row = (sy - y0) * self.width;
                 let row_word = (sy - y0) * words;
+                if let Some(bw) = &bounds_words
+                    && bw.iter().all(|&(w, m)| covered[row_word + w] & m == m)
+                {
+                    continue;
+                }
+                let Some(span) = t.row_span(&walk, sy) else {
+                    continue;
+                };
+                let (first, last) = match &hull {
+                    Some(rows) => match rows.narrow(sy, span.first, span.last) {
+                        Some(narrowed) => narrowed,
+                        None => continue,
+                    },
+                    None => (span.first, span.last),
+                };
                 if let Some(lanes) = &lanes {
                     // Eight samples at a time from the span's first: their coverage bits are
                     // read across the word boundary where they straddle one.
-                    let mut x = span.first;
-                    while x <= span.last {
+                    let mut x = first;
+                    while x <= last {
                         let (word, shift) = (x / 64, x % 64);
                         let mut bits = covered[row_word + word] >> shift;
                         if shift > 56 && word + 1 < words {
                             bits |= covered[row_word + word + 1] << (64 - shift);
                         }
                         let mut todo = !bits as u32 & 0xff;
-                        if span.last < x + 7 {
-                            todo &= 0xff >> (x + 7 - span.last);
+                        if last < x + 7 {
+                            todo &= 0xff >> (x + 7 - last);
                         }
                         if todo != 0 {
                             let k0 = x as i32 - span.x0 as i32;
@@ -1449,7 +1608,7 @@ impl<'a> Raster<'a> {
                     }
                     continue;
                 }
-                let (mut sx, end) = (span.first, span.last);
+                let (mut sx, end) = (first, last);
                 while sx <= end {
                     let word = sx / 64;
                     let run_end = end.min(word * 64 + 63);
@@ -1979,22 +2138,70 @@ mod tests {
         (scene, view_proj)
     }
 
+    /// The eight-sample lanes, the octagons where alpha tests can pass and the skipped covered
+    /// rows change nothing: the shortcuts draw the plain rasteriser's masks, areas and covered
+    /// samples, on random cards at many sizes.
     #[test]
-    fn eight_sample_lanes_draw_what_the_scalar_path_draws() {
-        if !sample_lanes::available() {
-            eprintln!("skipped: this machine has no AVX2, so the lanes are never used");
-            return;
+    fn shortcuts_draw_what_the_plain_rasteriser_draws() {
+        let lanes_available = sample_lanes::available();
+        if !lanes_available {
+            eprintln!("this machine has no AVX2: the lanes are never used, and not compared");
         }
         // Triangles drawn opaque, bilinear, trilinear by the lanes, and by the scalar loop.
         let mut drawn = [0usize; 4];
+        // Triangles the octagons leave whole, narrow, and leave out.
+        let mut hulled = [0usize; 3];
         for (cards, seed) in [(60, 1), (400, 2), (2000, 3)] {
             let (scene, view_proj) = random_cards(cards, seed);
             let textures = SoftwareTextures::new(&scene, false).expect("textures");
             for (w, h, ss) in [(40, 30, 1), (120, 90, 4), (400, 300, 2), (800, 600, 4)] {
-                // The lanes draw most triangles, of every kind (not only the scalar loop).
                 let [sw, sh] = [w * ss, h * ss].map(|n| n as usize);
                 let bands = Bands::new(&scene, &textures, view_proj, [sw, sh], ss as usize);
-                let raster = Raster::new(&scene, &textures, &bands, sw, ss as usize, [true; 2]);
+                let raster =
+                    Raster::new(&scene, &textures, &bands, sw, ss as usize, Shortcuts::ALL);
+                for t in &bands.triangles {
+                    if let Some(levels) = raster.hulls[t.material as usize] {
+                        let octagon = levels[t.lod.a as usize].union(levels[t.lod.b as usize]);
+                        hulled[match octagon.rows(t) {
+                            TriangleHull::Unbounded => 0,
+                            TriangleHull::Rows(_) => 1,
+                            TriangleHull::Empty => 2,
+                        }] += 1;
+                    }
+                }
+                for saturate in [true, false] {
+                    let draw = |lanes, hulls| {
+                        let shortcuts = Shortcuts {
+                            saturate,
+                            lanes,
+                            hulls,
+                            covered_rows: lanes || hulls,
+                        };
+                        rasterise(&scene, &textures, view_proj, [w, h, ss], shortcuts)
+                            .expect("render")
+                    };
+                    let plain = draw(false, false);
+                    let what = format!("{cards} cards, {w}x{h}, {ss}x, saturate {saturate}");
+                    assert!(count(&plain.0) > 0, "{what}: nothing drawn");
+                    for (lanes, hulls) in [(false, true), (true, false), (true, true)] {
+                        if lanes && !lanes_available {
+                            continue;
+                        }
+                        let other = draw(lanes, hulls);
+                        let what = format!("{what}, lanes {lanes}, octagons {hulls}");
+                        let differ = (plain.0.covered.iter())
+                            .zip(&other.0.covered)
+                            .filter(|(a, b)| a != b)
+                            .count();
+                        assert_eq!(differ, 0, "{what}: pixels that differ");
+                        assert_eq!(plain.1, other.1, "{what}: area");
+                        assert_eq!(plain.2, other.2, "{what}: covered samples");
+                    }
+                }
+                if !lanes_available {
+                    continue;
+                }
+                // The lanes draw most triangles, of every kind (not only the scalar loop).
                 let kinds = bands.triangles.iter().map(|t| {
                     raster.triangle_lanes(t).map(|l| match l.test {
                         LaneTest::Opaque => 0,
@@ -2012,25 +2219,20 @@ mod tests {
                 for (all, n) in drawn.iter_mut().zip(counts) {
                     *all += n;
                 }
-                for saturate in [true, false] {
-                    let draw = |lanes| {
-                        rasterise(&scene, &textures, view_proj, [w, h, ss], saturate, lanes)
-                            .expect("render")
-                    };
-                    let (scalar, lanes) = (draw(false), draw(true));
-                    let what = format!("{cards} cards, {w}x{h}, {ss}x, saturate {saturate}");
-                    assert!(count(&scalar.0) > 0, "{what}: nothing drawn");
-                    let differ = (scalar.0.covered.iter())
-                        .zip(&lanes.0.covered)
-                        .filter(|(a, b)| a != b)
-                        .count();
-                    assert_eq!(differ, 0, "{what}: pixels that differ");
-                    assert_eq!(scalar.1, lanes.1, "{what}: area");
-                    assert_eq!(scalar.2, lanes.2, "{what}: covered samples");
-                }
             }
         }
-        assert!(drawn[..3].iter().all(|&n| n > 0), "{drawn:?}");
+        assert!(
+            !lanes_available || drawn[..3].iter().all(|&n| n > 0),
+            "{drawn:?}"
+        );
+        // The octagons act: most cards' triangles lie on the unit square, whose texture is
+        // transparent around a disc (the smallest triangles are left whole, and every
+        // triangle of a material no byte passes is left out).
+        let total: usize = hulled.iter().sum();
+        assert!(
+            hulled[1] > total / 8 && hulled[2] > 0,
+            "{hulled:?} (whole, narrowed, left out)"
+        );
     }
 
     /// A 37×20 alpha: a disc of opaque texels with a soft rim, and noise — every kind of
@@ -2289,8 +2491,12 @@ mod tests {
         for ss in [1, 2, 3, 4] {
             let size = [61, 47, ss];
             let saturated =
-                rasterise(&scene, &textures, Mat4::IDENTITY, size, true, true).expect("r");
-            let exact = rasterise(&scene, &textures, Mat4::IDENTITY, size, false, true).expect("r");
+                rasterise(&scene, &textures, Mat4::IDENTITY, size, Shortcuts::ALL).expect("r");
+            let shortcuts = Shortcuts {
+                saturate: false,
+                ..Shortcuts::ALL
+            };
+            let exact = rasterise(&scene, &textures, Mat4::IDENTITY, size, shortcuts).expect("r");
             assert_eq!(saturated.0.covered, exact.0.covered, "{ss}x");
             let covered = exact.0.covered.iter().filter(|&&c| c).count();
             assert!(covered > 100 && covered < 61 * 47, "{ss}x: {covered}");
