@@ -905,7 +905,10 @@ fn setup_triangle(
         min: [min[0] as i32, min[1] as i32],
         max: [max[0] as i32, max[1] as i32],
     };
-    if let Some(levels) = texture {
+    // Colour renders' (and the bake's) levels now; a coverage render's when a band first
+    // tests a sample of the triangle ([`Raster::with_lod`]): inside a crown most triangles
+    // are drawn over samples covered already, and never need it.
+    if shade && let Some(levels) = texture {
         s.lod = levels.pair(centroid_lod(&s, levels));
     }
     let mut shading = Shading::default();
@@ -1503,6 +1506,30 @@ impl<'a> Raster<'a> {
         let stride = if colour { 4 } else { 1 };
         for &ti in bin {
             let t = &self.triangles[ti as usize];
+            // The words of a row that the triangle's bounds reach, when they are one or two:
+            // a row whose bounds are covered already is skipped before its span is found, and
+            // a triangle with no other row is not drawn (nor its mip level found).
+            let (bx0, bx1) = (t.min[0] as usize, t.max[0] as usize);
+            let bounds_words = (self.covered_rows && bx1 / 64 - bx0 / 64 <= 1).then(|| {
+                let (w0, w1) = (bx0 / 64, bx1 / 64);
+                let (m0, m1) = (u64::MAX << (bx0 % 64), u64::MAX >> (63 - bx1 % 64));
+                if w0 == w1 {
+                    [(w0, m0 & m1), (w1, m0 & m1)]
+                } else {
+                    [(w0, m0), (w1, m1)]
+                }
+            });
+            let row_covered = |covered: &[u64], sy: usize| {
+                let row_word = (sy - y0) * words;
+                bounds_words
+                    .as_ref()
+                    .is_some_and(|bw| bw.iter().all(|&(w, m)| covered[row_word + w] & m == m))
+            };
+            let rows = t.rows(y0, y1);
+            let Some(first_row) = rows.clone().find(|&sy| !row_covered(&covered, sy)) else {
+                continue;
+            };
+            let t = &if colour { *t } else { self.with_lod(t) };
             // Colour renders' triangles have their shading; coverage renders read none.
             let shading = self.shading.get(ti as usize);
             let material = &self.scene.materials[t.material as usize];
@@ -1541,25 +1568,11 @@ impl<'a> Raster<'a> {
                 }
                 None => None,
             };
-            // The words of a row that the triangle's bounds reach, when they are one or two:
-            // a row whose bounds are covered already is skipped before its span is found.
-            let (bx0, bx1) = (t.min[0] as usize, t.max[0] as usize);
-            let bounds_words = (self.covered_rows && bx1 / 64 - bx0 / 64 <= 1).then(|| {
-                let (w0, w1) = (bx0 / 64, bx1 / 64);
-                let (m0, m1) = (u64::MAX << (bx0 % 64), u64::MAX >> (63 - bx1 % 64));
-                if w0 == w1 {
-                    [(w0, m0 & m1), (w1, m0 & m1)]
-                } else {
-                    [(w0, m0), (w1, m1)]
-                }
-            });
             let walk = t.row_walk();
-            for sy in t.rows(y0, y1) {
+            for sy in first_row..rows.end {
                 let row = (sy - y0) * self.width;
                 let row_word = (sy - y0) * words;
-                if let Some(bw) = &bounds_words
-                    && bw.iter().all(|&(w, m)| covered[row_word + w] & m == m)
-                {
+                if row_covered(&covered, sy) {
                     continue;
                 }
                 let Some(span) = t.row_span(&walk, sy) else {
@@ -1732,6 +1745,18 @@ impl<'a> Raster<'a> {
                 }
             }
         }
+    }
+
+    /// Coverage render triangle `t` with its texture's mip levels (set up without them:
+    /// [`setup_triangle`]).
+    #[inline]
+    fn with_lod(&self, t: &Setup) -> Setup {
+        let mut t = *t;
+        let material = &self.scene.materials[t.material as usize];
+        if let Some(levels) = material.texture.map(|i| &self.textures.textures[i]) {
+            t.lod = levels.pair(centroid_lod(&t, levels));
+        }
+        t
     }
 
     /// A coverage render's eight-sample test of triangle `t`, when its material's alpha test
@@ -2171,6 +2196,7 @@ mod tests {
                 let raster =
                     Raster::new(&scene, &textures, &bands, sw, ss as usize, Shortcuts::ALL);
                 for t in &bands.triangles {
+                    let t = &raster.with_lod(t);
                     if let Some(levels) = raster.hulls[t.material as usize] {
                         let octagon = levels[t.lod.a as usize].union(levels[t.lod.b as usize]);
                         hulled[match octagon.rows(t) {
@@ -2214,10 +2240,12 @@ mod tests {
                 }
                 // The lanes draw most triangles, of every kind (not only the scalar loop).
                 let kinds = bands.triangles.iter().map(|t| {
-                    raster.triangle_lanes(t).map(|l| match l.test {
-                        LaneTest::Opaque => 0,
-                        LaneTest::Table { filter, .. } => 1 + usize::from(filter.b.is_some()),
-                    })
+                    raster
+                        .triangle_lanes(&raster.with_lod(t))
+                        .map(|l| match l.test {
+                            LaneTest::Opaque => 0,
+                            LaneTest::Table { filter, .. } => 1 + usize::from(filter.b.is_some()),
+                        })
                 });
                 let mut counts = [0usize; 4];
                 for kind in kinds {
