@@ -911,13 +911,8 @@ mod tests {
     /// `count` small triangles (a hundredth to a thirtieth of the box) at random places and
     /// orientations in the unit box.
     fn random_soup(count: usize, seed: u64) -> TriangleSoup {
-        let mut state = seed;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut next = move || rng.random_range(0.0f32..1.0);
         let positions = (0..count)
             .map(|_| {
                 let centre = Vec3::new(next(), next(), next());
@@ -954,13 +949,8 @@ mod tests {
             }
             // Planes through random triangles, their corners moved along the normal within ε
             // (as the search draws its candidates).
-            let mut state = 11u64;
-            let mut pick = move |n: usize| {
-                state = state
-                    .wrapping_mul(6_364_136_223_846_793_005)
-                    .wrapping_add(1_442_695_040_888_963_407);
-                (state >> 33) as usize % n
-            };
+            let mut rng = ChaCha8Rng::seed_from_u64(11);
+            let mut pick = move |n: usize| rng.random_range(0..n);
             let cands: Vec<(Vec3A, f32)> = (0..300)
                 .filter_map(|_| {
                     let v = s.t.v[pick(soup.len())];
