@@ -53,6 +53,11 @@ const ROW_SLACK: f32 = 0.25;
 /// bounds cost more than the samples they save.
 const MIN_AREA: f32 = 256.0;
 
+/// How far off the target's origin, in samples, a bounded triangle's corners may lie (twice
+/// the largest target's side): a crossing's rounding grows with the coordinates it is computed
+/// from, a few hundredths of a sample here against the quarter sample of [`ROW_SLACK`].
+const MAX_CORNER: f32 = 65536.0;
+
 /// Texture coordinates a triangle's corners may have for its samples' to lie within the
 /// footprints an octagon was fitted to (they reach half a texel of the level past each edge):
 /// the unit square, give or take rounding.
@@ -118,9 +123,6 @@ impl UvHull {
     /// Triangle `t`'s rows as this octagon bounds them, `t` textured with the level(s) it was
     /// fitted to.
     pub(crate) fn rows(&self, t: &Setup) -> TriangleHull {
-        if self.support[0] == f32::NEG_INFINITY {
-            return TriangleHull::Empty;
-        }
         if t.inv_area * MIN_AREA > 0.5 {
             return TriangleHull::Unbounded;
         }
@@ -129,15 +131,27 @@ impl UvHull {
             square.contains(&(t.uq[i][0] / t.q[i])) && square.contains(&(t.uq[i][1] / t.q[i]))
         });
         // The bounds' rounding stays far below the margin while `q` varies little over the
-        // triangle and the triangle is not a sliver (its edge functions' gradients then stay
-        // in proportion to its size); anywhere else the triangle is drawn without them.
+        // triangle, the triangle is not a sliver (its edge functions' gradients then stay in
+        // proportion to its size) and its corners are not far off the target (the crossings
+        // are computed from them): its whole extent counts, not the part on the target.
+        // Anywhere else the triangle is drawn without them.
         let (q_min, q_max) = (
             t.q.iter().copied().fold(f32::INFINITY, f32::min),
             t.q.iter().copied().fold(0.0, f32::max),
         );
-        let extent = (t.max[0] - t.min[0] + 1).max(t.max[1] - t.min[1] + 1) as f32;
-        if !in_square || q_max > 16.0 * q_min || extent * extent * t.inv_area > 64.0 {
+        let span = |c: &[f32; 3]| {
+            c.iter().copied().fold(f32::NEG_INFINITY, f32::max)
+                - c.iter().copied().fold(f32::INFINITY, f32::min)
+        };
+        let extent = span(&t.x).max(span(&t.y)) + 1.0;
+        let far = t.x.iter().chain(&t.y).any(|c| c.abs() > MAX_CORNER);
+        if !in_square || far || q_max > 16.0 * q_min || !(extent * extent * t.inv_area <= 64.0) {
             return TriangleHull::Unbounded;
+        }
+        // Nothing passes anywhere (after the checks above: texture coordinates off the square,
+        // a NaN among them, can give a NaN alpha, which passes).
+        if self.support[0] == f32::NEG_INFINITY {
+            return TriangleHull::Empty;
         }
         // Screen-space derivatives of the weights (as `Setup::weights` has them).
         let dx = [
@@ -283,6 +297,32 @@ mod tests {
                 .iter()
                 .all(|s| *s == f32::NEG_INFINITY)
         );
+    }
+
+    /// A triangle whose texture coordinates leave the unit square (or are NaN, whose filtered
+    /// alpha passes) is drawn whole, even where no texel of the square passes.
+    #[test]
+    fn triangles_off_the_square_are_drawn_whole_even_where_nothing_passes() {
+        let nothing = UvHull::of_level(&level(), [Wrap::ClampToEdge; 2], 256);
+        let mut t = Setup {
+            x: [0.0, 100.0, 0.0],
+            y: [0.0, 0.0, 100.0],
+            z: [0.5; 3],
+            q: [1.0; 3],
+            uq: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            inv_area: 1.0 / 10_000.0,
+            material: 0,
+            lit: false,
+            back: false,
+            lod: Default::default(),
+            min: [0, 0],
+            max: [99, 99],
+        };
+        assert!(matches!(nothing.rows(&t), TriangleHull::Empty));
+        for off in [[f32::NAN, 0.0], [1.5, 0.0], [0.0, -0.25]] {
+            t.uq[1] = off;
+            assert!(matches!(nothing.rows(&t), TriangleHull::Unbounded), "{off:?}");
+        }
     }
 
     #[test]
