@@ -145,7 +145,7 @@ impl UvHull {
         };
         let extent = span(&t.x).max(span(&t.y)) + 1.0;
         let far = t.x.iter().chain(&t.y).any(|c| c.abs() > MAX_CORNER);
-        if !in_square || far || q_max > 16.0 * q_min || !(extent * extent * t.inv_area <= 64.0) {
+        if !in_square || far || q_max > 16.0 * q_min || extent * extent * t.inv_area > 64.0 {
             return TriangleHull::Unbounded;
         }
         // Nothing passes anywhere (after the checks above: texture coordinates off the square,
