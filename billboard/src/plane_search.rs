@@ -492,41 +492,52 @@ impl Search<'_> {
                     maybe |= u32::from(dc <= near) << k;
                     sure |= u32::from(dc + leaf.radius[k] < far) << k;
                 }
-                let mut bits = maybe & node.alive_bits;
-                if bits == 0 {
-                    continue;
-                }
-                // The exact test and the contributions, eight triangles at a time where any is
-                // wanted: `valid_exact` and `contribution`'s operations in their order (a dot
-                // product is `(x·x' + y·y') + z·z'`, as glam's), so the same bits.
-                let mut valid = sure;
-                let (mut value, mut spread) = ([0.0f32; LEAF_SIZE], [0.0f32; LEAF_SIZE]);
+                let bits = maybe & node.alive_bits;
+                // The exact test and the contributions, eight triangles at a time in each group
+                // where one needs the test (near, but not valid by its bounding sphere alone):
+                // `valid_exact` and `contribution`'s operations in their order (a dot product is
+                // `(x·x' + y·y') + z·z'`, as glam's), so the same bits, summed group after group
+                // in storage order.
+                let acc = &mut d[c as usize];
                 for g in 0..LEAF_SIZE / 8 {
-                    if (bits >> (8 * g)) & 0xff == 0 {
+                    let mut wanted = (bits >> (8 * g)) & 0xff;
+                    if wanted == 0 {
                         continue;
                     }
-                    for k in 8 * g..8 * g + 8 {
+                    let base = 8 * g;
+                    if (wanted & !(sure >> base)) == 0 {
+                        // Valid by their spheres alone.
+                        while wanted != 0 {
+                            let i = s0 + base + wanted.trailing_zeros() as usize;
+                            wanted &= wanted - 1;
+                            *acc += contribution(&t.v[i], t.area_normal[i], n, rho, eps, falloff);
+                        }
+                        continue;
+                    }
+                    let mut valid = (sure >> base) & 0xff;
+                    let (mut value, mut spread) = ([0.0f32; 8], [0.0f32; 8]);
+                    for l in 0..8 {
+                        let k = base + l;
                         let v = &leaf.vertex;
                         let at = |j: usize| {
                             (n.x * v[j][0][k] + n.y * v[j][1][k] + n.z * v[j][2][k] - rho).abs()
                         };
                         let (d0, d1, d2) = (at(0), at(1), at(2));
-                        valid |= u32::from((d0 <= eps) & (d1 <= eps) & (d2 <= eps)) << k;
+                        valid |= u32::from((d0 <= eps) & (d1 <= eps) & (d2 <= eps)) << l;
                         let a = &leaf.area_normal;
-                        value[k] = (a[0][k] * n.x + a[1][k] * n.y + a[2][k] * n.z).abs();
-                        spread[k] = d0 + d1 + d2;
+                        value[l] = (a[0][k] * n.x + a[1][k] * n.y + a[2][k] * n.z).abs();
+                        spread[l] = d0 + d1 + d2;
                     }
-                }
-                bits &= valid;
-                let acc = &mut d[c as usize];
-                while bits != 0 {
-                    let k = bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    *acc += if falloff {
-                        falloff_contribution(value[k], spread[k], eps)
-                    } else {
-                        f64::from(value[k])
-                    };
+                    wanted &= valid;
+                    while wanted != 0 {
+                        let l = wanted.trailing_zeros() as usize;
+                        wanted &= wanted - 1;
+                        *acc += if falloff {
+                            falloff_contribution(value[l], spread[l], eps)
+                        } else {
+                            f64::from(value[l])
+                        };
+                    }
                 }
             }
         }

@@ -321,7 +321,10 @@ mod tests {
         assert!(matches!(nothing.rows(&t), TriangleHull::Empty));
         for off in [[f32::NAN, 0.0], [1.5, 0.0], [0.0, -0.25]] {
             t.uq[1] = off;
-            assert!(matches!(nothing.rows(&t), TriangleHull::Unbounded), "{off:?}");
+            assert!(
+                matches!(nothing.rows(&t), TriangleHull::Unbounded),
+                "{off:?}"
+            );
         }
     }
 
