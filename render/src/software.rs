@@ -121,6 +121,13 @@ struct TextureHulls {
 #[derive(Clone, Debug)]
 pub(crate) struct Levels(Vec<(u32, u32, Vec<u8>)>);
 
+impl Levels {
+    /// Every level, the first the texture itself: `(width, height, texels)`.
+    pub(crate) fn levels(&self) -> &[(u32, u32, Vec<u8>)] {
+        &self.0
+    }
+}
+
 /// The alpha test: discarded only when `alpha < cutoff` (a NaN alpha is kept, as the renderer
 /// always kept it).
 #[inline]
@@ -186,6 +193,12 @@ impl AlphaCutoff {
 
     /// The test of a filtered `alpha` (0..1).
     #[inline]
+    /// The byte below which a footprint's greatest alpha fails the test
+    /// ([`AlphaCutoff::thresholds`]), when the test is monotone.
+    pub(crate) fn fail_below(&self) -> Option<u16> {
+        self.thresholds.map(|(_, fail_below)| fail_below)
+    }
+
     pub(crate) fn passes(&self, alpha: f32) -> bool {
         passes_cutoff(alpha * self.scale, self.cutoff)
     }
@@ -337,7 +350,7 @@ impl SoftwareTextures {
                 wrap,
                 fail_below,
                 levels: (self.textures[texture].0.iter())
-                    .map(|level| UvHull::of_level(level, wrap, fail_below))
+                    .map(|level| UvHull::of_level(level, 1, wrap, fail_below))
                     .collect(),
             })
             .collect()
@@ -380,7 +393,7 @@ impl SoftwareTextures {
         cutoff: &AlphaCutoff,
     ) -> bool {
         let levels = &self.textures[texture];
-        let level = if lod.f < 0.5 { lod.a } else { lod.b } as usize;
+        let level = lod.nearest();
         if let Some(bounds) = self.alpha_bounds.get(texture)
             && let Some(cell) = AlphaBounds::cell(&levels.0[level], uv)
             && let Some(pass) = cutoff.decided(bounds[level].footprint[cell])
@@ -1024,6 +1037,14 @@ pub(crate) struct Trilinear {
     a: u32,
     b: u32,
     f: f32,
+}
+
+impl Trilinear {
+    /// The level of the two nearer the fetch's (what `LINEAR_MIPMAP_NEAREST` reads).
+    #[inline]
+    pub(crate) fn nearest(self) -> usize {
+        (if self.f < 0.5 { self.a } else { self.b }) as usize
+    }
 }
 
 /// Bilinear filter of channel `channel` (of `stride`-byte texels) of one level at `(u, v)`,

@@ -15,6 +15,9 @@
 //! greater of its two levels' (every step a lerp between bytes). Spans are bounds: every
 //! sample left in is still tested exactly, so the image is the same bit for bit.
 //!
+//! The billboard bake ([`crate::render_bake`]) walks its triangles' rows the same way, with
+//! the octagon of the one level its alpha test reads.
+//!
 //! The octagon is the tightest polygon whose edges take these eight fixed directions: any
 //! convex polygon would do; fixed directions cost one pass over each level to fit, and a row
 //! evaluates each bound with a multiply and an add. On the coverage renders' benchmark
@@ -73,12 +76,13 @@ pub(crate) struct UvHull {
 }
 
 impl UvHull {
-    /// The octagon of the footprints of `level` (one alpha byte a texel) that hold a texel of
-    /// at least `fail_below` (below it, a test fails), their texels wrapped as `wrap` has
-    /// them: every footprint a texture coordinate in `[0, 1]²` can have (their origins run from
-    /// one texel before the level's first to its last).
+    /// The octagon of the footprints of `level` (`stride` bytes a texel, alpha the last) that
+    /// hold a texel of at least `fail_below` (below it, a test fails), their texels wrapped as
+    /// `wrap` has them: every footprint a texture coordinate in `[0, 1]²` can have (their
+    /// origins run from one texel before the level's first to its last).
     pub(crate) fn of_level(
-        (w, h, alpha): &(u32, u32, Vec<u8>),
+        (w, h, texels): &(u32, u32, Vec<u8>),
+        stride: usize,
         wrap: [Wrap; 2],
         fail_below: u16,
     ) -> UvHull {
@@ -92,8 +96,10 @@ impl UvHull {
             let rows = [wrap_index(y, *h, wrap[1]), wrap_index(y + 1, *h, wrap[1])];
             let open = |k: &usize| {
                 rows.iter().any(|r| {
-                    let row = &alpha[r * *w as usize..];
-                    columns[*k].iter().any(|&c| u16::from(row[c]) >= fail_below)
+                    let row = &texels[r * *w as usize * stride + stride - 1..];
+                    columns[*k]
+                        .iter()
+                        .any(|&c| u16::from(row[c * stride]) >= fail_below)
                 })
             };
             // The row's extreme footprints bound it for every direction.
@@ -276,7 +282,7 @@ mod tests {
 
     #[test]
     fn the_octagon_holds_every_footprint_that_can_pass_and_no_more_than_it_must() {
-        let hull = UvHull::of_level(&level(), [Wrap::ClampToEdge; 2], 128);
+        let hull = UvHull::of_level(&level(), 1, [Wrap::ClampToEdge; 2], 128);
         // Footprints reach half a texel either side of a texel's centre and another beyond
         // its neighbour's: opaque texels 5..=9 are read for `u·16 − 0.5` within (4, 10).
         let expect = |k: usize, value: f32| {
@@ -290,9 +296,16 @@ mod tests {
         expect(1, -4.5 / 16.0);
         expect(6, 13.5 / 16.0);
         expect(7, -2.5 / 16.0);
+        // The same octagon from RGBA texels (alpha the last byte), as the bake reads them.
+        let (w, h, alpha) = level();
+        let rgba = alpha.iter().flat_map(|&a| [7, 7, 7, a]).collect();
+        assert_eq!(
+            UvHull::of_level(&(w, h, rgba), 4, [Wrap::ClampToEdge; 2], 128),
+            hull
+        );
         // Nothing passes a test no byte passes.
         assert!(
-            UvHull::of_level(&level(), [Wrap::ClampToEdge; 2], 256)
+            UvHull::of_level(&level(), 1, [Wrap::ClampToEdge; 2], 256)
                 .support
                 .iter()
                 .all(|s| *s == f32::NEG_INFINITY)
@@ -303,7 +316,7 @@ mod tests {
     /// alpha passes) is drawn whole, even where no texel of the square passes.
     #[test]
     fn triangles_off_the_square_are_drawn_whole_even_where_nothing_passes() {
-        let nothing = UvHull::of_level(&level(), [Wrap::ClampToEdge; 2], 256);
+        let nothing = UvHull::of_level(&level(), 1, [Wrap::ClampToEdge; 2], 256);
         let mut t = Setup {
             x: [0.0, 100.0, 0.0],
             y: [0.0, 0.0, 100.0],
@@ -337,8 +350,8 @@ mod tests {
             alpha[y * 8 + 7] = 255;
         }
         let level = (8, 8, alpha);
-        let repeat = UvHull::of_level(&level, [Wrap::Repeat; 2], 128);
-        let clamp = UvHull::of_level(&level, [Wrap::ClampToEdge; 2], 128);
+        let repeat = UvHull::of_level(&level, 1, [Wrap::Repeat; 2], 128);
+        let clamp = UvHull::of_level(&level, 1, [Wrap::ClampToEdge; 2], 128);
         // `−u ≤ support[1]`: the repeating one reaches u = −0.5/8 (footprint origin −1).
         assert!(repeat.support[1] >= 0.5 / 8.0);
         assert!((clamp.support[1] - (-6.5 / 8.0 + MARGIN)).abs() < 1e-6);
