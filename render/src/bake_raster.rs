@@ -26,8 +26,6 @@
 //! normal, flipped on back faces so it faces the viewer (improved-billboard-cloud §4 items 4
 //! and 7).
 
-use std::sync::OnceLock;
-
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 
@@ -35,7 +33,7 @@ use crate::error::RenderError;
 use crate::pipeline::srgb_to_linear;
 use crate::scene::DrawScene;
 use crate::software::{AlphaCutoff, Bands, Setup, Shading, SoftwareTextures, checked_target};
-use crate::uv_hull::{TriangleHull, UvHull};
+use crate::uv_hull::{HullLevels, TriangleHull};
 
 /// A bake render resolved to pixels, top row first.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -147,45 +145,6 @@ const EMPTY: u32 = u32::MAX;
 struct Scratch {
     depth: Vec<f32>,
     winner: Vec<u32>,
-}
-
-/// One material's texture levels (RGBA) and the octagon of each where its alpha test can pass
-/// ([`UvHull`]), each fitted on first use.
-struct HullLevels<'a> {
-    levels: &'a [(u32, u32, Vec<u8>)],
-    wrap: [frond_scene::Wrap; 2],
-    fail_below: u16,
-    hulls: Vec<OnceLock<UvHull>>,
-}
-
-impl<'a> HullLevels<'a> {
-    /// Per material of `scene`, its texture's levels when it has a textured alpha test
-    /// (`cutoffs`, the materials' tests), their octagons fitted under its wrap and failing
-    /// threshold when a triangle first reads them.
-    fn of_materials(
-        scene: &DrawScene,
-        textures: &'a SoftwareTextures,
-        cutoffs: &[Option<AlphaCutoff>],
-    ) -> Vec<Option<HullLevels<'a>>> {
-        (scene.materials.iter().zip(cutoffs))
-            .map(|(material, cutoff)| {
-                let fail_below = cutoff.as_ref()?.fail_below()?;
-                let levels = textures.textures.get(material.texture?)?.levels();
-                (!levels.is_empty()).then(|| HullLevels {
-                    levels,
-                    wrap: material.wrap,
-                    fail_below,
-                    hulls: levels.iter().map(|_| OnceLock::new()).collect(),
-                })
-            })
-            .collect()
-    }
-
-    /// The octagon of level `k`.
-    fn level(&self, k: usize) -> &UvHull {
-        self.hulls[k]
-            .get_or_init(|| UvHull::of_level(&self.levels[k], 4, self.wrap, self.fail_below))
-    }
 }
 
 /// What every band of one bake render shares.

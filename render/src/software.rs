@@ -34,7 +34,7 @@ use crate::pipeline::{
 };
 use crate::sample_lanes::{self, LaneFilter, LaneLevel, LaneTest, TriangleLanes};
 use crate::scene::{DrawMaterial, DrawScene, DrawTexture};
-use crate::uv_hull::{TriangleHull, UvHull};
+use crate::uv_hull::{HullLevels, TriangleHull};
 
 /// Most samples per side of the supersampled image (coordinates stay exact in `f32`).
 pub(crate) const MAX_SIDE: u64 = 1 << 15;
@@ -99,21 +99,8 @@ pub struct SoftwareTextures {
     /// Per texture, its linear box chain when a drawn material uses it as a normal map and
     /// colour is drawn (lighting needs the normals); empty otherwise.
     normal_maps: Vec<Levels>,
-    /// Where the alpha tests of the scene's materials can pass, per texture level
-    /// ([`UvHull`]): coverage renders only (empty when colour is drawn).
-    uv_hulls: Vec<TextureHulls>,
     pub(crate) colour: bool,
     lighting: Lighting,
-}
-
-/// The [`UvHull`] of every level of one texture under one material's wrap and alpha test.
-#[derive(Clone, Debug)]
-struct TextureHulls {
-    texture: usize,
-    wrap: [Wrap; 2],
-    /// The test's `fail_below` ([`AlphaCutoff::thresholds`]).
-    fail_below: u16,
-    levels: Vec<UvHull>,
 }
 
 /// One texture's mip chain, level 0 first: `(width, height, texels)`, one alpha byte a texel,
@@ -191,14 +178,14 @@ impl AlphaCutoff {
         shaped.then_some((pass_from as u16, fail_below as u16))
     }
 
-    /// The test of a filtered `alpha` (0..1).
-    #[inline]
     /// The byte below which a footprint's greatest alpha fails the test
     /// ([`AlphaCutoff::thresholds`]), when the test is monotone.
     pub(crate) fn fail_below(&self) -> Option<u16> {
         self.thresholds.map(|(_, fail_below)| fail_below)
     }
 
+    /// The test of a filtered `alpha` (0..1).
+    #[inline]
     pub(crate) fn passes(&self, alpha: f32) -> bool {
         passes_cutoff(alpha * self.scale, self.cutoff)
     }
@@ -324,36 +311,7 @@ impl SoftwareTextures {
                 *u = true;
             }
         }
-        let mut prepared = Self::prepare(&scene.textures, used, normal_map, colour)?;
-        if !colour {
-            prepared.uv_hulls = prepared.hulls_of(scene);
-        }
-        Ok(prepared)
-    }
-
-    /// The octagons of the textured, alpha-tested materials of `scene` (one per texture, wrap
-    /// and failing threshold), every level of each.
-    fn hulls_of(&self, scene: &DrawScene) -> Vec<TextureHulls> {
-        let mut keys: Vec<(usize, [Wrap; 2], u16)> = Vec::new();
-        for (material, cutoff) in scene.materials.iter().zip(AlphaCutoff::of_materials(scene)) {
-            if let (Some(texture), Some((_, fail_below))) =
-                (material.texture, cutoff.and_then(|c| c.thresholds))
-                && self.textures.get(texture).is_some_and(|l| !l.0.is_empty())
-                && !keys.contains(&(texture, material.wrap, fail_below))
-            {
-                keys.push((texture, material.wrap, fail_below));
-            }
-        }
-        keys.into_par_iter()
-            .map(|(texture, wrap, fail_below)| TextureHulls {
-                texture,
-                wrap,
-                fail_below,
-                levels: (self.textures[texture].0.iter())
-                    .map(|level| UvHull::of_level(level, 1, wrap, fail_below))
-                    .collect(),
-            })
-            .collect()
+        Self::prepare(&scene.textures, used, normal_map, colour)
     }
 
     /// Every one of `textures` prepared for colour renders without normal maps, as the
@@ -466,7 +424,6 @@ impl SoftwareTextures {
             textures,
             alpha_bounds,
             normal_maps,
-            uv_hulls: Vec::new(),
             colour,
             lighting: Lighting::TwoSided,
         })
@@ -1411,10 +1368,10 @@ struct Raster<'a> {
     cutoffs: Vec<Option<AlphaCutoff>>,
     /// Coverage renders test eight samples at once ([`sample_lanes`]) where the machine can.
     lanes: bool,
-    /// Per material, the [`UvHull`] of each level of its texture where its alpha test can pass
+    /// Per material, the octagons of its texture's levels where its alpha test can pass
     /// (coverage renders of alpha-tested textured materials): a triangle's rows are walked
     /// only where its texture coordinates lie within its levels' octagon.
-    hulls: Vec<Option<&'a [UvHull]>>,
+    hulls: Vec<Option<HullLevels<'a>>>,
     /// Coverage renders skip a triangle's row where the samples within its bounds are all
     /// covered, before finding the row's span (most rows of the leaf cards inside a crown).
     covered_rows: bool,
@@ -1451,16 +1408,12 @@ impl<'a> Raster<'a> {
         }: Shortcuts,
     ) -> Raster<'a> {
         let cutoffs = AlphaCutoff::of_materials(scene);
-        let hulls = (scene.materials.iter().zip(&cutoffs))
-            .map(|(material, cutoff)| {
-                let texture = material.texture?;
-                let (_, fail_below) = cutoff.as_ref()?.thresholds?;
-                let found = textures.uv_hulls.iter().find(|h| {
-                    (h.texture, h.wrap, h.fail_below) == (texture, material.wrap, fail_below)
-                });
-                found.filter(|_| hulls).map(|h| h.levels.as_slice())
-            })
-            .collect();
+        // The octagons are fitted to alpha-only levels: coverage renders'.
+        let hulls = if hulls && !textures.colour {
+            HullLevels::of_materials(scene, textures, &cutoffs)
+        } else {
+            scene.materials.iter().map(|_| None).collect()
+        };
         Raster {
             scene,
             textures,
@@ -1574,23 +1527,10 @@ impl<'a> Raster<'a> {
             } else {
                 None
             };
-            // Where the alpha test can pass (coverage renders: the octagons are fitted to
-            // the alpha-only levels).
-            let hull = match self.hulls[t.material as usize].filter(|_| !colour) {
-                Some(levels) => {
-                    let (a, b) = (t.lod.a as usize, t.lod.b as usize);
-                    let octagon = if t.lod.f > 0.0 {
-                        levels[a].union(levels[b])
-                    } else {
-                        levels[a]
-                    };
-                    match octagon.rows(t) {
-                        TriangleHull::Empty => continue,
-                        TriangleHull::Rows(rows) => Some(rows),
-                        TriangleHull::Unbounded => None,
-                    }
-                }
-                None => None,
+            let hull = match self.triangle_hull(t) {
+                TriangleHull::Empty => continue,
+                TriangleHull::Rows(rows) => Some(rows),
+                TriangleHull::Unbounded => None,
             };
             let walk = t.row_walk();
             for sy in first_row..rows.end {
@@ -1769,6 +1709,22 @@ impl<'a> Raster<'a> {
                 }
             }
         }
+    }
+
+    /// What the octagon of coverage render triangle `t`'s levels (`t` with its mip levels,
+    /// [`Raster::with_lod`]) does to it: a trilinear test passes only where one of its two
+    /// levels' can.
+    fn triangle_hull(&self, t: &Setup) -> TriangleHull {
+        let Some(levels) = &self.hulls[t.material as usize] else {
+            return TriangleHull::Unbounded;
+        };
+        let (a, b) = (t.lod.a as usize, t.lod.b as usize);
+        let octagon = if t.lod.f > 0.0 {
+            levels.level(a).union(levels.level(b))
+        } else {
+            levels.level(a)
+        };
+        octagon.rows(t)
     }
 
     /// Coverage render triangle `t` with its texture's mip levels (set up without them:
@@ -2220,10 +2176,8 @@ mod tests {
                 let raster =
                     Raster::new(&scene, &textures, &bands, sw, ss as usize, Shortcuts::ALL);
                 for t in &bands.triangles {
-                    let t = &raster.with_lod(t);
-                    if let Some(levels) = raster.hulls[t.material as usize] {
-                        let octagon = levels[t.lod.a as usize].union(levels[t.lod.b as usize]);
-                        hulled[match octagon.rows(t) {
+                    if raster.hulls[t.material as usize].is_some() {
+                        hulled[match raster.triangle_hull(&raster.with_lod(t)) {
                             TriangleHull::Unbounded => 0,
                             TriangleHull::Rows(_) => 1,
                             TriangleHull::Empty => 2,
@@ -2517,8 +2471,6 @@ mod tests {
         assert_eq!(draw(&bake), image);
     }
 
-    /// Marking a decided pixel's samples covered changes no mask: many overlapping
-    /// alpha-tested quads (a noisy alpha, offset and sloped) at several supersamplings.
     /// The mip level's `hypot` gives glibc's `hypotf` bits (what the renders read before it
     /// replaced the call): random magnitudes of texel steps and random bit patterns.
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
@@ -2550,6 +2502,8 @@ mod tests {
         }
     }
 
+    /// Marking a decided pixel's samples covered changes no mask: many overlapping
+    /// alpha-tested quads (a noisy alpha, offset and sloped) at several supersamplings.
     #[test]
     fn saturated_pixels_give_the_same_mask() {
         let (w, h) = (23u32, 17u32);

@@ -25,9 +25,12 @@
 //! took 12 % less CPU time with them, 3–5 % less at 200 and 60 px (where fewer triangles are
 //! large enough to be bounded, [`MIN_AREA`]).
 
+use std::sync::OnceLock;
+
 use frond_scene::Wrap;
 
-use crate::software::{Setup, wrap_index};
+use crate::scene::DrawScene;
+use crate::software::{AlphaCutoff, Setup, SoftwareTextures, wrap_index};
 
 /// The half-planes' directions `d` in `(u, v)`, those that cut most first (a triangle keeps
 /// four of each kind of bound, see [`HullRows`]).
@@ -213,6 +216,49 @@ impl UvHull {
         } else {
             TriangleHull::Rows(rows)
         }
+    }
+}
+
+/// One material's texture levels and the octagon of each where its alpha test can pass, each
+/// fitted when a triangle first reads it (a render reads a few of a chain's levels).
+pub(crate) struct HullLevels<'a> {
+    levels: &'a [(u32, u32, Vec<u8>)],
+    /// Bytes a texel: 1 for a coverage render's alpha-only levels, 4 for RGBA.
+    stride: usize,
+    wrap: [Wrap; 2],
+    fail_below: u16,
+    hulls: Vec<OnceLock<UvHull>>,
+}
+
+impl<'a> HullLevels<'a> {
+    /// Per material of `scene`, its texture's levels in `textures` when it has a textured
+    /// alpha test (`cutoffs`, the materials' tests) whose failing threshold is known.
+    pub(crate) fn of_materials(
+        scene: &DrawScene,
+        textures: &'a SoftwareTextures,
+        cutoffs: &[Option<AlphaCutoff>],
+    ) -> Vec<Option<HullLevels<'a>>> {
+        let stride = if textures.colour { 4 } else { 1 };
+        (scene.materials.iter().zip(cutoffs))
+            .map(|(material, cutoff)| {
+                let fail_below = cutoff.as_ref()?.fail_below()?;
+                let levels = textures.textures.get(material.texture?)?.levels();
+                (!levels.is_empty()).then(|| HullLevels {
+                    levels,
+                    stride,
+                    wrap: material.wrap,
+                    fail_below,
+                    hulls: levels.iter().map(|_| OnceLock::new()).collect(),
+                })
+            })
+            .collect()
+    }
+
+    /// The octagon of level `k`.
+    pub(crate) fn level(&self, k: usize) -> UvHull {
+        *self.hulls[k].get_or_init(|| {
+            UvHull::of_level(&self.levels[k], self.stride, self.wrap, self.fail_below)
+        })
     }
 }
 
