@@ -696,9 +696,9 @@ fn fit_plane(points: impl Iterator<Item = Vec3A> + Clone) -> Option<Plane> {
 /// bounding-box diagonal).
 pub fn search_planes(soup: &TriangleSoup, params: &SearchParams, scale: f32) -> PlaneSearch {
     let n = soup.len();
-    let eps = params.epsilon.max(0.0);
     let min_area = (scale * scale * 1e-12).max(f32::MIN_POSITIVE);
     let mut s = Search::new(soup, params, scale);
+    let eps = s.eps;
 
     // Seeds: alive triangles with a usable area; zero-area ones never seed (they would stop the
     // search early) and are joined to the nearest plane at the end.

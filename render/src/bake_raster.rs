@@ -33,7 +33,7 @@ use crate::error::RenderError;
 use crate::pipeline::srgb_to_linear;
 use crate::scene::DrawScene;
 use crate::software::{AlphaCutoff, Bands, Setup, Shading, SoftwareTextures, checked_target};
-use crate::uv_hull::{HullLevels, TriangleHull};
+use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
 
 /// A bake render resolved to pixels, top row first.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -189,12 +189,9 @@ impl BakeRaster<'_> {
             };
             for span in t.row_spans(y0, y1) {
                 let row = (span.y - y0) * self.width;
-                let (first, last) = match &hull {
-                    Some(rows) => match rows.narrow(span.y, span.first, span.last) {
-                        Some(narrowed) => narrowed,
-                        None => continue,
-                    },
-                    None => (span.first, span.last),
+                let Some((first, last)) = narrowed(hull.as_ref(), span.y, span.first, span.last)
+                else {
+                    continue;
                 };
                 for x in first..=last {
                     let b = span.weights_at(x);

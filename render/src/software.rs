@@ -34,7 +34,7 @@ use crate::pipeline::{
 };
 use crate::sample_lanes::{self, LaneFilter, LaneLevel, LaneTest, TriangleLanes};
 use crate::scene::{DrawMaterial, DrawScene, DrawTexture};
-use crate::uv_hull::{HullLevels, TriangleHull};
+use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
 
 /// Most samples per side of the supersampled image (coordinates stay exact in `f32`).
 pub(crate) const MAX_SIDE: u64 = 1 << 15;
@@ -1542,12 +1542,8 @@ impl<'a> Raster<'a> {
                 let Some(span) = t.row_span(&walk, sy) else {
                     continue;
                 };
-                let (first, last) = match &hull {
-                    Some(rows) => match rows.narrow(sy, span.first, span.last) {
-                        Some(narrowed) => narrowed,
-                        None => continue,
-                    },
-                    None => (span.first, span.last),
+                let Some((first, last)) = narrowed(hull.as_ref(), sy, span.first, span.last) else {
+                    continue;
                 };
                 if let Some(lanes) = &lanes {
                     // Eight samples at a time from the span's first: their coverage bits are

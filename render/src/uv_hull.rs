@@ -283,6 +283,21 @@ pub(crate) struct HullRows {
     hi: [[f32; 2]; 4],
 }
 
+/// Row `y`'s span `first..=last` narrowed by a triangle's `bounds` where it has them, `None`
+/// when they leave no sample.
+#[inline]
+pub(crate) fn narrowed(
+    bounds: Option<&HullRows>,
+    y: usize,
+    first: usize,
+    last: usize,
+) -> Option<(usize, usize)> {
+    match bounds {
+        Some(rows) => rows.narrow(y, first, last),
+        None => Some((first, last)),
+    }
+}
+
 impl HullRows {
     /// Row `y`'s span `first..=last` narrowed to the samples the half-planes leave, `None`
     /// when they leave none.
