@@ -96,6 +96,14 @@ pub struct SoftwareTextures {
     /// of the RGBA levels' alpha when prepared for the bake ([`SoftwareTextures::for_bake`],
     /// footprints only); empty otherwise.
     alpha_bounds: Vec<Vec<AlphaBounds>>,
+    /// Per texture, its levels' alpha channel alone when prepared for the bake
+    /// ([`SoftwareTextures::for_bake`]: what [`SoftwareTextures::bake_lanes`] filters); empty
+    /// otherwise.
+    bake_alpha: Vec<Levels>,
+    /// Per texture and level, its colour decoded to linear light when prepared for the bake
+    /// and the level holds at most [`MAX_LINEAR_TEXELS`] texels: what
+    /// [`SoftwareTextures::bake_rgb`] filters; empty otherwise.
+    bake_linear: Vec<Vec<Option<LinearLevel>>>,
     /// Per texture, its linear box chain when a drawn material uses it as a normal map and
     /// colour is drawn (lighting needs the normals); empty otherwise.
     normal_maps: Vec<Levels>,
@@ -320,18 +328,31 @@ impl SoftwareTextures {
     pub fn for_bake(textures: &[DrawTexture]) -> Result<SoftwareTextures, RenderError> {
         let n = textures.len();
         let mut prepared = Self::prepare(textures, vec![true; n], vec![false; n], true)?;
-        // The bake's alpha test reads one level's alpha channel: its footprints' bounds.
-        prepared.alpha_bounds = prepared
+        // The bake's alpha test reads one level's alpha channel: kept alone (the eight-sample
+        // test gathers it a byte a texel), with its footprints' bounds.
+        prepared.bake_alpha = prepared
             .textures
             .par_iter()
             .map(|levels| {
-                levels
-                    .0
-                    .iter()
-                    .map(|(w, h, rgba)| {
-                        let alpha = rgba.chunks_exact(4).map(|p| p[3]).collect();
-                        AlphaBounds::new(&(*w, *h, alpha), None)
-                    })
+                Levels(
+                    (levels.0.iter())
+                        .map(|(w, h, rgba)| (*w, *h, rgba.chunks_exact(4).map(|p| p[3]).collect()))
+                        .collect(),
+                )
+            })
+            .collect();
+        let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
+        prepared.bake_linear = (prepared.textures.iter())
+            .map(|levels| {
+                (levels.0.iter())
+                    .map(|level| LinearLevel::new(level, &linear))
+                    .collect()
+            })
+            .collect();
+        prepared.alpha_bounds = (prepared.bake_alpha.iter())
+            .map(|levels| {
+                (levels.0.iter())
+                    .map(|level| AlphaBounds::new(level, None))
                     .collect()
             })
             .collect();
@@ -362,6 +383,70 @@ impl SoftwareTextures {
         let data = &levels.0[level].2;
         let alpha = bilerp(o.map(|k| f32::from(data[k + 3])), fx, fy) / 255.0;
         cutoff.passes(alpha)
+    }
+
+    /// The bake's colour of `texture` at `uv`: [`Levels::rgb`] (`linear` decoding sRGB), the
+    /// same bits, from its levels decoded beforehand where it has them.
+    #[inline]
+    pub(crate) fn bake_rgb(
+        &self,
+        texture: usize,
+        uv: [f32; 2],
+        lod: Trilinear,
+        wrap: [Wrap; 2],
+        linear: &[f32; 256],
+    ) -> Vec3 {
+        let levels = &self.textures[texture];
+        let decoded = self.bake_linear.get(texture);
+        let at = |l: usize| match decoded.and_then(|d| d[l].as_ref()) {
+            Some(level) => level.bilinear(uv, wrap),
+            None => bilinear_rgb(&levels.0[l], uv, wrap, linear),
+        };
+        let va = at(lod.a as usize);
+        if lod.f > 0.0 {
+            va + (at(lod.b as usize) - va) * lod.f
+        } else {
+            va
+        }
+    }
+
+    /// The bake's eight-sample test of triangle `t` of a material with `texture` sampled with
+    /// `wrap` and the alpha test `cutoff` ([`SoftwareTextures::bake_alpha_test`], in lanes):
+    /// the bounds table and the bilinear filter of the level nearer `t.lod`. `None` where the
+    /// lanes cannot decide as the scalar test does (not prepared for the bake, or a test
+    /// without thresholds).
+    pub(crate) fn bake_lanes(
+        &self,
+        t: &Setup,
+        texture: usize,
+        wrap: [Wrap; 2],
+        cutoff: &AlphaCutoff,
+    ) -> Option<TriangleLanes<'_>> {
+        let level = t.lod.nearest();
+        let table = &self.alpha_bounds.get(texture)?.get(level)?.footprint;
+        let (width, height, texels) = self.bake_alpha.get(texture)?.0.get(level)?;
+        let (pass_from, fail_below) = cutoff.thresholds?;
+        Some(TriangleLanes {
+            q: t.q,
+            uq: t.uq,
+            test: LaneTest::Table {
+                table,
+                pass_from,
+                fail_below,
+                filter: LaneFilter {
+                    a: LaneLevel {
+                        texels,
+                        width: *width,
+                        height: *height,
+                        wrap,
+                    },
+                    b: None,
+                    f: 0.0,
+                    scale: cutoff.scale,
+                    cutoff: cutoff.cutoff,
+                },
+            },
+        })
     }
 
     /// The mip chains of the `used` textures (colour or alpha alone) and of the `normal_map`
@@ -423,6 +508,8 @@ impl SoftwareTextures {
         Ok(SoftwareTextures {
             textures,
             alpha_bounds,
+            bake_alpha: Vec::new(),
+            bake_linear: Vec::new(),
             normal_maps,
             colour,
             lighting: Lighting::TwoSided,
@@ -1037,6 +1124,44 @@ where
     top + (bottom - top) * fy
 }
 
+/// The most texels a level decoded to linear light holds (16 MiB): a bake reads the small
+/// levels of leaf textures; a larger level is decoded texel by texel as it is read.
+const MAX_LINEAR_TEXELS: usize = 1 << 20;
+
+/// An RGBA level's colour decoded to linear light, `[r, g, b, 0]` a texel: a bilinear fetch
+/// reads four vectors where [`bilinear_rgb`] reads and decodes twelve bytes (the bake shades
+/// every covered sample, a third of its time on oak_dense).
+#[derive(Clone, Debug)]
+struct LinearLevel {
+    width: u32,
+    height: u32,
+    texels: Vec<Vec4>,
+}
+
+impl LinearLevel {
+    /// `level` decoded by `linear`, `None` over [`MAX_LINEAR_TEXELS`].
+    fn new((width, height, rgba): &(u32, u32, Vec<u8>), linear: &[f32; 256]) -> Option<Self> {
+        (rgba.len() / 4 <= MAX_LINEAR_TEXELS).then(|| LinearLevel {
+            width: *width,
+            height: *height,
+            texels: (rgba.chunks_exact(4))
+                .map(|p| {
+                    let [r, g, b] = [0, 1, 2].map(|k| linear[usize::from(p[k])]);
+                    Vec4::new(r, g, b, 0.0)
+                })
+                .collect(),
+        })
+    }
+
+    /// [`bilinear_rgb`] of the level it was decoded from: the same footprint, and the same
+    /// operations on each channel (a vector's lanes round as scalars do), so the same bits.
+    #[inline]
+    fn bilinear(&self, uv: [f32; 2], wrap: [Wrap; 2]) -> Vec3 {
+        let (o, fx, fy) = footprint_of([self.width, self.height], uv, wrap, 1);
+        bilerp(o.map(|k| self.texels[k]), fx, fy).truncate()
+    }
+}
+
 /// [`bilinear`] of the three colour channels of an RGBA level at once, each texel decoded to
 /// linear light by `linear`: the footprint is found once for the three.
 #[inline]
@@ -1070,7 +1195,18 @@ fn footprint(
     wrap: [Wrap; 2],
     stride: usize,
 ) -> ([usize; 4], f32, f32) {
-    let (w, h, _) = level;
+    footprint_of([level.0, level.1], uv, wrap, stride)
+}
+
+/// [`footprint`] on a level of `w`×`h` texels.
+#[inline(always)]
+fn footprint_of(
+    [w, h]: [u32; 2],
+    uv: [f32; 2],
+    wrap: [Wrap; 2],
+    stride: usize,
+) -> ([usize; 4], f32, f32) {
+    let (w, h) = (&w, &h);
     let x = uv[0] * *w as f32 - 0.5;
     let y = uv[1] * *h as f32 - 0.5;
     let (x0, y0) = (floor_i64(x), floor_i64(y));
@@ -1289,10 +1425,10 @@ pub(crate) struct RowSpan {
     pub(crate) first: usize,
     pub(crate) last: usize,
     /// The sample the weights `start` are at.
-    x0: usize,
-    start: [f32; 3],
+    pub(crate) x0: usize,
+    pub(crate) start: [f32; 3],
     /// The weights' change per sample along the row.
-    step: [f32; 3],
+    pub(crate) step: [f32; 3],
 }
 
 impl RowSpan {
@@ -2432,6 +2568,58 @@ mod tests {
                 prepared.bake_alpha_test(0, uv, pair, [wrap; 2], &AlphaCutoff::new(scale, cutoff))
             },
         );
+    }
+
+    /// The bake's colour from levels decoded beforehand is the decoding filter's to the bit,
+    /// inside and across the edges under each wrap, at single levels and blends; a level over
+    /// the decoded size limit is filtered from its bytes.
+    #[test]
+    fn bake_colour_from_decoded_levels_is_the_filters() {
+        let (w, h, alpha) = leaf_alpha();
+        let rgba: Vec<u8> = (alpha.iter().enumerate())
+            .flat_map(|(i, &a)| {
+                let n = (i as u32).wrapping_mul(2_654_435_761);
+                [(n >> 24) as u8, (n >> 16) as u8, (n >> 8) as u8, a]
+            })
+            .collect();
+        let texture = DrawTexture {
+            width: w,
+            height: h,
+            rgba,
+        };
+        let prepared = SoftwareTextures::for_bake(std::slice::from_ref(&texture)).expect("tex");
+        let levels = &prepared.textures[0];
+        assert!(prepared.bake_linear[0].iter().all(Option::is_some));
+        let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
+        let mut undecoded = prepared.clone();
+        undecoded.bake_linear[0][0] = None;
+        let mut compared = 0;
+        for wrap in [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat] {
+            for lod in [0.0, 0.3, 0.7, 1.7, 2.5, 9.0] {
+                let pair = levels.pair(lod);
+                for k in 0..4000u32 {
+                    let uv = [(k % 80) as f32 / 53.0 - 0.3, (k / 80) as f32 / 37.0 - 0.2];
+                    let expected = levels.rgb(uv, pair, [wrap; 2], &linear);
+                    for p in [&prepared, &undecoded] {
+                        let got = p.bake_rgb(0, uv, pair, [wrap; 2], &linear);
+                        assert_eq!(
+                            got.to_array().map(f32::to_bits),
+                            expected.to_array().map(f32::to_bits)
+                        );
+                    }
+                    compared += 1;
+                }
+            }
+        }
+        assert_eq!(compared, 3 * 6 * 4000);
+        let big = DrawTexture {
+            width: 1025,
+            height: 1024,
+            rgba: vec![128; 1025 * 1024 * 4],
+        };
+        let prepared = SoftwareTextures::for_bake(&[big]).expect("big");
+        assert!(prepared.bake_linear[0][0].is_none());
+        assert!(prepared.bake_linear[0][1].is_some());
     }
 
     /// Textures prepared for the bake (RGBA levels with their alpha's bounds) draw a colour
