@@ -21,8 +21,8 @@
 use std::sync::LazyLock;
 
 use frond_render::{
-    DrawMaterial, DrawMesh, DrawScene, DrawTexture, Output, RenderError, Renderer,
-    SoftwareTextures, render_bake,
+    BakeScratch, BakeTarget, DrawMaterial, DrawMesh, DrawScene, DrawTexture, Output, RenderError,
+    Renderer, SoftwareTextures,
 };
 use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
@@ -808,59 +808,140 @@ fn two_sided(m: &DrawMaterial) -> DrawMaterial {
     }
 }
 
-/// Texel rows of the atlas the CPU rasteriser draws at a time: its per-texel results for a
-/// 4096-texel-wide strip stay near 27 MB (26 bytes a texel), and a strip holds 16 bands of
-/// rows to share among threads.
+/// Texel rows of the atlas in one frame of supersampled coordinates (every sample's weights
+/// follow its rounding): the atlas is cut into strips of so many rows, each cell's part of a
+/// strip drawn in the strip's frame.
 const CPU_STRIP_TEXELS: u32 = 256;
 
-/// The CPU path: strips of whole atlas rows drawn by [`render_bake`] (colour and normals in
-/// one pass) and stored texel by texel.
+/// The CPU path: every cell's part of every strip of the atlas drawn alone by [`BakeTarget`]
+/// from its own triangles (colour and normals in one pass), in parallel, and stored texel by
+/// texel. The strips of [`CPU_STRIP_TEXELS`] rows share one target (one frame), the shorter
+/// last strip has its own.
 fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeError> {
     let ss = job.params.supersample;
     let (total, needed) = (ss * ss, cutoff_samples(job.params));
     let prepared = SoftwareTextures::for_bake(job.textures)?;
     let mut scene = job.scene();
     let width = out.width as usize;
-    for ty in (0..out.height).step_by(CPU_STRIP_TEXELS as usize) {
-        let th = CPU_STRIP_TEXELS.min(out.height - ty);
-        let rect = [0, ty * ss, out.width * ss, th * ss];
-        let (mut meshes, normals) = job.meshes(rect);
-        if meshes.is_empty() {
+    let strips = (0..out.height).step_by(CPU_STRIP_TEXELS as usize);
+    let (whole, shorter): (Vec<u32>, Vec<u32>) =
+        strips.partition(|&ty| out.height - ty >= CPU_STRIP_TEXELS);
+    for group in [whole, shorter] {
+        let Some(&first) = group.first() else {
             continue;
+        };
+        let th = CPU_STRIP_TEXELS.min(out.height - first);
+        // Every (strip, cell) pair where the cell has triangles in the strip.
+        let parts: Vec<(u32, usize)> = (group.iter())
+            .flat_map(|&ty| {
+                let rect = [0, ty * ss, out.width * ss, th * ss];
+                (job.cells.iter().zip(job.placed_triangles).enumerate())
+                    .filter(move |(_, (cell, tris))| {
+                        !tris.is_empty() && cell_in_tile(cell, ss, rect)
+                    })
+                    .map(move |(c, _)| (ty, c))
+            })
+            .collect();
+        let meshes: Vec<Vec<DrawMesh>> = parts
+            .par_iter()
+            .map(|&(ty, c)| {
+                cell_meshes(
+                    &job.placed_triangles[c],
+                    [0, ty * ss, out.width * ss, th * ss],
+                    job.materials.len(),
+                )
+            })
+            .collect();
+        let mut regions = Vec::with_capacity(parts.len());
+        scene.meshes.clear();
+        for (&(ty, c), cell_meshes) in parts.iter().zip(meshes) {
+            let cell = &job.cells[c];
+            let (y0, y1) = (cell.y.max(ty), (cell.y + cell.height).min(ty + th));
+            let first = scene.meshes.len();
+            scene.meshes.extend(cell_meshes);
+            regions.push((
+                ty,
+                [cell.x, y0 - ty, cell.width, y1 - y0],
+                first..scene.meshes.len(),
+            ));
         }
-        for (mesh, n) in meshes.iter_mut().zip(normals) {
-            mesh.normals = Some(n);
-        }
-        scene.meshes = meshes;
-        let image = render_bake(&scene, &prepared, Mat4::IDENTITY, out.width, th, ss)?;
-        let first = ty as usize * width;
-        let strip = first..first + th as usize * width;
-        out.color[strip.start * 4..strip.end * 4]
-            .par_chunks_mut(width * 4)
-            .zip(out.normal[strip.start * 4..strip.end * 4].par_chunks_mut(width * 4))
-            .zip(out.covered[strip.clone()].par_chunks_mut(width))
-            .zip(out.samples[strip].par_chunks_mut(width))
-            .enumerate()
-            .for_each(
-                |(row, (((color_row, normal_row), covered_row), samples_row))| {
-                    for x in 0..width {
-                        let i = row * width + x;
-                        let n = image.samples[i];
-                        if n == 0 {
-                            continue;
-                        }
+        let target = BakeTarget::new(&scene, &prepared, Mat4::IDENTITY, out.width, th, ss)?;
+        let texels: Vec<Vec<CoveredTexel>> = regions
+            .par_iter()
+            .map_init(BakeScratch::default, |scratch, (_, rect, meshes)| {
+                let image = target.render(*rect, meshes.clone(), scratch);
+                (image.samples.iter().enumerate())
+                    .filter(|&(_, &n)| n > 0)
+                    .map(|(i, &n)| {
                         let normal = Vec3::from(image.normal[i]);
                         let (c, nb) =
                             texel_bytes(u32::from(n), total, needed, image.colour[i], normal);
-                        samples_row[x] = n;
-                        color_row[x * 4..x * 4 + 4].copy_from_slice(&c);
-                        normal_row[x * 4..x * 4 + 4].copy_from_slice(&nb);
-                        covered_row[x] = true;
-                    }
-                },
-            );
+                        (i, n, c, nb)
+                    })
+                    .collect()
+            })
+            .collect();
+        for ((ty, rect, _), texels) in regions.iter().zip(texels) {
+            let [x, y, w, _] = rect.map(|v| v as usize);
+            for (i, n, c, nb) in texels {
+                let at = (*ty as usize + y + i / w) * width + x + i % w;
+                out.samples[at] = n;
+                out.color[at * 4..at * 4 + 4].copy_from_slice(&c);
+                out.normal[at * 4..at * 4 + 4].copy_from_slice(&nb);
+                out.covered[at] = true;
+            }
+        }
     }
     Ok(())
+}
+
+/// A covered texel of a region drawn by [`BakeTarget::render`]: its index in the region, its
+/// covered samples, colour and normal bytes.
+type CoveredTexel = (usize, u16, [u8; 4], [u8; 4]);
+
+/// One cell's triangles `tris` (supersampled atlas coordinates) in NDC of the supersampled
+/// rectangle `rect` (as [`tile_meshes`] places them, with their normals): one mesh per
+/// material, in material order (the order [`tile_meshes`] draws a cell's triangles in).
+fn cell_meshes(tris: &[PlacedTriangle], rect: [u32; 4], material_count: usize) -> Vec<DrawMesh> {
+    let mut normals = Vec::new();
+    (0..material_count)
+        .filter_map(|material| {
+            let mut mesh = DrawMesh {
+                uvs: Some(Vec::new()),
+                material,
+                ..Default::default()
+            };
+            normals.clear();
+            for t in tris.iter().filter(|t| t.material as usize == material) {
+                push_triangle(&mut mesh, &mut normals, t, rect);
+            }
+            (!mesh.indices.is_empty()).then(|| DrawMesh {
+                normals: Some(normals.clone()),
+                ..mesh
+            })
+        })
+        .collect()
+}
+
+/// Appends triangle `t` (supersampled atlas coordinates) to `mesh` in NDC of the
+/// supersampled rectangle `rect`, and its world-space face normal per vertex to `normals`.
+fn push_triangle(
+    mesh: &mut DrawMesh,
+    normals: &mut Vec<[f32; 3]>,
+    t: &PlacedTriangle,
+    rect: [u32; 4],
+) {
+    let [x, y, w, h] = rect.map(|v| v as f32);
+    for k in 0..3 {
+        let [px, py, pz] = t.pos[k];
+        mesh.indices.push(mesh.positions.len() as u32);
+        mesh.positions
+            .push([(px - x) / w * 2.0 - 1.0, 1.0 - (py - y) / h * 2.0, pz]);
+        if let Some(uvs) = &mut mesh.uvs {
+            uvs.push(t.uv[k]);
+        }
+        normals.push(t.normal);
+    }
 }
 
 /// The wgpu path: the supersampled atlas rendered tile by tile (colour, then normals) and
@@ -931,23 +1012,13 @@ fn tile_meshes(
             (mesh, Vec::new())
         })
         .collect();
-    let [x, y, w, h] = rect.map(|v| v as f32);
     for (tris, cell) in placed_triangles.iter().zip(cells) {
         if !cell_in_tile(cell, ss, rect) {
             continue;
         }
         for t in tris {
             let (mesh, normals) = &mut meshes[t.material as usize];
-            for k in 0..3 {
-                let [px, py, pz] = t.pos[k];
-                mesh.indices.push(mesh.positions.len() as u32);
-                mesh.positions
-                    .push([(px - x) / w * 2.0 - 1.0, 1.0 - (py - y) / h * 2.0, pz]);
-                if let Some(uvs) = &mut mesh.uvs {
-                    uvs.push(t.uv[k]);
-                }
-                normals.push(t.normal);
-            }
+            push_triangle(mesh, normals, t, rect);
         }
     }
     meshes.retain(|(m, _)| !m.indices.is_empty());
@@ -1124,6 +1195,20 @@ fn finish_cells(d: Downsampled, cells: &[Cell], quads: &[Quad], padding: u32) ->
                 quad.axis_u.normalize_or_zero(),
                 quad.axis_v.normalize_or_zero(),
             );
+            // The tangent-space normal depends on the atlas normal alone within a cell, and
+            // neighbouring texels mostly share theirs (a flat card, a dilated source): the
+            // last one converted is kept.
+            let mut last: Option<([u8; 3], [u8; 3])> = None;
+            let mut tangent_space = |n: [u8; 3]| match last {
+                Some((seen, t)) if seen == n => t,
+                _ => {
+                    let m = Vec3::new(decode(n[0]), decode(n[1]), decode(n[2])).normalize_or(front);
+                    let t = Vec3::new(m.dot(u), m.dot(v), m.dot(front)).normalize_or(Vec3::Z);
+                    let [r, g, b, _] = encode_normal(t, 0);
+                    last = Some((n, [r, g, b]));
+                    [r, g, b]
+                }
+            };
             source
                 .iter()
                 .map(|&src| {
@@ -1136,9 +1221,7 @@ fn finish_cells(d: Downsampled, cells: &[Cell], quads: &[Quad], padding: u32) ->
                             if n == [0, 0, 0] { default_normal } else { n },
                         )
                     };
-                    let n = Vec3::new(decode(n[0]), decode(n[1]), decode(n[2])).normalize_or(front);
-                    let t = Vec3::new(n.dot(u), n.dot(v), n.dot(front)).normalize_or(Vec3::Z);
-                    let [r, g, b, _] = encode_normal(t, 0);
+                    let [r, g, b] = tangent_space(n);
                     [colour[0], colour[1], colour[2], r, g, b]
                 })
                 .collect()

@@ -29,6 +29,8 @@
 //! normal, flipped on back faces so it faces the viewer (improved-billboard-cloud §4 items 4
 //! and 7).
 
+use std::ops::Range;
+
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 
@@ -36,7 +38,9 @@ use crate::error::RenderError;
 use crate::pipeline::srgb_to_linear;
 use crate::sample_lanes::{self, LaneTest, TriangleLanes};
 use crate::scene::DrawScene;
-use crate::software::{AlphaCutoff, Bands, Setup, Shading, SoftwareTextures, checked_target};
+use crate::software::{
+    AlphaCutoff, BAND_PIXELS, Setup, Shading, SoftwareTextures, checked_target, setup_meshes,
+};
 use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
 
 /// A bake render resolved to pixels, top row first.
@@ -59,7 +63,7 @@ pub struct BakeImage {
 
 /// Renders `scene` through `view_proj` at `width`×`height` pixels of `supersample`² samples
 /// for baking (see the module docs), with `textures` prepared from `scene.textures` with
-/// colour ([`SoftwareTextures::for_bake`]).
+/// colour ([`SoftwareTextures::for_bake`]): bands of rows drawn in parallel.
 pub fn render_bake(
     scene: &DrawScene,
     textures: &SoftwareTextures,
@@ -73,10 +77,7 @@ pub fn render_bake(
         textures,
         view_proj,
         [width, height, supersample],
-        BakeShortcuts {
-            hulls: true,
-            lanes: true,
-        },
+        BakeShortcuts::ALL,
     )
 }
 
@@ -90,6 +91,13 @@ struct BakeShortcuts {
     lanes: bool,
 }
 
+impl BakeShortcuts {
+    const ALL: BakeShortcuts = BakeShortcuts {
+        hulls: true,
+        lanes: true,
+    };
+}
+
 /// [`render_bake`] with the given `shortcuts` (all of them but in the test that compares
 /// them).
 fn bake_with(
@@ -99,44 +107,20 @@ fn bake_with(
     [width, height, supersample]: [u32; 3],
     shortcuts: BakeShortcuts,
 ) -> Result<BakeImage, RenderError> {
-    let (sw, sh) = checked_target(scene, textures, view_proj, [width, height, supersample])?;
-    if !textures.colour {
-        return Err(RenderError::InvalidTexture {
-            texture: 0,
-            reason: "a bake render needs textures prepared with colour".into(),
-        });
-    }
-    let ss = supersample.max(1) as usize;
-    let Bands {
-        triangles,
-        shading,
-        bins,
-        rows: band_rows,
-    } = Bands::new(scene, textures, view_proj, [sw, sh], ss);
-    let cutoffs = AlphaCutoff::of_materials(scene);
-    let hulls = if shortcuts.hulls {
-        HullLevels::of_materials(scene, textures, &cutoffs)
-    } else {
-        scene.materials.iter().map(|_| None).collect()
-    };
-    let raster = BakeRaster {
+    let target = BakeTarget::with(
         scene,
         textures,
-        cutoffs,
-        hulls,
-        triangles: &triangles,
-        shading: &shading,
-        width: sw,
-        ss,
-        lanes: shortcuts.lanes && sample_lanes::available(),
-    };
-    // Each thread reuses its depth and winner buffers from band to band (a band's are
-    // megabytes: allocating them afresh cost a page fault per 4 KiB).
-    let bands: Vec<BakeImage> = bins
-        .par_iter()
-        .enumerate()
-        .map_init(Scratch::default, |scratch, (b, bin)| {
-            raster.band(b * band_rows, ((b + 1) * band_rows).min(sh), bin, scratch)
+        view_proj,
+        [width, height, supersample],
+        shortcuts,
+    )?;
+    let meshes = 0..scene.meshes.len();
+    let bands: Vec<BakeImage> = (0..height.div_ceil(BAND_PIXELS as u32))
+        .into_par_iter()
+        .map_init(BakeScratch::default, |scratch, b| {
+            let y = b * BAND_PIXELS as u32;
+            let rows = (BAND_PIXELS as u32).min(height - y);
+            target.render([0, y, width, rows], meshes.clone(), scratch)
         })
         .collect();
     let pixels = width as usize * height as usize;
@@ -155,18 +139,26 @@ fn bake_with(
     Ok(image)
 }
 
+/// Meshes a thread sets up at a time.
+const SETUP_MESHES: usize = 256;
+
 /// No triangle at this sample.
 const EMPTY: u32 = u32::MAX;
 
-/// One thread's per-sample buffers: the nearest depth so far and the triangle there.
-#[derive(Default)]
-struct Scratch {
+/// One thread's per-sample buffers, reused from region to region: the nearest depth so far
+/// and the triangle there.
+#[derive(Debug, Default)]
+pub struct BakeScratch {
     depth: Vec<f32>,
     winner: Vec<u32>,
 }
 
-/// What every band of one bake render shares.
-struct BakeRaster<'a> {
+/// A bake render's triangles set up once, for its regions to be drawn one by one
+/// ([`BakeTarget::render`]), each from its own meshes: a billboard atlas is thousands of
+/// small cells whose triangles lie within them, and a cell drawn alone keeps its samples in
+/// the core's cache and resolves no empty texel around it. Every sample is the one
+/// [`render_bake`] draws when a region's meshes hold every triangle reaching into it.
+pub struct BakeTarget<'a> {
     scene: &'a DrawScene,
     textures: &'a SoftwareTextures,
     /// Per material, its alpha test.
@@ -175,136 +167,248 @@ struct BakeRaster<'a> {
     /// are walked only within the octagon of the level its samples are tested at (the bake's
     /// alpha test reads one, [`SoftwareTextures::bake_alpha_test`]).
     hulls: Vec<Option<HullLevels<'a>>>,
-    triangles: &'a [Setup],
+    triangles: Vec<Setup>,
     /// Per triangle, its shading (the textures are prepared with colour).
-    shading: &'a [Shading],
-    /// Samples per row.
-    width: usize,
+    shading: Vec<Shading>,
+    /// Per mesh, its first triangle; one entry more, the count.
+    mesh_starts: Vec<u32>,
+    /// The target's size in samples.
+    size: [usize; 2],
     ss: usize,
     /// Eight samples of a row tested at once ([`sample_lanes`]) where the machine can: the
     /// same image.
     lanes: bool,
 }
 
-impl BakeRaster<'_> {
-    /// Sample rows `y0..y1` (whole pixel rows) drawn with the triangles `bin` and resolved to
-    /// pixels.
-    fn band(&self, y0: usize, y1: usize, bin: &[u32], scratch: &mut Scratch) -> BakeImage {
-        let rows = y1 - y0;
-        let Scratch { depth, winner } = scratch;
-        depth.clear();
-        depth.resize(rows * self.width, f32::INFINITY);
-        winner.clear();
-        winner.resize(rows * self.width, EMPTY);
-        for &ti in bin {
-            let t = &self.triangles[ti as usize];
-            let material = &self.scene.materials[t.material as usize];
-            let cutoff = self.cutoffs[t.material as usize].as_ref();
-            let hull = match &self.hulls[t.material as usize] {
-                Some(levels) => match levels.level(t.lod.nearest()).rows(t) {
-                    TriangleHull::Empty => continue,
-                    TriangleHull::Rows(rows) => Some(rows),
-                    TriangleHull::Unbounded => None,
-                },
-                None => None,
-            };
-            let lanes = match (cutoff, material.texture) {
-                _ if !self.lanes => None,
-                (None, _) => Some(TriangleLanes {
-                    q: t.q,
-                    uq: t.uq,
-                    test: LaneTest::Opaque,
-                }),
-                (Some(cutoff), Some(i)) => self.textures.bake_lanes(t, i, material.wrap, cutoff),
-                (Some(_), None) => None,
-            };
-            for span in t.row_spans(y0, y1) {
-                let row = (span.y - y0) * self.width;
-                let Some((first, last)) = narrowed(hull.as_ref(), span.y, span.first, span.last)
-                else {
-                    continue;
-                };
-                if let Some(lanes) = &lanes {
-                    let mut x = first;
-                    while x <= last {
-                        let k0 = x as i32 - span.x0 as i32;
-                        // SAFETY: `self.lanes` holds only where `sample_lanes::available`, and
-                        // a table test's table is an `AlphaBounds` one (padded).
-                        let r = unsafe { lanes.test(k0, span.start, span.step) };
-                        let todo = if last < x + 7 {
-                            0xff >> (x + 7 - last)
-                        } else {
-                            0xff
-                        };
-                        let mut hits = r.pass & todo;
-                        let mut open = r.open & todo;
-                        while open != 0 {
-                            let i = open.trailing_zeros() as usize;
-                            open &= open - 1;
-                            if let (Some(cutoff), Some(texture)) = (cutoff, material.texture)
-                                && self.textures.bake_alpha_test(
-                                    texture,
-                                    [r.u[i], r.v[i]],
-                                    t.lod,
-                                    material.wrap,
-                                    cutoff,
-                                )
-                            {
-                                hits |= 1 << i;
-                            }
-                        }
-                        while hits != 0 {
-                            let i = hits.trailing_zeros() as usize;
-                            hits &= hits - 1;
-                            let b = span.weights_at(x + i);
-                            let s = row + x + i;
-                            let z = b[0] * t.z[0] + b[1] * t.z[1] + b[2] * t.z[2];
-                            if z < depth[s] {
-                                depth[s] = z;
-                                winner[s] = ti;
-                            }
-                        }
-                        x += 8;
-                    }
-                    continue;
-                }
-                for x in first..=last {
-                    let b = span.weights_at(x);
-                    if b[0] < 0.0 || b[1] < 0.0 || b[2] < 0.0 {
-                        continue;
-                    }
-                    let s = row + x;
-                    let z = b[0] * t.z[0] + b[1] * t.z[1] + b[2] * t.z[2];
-                    if z >= depth[s] {
-                        continue;
-                    }
-                    if let Some(cutoff) = cutoff {
-                        let (uv, _) = t.uv(b);
-                        let pass = match material.texture {
-                            Some(i) => {
-                                self.textures
-                                    .bake_alpha_test(i, uv, t.lod, material.wrap, cutoff)
-                            }
-                            None => cutoff.passes(1.0),
-                        };
-                        if !pass {
-                            continue;
-                        }
-                    }
-                    depth[s] = z;
-                    winner[s] = ti;
-                }
-            }
-        }
-        self.resolve(y0, rows, winner)
+impl<'a> BakeTarget<'a> {
+    /// `scene`'s triangles set up through `view_proj` for a target of `width`×`height` pixels
+    /// of `supersample`² samples, with `textures` prepared from `scene.textures` with colour
+    /// ([`SoftwareTextures::for_bake`]).
+    pub fn new(
+        scene: &'a DrawScene,
+        textures: &'a SoftwareTextures,
+        view_proj: Mat4,
+        width: u32,
+        height: u32,
+        supersample: u32,
+    ) -> Result<Self, RenderError> {
+        Self::with(
+            scene,
+            textures,
+            view_proj,
+            [width, height, supersample],
+            BakeShortcuts::ALL,
+        )
     }
 
-    /// Shades each covered sample of the band once (its winning triangle's colour and
+    /// [`BakeTarget::new`] taking the given shortcuts.
+    fn with(
+        scene: &'a DrawScene,
+        textures: &'a SoftwareTextures,
+        view_proj: Mat4,
+        [width, height, supersample]: [u32; 3],
+        shortcuts: BakeShortcuts,
+    ) -> Result<Self, RenderError> {
+        let (sw, sh) = checked_target(scene, textures, view_proj, [width, height, supersample])?;
+        if !textures.colour {
+            return Err(RenderError::InvalidTexture {
+                texture: 0,
+                reason: "a bake render needs textures prepared with colour".into(),
+            });
+        }
+        // Set up in parallel, a run of meshes at a time (an atlas's cells are thousands of
+        // small meshes), then joined in mesh order.
+        let chunks: Vec<_> = (0..scene.meshes.len().div_ceil(SETUP_MESHES))
+            .into_par_iter()
+            .map(|c| {
+                let meshes = c * SETUP_MESHES..((c + 1) * SETUP_MESHES).min(scene.meshes.len());
+                setup_meshes(scene, meshes, textures, view_proj, [sw as f32, sh as f32])
+            })
+            .collect();
+        let count = chunks.iter().map(|c| c.0.len()).sum();
+        let mut triangles = Vec::with_capacity(count);
+        let mut shading = Vec::with_capacity(count);
+        let mut mesh_starts = Vec::with_capacity(scene.meshes.len() + 1);
+        for (t, s, starts) in chunks {
+            let offset = triangles.len() as u32;
+            mesh_starts.extend(starts[..starts.len() - 1].iter().map(|&i| i + offset));
+            triangles.extend(t);
+            shading.extend(s);
+        }
+        mesh_starts.push(triangles.len() as u32);
+        let cutoffs = AlphaCutoff::of_materials(scene);
+        let hulls = if shortcuts.hulls {
+            HullLevels::of_materials(scene, textures, &cutoffs)
+        } else {
+            scene.materials.iter().map(|_| None).collect()
+        };
+        Ok(BakeTarget {
+            scene,
+            textures,
+            cutoffs,
+            hulls,
+            triangles,
+            shading,
+            mesh_starts,
+            size: [sw, sh],
+            ss: supersample.max(1) as usize,
+            lanes: shortcuts.lanes && sample_lanes::available(),
+        })
+    }
+
+    /// The pixels `[x, y, w, h]` (clamped to the target) drawn with the triangles of
+    /// `meshes` alone and resolved, `scratch` holding the samples meanwhile.
+    pub fn render(
+        &self,
+        [x, y, w, h]: [u32; 4],
+        meshes: Range<usize>,
+        scratch: &mut BakeScratch,
+    ) -> BakeImage {
+        let ss = self.ss;
+        let clamp = |v: u32, side: usize| (v as usize * ss).min(side);
+        let (x0, y0) = (clamp(x, self.size[0]), clamp(y, self.size[1]));
+        let x1 = clamp(x.saturating_add(w), self.size[0]).max(x0);
+        let y1 = clamp(y.saturating_add(h), self.size[1]).max(y0);
+        let last = self.scene.meshes.len();
+        let (m0, m1) = (meshes.start.min(last), meshes.end.min(last));
+        let triangles = if m0 < m1 {
+            self.mesh_starts[m0]..self.mesh_starts[m1]
+        } else {
+            0..0
+        };
+        let region = Region { x0, x1, y0, y1 };
+        let BakeScratch { depth, winner } = scratch;
+        depth.clear();
+        depth.resize(region.samples(), f32::INFINITY);
+        winner.clear();
+        winner.resize(region.samples(), EMPTY);
+        for ti in triangles {
+            self.draw(ti, &region, depth, winner);
+        }
+        self.resolve(&region, winner)
+    }
+
+    /// Draws triangle `ti` into the samples of `region`: each sample it covers nearer than
+    /// the depth there, where its alpha test passes, takes it.
+    fn draw(&self, ti: u32, region: &Region, depth: &mut [f32], winner: &mut [u32]) {
+        let t = &self.triangles[ti as usize];
+        if (t.max[0].max(0) as usize) < region.x0
+            || t.min[0].max(0) as usize >= region.x1
+            || (t.max[1].max(0) as usize) < region.y0
+            || t.min[1].max(0) as usize >= region.y1
+        {
+            return;
+        }
+        let material = &self.scene.materials[t.material as usize];
+        let cutoff = self.cutoffs[t.material as usize].as_ref();
+        let hull = match &self.hulls[t.material as usize] {
+            Some(levels) => match levels.level(t.lod.nearest()).rows(t) {
+                TriangleHull::Empty => return,
+                TriangleHull::Rows(rows) => Some(rows),
+                TriangleHull::Unbounded => None,
+            },
+            None => None,
+        };
+        let lanes = match (cutoff, material.texture) {
+            _ if !self.lanes => None,
+            (None, _) => Some(TriangleLanes {
+                q: t.q,
+                uq: t.uq,
+                test: LaneTest::Opaque,
+            }),
+            (Some(cutoff), Some(i)) => self.textures.bake_lanes(t, i, material.wrap, cutoff),
+            (Some(_), None) => None,
+        };
+        let width = region.x1 - region.x0;
+        for span in t.row_spans(region.y0, region.y1) {
+            let row = (span.y - region.y0) * width;
+            let (first, last) = (span.first.max(region.x0), span.last.min(region.x1 - 1));
+            if first > last {
+                continue;
+            }
+            let Some((first, last)) = narrowed(hull.as_ref(), span.y, first, last) else {
+                continue;
+            };
+            if let Some(lanes) = &lanes {
+                let mut x = first;
+                while x <= last {
+                    let k0 = x as i32 - span.x0 as i32;
+                    // SAFETY: `self.lanes` holds only where `sample_lanes::available`, and a
+                    // table test's table is an `AlphaBounds` one (padded).
+                    let r = unsafe { lanes.test(k0, span.start, span.step) };
+                    let todo = if last < x + 7 {
+                        0xff >> (x + 7 - last)
+                    } else {
+                        0xff
+                    };
+                    let mut hits = r.pass & todo;
+                    let mut open = r.open & todo;
+                    while open != 0 {
+                        let i = open.trailing_zeros() as usize;
+                        open &= open - 1;
+                        if let (Some(cutoff), Some(texture)) = (cutoff, material.texture)
+                            && self.textures.bake_alpha_test(
+                                texture,
+                                [r.u[i], r.v[i]],
+                                t.lod,
+                                material.wrap,
+                                cutoff,
+                            )
+                        {
+                            hits |= 1 << i;
+                        }
+                    }
+                    while hits != 0 {
+                        let i = hits.trailing_zeros() as usize;
+                        hits &= hits - 1;
+                        let b = span.weights_at(x + i);
+                        let s = row + x + i - region.x0;
+                        let z = b[0] * t.z[0] + b[1] * t.z[1] + b[2] * t.z[2];
+                        if z < depth[s] {
+                            depth[s] = z;
+                            winner[s] = ti;
+                        }
+                    }
+                    x += 8;
+                }
+                continue;
+            }
+            for x in first..=last {
+                let b = span.weights_at(x);
+                if b[0] < 0.0 || b[1] < 0.0 || b[2] < 0.0 {
+                    continue;
+                }
+                let s = row + x - region.x0;
+                let z = b[0] * t.z[0] + b[1] * t.z[1] + b[2] * t.z[2];
+                if z >= depth[s] {
+                    continue;
+                }
+                if let Some(cutoff) = cutoff {
+                    let (uv, _) = t.uv(b);
+                    let pass = match material.texture {
+                        Some(i) => {
+                            self.textures
+                                .bake_alpha_test(i, uv, t.lod, material.wrap, cutoff)
+                        }
+                        None => cutoff.passes(1.0),
+                    };
+                    if !pass {
+                        continue;
+                    }
+                }
+                depth[s] = z;
+                winner[s] = ti;
+            }
+        }
+    }
+
+    /// Shades each covered sample of `region` once (its winning triangle's colour and
     /// normal) and sums them per pixel.
-    fn resolve(&self, y0: usize, rows: usize, winner: &[u32]) -> BakeImage {
+    fn resolve(&self, region: &Region, winner: &[u32]) -> BakeImage {
         let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
         let ss = self.ss;
-        let (w, h) = (self.width / ss, rows / ss);
+        let width = region.x1 - region.x0;
+        let (w, h) = (width / ss, (region.y1 - region.y0) / ss);
         let mut image = BakeImage {
             width: w as u32,
             height: h as u32,
@@ -318,13 +422,14 @@ impl BakeRaster<'_> {
                 for dy in 0..ss {
                     let y = py * ss + dy;
                     for x in px * ss..(px + 1) * ss {
-                        let ti = winner[y * self.width + x];
+                        let ti = winner[y * width + x];
                         if ti == EMPTY {
                             continue;
                         }
                         let t = &self.triangles[ti as usize];
                         let material = &self.scene.materials[t.material as usize];
-                        let b = t.weights(x as f32 + 0.5, (y0 + y) as f32 + 0.5);
+                        let b =
+                            t.weights((region.x0 + x) as f32 + 0.5, (region.y0 + y) as f32 + 0.5);
                         let (uv, q) = t.uv(b);
                         let texel = material.texture.map_or(Vec3::ONE, |i| {
                             self.textures.bake_rgb(i, uv, t.lod, material.wrap, &linear)
@@ -356,10 +461,25 @@ impl BakeRaster<'_> {
     }
 }
 
+/// The samples `x0..x1` × `y0..y1` of a region being drawn (whole pixels).
+struct Region {
+    x0: usize,
+    x1: usize,
+    y0: usize,
+    y1: usize,
+}
+
+impl Region {
+    fn samples(&self) -> usize {
+        (self.x1 - self.x0) * (self.y1 - self.y0)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::scene::{DrawMaterial, DrawMesh, DrawTexture};
+    use crate::software::Bands;
 
     /// A triangle pair over NDC `[x0, x1] × [-1, 1]` at depth `z` with normal `n`, counter-
     /// clockwise (front) unless `flip`.

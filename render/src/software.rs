@@ -41,7 +41,7 @@ pub(crate) const MAX_SIDE: u64 = 1 << 15;
 
 /// Pixel rows per band: the unit of parallel work and of memory (one band's samples per
 /// thread).
-const BAND_PIXELS: usize = 16;
+pub(crate) const BAND_PIXELS: usize = 16;
 
 /// Largest texture side accepted (as the wgpu path's limit on common adapters).
 pub(crate) const MAX_TEXTURE_SIDE: u32 = 16384;
@@ -100,10 +100,10 @@ pub struct SoftwareTextures {
     /// ([`SoftwareTextures::for_bake`]: what [`SoftwareTextures::bake_lanes`] filters); empty
     /// otherwise.
     bake_alpha: Vec<Levels>,
-    /// Per texture and level, its colour decoded to linear light when prepared for the bake
-    /// and the level holds at most [`MAX_LINEAR_TEXELS`] texels: what
+    /// Per texture and level, when prepared for the bake, its colour decoded to linear light
+    /// on first use where the level holds at most [`MAX_LINEAR_TEXELS`] texels: what
     /// [`SoftwareTextures::bake_rgb`] filters; empty otherwise.
-    bake_linear: Vec<Vec<Option<LinearLevel>>>,
+    bake_linear: Vec<Vec<std::sync::OnceLock<Option<LinearLevel>>>>,
     /// Per texture, its linear box chain when a drawn material uses it as a normal map and
     /// colour is drawn (lighting needs the normals); empty otherwise.
     normal_maps: Vec<Levels>,
@@ -341,11 +341,12 @@ impl SoftwareTextures {
                 )
             })
             .collect();
-        let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
         prepared.bake_linear = (prepared.textures.iter())
             .map(|levels| {
-                (levels.0.iter())
-                    .map(|level| LinearLevel::new(level, &linear))
+                levels
+                    .0
+                    .iter()
+                    .map(|_| std::sync::OnceLock::new())
                     .collect()
             })
             .collect();
@@ -398,7 +399,10 @@ impl SoftwareTextures {
     ) -> Vec3 {
         let levels = &self.textures[texture];
         let decoded = self.bake_linear.get(texture);
-        let at = |l: usize| match decoded.and_then(|d| d[l].as_ref()) {
+        let at = |l: usize| match decoded.and_then(|d| {
+            d[l].get_or_init(|| LinearLevel::new(&levels.0[l], linear))
+                .as_ref()
+        }) {
             Some(level) => level.bilinear(uv, wrap),
             None => bilinear_rgb(&levels.0[l], uv, wrap, linear),
         };
@@ -774,7 +778,7 @@ impl Bands {
         [sw, sh]: [usize; 2],
         ss: usize,
     ) -> Bands {
-        let (triangles, shading) = setup(scene, textures, view_proj, sw as f32, sh as f32);
+        let (triangles, shading, _) = setup(scene, textures, view_proj, sw as f32, sh as f32);
         let rows = BAND_PIXELS * ss;
         let mut bins: Vec<Vec<u32>> = vec![Vec::new(); sh.div_ceil(rows)];
         for (i, t) in triangles.iter().enumerate() {
@@ -802,21 +806,36 @@ struct Band {
 
 /// Transforms, clips (near and far planes), culls and sets up every triangle of `scene`, in
 /// draw order, for a target of `sw`×`sh` samples, with their shading when the textures were
-/// prepared with colour.
-fn setup(
+/// prepared with colour, and per mesh the first of its triangles (one entry more: the count).
+pub(crate) fn setup(
     scene: &DrawScene,
     textures: &SoftwareTextures,
     view_proj: Mat4,
     sw: f32,
     sh: f32,
-) -> (Vec<Setup>, Vec<Shading>) {
+) -> (Vec<Setup>, Vec<Shading>, Vec<u32>) {
+    setup_meshes(scene, 0..scene.meshes.len(), textures, view_proj, [sw, sh])
+}
+
+/// [`setup`] of the meshes `meshes` of `scene` alone (the first triangle of the first of them
+/// at 0).
+pub(crate) fn setup_meshes(
+    scene: &DrawScene,
+    meshes: std::ops::Range<usize>,
+    textures: &SoftwareTextures,
+    view_proj: Mat4,
+    [sw, sh]: [f32; 2],
+) -> (Vec<Setup>, Vec<Shading>, Vec<u32>) {
+    let meshes = &scene.meshes[meshes];
     // Reserved up front: growing it (tens of megabytes for a large tree) was a tenth of a small
     // render's time.
-    let count = scene.meshes.iter().map(|m| m.indices.len() / 3).sum();
+    let count = meshes.iter().map(|m| m.indices.len() / 3).sum();
     let shade = textures.colour;
     let mut out = Vec::with_capacity(count);
     let mut shading = Vec::with_capacity(if shade { count } else { 0 });
-    for mesh in &scene.meshes {
+    let mut mesh_starts = Vec::with_capacity(meshes.len() + 1);
+    for mesh in meshes {
+        mesh_starts.push(out.len() as u32);
         let material = &scene.materials[mesh.material];
         let clip: Vec<Vec4> = mesh
             .positions
@@ -869,7 +888,8 @@ fn setup(
             }
         }
     }
-    (out, shading)
+    mesh_starts.push(out.len() as u32);
+    (out, shading, mesh_starts)
 }
 
 /// `polygon` clipped to `0 ≤ z ≤ w` (wgpu's depth range), Sutherland–Hodgman.
@@ -2589,10 +2609,11 @@ mod tests {
         };
         let prepared = SoftwareTextures::for_bake(std::slice::from_ref(&texture)).expect("tex");
         let levels = &prepared.textures[0];
-        assert!(prepared.bake_linear[0].iter().all(Option::is_some));
+        // Decoded on first use.
+        assert!(prepared.bake_linear[0].iter().all(|l| l.get().is_none()));
         let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
         let mut undecoded = prepared.clone();
-        undecoded.bake_linear[0][0] = None;
+        undecoded.bake_linear[0][0] = std::sync::OnceLock::from(None);
         let mut compared = 0;
         for wrap in [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat] {
             for lod in [0.0, 0.3, 0.7, 1.7, 2.5, 9.0] {
@@ -2612,14 +2633,31 @@ mod tests {
             }
         }
         assert_eq!(compared, 3 * 6 * 4000);
+        let decoded =
+            |l: &std::sync::OnceLock<Option<LinearLevel>>| l.get().is_some_and(Option::is_some);
+        assert!(prepared.bake_linear[0][..4].iter().all(decoded));
         let big = DrawTexture {
             width: 1025,
             height: 1024,
             rgba: vec![128; 1025 * 1024 * 4],
         };
         let prepared = SoftwareTextures::for_bake(&[big]).expect("big");
-        assert!(prepared.bake_linear[0][0].is_none());
-        assert!(prepared.bake_linear[0][1].is_some());
+        let wrap = [Wrap::Repeat; 2];
+        for lod in [0.0, 1.0] {
+            let pair = prepared.textures[0].pair(lod);
+            let got = prepared.bake_rgb(0, [0.3, 0.6], pair, wrap, &linear);
+            assert_eq!(got, Vec3::splat(linear[128]));
+        }
+        assert!(
+            prepared.bake_linear[0][0]
+                .get()
+                .is_some_and(Option::is_none)
+        );
+        assert!(
+            prepared.bake_linear[0][1]
+                .get()
+                .is_some_and(Option::is_some)
+        );
     }
 
     /// Textures prepared for the bake (RGBA levels with their alpha's bounds) draw a colour
