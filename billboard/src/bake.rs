@@ -1149,26 +1149,29 @@ fn finish_cells(d: Downsampled, cells: &[Cell], quads: &[Quad], padding: u32) ->
     let finished: Vec<Vec<[u8; 6]>> = cells
         .par_iter()
         .zip(quads.par_iter())
-        .map(|(cell, quad)| {
+        .map_init(Vec::new, |queue, (cell, quad)| {
             let front = front_normal(quad);
             let [nx, ny, nz, _] = encode_normal(front, 0);
             let default_normal = [nx, ny, nz];
             let [x0, x1, y0, y1] = padded_rect(cell, padding, d.width, d.height);
             let (cw, ch) = (x1 - x0, y1 - y0);
-            // Per cell texel: index of the source texel (in the atlas) it copies.
+            // Per cell texel: index of the source texel (in the atlas) it copies. Breadth
+            // first from the covered texels: `queue[next..]` is still to expand.
             let mut source = vec![usize::MAX; cw * ch];
-            let mut queue = std::collections::VecDeque::new();
+            queue.clear();
             for y in 0..ch {
                 for x in 0..cw {
                     let i = (y0 + y) * width + x0 + x;
                     if d.covered[i] {
                         source[y * cw + x] = i;
-                        queue.push_back((x, y));
+                        queue.push((x, y));
                     }
                 }
             }
             let empty = queue.is_empty();
-            while let Some((x, y)) = queue.pop_front() {
+            let mut next = 0;
+            while let Some(&(x, y)) = queue.get(next) {
+                next += 1;
                 let src = source[y * cw + x];
                 for (dx, dy) in [
                     (-1, 0),
@@ -1187,7 +1190,7 @@ fn finish_cells(d: Downsampled, cells: &[Cell], quads: &[Quad], padding: u32) ->
                     let j = ny as usize * cw + nx as usize;
                     if source[j] == usize::MAX {
                         source[j] = src;
-                        queue.push_back((nx as usize, ny as usize));
+                        queue.push((nx as usize, ny as usize));
                     }
                 }
             }
@@ -1232,18 +1235,32 @@ fn finish_cells(d: Downsampled, cells: &[Cell], quads: &[Quad], padding: u32) ->
         mut normal,
         ..
     } = d;
-    for (cell, texels) in cells.iter().zip(finished) {
-        let [x0, x1, y0, _] = padded_rect(cell, padding, d.width, d.height);
-        let cw = x1 - x0;
-        for (row, texels) in texels.chunks_exact(cw.max(1)).enumerate() {
-            let first = (y0 + row) * width + x0;
-            for (k, t) in texels.iter().enumerate() {
-                let i = (first + k) * 4;
-                color[i..i + 3].copy_from_slice(&t[..3]);
-                normal[i..i + 3].copy_from_slice(&t[3..]);
-            }
+    // Stored row by row in parallel: per atlas row, the cells whose padded rectangle holds it
+    // (padded cells are disjoint).
+    let mut row_cells: Vec<Vec<u32>> = vec![Vec::new(); d.height as usize];
+    for (c, cell) in cells.iter().enumerate() {
+        let [_, _, y0, y1] = padded_rect(cell, padding, d.width, d.height);
+        for cells in &mut row_cells[y0..y1] {
+            cells.push(c as u32);
         }
     }
+    color
+        .par_chunks_mut(width * 4)
+        .zip(normal.par_chunks_mut(width * 4))
+        .zip(row_cells.par_iter())
+        .enumerate()
+        .for_each(|(y, ((color_row, normal_row), row_cells))| {
+            for &c in row_cells {
+                let [x0, x1, y0, _] = padded_rect(&cells[c as usize], padding, d.width, d.height);
+                let cw = x1 - x0;
+                let texels = &finished[c as usize][(y - y0) * cw..(y - y0 + 1) * cw];
+                for (k, t) in texels.iter().enumerate() {
+                    let i = (x0 + k) * 4;
+                    color_row[i..i + 3].copy_from_slice(&t[..3]);
+                    normal_row[i..i + 3].copy_from_slice(&t[3..]);
+                }
+            }
+        });
     Atlas {
         width: d.width,
         height: d.height,
