@@ -12,11 +12,12 @@
 //! How it is rendered: quads are first packed (see [`crate::atlas`]); every member triangle is
 //! then transformed on the CPU into the supersampled atlas (the quad's rectangle maps onto its
 //! texture's cell, depth runs from the quad's far to near member), clipped to its cell, and the
-//! whole supersampled atlas is drawn in large pieces with one identity-matrix render each. So
-//! thousands of quads cost a handful of renders, not thousands. By default the CPU bake
-//! rasteriser ([`frond_render::render_bake`]) draws strips of whole atlas rows, colour and
-//! normals in one pass (the same atlas on every machine); [`BakeRasteriser::Wgpu`] draws
-//! square tiles through the wgpu renderer, a colour and a normal pass each.
+//! whole supersampled atlas is drawn with identity-matrix renders. By default the CPU bake
+//! rasteriser ([`frond_render::BakeTarget`]) sets up strips of whole atlas rows, a few
+//! targets in all, and draws each cell's part of a strip alone from its own triangles, in
+//! parallel, colour and normals in one pass (the same atlas on every machine);
+//! [`BakeRasteriser::Wgpu`] draws square tiles through the wgpu renderer, a colour and a
+//! normal pass each.
 
 use std::sync::LazyLock;
 
@@ -80,9 +81,8 @@ pub struct BakeParams {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum BakeRasteriser {
-    /// [`frond_render::render_bake`]: one pass over strips of the atlas, bands in parallel,
-    /// colour and normals together; byte-identical output whatever the machine or thread
-    /// count.
+    /// [`frond_render::BakeTarget`]: one pass over the atlas, cells in parallel, colour and
+    /// normals together; byte-identical output whatever the machine or thread count.
     #[default]
     Cpu,
     /// [`Renderer::render_view`] in tiles, a colour then a normal pass: fast on a GPU, and

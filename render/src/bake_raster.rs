@@ -18,8 +18,10 @@
 //! the machine has AVX2, eight samples of a row are tested at once ([`crate::sample_lanes`],
 //! as coverage renders do: 1.26–1.32 → 1.03–1.07 s), and the colour is filtered from levels
 //! decoded to linear light beforehand (→ 0.92–0.97 s); both give the same bits.
-//! Bands of rows are rasterised in parallel and
-//! independently, so the image is the same whatever the thread count, and from machine to
+//! A [`BakeTarget`] sets a render's triangles up once; its regions are then drawn one by one,
+//! each from its own meshes into buffers of its own size, and resolved alone: the billboard
+//! bake draws each atlas cell so, in parallel ([`render_bake`] draws bands of rows). Regions are
+//! independent, so the image is the same whatever the thread count, and from machine to
 //! machine.
 //!
 //! It follows [`crate::render_coverage`]'s conventions (samples at pixel centres, wgpu clip
@@ -673,6 +675,83 @@ mod tests {
             })
             .count();
         assert!(bounded > bands.triangles.len() / 2, "{bounded} bounded");
+    }
+
+    /// Regions drawn alone from their own meshes are the whole render's pixels: three
+    /// columns of cards, one textured and alpha-tested, the last drawn in two pieces of rows;
+    /// a region reaching past the target is cut at its edge.
+    #[test]
+    fn regions_drawn_alone_are_the_whole_renders_pixels() {
+        let (w, h) = (8u32, 8u32);
+        let rgba = (0..w * h)
+            .flat_map(|i| {
+                [
+                    (i * 3) as u8,
+                    90,
+                    (i * 7) as u8,
+                    if (i % w + i / w) % 3 == 0 { 0 } else { 255 },
+                ]
+            })
+            .collect();
+        let cut = DrawMaterial {
+            alpha_cutoff: Some(0.5),
+            texture: Some(0),
+            double_sided: true,
+            ..DrawMaterial::opaque([0.9, 0.8, 1.0, 1.0])
+        };
+        let scene = DrawScene {
+            meshes: vec![
+                quad(-1.0, -0.5, 0.3, false, 1, [0.0, 0.6, 0.8]),
+                quad(-0.5, 0.25, 0.6, true, 0, [0.0, 0.0, 1.0]),
+                quad(0.25, 1.0, 0.4, false, 0, [0.6, 0.0, 0.8]),
+            ],
+            materials: vec![cut, DrawMaterial::opaque([0.2, 0.7, 0.1, 1.0])],
+            textures: vec![DrawTexture {
+                width: w,
+                height: h,
+                rgba,
+            }],
+        };
+        let textures = SoftwareTextures::for_bake(&scene.textures).expect("textures");
+        let whole = render_bake(&scene, &textures, Mat4::IDENTITY, 16, 8, 4).expect("render");
+        let target = BakeTarget::new(&scene, &textures, Mat4::IDENTITY, 16, 8, 4).expect("target");
+        let mut scratch = BakeScratch::default();
+        let regions = [
+            ([0, 0, 4, 8], 0..1),
+            ([4, 0, 6, 8], 1..2),
+            ([10, 0, 6, 3], 2..3),
+            ([10, 3, 9, 9], 2..3),
+        ];
+        let mut compared = 0;
+        for (rect, meshes) in regions {
+            let image = target.render(rect, meshes, &mut scratch);
+            let [x, y, _, _] = rect.map(|v| v as usize);
+            let (rw, rh) = (image.width as usize, image.height as usize);
+            assert_eq!(
+                (rw, rh),
+                (
+                    (16 - x).min(rect[2] as usize),
+                    (8 - y).min(rect[3] as usize)
+                )
+            );
+            for j in 0..rh {
+                for i in 0..rw {
+                    let (a, b) = (j * rw + i, (y + j) * 16 + x + i);
+                    assert_eq!(
+                        (image.samples[a], image.colour[a], image.normal[a]),
+                        (whole.samples[b], whole.colour[b], whole.normal[b]),
+                        "pixel {},{}",
+                        x + i,
+                        y + j
+                    );
+                    compared += 1;
+                }
+            }
+        }
+        assert_eq!(compared, 16 * 8);
+        let partly = whole.samples.iter().filter(|&&n| n > 0 && n < 16).count();
+        let full = whole.samples.iter().filter(|&&n| n == 16).count();
+        assert!(partly > 4 && full > 40, "{partly} pixels partly covered, {full} fully");
     }
 
     #[test]
