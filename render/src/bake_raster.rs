@@ -343,23 +343,12 @@ impl<'a> BakeTarget<'a> {
                     } else {
                         0xff
                     };
-                    let mut hits = r.pass & todo;
-                    let mut open = r.open & todo;
-                    while open != 0 {
-                        let i = open.trailing_zeros() as usize;
-                        open &= open - 1;
-                        if let (Some(cutoff), Some(texture)) = (cutoff, material.texture)
-                            && self.textures.bake_alpha_test(
-                                texture,
-                                [r.u[i], r.v[i]],
-                                t.lod,
-                                material.wrap,
-                                cutoff,
-                            )
-                        {
-                            hits |= 1 << i;
-                        }
-                    }
+                    let mut hits = r.passing(todo, |uv| {
+                        let (Some(cutoff), Some(texture)) = (cutoff, material.texture) else {
+                            return false;
+                        };
+                        (self.textures).bake_alpha_test(texture, uv, t.lod, material.wrap, cutoff)
+                    });
                     while hits != 0 {
                         let i = hits.trailing_zeros() as usize;
                         hits &= hits - 1;
@@ -751,7 +740,10 @@ mod tests {
         assert_eq!(compared, 16 * 8);
         let partly = whole.samples.iter().filter(|&&n| n > 0 && n < 16).count();
         let full = whole.samples.iter().filter(|&&n| n == 16).count();
-        assert!(partly > 4 && full > 40, "{partly} pixels partly covered, {full} fully");
+        assert!(
+            partly > 4 && full > 40,
+            "{partly} pixels partly covered, {full} fully"
+        );
     }
 
     #[test]

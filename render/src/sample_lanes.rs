@@ -77,6 +77,24 @@ pub(crate) struct LaneResult {
     pub(crate) v: [f32; 8],
 }
 
+impl LaneResult {
+    /// The lanes of `todo` that pass: those passed here, and the open ones that `test` (the
+    /// scalar test) passes at their coordinates.
+    #[inline]
+    pub(crate) fn passing(&self, todo: u32, test: impl Fn([f32; 2]) -> bool) -> u32 {
+        let mut hits = self.pass & todo;
+        let mut open = self.open & todo;
+        while open != 0 {
+            let i = open.trailing_zeros() as usize;
+            open &= open - 1;
+            if test([self.u[i], self.v[i]]) {
+                hits |= 1 << i;
+            }
+        }
+        hits
+    }
+}
+
 /// Whether this machine runs [`TriangleLanes::test`] (checked once per render by the caller).
 pub(crate) fn available() -> bool {
     #[cfg(target_arch = "x86_64")]

@@ -1720,24 +1720,14 @@ impl<'a> Raster<'a> {
                             // SAFETY: `self.lanes` holds only where `sample_lanes::available`,
                             // and a table test's table is an `AlphaBounds` one (padded).
                             let r = unsafe { lanes.test(k0, span.start, span.step) };
-                            let mut hits = r.pass & todo;
-                            let mut open = r.open & todo;
-                            while open != 0 {
-                                let i = open.trailing_zeros() as usize;
-                                open &= open - 1;
-                                if let (Some(l), Some(bounds), Some(cutoff)) =
+                            let mut hits = r.passing(todo, |uv| {
+                                let (Some(l), Some(bounds), Some(cutoff)) =
                                     (texture, bounds, cutoff)
-                                    && l.alpha_test(
-                                        bounds,
-                                        [r.u[i], r.v[i]],
-                                        t.lod,
-                                        material.wrap,
-                                        cutoff,
-                                    )
-                                {
-                                    hits |= 1 << i;
-                                }
-                            }
+                                else {
+                                    return false;
+                                };
+                                l.alpha_test(bounds, uv, t.lod, material.wrap, cutoff)
+                            });
                             while hits != 0 {
                                 let i = hits.trailing_zeros() as usize;
                                 hits &= hits - 1;
