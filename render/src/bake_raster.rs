@@ -33,6 +33,7 @@
 
 use std::ops::Range;
 
+use frond_scene::Wrap;
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 
@@ -41,7 +42,8 @@ use crate::pipeline::srgb_to_linear;
 use crate::sample_lanes::{self, LaneTest, TriangleLanes};
 use crate::scene::DrawScene;
 use crate::software::{
-    AlphaCutoff, BAND_PIXELS, Setup, Shading, SoftwareTextures, checked_target, setup_meshes,
+    AlphaCutoff, BAND_PIXELS, LinearLevel, Setup, Shading, SoftwareTextures, checked_target,
+    setup_meshes,
 };
 use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
 
@@ -407,6 +409,8 @@ impl<'a> BakeTarget<'a> {
             colour: vec![[0.0; 3]; w * h],
             normal: vec![[0.0; 3]; w * h],
         };
+        // The triangle of the last sample shaded: neighbouring samples mostly share it.
+        let mut shader: Option<(u32, Shader)> = None;
         for py in 0..h {
             for px in 0..w {
                 let (mut count, mut colour, mut normal) = (0u16, Vec3::ZERO, Vec3::ZERO);
@@ -417,21 +421,28 @@ impl<'a> BakeTarget<'a> {
                         if ti == EMPTY {
                             continue;
                         }
-                        let t = &self.triangles[ti as usize];
-                        let material = &self.scene.materials[t.material as usize];
+                        let s = match &shader {
+                            Some((last, s)) if *last == ti => s,
+                            _ => &shader.insert((ti, self.shader(ti))).1,
+                        };
+                        let t = s.triangle;
                         let b =
                             t.weights((region.x0 + x) as f32 + 0.5, (region.y0 + y) as f32 + 0.5);
                         let (uv, q) = t.uv(b);
-                        let texel = material.texture.map_or(Vec3::ONE, |i| {
-                            self.textures.bake_rgb(i, uv, t.lod, material.wrap, &linear)
-                        });
-                        let base = Vec3::new(
-                            material.base_color[0],
-                            material.base_color[1],
-                            material.base_color[2],
-                        );
-                        colour += (texel * base).clamp(Vec3::ZERO, Vec3::ONE);
-                        let nq = &self.shading[ti as usize].nq;
+                        let texel = match s.texels {
+                            Texels::White => Vec3::ONE,
+                            Texels::Decoded(a, None) => a.bilinear(uv, s.wrap),
+                            Texels::Decoded(a, Some(b)) => {
+                                // `Levels::rgb`'s blend.
+                                let va = a.bilinear(uv, s.wrap);
+                                va + (b.bilinear(uv, s.wrap) - va) * t.lod.f
+                            }
+                            Texels::Bytes(i) => {
+                                self.textures.bake_rgb(i, uv, t.lod, s.wrap, &linear)
+                            }
+                        };
+                        colour += (texel * s.base).clamp(Vec3::ZERO, Vec3::ONE);
+                        let nq = &s.nq;
                         let n = (b[0] * nq[0] + b[1] * nq[1] + b[2] * nq[2]) / q;
                         if n.length_squared() > 1e-12 {
                             let n = n.normalize();
@@ -450,6 +461,55 @@ impl<'a> BakeTarget<'a> {
         }
         image
     }
+}
+
+impl BakeTarget<'_> {
+    /// What shading a sample of triangle `ti` reads, looked up once.
+    fn shader(&self, ti: u32) -> Shader<'_> {
+        let triangle = &self.triangles[ti as usize];
+        let material = &self.scene.materials[triangle.material as usize];
+        let lod = triangle.lod;
+        let texels = match material.texture {
+            None => Texels::White,
+            Some(i) => {
+                let level = |l: u32| self.textures.bake_linear_level(i, l as usize);
+                match (level(lod.a), lod.f > 0.0) {
+                    (Some(a), false) => Texels::Decoded(a, None),
+                    (Some(a), true) => {
+                        level(lod.b).map_or(Texels::Bytes(i), |b| Texels::Decoded(a, Some(b)))
+                    }
+                    (None, _) => Texels::Bytes(i),
+                }
+            }
+        };
+        let [r, g, b, _] = material.base_color;
+        Shader {
+            triangle,
+            base: Vec3::new(r, g, b),
+            nq: self.shading[ti as usize].nq,
+            wrap: material.wrap,
+            texels,
+        }
+    }
+}
+
+/// What the shading of a triangle's samples reads ([`BakeTarget::shader`]).
+struct Shader<'a> {
+    triangle: &'a Setup,
+    base: Vec3,
+    nq: [Vec3; 3],
+    wrap: [Wrap; 2],
+    texels: Texels<'a>,
+}
+
+/// Where a triangle's colour texels come from: the same bits each way.
+enum Texels<'a> {
+    /// No texture: white.
+    White,
+    /// The trilinear pair's levels decoded to linear light (the second when blended in).
+    Decoded(&'a LinearLevel, Option<&'a LinearLevel>),
+    /// Texture `i`'s bytes, decoded as read ([`SoftwareTextures::bake_rgb`]).
+    Bytes(usize),
 }
 
 /// The samples `x0..x1` × `y0..y1` of a region being drawn (whole pixels).

@@ -414,6 +414,18 @@ impl SoftwareTextures {
         }
     }
 
+    /// Level `level` of `texture` decoded to linear light for the bake (decoded on first use),
+    /// `None` when it is not (not prepared for the bake, or over [`MAX_LINEAR_TEXELS`]).
+    pub(crate) fn bake_linear_level(&self, texture: usize, level: usize) -> Option<&LinearLevel> {
+        let decode = || {
+            let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
+            LinearLevel::new(&self.textures[texture].0[level], &linear)
+        };
+        (self.bake_linear.get(texture)?.get(level)?)
+            .get_or_init(decode)
+            .as_ref()
+    }
+
     /// The bake's eight-sample test of triangle `t` of a material with `texture` sampled with
     /// `wrap` and the alpha test `cutoff` ([`SoftwareTextures::bake_alpha_test`], in lanes):
     /// the bounds table and the bilinear filter of the level nearer `t.lod`. `None` where the
@@ -461,8 +473,9 @@ impl SoftwareTextures {
         normal_map: Vec<bool>,
         colour: bool,
     ) -> Result<SoftwareTextures, RenderError> {
+        // In parallel: a 1024² colour chain is tens of milliseconds.
         let textures: Vec<Levels> = source
-            .iter()
+            .par_iter()
             .zip(used)
             .enumerate()
             .map(|(i, (t, used))| {
@@ -1098,9 +1111,9 @@ pub(crate) fn wrap_index(i: i64, n: u32, wrap: Wrap) -> usize {
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Trilinear {
     // Level indices as `u32`: a `Setup` is stored per triangle and rendered many times over.
-    a: u32,
-    b: u32,
-    f: f32,
+    pub(crate) a: u32,
+    pub(crate) b: u32,
+    pub(crate) f: f32,
 }
 
 impl Trilinear {
@@ -1152,7 +1165,7 @@ const MAX_LINEAR_TEXELS: usize = 1 << 20;
 /// reads four vectors where [`bilinear_rgb`] reads and decodes twelve bytes (the bake shades
 /// every covered sample, a third of its time on oak_dense).
 #[derive(Clone, Debug)]
-struct LinearLevel {
+pub(crate) struct LinearLevel {
     width: u32,
     height: u32,
     texels: Vec<Vec4>,
@@ -1176,7 +1189,7 @@ impl LinearLevel {
     /// [`bilinear_rgb`] of the level it was decoded from: the same footprint, and the same
     /// operations on each channel (a vector's lanes round as scalars do), so the same bits.
     #[inline]
-    fn bilinear(&self, uv: [f32; 2], wrap: [Wrap; 2]) -> Vec3 {
+    pub(crate) fn bilinear(&self, uv: [f32; 2], wrap: [Wrap; 2]) -> Vec3 {
         let (o, fx, fy) = footprint_of([self.width, self.height], uv, wrap, 1);
         bilerp(o.map(|k| self.texels[k]), fx, fy).truncate()
     }
