@@ -37,6 +37,7 @@ use frond_scene::Wrap;
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 
+use crate::bake_lanes::ShadeLanes;
 use crate::error::RenderError;
 use crate::pipeline::srgb_to_linear;
 use crate::sample_lanes::{self, LaneTest, TriangleLanes};
@@ -396,7 +397,9 @@ impl<'a> BakeTarget<'a> {
     }
 
     /// Shades each covered sample of `region` once (its winning triangle's colour and
-    /// normal) and sums them per pixel.
+    /// normal) and sums them per pixel, in the order of its samples (rows, then columns).
+    /// Where the machine can, the arithmetic of eight samples of a row won by one triangle is
+    /// done at once ([`crate::bake_lanes`]: the same bits).
     fn resolve(&self, region: &Region, winner: &[u32]) -> BakeImage {
         let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
         let ss = self.ss;
@@ -409,44 +412,78 @@ impl<'a> BakeTarget<'a> {
             colour: vec![[0.0; 3]; w * h],
             normal: vec![[0.0; 3]; w * h],
         };
-        // The triangle of the last sample shaded: neighbouring samples mostly share it.
+        // One pixel row's samples shaded: colour, and the normal where it has one.
+        let mut shaded = vec![(Vec3::ZERO, None); ss * width];
+        // The triangle of the last samples shaded: neighbouring samples mostly share it.
         let mut shader: Option<(u32, Shader)> = None;
         for py in 0..h {
+            for dy in 0..ss {
+                let y = py * ss + dy;
+                let row = &winner[y * width..(y + 1) * width];
+                let out = &mut shaded[dy * width..(dy + 1) * width];
+                for x in (0..width).step_by(8) {
+                    let group = &row[x..(x + 8).min(width)];
+                    let mut pending = (group.iter().enumerate())
+                        .filter(|&(_, &ti)| ti != EMPTY)
+                        .fold(0u32, |m, (i, _)| m | 1 << i);
+                    while pending != 0 {
+                        let ti = group[pending.trailing_zeros() as usize];
+                        let s = match &shader {
+                            Some((last, s)) if *last == ti => s,
+                            _ => &shader.insert((ti, self.shader(ti))).1,
+                        };
+                        let mut same = (group.iter().enumerate())
+                            .filter(|&(_, &t)| t == ti)
+                            .fold(0u32, |m, (i, _)| m | 1 << i);
+                        pending &= !same;
+                        let [sx, sy] = [region.x0 + x, region.y0 + y];
+                        if let Some(lanes) = s.lanes.filter(|_| self.lanes && same.count_ones() > 1)
+                        {
+                            // SAFETY: `self.lanes` holds only where `sample_lanes::available`.
+                            let r = unsafe { lanes.shade(sx, sy, same) };
+                            let mut done = r.done;
+                            same &= !done;
+                            while done != 0 {
+                                let i = done.trailing_zeros() as usize;
+                                done &= done - 1;
+                                let texel = match s.texels {
+                                    Texels::Decoded(a, b) => {
+                                        let at = |level: &LinearLevel, k: usize| {
+                                            let first = r.first[k][i] as usize;
+                                            level.bilinear_at(first, r.fx[k][i], r.fy[k][i])
+                                        };
+                                        let va = at(a, 0);
+                                        // `Levels::rgb`'s blend.
+                                        b.map_or(va, |b| va + (at(b, 1) - va) * s.triangle.lod.f)
+                                    }
+                                    _ => Vec3::ONE,
+                                };
+                                let normal = (r.with_normal >> i & 1 == 1).then(|| {
+                                    Vec3::new(r.normal[0][i], r.normal[1][i], r.normal[2][i])
+                                });
+                                out[x + i] = (s.colour(texel), normal);
+                            }
+                        }
+                        while same != 0 {
+                            let i = same.trailing_zeros() as usize;
+                            same &= same - 1;
+                            out[x + i] = self.shade(s, [sx + i, sy], &linear);
+                        }
+                    }
+                }
+            }
             for px in 0..w {
                 let (mut count, mut colour, mut normal) = (0u16, Vec3::ZERO, Vec3::ZERO);
                 for dy in 0..ss {
                     let y = py * ss + dy;
                     for x in px * ss..(px + 1) * ss {
-                        let ti = winner[y * width + x];
-                        if ti == EMPTY {
+                        if winner[y * width + x] == EMPTY {
                             continue;
                         }
-                        let s = match &shader {
-                            Some((last, s)) if *last == ti => s,
-                            _ => &shader.insert((ti, self.shader(ti))).1,
-                        };
-                        let t = s.triangle;
-                        let b =
-                            t.weights((region.x0 + x) as f32 + 0.5, (region.y0 + y) as f32 + 0.5);
-                        let (uv, q) = t.uv(b);
-                        let texel = match s.texels {
-                            Texels::White => Vec3::ONE,
-                            Texels::Decoded(a, None) => a.bilinear(uv, s.wrap),
-                            Texels::Decoded(a, Some(b)) => {
-                                // `Levels::rgb`'s blend.
-                                let va = a.bilinear(uv, s.wrap);
-                                va + (b.bilinear(uv, s.wrap) - va) * t.lod.f
-                            }
-                            Texels::Bytes(i) => {
-                                self.textures.bake_rgb(i, uv, t.lod, s.wrap, &linear)
-                            }
-                        };
-                        colour += (texel * s.base).clamp(Vec3::ZERO, Vec3::ONE);
-                        let nq = &s.nq;
-                        let n = (b[0] * nq[0] + b[1] * nq[1] + b[2] * nq[2]) / q;
-                        if n.length_squared() > 1e-12 {
-                            let n = n.normalize();
-                            normal += if t.back { -n } else { n };
+                        let (c, n) = shaded[dy * width + x];
+                        colour += c;
+                        if let Some(n) = n {
+                            normal += n;
                         }
                         count += 1;
                     }
@@ -460,6 +497,31 @@ impl<'a> BakeTarget<'a> {
             }
         }
         image
+    }
+
+    /// Sample `[x, y]` shaded by the triangle of `s`: its colour and its unit normal facing
+    /// the viewer, `None` when too short to normalise.
+    fn shade(&self, s: &Shader, [x, y]: [usize; 2], linear: &[f32; 256]) -> (Vec3, Option<Vec3>) {
+        let t = s.triangle;
+        let b = t.weights(x as f32 + 0.5, y as f32 + 0.5);
+        let (uv, q) = t.uv(b);
+        let texel = match s.texels {
+            Texels::White => Vec3::ONE,
+            Texels::Decoded(a, None) => a.bilinear(uv, s.wrap),
+            Texels::Decoded(a, Some(b)) => {
+                // `Levels::rgb`'s blend.
+                let va = a.bilinear(uv, s.wrap);
+                va + (b.bilinear(uv, s.wrap) - va) * t.lod.f
+            }
+            Texels::Bytes(i) => self.textures.bake_rgb(i, uv, t.lod, s.wrap, linear),
+        };
+        let nq = &s.nq;
+        let n = (b[0] * nq[0] + b[1] * nq[1] + b[2] * nq[2]) / q;
+        let normal = (n.length_squared() > 1e-12).then(|| {
+            let n = n.normalize();
+            if t.back { -n } else { n }
+        });
+        (s.colour(texel), normal)
     }
 }
 
@@ -483,12 +545,29 @@ impl BakeTarget<'_> {
             }
         };
         let [r, g, b, _] = material.base_color;
+        let nq = self.shading[ti as usize].nq;
+        let size = |level: &LinearLevel| [level.width, level.height];
+        let levels = match texels {
+            Texels::White => Some([None; 2]),
+            Texels::Decoded(a, b) => Some([Some(size(a)), b.map(size)]),
+            Texels::Bytes(_) => None,
+        };
         Shader {
             triangle,
             base: Vec3::new(r, g, b),
-            nq: self.shading[ti as usize].nq,
+            nq,
             wrap: material.wrap,
             texels,
+            lanes: levels.map(|levels| ShadeLanes {
+                x: triangle.x,
+                y: triangle.y,
+                inv_area: triangle.inv_area,
+                q: triangle.q,
+                uq: triangle.uq,
+                nq: nq.map(|n| n.to_array()),
+                back: triangle.back,
+                levels,
+            }),
         }
     }
 }
@@ -500,6 +579,17 @@ struct Shader<'a> {
     nq: [Vec3; 3],
     wrap: [Wrap; 2],
     texels: Texels<'a>,
+    /// Its eight-sample arithmetic, where its texels are not read from bytes.
+    lanes: Option<ShadeLanes>,
+}
+
+impl Shader<'_> {
+    /// A sample's colour from its texel: times the base colour, clamped as a colour target
+    /// stores it.
+    #[inline]
+    fn colour(&self, texel: Vec3) -> Vec3 {
+        (texel * self.base).clamp(Vec3::ZERO, Vec3::ONE)
+    }
 }
 
 /// Where a triangle's colour texels come from: the same bits each way.
@@ -624,9 +714,10 @@ mod tests {
     }
 
     /// The shortcuts change nothing, alone or together: walking only the parts of triangles
-    /// where the alpha test can pass, and testing eight samples at once. Random leaf cards (an
-    /// opaque rectangle with hard edges on a clear square, most of the cards large enough to
-    /// be bounded) at random depths, baked every way. One material's cutoff is nearly zero, so
+    /// where the alpha test can pass, and testing and shading eight samples at once. Random
+    /// leaf cards (an opaque rectangle with hard edges on a clear square, most of the cards
+    /// large enough to be bounded; a third untextured and opaque) at random depths, baked
+    /// every way. One material's cutoff is nearly zero, so
     /// that samples pass within a small fraction of a texel of the octagon's edges.
     #[test]
     fn shortcuts_leave_the_bake_unchanged() {
@@ -634,7 +725,13 @@ mod tests {
         let rgba = (0..w * h)
             .flat_map(|i| {
                 let opaque = (8..24).contains(&(i % w)) && (5..27).contains(&(i / w));
-                [200, 120, 40, if opaque { 255 } else { 0 }]
+                // Colour varying texel to texel, so that a filter's weights show.
+                [
+                    (i * 37 % 256) as u8,
+                    (i * 11 % 256) as u8,
+                    40,
+                    if opaque { 255 } else { 0 },
+                ]
             })
             .collect();
         let mut state = 5u64;
@@ -660,7 +757,7 @@ mod tests {
                     tangents: None,
                     uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
                     indices: vec![0, 1, 2, 0, 2, 3],
-                    material: i % 2,
+                    material: i % 3,
                 }
             })
             .collect();
@@ -676,6 +773,10 @@ mod tests {
             materials: vec![
                 material(0.02, frond_scene::Wrap::ClampToEdge),
                 material(0.5, frond_scene::Wrap::Repeat),
+                DrawMaterial {
+                    double_sided: true,
+                    ..DrawMaterial::opaque([0.3, 0.9, 0.5, 1.0])
+                },
             ],
             textures: vec![DrawTexture {
                 width: w,
@@ -709,21 +810,27 @@ mod tests {
                 "{covered} pixels covered"
             );
         }
-        // The octagons bound most cards at the larger size.
+        // The octagons bound most textured cards at the larger size.
         let (sw, sh) = (800, 600);
         let bands = Bands::new(&scene, &textures, Mat4::IDENTITY, [sw, sh], 4);
         let cutoffs = AlphaCutoff::of_materials(&scene);
         let hulls = HullLevels::of_materials(&scene, &textures, &cutoffs);
-        let bounded = (bands.triangles.iter())
-            .filter(|t| {
-                let levels = hulls[t.material as usize].as_ref().expect("hulls");
+        let textured: Vec<_> = (bands.triangles.iter())
+            .filter_map(|t| Some((t, hulls[t.material as usize].as_ref()?)))
+            .collect();
+        let bounded = (textured.iter())
+            .filter(|(t, levels)| {
                 matches!(
                     levels.level(t.lod.nearest()).rows(t),
                     TriangleHull::Rows(_) | TriangleHull::Empty
                 )
             })
             .count();
-        assert!(bounded > bands.triangles.len() / 2, "{bounded} bounded");
+        assert!(
+            bounded > textured.len() / 2,
+            "{bounded} of {} bounded",
+            textured.len()
+        );
     }
 
     /// Regions drawn alone from their own meshes are the whole render's pixels: three

@@ -39,6 +39,7 @@
 //! ```
 
 mod adapter;
+mod bake_lanes;
 mod bake_raster;
 mod batch;
 mod camera;

@@ -1166,8 +1166,8 @@ const MAX_LINEAR_TEXELS: usize = 1 << 20;
 /// every covered sample, a third of its time on oak_dense).
 #[derive(Clone, Debug)]
 pub(crate) struct LinearLevel {
-    width: u32,
-    height: u32,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
     texels: Vec<Vec4>,
 }
 
@@ -1191,6 +1191,15 @@ impl LinearLevel {
     #[inline]
     pub(crate) fn bilinear(&self, uv: [f32; 2], wrap: [Wrap; 2]) -> Vec3 {
         let (o, fx, fy) = footprint_of([self.width, self.height], uv, wrap, 1);
+        bilerp(o.map(|k| self.texels[k]), fx, fy).truncate()
+    }
+
+    /// [`LinearLevel::bilinear`] of a footprint that does not wrap, found beforehand: texel
+    /// `first` (top left) and the weights `fx`, `fy` (`crate::bake_lanes`).
+    #[inline]
+    pub(crate) fn bilinear_at(&self, first: usize, fx: f32, fy: f32) -> Vec3 {
+        let w = self.width as usize;
+        let o = [first, first + 1, first + w, first + w + 1];
         bilerp(o.map(|k| self.texels[k]), fx, fy).truncate()
     }
 }
