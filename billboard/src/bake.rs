@@ -881,16 +881,37 @@ fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeErr
                     .collect()
             })
             .collect();
-        for ((ty, rect, _), texels) in regions.iter().zip(texels) {
-            let [x, y, w, _] = rect.map(|v| v as usize);
-            for (i, n, c, nb) in texels {
-                let at = (*ty as usize + y + i / w) * width + x + i % w;
-                out.samples[at] = n;
-                out.color[at * 4..at * 4 + 4].copy_from_slice(&c);
-                out.normal[at * 4..at * 4 + 4].copy_from_slice(&nb);
-                out.covered[at] = true;
-            }
+        // Stored strip by strip in parallel: per strip, its regions (they come strip by strip,
+        // each at rows counted from its strip's first).
+        let strip = CPU_STRIP_TEXELS as usize;
+        let mut per_strip = vec![0..0; (out.height as usize).div_ceil(strip)];
+        for (k, (ty, _, _)) in regions.iter().enumerate() {
+            let range = &mut per_strip[*ty as usize / strip];
+            // Still `0..0` until the strip's first region.
+            *range = if range.end == 0 {
+                k..k + 1
+            } else {
+                range.start..k + 1
+            };
         }
+        let rows = strip * width;
+        (out.samples.par_chunks_mut(rows))
+            .zip(out.color.par_chunks_mut(rows * 4))
+            .zip(out.normal.par_chunks_mut(rows * 4))
+            .zip(out.covered.par_chunks_mut(rows))
+            .zip(per_strip.par_iter())
+            .for_each(|((((samples, color), normal), covered), range)| {
+                for k in range.clone() {
+                    let [x, y, w, _] = regions[k].1.map(|v| v as usize);
+                    for &(i, n, c, nb) in &texels[k] {
+                        let at = (y + i / w) * width + x + i % w;
+                        samples[at] = n;
+                        color[at * 4..at * 4 + 4].copy_from_slice(&c);
+                        normal[at * 4..at * 4 + 4].copy_from_slice(&nb);
+                        covered[at] = true;
+                    }
+                }
+            });
     }
     Ok(())
 }
@@ -903,22 +924,26 @@ type CoveredTexel = (usize, u16, [u8; 4], [u8; 4]);
 /// rectangle `rect` (as [`tile_meshes`] places them, with their normals): one mesh per
 /// material, in material order (the order [`tile_meshes`] draws a cell's triangles in).
 fn cell_meshes(tris: &[PlacedTriangle], rect: [u32; 4], material_count: usize) -> Vec<DrawMesh> {
-    let mut normals = Vec::new();
     (0..material_count)
         .filter_map(|material| {
+            let of_material = |t: &&PlacedTriangle| t.material as usize == material;
+            let vertices = 3 * tris.iter().filter(of_material).count();
+            if vertices == 0 {
+                return None;
+            }
             let mut mesh = DrawMesh {
-                uvs: Some(Vec::new()),
+                positions: Vec::with_capacity(vertices),
+                uvs: Some(Vec::with_capacity(vertices)),
+                indices: Vec::with_capacity(vertices),
                 material,
                 ..Default::default()
             };
-            normals.clear();
-            for t in tris.iter().filter(|t| t.material as usize == material) {
+            let mut normals = Vec::with_capacity(vertices);
+            for t in tris.iter().filter(of_material) {
                 push_triangle(&mut mesh, &mut normals, t, rect);
             }
-            (!mesh.indices.is_empty()).then(|| DrawMesh {
-                normals: Some(normals.clone()),
-                ..mesh
-            })
+            mesh.normals = Some(normals);
+            Some(mesh)
         })
         .collect()
 }
