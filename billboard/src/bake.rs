@@ -19,6 +19,7 @@
 //! [`BakeRasteriser::Wgpu`] draws square tiles through the wgpu renderer, a colour and a
 //! normal pass each.
 
+use std::ops::Range;
 use std::sync::LazyLock;
 
 use frond_render::{
@@ -822,7 +823,6 @@ fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeErr
     let (total, needed) = (ss * ss, cutoff_samples(job.params));
     let prepared = SoftwareTextures::for_bake(job.textures)?;
     let mut scene = job.scene();
-    let width = out.width as usize;
     let strips = (0..out.height).step_by(CPU_STRIP_TEXELS as usize);
     let (whole, shorter): (Vec<u32>, Vec<u32>) =
         strips.partition(|&ty| out.height - ty >= CPU_STRIP_TEXELS);
@@ -831,45 +831,12 @@ fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeErr
             continue;
         };
         let th = CPU_STRIP_TEXELS.min(out.height - first);
-        // Every (strip, cell) pair where the cell has triangles in the strip.
-        let parts: Vec<(u32, usize)> = (group.iter())
-            .flat_map(|&ty| {
-                let rect = [0, ty * ss, out.width * ss, th * ss];
-                (job.cells.iter().zip(job.placed_triangles).enumerate())
-                    .filter(move |(_, (cell, tris))| {
-                        !tris.is_empty() && cell_in_tile(cell, ss, rect)
-                    })
-                    .map(move |(c, _)| (ty, c))
-            })
-            .collect();
-        let meshes: Vec<Vec<DrawMesh>> = parts
-            .par_iter()
-            .map(|&(ty, c)| {
-                cell_meshes(
-                    &job.placed_triangles[c],
-                    [0, ty * ss, out.width * ss, th * ss],
-                    job.materials.len(),
-                )
-            })
-            .collect();
-        let mut regions = Vec::with_capacity(parts.len());
-        scene.meshes.clear();
-        for (&(ty, c), cell_meshes) in parts.iter().zip(meshes) {
-            let cell = &job.cells[c];
-            let (y0, y1) = (cell.y.max(ty), (cell.y + cell.height).min(ty + th));
-            let first = scene.meshes.len();
-            scene.meshes.extend(cell_meshes);
-            regions.push((
-                ty,
-                [cell.x, y0 - ty, cell.width, y1 - y0],
-                first..scene.meshes.len(),
-            ));
-        }
+        let regions = cell_regions(job, &group, [out.width, th], &mut scene.meshes);
         let target = BakeTarget::new(&scene, &prepared, Mat4::IDENTITY, out.width, th, ss)?;
         let texels: Vec<Vec<CoveredTexel>> = regions
             .par_iter()
-            .map_init(BakeScratch::default, |scratch, (_, rect, meshes)| {
-                let image = target.render(*rect, meshes.clone(), scratch);
+            .map_init(BakeScratch::default, |scratch, region| {
+                let image = target.render(region.rect, region.meshes.clone(), scratch);
                 (image.samples.iter().enumerate())
                     .filter(|&(_, &n)| n > 0)
                     .map(|(i, &n)| {
@@ -881,39 +848,101 @@ fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeErr
                     .collect()
             })
             .collect();
-        // Stored strip by strip in parallel: per strip, its regions (they come strip by strip,
-        // each at rows counted from its strip's first).
-        let strip = CPU_STRIP_TEXELS as usize;
-        let mut per_strip = vec![0..0; (out.height as usize).div_ceil(strip)];
-        for (k, (ty, _, _)) in regions.iter().enumerate() {
-            let range = &mut per_strip[*ty as usize / strip];
-            // Still `0..0` until the strip's first region.
-            *range = if range.end == 0 {
-                k..k + 1
-            } else {
-                range.start..k + 1
-            };
-        }
-        let rows = strip * width;
-        (out.samples.par_chunks_mut(rows))
-            .zip(out.color.par_chunks_mut(rows * 4))
-            .zip(out.normal.par_chunks_mut(rows * 4))
-            .zip(out.covered.par_chunks_mut(rows))
-            .zip(per_strip.par_iter())
-            .for_each(|((((samples, color), normal), covered), range)| {
-                for k in range.clone() {
-                    let [x, y, w, _] = regions[k].1.map(|v| v as usize);
-                    for &(i, n, c, nb) in &texels[k] {
-                        let at = (y + i / w) * width + x + i % w;
-                        samples[at] = n;
-                        color[at * 4..at * 4 + 4].copy_from_slice(&c);
-                        normal[at * 4..at * 4 + 4].copy_from_slice(&nb);
-                        covered[at] = true;
-                    }
-                }
-            });
+        store_texels(out, &regions, &texels);
     }
     Ok(())
+}
+
+/// One cell's part of a strip of the atlas, for [`BakeTarget::render`].
+struct CellRegion {
+    /// The strip's first texel row.
+    ty: u32,
+    /// Its texels `[x, y, w, h]`, rows counted from the strip's first.
+    rect: [u32; 4],
+    /// The meshes holding its triangles.
+    meshes: Range<usize>,
+}
+
+/// The regions of the cells with triangles in the strips `group` (first rows) of
+/// `th` rows of an atlas `width` texels wide, strip by strip, their meshes (in NDC of their
+/// strip's supersampled rectangle) made in parallel into `meshes` (emptied first).
+fn cell_regions(
+    job: &AtlasJob,
+    group: &[u32],
+    [width, th]: [u32; 2],
+    meshes: &mut Vec<DrawMesh>,
+) -> Vec<CellRegion> {
+    let ss = job.params.supersample;
+    let strip_rect = |ty: u32| [0, ty * ss, width * ss, th * ss];
+    // Every (strip, cell) pair where the cell has triangles in the strip.
+    let parts: Vec<(u32, usize)> = (group.iter())
+        .flat_map(|&ty| {
+            (job.cells.iter().zip(job.placed_triangles).enumerate())
+                .filter(move |(_, (cell, tris))| {
+                    !tris.is_empty() && cell_in_tile(cell, ss, strip_rect(ty))
+                })
+                .map(move |(c, _)| (ty, c))
+        })
+        .collect();
+    let made: Vec<Vec<DrawMesh>> = parts
+        .par_iter()
+        .map(|&(ty, c)| {
+            cell_meshes(
+                &job.placed_triangles[c],
+                strip_rect(ty),
+                job.materials.len(),
+            )
+        })
+        .collect();
+    meshes.clear();
+    (parts.iter().zip(made))
+        .map(|(&(ty, c), made)| {
+            let cell = &job.cells[c];
+            let (y0, y1) = (cell.y.max(ty), (cell.y + cell.height).min(ty + th));
+            let first = meshes.len();
+            meshes.extend(made);
+            CellRegion {
+                ty,
+                rect: [cell.x, y0 - ty, cell.width, y1 - y0],
+                meshes: first..meshes.len(),
+            }
+        })
+        .collect()
+}
+
+/// Stores each region's covered texels in `out`, strip by strip in parallel (the regions
+/// come strip by strip).
+fn store_texels(out: &mut Downsampled, regions: &[CellRegion], texels: &[Vec<CoveredTexel>]) {
+    let strip = CPU_STRIP_TEXELS as usize;
+    let width = out.width as usize;
+    // Per strip, its regions (`0..0` until its first).
+    let mut per_strip = vec![0..0; (out.height as usize).div_ceil(strip)];
+    for (k, region) in regions.iter().enumerate() {
+        let range = &mut per_strip[region.ty as usize / strip];
+        *range = if range.end == 0 {
+            k..k + 1
+        } else {
+            range.start..k + 1
+        };
+    }
+    let rows = strip * width;
+    (out.samples.par_chunks_mut(rows))
+        .zip(out.color.par_chunks_mut(rows * 4))
+        .zip(out.normal.par_chunks_mut(rows * 4))
+        .zip(out.covered.par_chunks_mut(rows))
+        .zip(per_strip.par_iter())
+        .for_each(|((((samples, color), normal), covered), range)| {
+            for k in range.clone() {
+                let [x, y, w, _] = regions[k].rect.map(|v| v as usize);
+                for &(i, n, c, nb) in &texels[k] {
+                    let at = (y + i / w) * width + x + i % w;
+                    samples[at] = n;
+                    color[at * 4..at * 4 + 4].copy_from_slice(&c);
+                    normal[at * 4..at * 4 + 4].copy_from_slice(&nb);
+                    covered[at] = true;
+                }
+            }
+        });
 }
 
 /// A covered texel of a region drawn by [`BakeTarget::render`]: its index in the region, its

@@ -37,7 +37,7 @@ use frond_scene::Wrap;
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 
-use crate::bake_lanes::ShadeLanes;
+use crate::bake_lanes::{LaneShading, ShadeLanes};
 use crate::error::RenderError;
 use crate::pipeline::srgb_to_linear;
 use crate::sample_lanes::{self, LaneTest, TriangleLanes};
@@ -421,56 +421,7 @@ impl<'a> BakeTarget<'a> {
                 let y = py * ss + dy;
                 let row = &winner[y * width..(y + 1) * width];
                 let out = &mut shaded[dy * width..(dy + 1) * width];
-                for x in (0..width).step_by(8) {
-                    let group = &row[x..(x + 8).min(width)];
-                    let mut pending = (group.iter().enumerate())
-                        .filter(|&(_, &ti)| ti != EMPTY)
-                        .fold(0u32, |m, (i, _)| m | 1 << i);
-                    while pending != 0 {
-                        let ti = group[pending.trailing_zeros() as usize];
-                        let s = match &shader {
-                            Some((last, s)) if *last == ti => s,
-                            _ => &shader.insert((ti, self.shader(ti))).1,
-                        };
-                        let mut same = (group.iter().enumerate())
-                            .filter(|&(_, &t)| t == ti)
-                            .fold(0u32, |m, (i, _)| m | 1 << i);
-                        pending &= !same;
-                        let [sx, sy] = [region.x0 + x, region.y0 + y];
-                        if let Some(lanes) = s.lanes.filter(|_| self.lanes && same.count_ones() > 1)
-                        {
-                            // SAFETY: `self.lanes` holds only where `sample_lanes::available`.
-                            let r = unsafe { lanes.shade(sx, sy, same) };
-                            let mut done = r.done;
-                            same &= !done;
-                            while done != 0 {
-                                let i = done.trailing_zeros() as usize;
-                                done &= done - 1;
-                                let texel = match s.texels {
-                                    Texels::Decoded(a, b) => {
-                                        let at = |level: &LinearLevel, k: usize| {
-                                            let first = r.first[k][i] as usize;
-                                            level.bilinear_at(first, r.fx[k][i], r.fy[k][i])
-                                        };
-                                        let va = at(a, 0);
-                                        // `Levels::rgb`'s blend.
-                                        b.map_or(va, |b| va + (at(b, 1) - va) * s.triangle.lod.f)
-                                    }
-                                    _ => Vec3::ONE,
-                                };
-                                let normal = (r.with_normal >> i & 1 == 1).then(|| {
-                                    Vec3::new(r.normal[0][i], r.normal[1][i], r.normal[2][i])
-                                });
-                                out[x + i] = (s.colour(texel), normal);
-                            }
-                        }
-                        while same != 0 {
-                            let i = same.trailing_zeros() as usize;
-                            same &= same - 1;
-                            out[x + i] = self.shade(s, [sx + i, sy], &linear);
-                        }
-                    }
-                }
+                self.shade_row(row, [region.x0, region.y0 + y], out, &mut shader, &linear);
             }
             for px in 0..w {
                 let (mut count, mut colour, mut normal) = (0u16, Vec3::ZERO, Vec3::ZERO);
@@ -497,6 +448,48 @@ impl<'a> BakeTarget<'a> {
             }
         }
         image
+    }
+
+    /// Shades the covered samples of one row of a region (`row`, its winners, from sample
+    /// `[x0, y]`) into `out`: eight at a time where one triangle won several of them and the
+    /// machine can, one by one otherwise. `shader` is the last triangle's.
+    fn shade_row<'s>(
+        &'s self,
+        row: &[u32],
+        [x0, y]: [usize; 2],
+        out: &mut [(Vec3, Option<Vec3>)],
+        shader: &mut Option<(u32, Shader<'s>)>,
+        linear: &[f32; 256],
+    ) {
+        for x in (0..row.len()).step_by(8) {
+            let group = &row[x..(x + 8).min(row.len())];
+            let mut pending = lanes_where(group, |ti| ti != EMPTY);
+            while pending != 0 {
+                let ti = group[pending.trailing_zeros() as usize];
+                let s = match shader {
+                    Some((last, s)) if *last == ti => s,
+                    _ => &shader.insert((ti, self.shader(ti))).1,
+                };
+                let mut same = lanes_where(group, |t| t == ti);
+                pending &= !same;
+                if let Some(lanes) = s.lanes.filter(|_| self.lanes && same.count_ones() > 1) {
+                    // SAFETY: `self.lanes` holds only where `sample_lanes::available`.
+                    let r = unsafe { lanes.shade(x0 + x, y, same) };
+                    let mut done = r.done;
+                    same &= !done;
+                    while done != 0 {
+                        let i = done.trailing_zeros() as usize;
+                        done &= done - 1;
+                        out[x + i] = s.lane(&r, i);
+                    }
+                }
+                while same != 0 {
+                    let i = same.trailing_zeros() as usize;
+                    same &= same - 1;
+                    out[x + i] = self.shade(s, [x0 + x + i, y], linear);
+                }
+            }
+        }
     }
 
     /// Sample `[x, y]` shaded by the triangle of `s`: its colour and its unit normal facing
@@ -590,6 +583,26 @@ impl Shader<'_> {
     fn colour(&self, texel: Vec3) -> Vec3 {
         (texel * self.base).clamp(Vec3::ZERO, Vec3::ONE)
     }
+
+    /// Lane `i` of eight samples whose arithmetic `r` did ([`ShadeLanes::shade`]): its texels
+    /// read and filtered as [`BakeTarget::shade`] filters them, its colour and normal.
+    #[inline]
+    fn lane(&self, r: &LaneShading, i: usize) -> (Vec3, Option<Vec3>) {
+        let texel = match self.texels {
+            Texels::Decoded(a, b) => {
+                let at = |level: &LinearLevel, k: usize| {
+                    level.bilinear_at(r.first[k][i] as usize, r.fx[k][i], r.fy[k][i])
+                };
+                let va = at(a, 0);
+                // `Levels::rgb`'s blend.
+                b.map_or(va, |b| va + (at(b, 1) - va) * self.triangle.lod.f)
+            }
+            _ => Vec3::ONE,
+        };
+        let normal = (r.with_normal >> i & 1 == 1)
+            .then(|| Vec3::new(r.normal[0][i], r.normal[1][i], r.normal[2][i]));
+        (self.colour(texel), normal)
+    }
 }
 
 /// Where a triangle's colour texels come from: the same bits each way.
@@ -600,6 +613,14 @@ enum Texels<'a> {
     Decoded(&'a LinearLevel, Option<&'a LinearLevel>),
     /// Texture `i`'s bytes, decoded as read ([`SoftwareTextures::bake_rgb`]).
     Bytes(usize),
+}
+
+/// The lanes (bits) of the winners `group` that `f` holds for.
+#[inline]
+fn lanes_where(group: &[u32], f: impl Fn(u32) -> bool) -> u32 {
+    (group.iter().enumerate())
+        .filter(|&(_, &ti)| f(ti))
+        .fold(0, |m, (i, _)| m | 1 << i)
 }
 
 /// The samples `x0..x1` × `y0..y1` of a region being drawn (whole pixels).
