@@ -1197,91 +1197,13 @@ fn padded_rect(cell: &Cell, padding: u32, width: u32, height: u32) -> [usize; 4]
 fn finish_cells(d: Downsampled, cells: &[Cell], quads: &[Quad], padding: u32) -> Atlas {
     let width = d.width as usize;
     let fallback = mean_color(&d);
-    let decode = |v: u8| f32::from(v) / 255.0 * 2.0 - 1.0;
-    let rgb = |buf: &[u8], i: usize| [buf[i * 4], buf[i * 4 + 1], buf[i * 4 + 2]];
     // Per cell, its padded texels' final colour and normal, row by row.
     let finished: Vec<Vec<[u8; 6]>> = cells
         .par_iter()
         .zip(quads.par_iter())
         .map_init(Vec::new, |queue, (cell, quad)| {
-            let front = front_normal(quad);
-            let [nx, ny, nz, _] = encode_normal(front, 0);
-            let default_normal = [nx, ny, nz];
-            let [x0, x1, y0, y1] = padded_rect(cell, padding, d.width, d.height);
-            let (cw, ch) = (x1 - x0, y1 - y0);
-            // Per cell texel: index of the source texel (in the atlas) it copies. Breadth
-            // first from the covered texels: `queue[next..]` is still to expand.
-            let mut source = vec![usize::MAX; cw * ch];
-            queue.clear();
-            for y in 0..ch {
-                for x in 0..cw {
-                    let i = (y0 + y) * width + x0 + x;
-                    if d.covered[i] {
-                        source[y * cw + x] = i;
-                        queue.push((x, y));
-                    }
-                }
-            }
-            let empty = queue.is_empty();
-            let mut next = 0;
-            while let Some(&(x, y)) = queue.get(next) {
-                next += 1;
-                let src = source[y * cw + x];
-                for (dx, dy) in [
-                    (-1, 0),
-                    (1, 0),
-                    (0, -1),
-                    (0, 1),
-                    (-1, -1),
-                    (1, -1),
-                    (-1, 1),
-                    (1, 1),
-                ] {
-                    let (nx, ny) = (x as isize + dx, y as isize + dy);
-                    if nx < 0 || ny < 0 || nx >= cw as isize || ny >= ch as isize {
-                        continue;
-                    }
-                    let j = ny as usize * cw + nx as usize;
-                    if source[j] == usize::MAX {
-                        source[j] = src;
-                        queue.push((nx as usize, ny as usize));
-                    }
-                }
-            }
-            let (u, v) = (
-                quad.axis_u.normalize_or_zero(),
-                quad.axis_v.normalize_or_zero(),
-            );
-            // The tangent-space normal depends on the atlas normal alone within a cell, and
-            // neighbouring texels mostly share theirs (a flat card, a dilated source): the
-            // last one converted is kept.
-            let mut last: Option<([u8; 3], [u8; 3])> = None;
-            let mut tangent_space = |n: [u8; 3]| match last {
-                Some((seen, t)) if seen == n => t,
-                _ => {
-                    let m = Vec3::new(decode(n[0]), decode(n[1]), decode(n[2])).normalize_or(front);
-                    let t = Vec3::new(m.dot(u), m.dot(v), m.dot(front)).normalize_or(Vec3::Z);
-                    let [r, g, b, _] = encode_normal(t, 0);
-                    last = Some((n, [r, g, b]));
-                    [r, g, b]
-                }
-            };
-            source
-                .iter()
-                .map(|&src| {
-                    let (colour, n) = if empty {
-                        (fallback, default_normal)
-                    } else {
-                        let n = rgb(&d.normal, src);
-                        (
-                            rgb(&d.color, src),
-                            if n == [0, 0, 0] { default_normal } else { n },
-                        )
-                    };
-                    let [r, g, b] = tangent_space(n);
-                    [colour[0], colour[1], colour[2], r, g, b]
-                })
-                .collect()
+            let rect = padded_rect(cell, padding, d.width, d.height);
+            finish_cell(&d, quad, rect, fallback, queue)
         })
         .collect();
     let Downsampled {
@@ -1321,6 +1243,111 @@ fn finish_cells(d: Downsampled, cells: &[Cell], quads: &[Quad], padding: u32) ->
         color,
         normal,
     }
+}
+
+/// One quad's padded cell `[x0, x1, y0, y1]` of `d` finished, row by row: each texel's colour
+/// and tangent-space normal bytes, an uncovered texel's those of the covered texel nearest it
+/// ([`dilation_sources`]); a cell without any covered texel takes `fallback` and the quad's
+/// normal. `queue` is scratch.
+fn finish_cell(
+    d: &Downsampled,
+    quad: &Quad,
+    rect: [usize; 4],
+    fallback: [u8; 3],
+    queue: &mut Vec<(usize, usize)>,
+) -> Vec<[u8; 6]> {
+    let decode = |v: u8| f32::from(v) / 255.0 * 2.0 - 1.0;
+    let rgb = |buf: &[u8], i: usize| [buf[i * 4], buf[i * 4 + 1], buf[i * 4 + 2]];
+    let front = front_normal(quad);
+    let [nx, ny, nz, _] = encode_normal(front, 0);
+    let default_normal = [nx, ny, nz];
+    let source = dilation_sources(d, rect, queue);
+    let empty = source.first().is_none_or(|&s| s == usize::MAX);
+    let (u, v) = (
+        quad.axis_u.normalize_or_zero(),
+        quad.axis_v.normalize_or_zero(),
+    );
+    // The tangent-space normal depends on the atlas normal alone within a cell, and
+    // neighbouring texels mostly share theirs (a flat card, a dilated source): the last one
+    // converted is kept.
+    let mut last: Option<([u8; 3], [u8; 3])> = None;
+    let mut tangent_space = |n: [u8; 3]| match last {
+        Some((seen, t)) if seen == n => t,
+        _ => {
+            let m = Vec3::new(decode(n[0]), decode(n[1]), decode(n[2])).normalize_or(front);
+            let t = Vec3::new(m.dot(u), m.dot(v), m.dot(front)).normalize_or(Vec3::Z);
+            let [r, g, b, _] = encode_normal(t, 0);
+            last = Some((n, [r, g, b]));
+            [r, g, b]
+        }
+    };
+    source
+        .iter()
+        .map(|&src| {
+            let (colour, n) = if empty {
+                (fallback, default_normal)
+            } else {
+                let n = rgb(&d.normal, src);
+                (
+                    rgb(&d.color, src),
+                    if n == [0, 0, 0] { default_normal } else { n },
+                )
+            };
+            let [r, g, b] = tangent_space(n);
+            [colour[0], colour[1], colour[2], r, g, b]
+        })
+        .collect()
+}
+
+/// Per texel of the cell `[x0, x1, y0, y1]` of `d`, row by row, the atlas index of the
+/// covered texel it copies: itself where covered, else the first reached breadth first,
+/// 8-connected, from the covered texels in row order (every entry `usize::MAX` when none is
+/// covered). `queue` is scratch.
+fn dilation_sources(
+    d: &Downsampled,
+    [x0, x1, y0, y1]: [usize; 4],
+    queue: &mut Vec<(usize, usize)>,
+) -> Vec<usize> {
+    let width = d.width as usize;
+    let (cw, ch) = (x1 - x0, y1 - y0);
+    let mut source = vec![usize::MAX; cw * ch];
+    queue.clear();
+    for y in 0..ch {
+        for x in 0..cw {
+            let i = (y0 + y) * width + x0 + x;
+            if d.covered[i] {
+                source[y * cw + x] = i;
+                queue.push((x, y));
+            }
+        }
+    }
+    // `queue[next..]` is still to expand.
+    let mut next = 0;
+    while let Some(&(x, y)) = queue.get(next) {
+        next += 1;
+        let src = source[y * cw + x];
+        for (dx, dy) in [
+            (-1, 0),
+            (1, 0),
+            (0, -1),
+            (0, 1),
+            (-1, -1),
+            (1, -1),
+            (-1, 1),
+            (1, 1),
+        ] {
+            let (nx, ny) = (x as isize + dx, y as isize + dy);
+            if nx < 0 || ny < 0 || nx >= cw as isize || ny >= ch as isize {
+                continue;
+            }
+            let j = ny as usize * cw + nx as usize;
+            if source[j] == usize::MAX {
+                source[j] = src;
+                queue.push((nx as usize, ny as usize));
+            }
+        }
+    }
+    source
 }
 
 /// Mean colour (in linear light) of all covered texels, mid grey when there are none.

@@ -39,7 +39,7 @@ use rayon::prelude::*;
 
 use crate::bake_lanes::{LaneShading, ShadeLanes};
 use crate::error::RenderError;
-use crate::pipeline::srgb_to_linear;
+use crate::pipeline::SRGB_LINEAR;
 use crate::sample_lanes::{self, LaneTest, TriangleLanes};
 use crate::scene::DrawScene;
 use crate::software::{
@@ -401,7 +401,7 @@ impl<'a> BakeTarget<'a> {
     /// Where the machine can, the arithmetic of eight samples of a row won by one triangle is
     /// done at once ([`crate::bake_lanes`]: the same bits).
     fn resolve(&self, region: &Region, winner: &[u32]) -> BakeImage {
-        let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
+        let linear = &*SRGB_LINEAR;
         let ss = self.ss;
         let width = region.x1 - region.x0;
         let (w, h) = (width / ss, (region.y1 - region.y0) / ss);

@@ -207,6 +207,11 @@ impl Pipelines {
     }
 }
 
+/// [`srgb_to_linear`] of every byte, computed once (256 `powf` calls made per render, or per
+/// bake region, were a measurable part of a bake).
+pub(crate) static SRGB_LINEAR: std::sync::LazyLock<[f32; 256]> =
+    std::sync::LazyLock::new(|| std::array::from_fn(|b| srgb_to_linear(b as u8)));
+
 /// sRGB-encoded byte → linear light.
 pub(crate) fn srgb_to_linear(v: u8) -> f32 {
     let c = v as f32 / 255.0;
@@ -236,7 +241,7 @@ fn downsample(width: u32, height: u32, rgba: &[u8]) -> (u32, u32, Vec<u8>) {
     let mut out = vec![0u8; (w2 * h2 * 4) as usize];
     // The same values as `srgb_to_linear`, looked up: four texels' three channels an output
     // texel made `powf` most of a large texture's chain.
-    let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
+    let linear = &*SRGB_LINEAR;
     for y in 0..h2 {
         for x in 0..w2 {
             let mut acc = [0.0f32; 3];

@@ -29,9 +29,7 @@ use glam::{Mat4, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::error::RenderError;
-use crate::pipeline::{
-    LIGHT_DIRECTION, alpha_mip_chain, linear_mip_chain, mip_chain, srgb_to_linear,
-};
+use crate::pipeline::{LIGHT_DIRECTION, SRGB_LINEAR, alpha_mip_chain, linear_mip_chain, mip_chain};
 use crate::sample_lanes::{self, LaneFilter, LaneLevel, LaneTest, TriangleLanes};
 use crate::scene::{DrawMaterial, DrawScene, DrawTexture};
 use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
@@ -417,10 +415,7 @@ impl SoftwareTextures {
     /// Level `level` of `texture` decoded to linear light for the bake (decoded on first use),
     /// `None` when it is not (not prepared for the bake, or over [`MAX_LINEAR_TEXELS`]).
     pub(crate) fn bake_linear_level(&self, texture: usize, level: usize) -> Option<&LinearLevel> {
-        let decode = || {
-            let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
-            LinearLevel::new(&self.textures[texture].0[level], &linear)
-        };
+        let decode = || LinearLevel::new(&self.textures[texture].0[level], &SRGB_LINEAR);
         (self.bake_linear.get(texture)?.get(level)?)
             .get_or_init(decode)
             .as_ref()
@@ -1656,7 +1651,7 @@ impl<'a> Raster<'a> {
         } else {
             Vec::new()
         };
-        let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
+        let linear = &*SRGB_LINEAR;
         let light = Vec3::from(LIGHT_DIRECTION);
         let stride = if colour { 4 } else { 1 };
         for &ti in bin {
@@ -2623,7 +2618,7 @@ mod tests {
         let levels = &prepared.textures[0];
         // Decoded on first use.
         assert!(prepared.bake_linear[0].iter().all(|l| l.get().is_none()));
-        let linear: [f32; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
+        let linear = *SRGB_LINEAR;
         let mut undecoded = prepared.clone();
         undecoded.bake_linear[0][0] = std::sync::OnceLock::from(None);
         let mut compared = 0;
