@@ -421,7 +421,7 @@ impl<'a> BakeTarget<'a> {
                 let y = py * ss + dy;
                 let row = &winner[y * width..(y + 1) * width];
                 let out = &mut shaded[dy * width..(dy + 1) * width];
-                self.shade_row(row, [region.x0, region.y0 + y], out, &mut shader, &linear);
+                self.shade_row(row, [region.x0, region.y0 + y], out, &mut shader, linear);
             }
             for px in 0..w {
                 let (mut count, mut colour, mut normal) = (0u16, Vec3::ZERO, Vec3::ZERO);

@@ -1813,7 +1813,7 @@ impl<'a> Raster<'a> {
                                 material.base_color[2],
                             );
                             let texel = texture
-                                .map_or(Vec3::ONE, |l| l.rgb(uv, t.lod, material.wrap, &linear));
+                                .map_or(Vec3::ONE, |l| l.rgb(uv, t.lod, material.wrap, linear));
                             let mut shade = 1.0;
                             if let Some(sh) = shading.filter(|_| t.lit) {
                                 let mut normal =
