@@ -10,6 +10,9 @@
 //! Hand-written because the compiler does not vectorise the scalar resolve (it branches per
 //! sample), and the operations must stay the scalar ones, in their order.
 
+#[cfg(target_arch = "x86_64")]
+use crate::sample_lanes::weighted_sum;
+
 /// What the eight-sample arithmetic needs of the triangle that won the samples.
 #[derive(Clone, Copy)]
 pub(crate) struct ShadeLanes {
@@ -81,15 +84,7 @@ impl ShadeLanes {
         };
         let b = [edge(1, 2), edge(2, 0), edge(0, 1)];
         // `Σ b·a` left to right, as `Setup::uv` and glam's sums.
-        let dot = |a: [f32; 3]| {
-            _mm256_add_ps(
-                _mm256_add_ps(
-                    _mm256_mul_ps(b[0], _mm256_set1_ps(a[0])),
-                    _mm256_mul_ps(b[1], _mm256_set1_ps(a[1])),
-                ),
-                _mm256_mul_ps(b[2], _mm256_set1_ps(a[2])),
-            )
-        };
+        let dot = |a: [f32; 3]| weighted_sum(&b, a);
         let q = dot(self.q);
         let mut out = LaneShading::default();
         if self.levels[0].is_some() {

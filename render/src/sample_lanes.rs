@@ -118,6 +118,25 @@ fn lane_mask(bits: u32) -> std::arch::x86_64::__m256 {
     _mm256_castsi256_ps(_mm256_cmpeq_epi32(set, lane))
 }
 
+/// `Σ b·a` of eight lanes of weights `b`, left to right (`(b0·a0 + b1·a1) + b2·a2`): the
+/// scalar sums' roundings, shared by the lanes here and the bake's ([`crate::bake_lanes`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) fn weighted_sum(
+    b: &[std::arch::x86_64::__m256; 3],
+    a: [f32; 3],
+) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::*;
+    _mm256_add_ps(
+        _mm256_add_ps(
+            _mm256_mul_ps(b[0], _mm256_set1_ps(a[0])),
+            _mm256_mul_ps(b[1], _mm256_set1_ps(a[1])),
+        ),
+        _mm256_mul_ps(b[2], _mm256_set1_ps(a[2])),
+    )
+}
+
 /// The scalar `bilinear` alpha (`footprint`, then `bilerp` of the four texels) of `level` at
 /// `(u, v)` in the lanes of `wanted`, and the lanes it was computed for: those whose footprint
 /// reaches at most one texel past the level's edges, where it wraps as `wrap_index` has it
@@ -235,15 +254,7 @@ impl TriangleLanes<'_> {
                 _mm256_mul_ps(_mm256_set1_ps(step[j]), k),
             )
         });
-        let dot = |a: [f32; 3]| {
-            _mm256_add_ps(
-                _mm256_add_ps(
-                    _mm256_mul_ps(b[0], _mm256_set1_ps(a[0])),
-                    _mm256_mul_ps(b[1], _mm256_set1_ps(a[1])),
-                ),
-                _mm256_mul_ps(b[2], _mm256_set1_ps(a[2])),
-            )
-        };
+        let dot = |a: [f32; 3]| weighted_sum(&b, a);
         let zero = _mm256_setzero_ps();
         // Not below zero (a NaN weight is inside, as the scalar `b < 0.0` test has it).
         let inside = _mm256_and_ps(
