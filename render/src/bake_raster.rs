@@ -13,14 +13,13 @@
 //! triangle is drawn (deferred): one texture fetch per fragment for the alpha test (from the
 //! nearer mip level, as `LINEAR_MIPMAP_NEAREST`), and one trilinear colour fetch per covered
 //! sample. A triangle's rows are walked only within the octagon of texture coordinates where
-//! its alpha test can pass ([`crate::uv_hull`]): the samples left out would fail it (on
-//! oak_dense's fixed per-bone configuration the bake fell from 1.33 to 1.22–1.25 s). Where
-//! the machine has AVX2, eight samples of a row are tested at once ([`crate::sample_lanes`],
-//! as coverage renders do: 1.26–1.32 → 1.03–1.07 s), and the colour is filtered from levels
-//! decoded to linear light beforehand (→ 0.92–0.97 s); both give the same bits. The resolve
-//! does the arithmetic of eight samples won by one triangle at once ([`crate::bake_lanes`]),
-//! and the billboard bake draws each atlas cell alone (below): → 0.68–0.72 s.
-//! A [`BakeTarget`] sets a render's triangles up once; its regions are then drawn one by one,
+//! its alpha test can pass ([`crate::uv_hull`]): the samples left out would fail it. Where the
+//! machine has AVX2, eight samples of a row are tested at once ([`crate::sample_lanes`], as
+//! coverage renders do), and the arithmetic of eight samples won by one triangle is done at
+//! once ([`crate::bake_lanes`]); the colour is filtered from levels decoded to linear light
+//! beforehand. Each gives the same bits (on oak_dense's fixed per-bone configuration the bake
+//! went from 1.33 to 0.68–0.72 s with them and the regions below; docs/performance.md has
+//! each step). A [`BakeTarget`] sets a render's triangles up once; its regions are then drawn one by one,
 //! each from its own meshes into buffers of its own size, and resolved alone: the billboard
 //! bake draws each atlas cell so, in parallel ([`render_bake`] draws bands of rows). Regions are
 //! independent, so the image is the same whatever the thread count, and from machine to
@@ -502,11 +501,10 @@ impl<'a> BakeTarget<'a> {
         let (uv, q) = t.uv(b);
         let texel = match s.texels {
             Texels::White => Vec3::ONE,
-            Texels::Decoded(a, None) => a.bilinear(uv, s.wrap),
-            Texels::Decoded(a, Some(b)) => {
-                // `Levels::rgb`'s blend.
+            Texels::Decoded(a, b) => {
                 let va = a.bilinear(uv, s.wrap);
-                va + (b.bilinear(uv, s.wrap) - va) * t.lod.f
+                // `Levels::rgb`'s blend.
+                b.map_or(va, |b| va + (b.bilinear(uv, s.wrap) - va) * t.lod.f)
             }
             Texels::Bytes(i) => self.textures.bake_rgb(i, uv, t.lod, s.wrap, linear),
         };

@@ -395,14 +395,9 @@ impl SoftwareTextures {
         wrap: [Wrap; 2],
         linear: &[f32; 256],
     ) -> Vec3 {
-        let levels = &self.textures[texture];
-        let decoded = self.bake_linear.get(texture);
-        let at = |l: usize| match decoded.and_then(|d| {
-            d[l].get_or_init(|| LinearLevel::new(&levels.0[l], linear))
-                .as_ref()
-        }) {
+        let at = |l: usize| match self.bake_linear_level(texture, l) {
             Some(level) => level.bilinear(uv, wrap),
-            None => bilinear_rgb(&levels.0[l], uv, wrap, linear),
+            None => bilinear_rgb(&self.textures[texture].0[l], uv, wrap, linear),
         };
         let va = at(lod.a as usize);
         if lod.f > 0.0 {
@@ -1243,23 +1238,22 @@ fn footprint_of(
     wrap: [Wrap; 2],
     stride: usize,
 ) -> ([usize; 4], f32, f32) {
-    let (w, h) = (&w, &h);
-    let x = uv[0] * *w as f32 - 0.5;
-    let y = uv[1] * *h as f32 - 0.5;
+    let x = uv[0] * w as f32 - 0.5;
+    let y = uv[1] * h as f32 - 0.5;
     let (x0, y0) = (floor_i64(x), floor_i64(y));
     let (fx, fy) = (x - x0 as f32, y - y0 as f32);
-    let (wi, hi) = (i64::from(*w), i64::from(*h));
+    let (wi, hi) = (i64::from(w), i64::from(h));
     let (xa, xb, ya, yb) = if x0 >= 0 && x0 + 1 < wi && y0 >= 0 && y0 + 1 < hi {
         (x0 as usize, x0 as usize + 1, y0 as usize, y0 as usize + 1)
     } else {
         (
-            wrap_index(x0, *w, wrap[0]),
-            wrap_index(x0 + 1, *w, wrap[0]),
-            wrap_index(y0, *h, wrap[1]),
-            wrap_index(y0 + 1, *h, wrap[1]),
+            wrap_index(x0, w, wrap[0]),
+            wrap_index(x0 + 1, w, wrap[0]),
+            wrap_index(y0, h, wrap[1]),
+            wrap_index(y0 + 1, h, wrap[1]),
         )
     };
-    let row = *w as usize * stride;
+    let row = w as usize * stride;
     (
         [
             ya * row + xa * stride,
