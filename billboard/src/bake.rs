@@ -608,8 +608,6 @@ struct Downsampled {
     height: u32,
     color: Vec<u8>,
     normal: Vec<u8>,
-    /// Whether any supersample of the texel was covered.
-    covered: Vec<bool>,
     /// Covered supersamples per texel.
     samples: Vec<u16>,
 }
@@ -622,7 +620,6 @@ impl Downsampled {
             height,
             color: vec![0; n * 4],
             normal: vec![0; n * 4],
-            covered: vec![false; n],
             samples: vec![0; n],
         }
     }
@@ -681,54 +678,83 @@ fn coverage_alpha(n: u32, total: u32, needed: u32) -> u8 {
 /// graded alpha: its leaves are resolved at this density, and a billboard seen at its design
 /// size should reproduce their outline, not a re-thresholded (speckled) one.
 fn preserve_coverage(out: &mut Downsampled, cells: &[Cell], total: u32, needed: u32) {
+    let thresholds = coverage_thresholds(out, cells, total, needed);
+    let rects: Vec<[usize; 4]> = (cells.iter())
+        .map(|c| padded_rect(c, 0, out.width, out.height))
+        .collect();
+    let bands = row_bands(&rects);
+    (band_parts(out, &bands).into_par_iter()).for_each(|(mut band, members)| {
+        for &c in members {
+            if let Some(threshold) = thresholds[c] {
+                band.threshold(rects[c], threshold);
+            }
+        }
+    });
+}
+
+/// Per cell, the covered samples from which its texels pass after [`preserve_coverage`]
+/// (`total + 1`: none), `None` where it keeps its graded alpha. The cells' counts are
+/// gathered in parallel, the remainders then carried from cell to cell in quad order.
+fn coverage_thresholds(
+    out: &Downsampled,
+    cells: &[Cell],
+    total: u32,
+    needed: u32,
+) -> Vec<Option<u32>> {
     let w = out.width as usize;
-    let mut counts: Vec<u32> = Vec::new();
+    // Per cell with covered texels: its summed covered samples, its texels passing at the
+    // cutoff, and how many texels have each count of covered samples (0 left out).
+    let counts: Vec<Option<(u64, usize, Vec<usize>)>> = cells
+        .par_iter()
+        .map(|c| {
+            let mut histogram = vec![0usize; total as usize + 1];
+            for y in c.y as usize..(c.y + c.height) as usize {
+                let row = &out.samples[y * w + c.x as usize..][..c.width as usize];
+                for &n in row {
+                    histogram[usize::from(n).min(total as usize)] += 1;
+                }
+            }
+            histogram[0] = 0;
+            let covered: usize = histogram.iter().sum();
+            (covered > 0).then(|| {
+                let sum = (histogram.iter().enumerate())
+                    .map(|(n, &k)| n as u64 * k as u64)
+                    .sum();
+                let passing = histogram[needed as usize..].iter().sum();
+                (sum, passing, histogram)
+            })
+        })
+        .collect();
     // Rounding remainders carry over to the next cell (in quad order), so the whole atlas
     // keeps its coverage even when most cells hold less than one texel of it.
     let mut carry = 0.0f64;
-    for c in cells {
-        counts.clear();
-        let texels = || {
-            (c.y as usize..(c.y + c.height) as usize)
-                .flat_map(move |y| (c.x as usize..(c.x + c.width) as usize).map(move |x| y * w + x))
-        };
-        counts.extend(
-            texels()
-                .map(|i| u32::from(out.samples[i]))
-                .filter(|&n| n > 0),
-        );
-        if counts.is_empty() {
-            continue;
-        }
-        let sum: u64 = counts.iter().map(|&n| u64::from(n)).sum();
-        let own = sum as f64 / f64::from(total);
-        let passing = counts.iter().filter(|&&n| n >= needed).count() as f64;
-        if own >= 1.0 && (passing - own).abs() <= COVERAGE_TOLERANCE * own {
-            continue;
-        }
-        let want = own + carry;
-        let keep = (want.round().max(0.0) as usize).min(counts.len());
-        carry = want - keep as f64;
-        counts.sort_unstable_by(|a, b| b.cmp(a));
-        // Texels with at least `needed` covered samples pass; none when keep == 0.
-        let threshold = if keep == 0 {
-            total + 1
-        } else {
-            counts[keep - 1]
-        };
-        for i in texels() {
-            let n = u32::from(out.samples[i]);
-            if n == 0 {
-                continue;
+    (counts.into_iter())
+        .map(|counts| {
+            let (sum, passing, histogram) = counts?;
+            let own = sum as f64 / f64::from(total);
+            let passing = passing as f64;
+            if own >= 1.0 && (passing - own).abs() <= COVERAGE_TOLERANCE * own {
+                return None;
             }
-            // Binary: a texel that passes is opaque, one that does not is clear, so bilinear
-            // magnification keeps an isolated passing texel (61 % of its area) instead of
-            // eroding one that barely passes to nothing.
-            let alpha = if n >= threshold { 255 } else { 0 };
-            out.color[i * 4 + 3] = alpha;
-            out.normal[i * 4 + 3] = alpha;
-        }
-    }
+            let covered: usize = histogram.iter().sum();
+            let want = own + carry;
+            let keep = (want.round().max(0.0) as usize).min(covered);
+            carry = want - keep as f64;
+            // The `keep`-th largest count: texels with at least it pass; none when keep == 0.
+            let mut seen = 0;
+            Some(if keep == 0 {
+                total + 1
+            } else {
+                (0..=total)
+                    .rev()
+                    .find(|&n| {
+                        seen += histogram[n as usize];
+                        seen >= keep
+                    })
+                    .unwrap_or(0)
+            })
+        })
+        .collect()
 }
 
 /// Relative difference between a cell's coverage (in texels) and the texels the plain alpha
@@ -929,9 +955,8 @@ fn store_texels(out: &mut Downsampled, regions: &[CellRegion], texels: &[Vec<Cov
     (out.samples.par_chunks_mut(rows))
         .zip(out.color.par_chunks_mut(rows * 4))
         .zip(out.normal.par_chunks_mut(rows * 4))
-        .zip(out.covered.par_chunks_mut(rows))
         .zip(per_strip.par_iter())
-        .for_each(|((((samples, color), normal), covered), range)| {
+        .for_each(|(((samples, color), normal), range)| {
             for k in range.clone() {
                 let [x, y, w, _] = regions[k].rect.map(|v| v as usize);
                 for &(i, n, c, nb) in &texels[k] {
@@ -939,7 +964,6 @@ fn store_texels(out: &mut Downsampled, regions: &[CellRegion], texels: &[Vec<Cov
                     samples[at] = n;
                     color[at * 4..at * 4 + 4].copy_from_slice(&c);
                     normal[at * 4..at * 4 + 4].copy_from_slice(&nb);
-                    covered[at] = true;
                 }
             }
         });
@@ -1100,51 +1124,47 @@ fn downsample(
         .color
         .par_chunks_mut(atlas_w * 4)
         .zip(out.normal.par_chunks_mut(atlas_w * 4))
-        .zip(out.covered.par_chunks_mut(atlas_w))
         .zip(out.samples.par_chunks_mut(atlas_w))
         .skip(oy)
         .take(tex_h)
         .enumerate();
-    rows.for_each(
-        |(row, (((color_row, normal_row), covered_row), samples_row))| {
-            for col in 0..tex_w {
-                let mut n = 0u32;
-                let mut sum = [0.0f32; 3];
-                let mut nn = 0u32;
-                let mut nsum = Vec3::ZERO;
-                for sy in 0..ss {
-                    let base = (row * ss + sy) * frame_w + col * ss;
-                    for sx in 0..ss {
-                        let i = base + sx;
-                        if color.coverage[i] {
-                            n += 1;
-                            let p = &color.rgba[i * 4..i * 4 + 3];
-                            for k in 0..3 {
-                                sum[k] += lut[p[k] as usize];
-                            }
-                        }
-                        if normal.coverage[i] {
-                            nn += 1;
-                            let p = &normal.rgba[i * 4..i * 4 + 3];
-                            nsum += Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) / 127.5
-                                - Vec3::ONE;
+    rows.for_each(|(row, ((color_row, normal_row), samples_row))| {
+        for col in 0..tex_w {
+            let mut n = 0u32;
+            let mut sum = [0.0f32; 3];
+            let mut nn = 0u32;
+            let mut nsum = Vec3::ZERO;
+            for sy in 0..ss {
+                let base = (row * ss + sy) * frame_w + col * ss;
+                for sx in 0..ss {
+                    let i = base + sx;
+                    if color.coverage[i] {
+                        n += 1;
+                        let p = &color.rgba[i * 4..i * 4 + 3];
+                        for k in 0..3 {
+                            sum[k] += lut[p[k] as usize];
                         }
                     }
+                    if normal.coverage[i] {
+                        nn += 1;
+                        let p = &normal.rgba[i * 4..i * 4 + 3];
+                        nsum +=
+                            Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) / 127.5 - Vec3::ONE;
+                    }
                 }
-                if n == 0 {
-                    continue;
-                }
-                let x = ox + col;
-                let mean = sum.map(|c| c / n as f32);
-                let normal = if nn > 0 { nsum } else { Vec3::ZERO };
-                let (c, nb) = texel_bytes(n, total, needed, mean, normal);
-                samples_row[x] = n as u16;
-                color_row[x * 4..x * 4 + 4].copy_from_slice(&c);
-                normal_row[x * 4..x * 4 + 4].copy_from_slice(&nb);
-                covered_row[x] = true;
             }
-        },
-    );
+            if n == 0 {
+                continue;
+            }
+            let x = ox + col;
+            let mean = sum.map(|c| c / n as f32);
+            let normal = if nn > 0 { nsum } else { Vec3::ZERO };
+            let (c, nb) = texel_bytes(n, total, needed, mean, normal);
+            samples_row[x] = n as u16;
+            color_row[x * 4..x * 4 + 4].copy_from_slice(&c);
+            normal_row[x * 4..x * 4 + 4].copy_from_slice(&nb);
+        }
+    });
 }
 
 /// One covered texel's colour and normal bytes: `n` of `total` supersamples covered (alpha
@@ -1186,178 +1206,284 @@ fn padded_rect(cell: &Cell, padding: u32, width: u32, height: u32) -> [usize; 4]
     ]
 }
 
-/// Finishes each quad's padded cell, the cells in parallel, each texel written once:
-/// - dilation: every texel no sample covered takes the colour and normal of the nearest
-///   covered texel of that quad (breadth-first over 8-neighbours, ties broken by a fixed
-///   order), alpha staying 0; a quad with nothing covered gets the mean covered colour of the
-///   atlas and its own front normal (improved-billboard-cloud §4 item 6);
+/// Finishes each quad's padded cell in place, the cells in parallel (bands of atlas rows
+/// that no padded cell straddles, [`row_bands`]), each texel written once more at most:
+/// - dilation: every texel no sample covered takes the colour and normal of a nearest
+///   covered texel of that quad (chessboard distance, 8-neighbours: [`dilate`]), alpha
+///   staying 0; a quad with nothing covered gets the mean covered colour of the atlas and its
+///   own front normal (improved-billboard-cloud §4 item 6);
 /// - tangent space: the normal, baked and dilated in world space, is rewritten in the quad's
 ///   tangent frame (`axis_u`, `axis_v`, front normal): what glTF's `normalTexture` holds, the
 ///   tangents engines derive from the billboard's UVs running along the same axes.
-fn finish_cells(d: Downsampled, cells: &[Cell], quads: &[Quad], padding: u32) -> Atlas {
-    let width = d.width as usize;
-    let fallback = mean_color(&d);
-    // Per cell, its padded texels' final colour and normal, row by row.
-    let finished: Vec<Vec<[u8; 6]>> = cells
-        .par_iter()
-        .zip(quads.par_iter())
-        .map_init(Vec::new, |queue, (cell, quad)| {
-            let rect = padded_rect(cell, padding, d.width, d.height);
-            finish_cell(&d, quad, rect, fallback, queue)
-        })
+fn finish_cells(mut d: Downsampled, cells: &[Cell], quads: &[Quad], padding: u32) -> Atlas {
+    let rects: Vec<[usize; 4]> = (cells.iter())
+        .map(|c| padded_rect(c, padding, d.width, d.height))
         .collect();
-    let Downsampled {
-        mut color,
-        mut normal,
-        ..
-    } = d;
-    // Stored row by row in parallel: per atlas row, the cells whose padded rectangle holds it
-    // (padded cells are disjoint).
-    let mut row_cells: Vec<Vec<u32>> = vec![Vec::new(); d.height as usize];
-    for (c, cell) in cells.iter().enumerate() {
-        let [_, _, y0, y1] = padded_rect(cell, padding, d.width, d.height);
-        for cells in &mut row_cells[y0..y1] {
-            cells.push(c as u32);
+    let bands = row_bands(&rects);
+    // The cells without any covered texel, band by band.
+    let empty: Vec<usize> = (band_parts(&mut d, &bands).into_par_iter())
+        .map_init(Vec::new, |grid, (mut band, members)| {
+            (members.iter().copied())
+                .filter(|&c| !band.finish(rects[c], &quads[c], grid))
+                .collect::<Vec<usize>>()
+        })
+        .flatten()
+        .collect();
+    if !empty.is_empty() {
+        let fallback = mean_color(&d.color, &d.samples);
+        let mut all = CellTexels {
+            color: &mut d.color,
+            normal: &mut d.normal,
+            samples: &d.samples,
+            width: d.width as usize,
+            y0: 0,
+        };
+        for c in empty {
+            all.fill(rects[c], &quads[c], fallback);
         }
     }
-    color
-        .par_chunks_mut(width * 4)
-        .zip(normal.par_chunks_mut(width * 4))
-        .zip(row_cells.par_iter())
-        .enumerate()
-        .for_each(|(y, ((color_row, normal_row), row_cells))| {
-            for &c in row_cells {
-                let [x0, x1, y0, _] = padded_rect(&cells[c as usize], padding, d.width, d.height);
-                let cw = x1 - x0;
-                let texels = &finished[c as usize][(y - y0) * cw..(y - y0 + 1) * cw];
-                for (k, t) in texels.iter().enumerate() {
-                    let i = (x0 + k) * 4;
-                    color_row[i..i + 3].copy_from_slice(&t[..3]);
-                    normal_row[i..i + 3].copy_from_slice(&t[3..]);
-                }
-            }
-        });
     Atlas {
         width: d.width,
         height: d.height,
-        color,
-        normal,
+        color: d.color,
+        normal: d.normal,
     }
 }
 
-/// One quad's padded cell `[x0, x1, y0, y1]` of `d` finished, row by row: each texel's colour
-/// and tangent-space normal bytes, an uncovered texel's those of the covered texel nearest it
-/// ([`dilation_sources`]); a cell without any covered texel takes `fallback` and the quad's
-/// normal. `queue` is scratch.
-fn finish_cell(
-    d: &Downsampled,
-    quad: &Quad,
-    rect: [usize; 4],
-    fallback: [u8; 3],
-    queue: &mut Vec<(usize, usize)>,
-) -> Vec<[u8; 6]> {
-    let decode = |v: u8| f32::from(v) / 255.0 * 2.0 - 1.0;
-    let rgb = |buf: &[u8], i: usize| [buf[i * 4], buf[i * 4 + 1], buf[i * 4 + 2]];
-    let front = front_normal(quad);
-    let [nx, ny, nz, _] = encode_normal(front, 0);
-    let default_normal = [nx, ny, nz];
-    let source = dilation_sources(d, rect, queue);
-    let empty = source.first().is_none_or(|&s| s == usize::MAX);
-    let (u, v) = (
-        quad.axis_u.normalize_or_zero(),
-        quad.axis_v.normalize_or_zero(),
-    );
-    // The tangent-space normal depends on the atlas normal alone within a cell, and
-    // neighbouring texels mostly share theirs (a flat card, a dilated source): the last one
-    // converted is kept.
-    let mut last: Option<([u8; 3], [u8; 3])> = None;
-    let mut tangent_space = |n: [u8; 3]| match last {
-        Some((seen, t)) if seen == n => t,
-        _ => {
-            let m = Vec3::new(decode(n[0]), decode(n[1]), decode(n[2])).normalize_or(front);
-            let t = Vec3::new(m.dot(u), m.dot(v), m.dot(front)).normalize_or(Vec3::Z);
-            let [r, g, b, _] = encode_normal(t, 0);
-            last = Some((n, [r, g, b]));
-            [r, g, b]
-        }
-    };
-    source
-        .iter()
-        .map(|&src| {
-            let (colour, n) = if empty {
-                (fallback, default_normal)
-            } else {
-                let n = rgb(&d.normal, src);
-                (
-                    rgb(&d.color, src),
-                    if n == [0, 0, 0] { default_normal } else { n },
-                )
-            };
-            let [r, g, b] = tangent_space(n);
-            [colour[0], colour[1], colour[2], r, g, b]
-        })
-        .collect()
-}
-
-/// Per texel of the cell `[x0, x1, y0, y1]` of `d`, row by row, the atlas index of the
-/// covered texel it copies: itself where covered, else the first reached breadth first,
-/// 8-connected, from the covered texels in row order (every entry `usize::MAX` when none is
-/// covered). `queue` is scratch.
-fn dilation_sources(
-    d: &Downsampled,
-    [x0, x1, y0, y1]: [usize; 4],
-    queue: &mut Vec<(usize, usize)>,
-) -> Vec<usize> {
+/// `d`'s rows cut along `bands` ([`row_bands`]): per band, its rows of both atlases and of
+/// the covered samples, and its cells.
+fn band_parts<'a>(
+    d: &'a mut Downsampled,
+    bands: &'a [(Range<usize>, Vec<usize>)],
+) -> Vec<(CellTexels<'a>, &'a [usize])> {
     let width = d.width as usize;
-    let (cw, ch) = (x1 - x0, y1 - y0);
-    let mut source = vec![usize::MAX; cw * ch];
-    queue.clear();
-    for y in 0..ch {
-        for x in 0..cw {
-            let i = (y0 + y) * width + x0 + x;
-            if d.covered[i] {
-                source[y * cw + x] = i;
-                queue.push((x, y));
+    let mut parts = Vec::with_capacity(bands.len());
+    let (mut color, mut normal) = (&mut d.color[..], &mut d.normal[..]);
+    let mut done = 0;
+    for (rows, members) in bands {
+        let skip = (rows.start - done) * width * 4;
+        let len = rows.len() * width * 4;
+        let (c, n);
+        (c, color) = std::mem::take(&mut color)[skip..].split_at_mut(len);
+        (n, normal) = std::mem::take(&mut normal)[skip..].split_at_mut(len);
+        done = rows.end;
+        let band = CellTexels {
+            color: c,
+            normal: n,
+            samples: &d.samples[rows.start * width..rows.end * width],
+            width,
+            y0: rows.start,
+        };
+        parts.push((band, &members[..]));
+    }
+    parts
+}
+
+/// The padded cells' rectangles `rects` (`[x0, x1, y0, y1]`, disjoint) gathered into bands of
+/// whole atlas rows, in row order: each cell's rows lie within one band, each band's cells
+/// (by index) are the ones whose rows it holds. A shelf packing gives a band a shelf.
+fn row_bands(rects: &[[usize; 4]]) -> Vec<(Range<usize>, Vec<usize>)> {
+    let mut order: Vec<usize> = (0..rects.len())
+        .filter(|&c| rects[c][2] < rects[c][3])
+        .collect();
+    order.sort_by_key(|&c| (rects[c][2], c));
+    let mut bands: Vec<(Range<usize>, Vec<usize>)> = Vec::new();
+    for c in order {
+        let [_, _, y0, y1] = rects[c];
+        match bands.last_mut() {
+            Some((rows, members)) if y0 < rows.end => {
+                rows.end = rows.end.max(y1);
+                members.push(c);
+            }
+            _ => bands.push((y0..y1, vec![c])),
+        }
+    }
+    bands
+}
+
+/// One step of distance in a dilation grid's entry ([`CellTexels::finish`]).
+const STEP: u64 = 1 << 32;
+/// A dilation grid's entry no covered texel has reached (nor can, in the two passes: a step
+/// more is still above every reached entry).
+const UNREACHED: u64 = u64::MAX >> 1;
+
+/// Rows of both atlases from row `y0` (as many as `color` holds), and their texels' covered
+/// samples.
+struct CellTexels<'a> {
+    color: &'a mut [u8],
+    normal: &'a mut [u8],
+    samples: &'a [u16],
+    width: usize,
+    y0: usize,
+}
+
+impl CellTexels<'_> {
+    /// The atlas texel `[x, y]`'s index in these rows.
+    #[inline]
+    fn at(&self, x: usize, y: usize) -> usize {
+        (y - self.y0) * self.width + x
+    }
+
+    /// Finishes the padded cell `[x0, x1, y0, y1]` of `quad` (see [`finish_cells`]): its
+    /// covered texels' normals rewritten in tangent space, then [`CellTexels::dilate`]d into
+    /// the others. False, leaving it as it is, when no texel of it is covered. `grid` is
+    /// scratch.
+    fn finish(&mut self, rect: [usize; 4], quad: &Quad, grid: &mut Vec<u64>) -> bool {
+        let [x0, x1, y0, y1] = rect;
+        let mut tangent = TangentSpace::of(quad);
+        // The cell with a ring of unreachable texels around it, each entry its distance
+        // (high half) and source (low half, the texel's index in these rows).
+        let gw = x1 - x0 + 2;
+        grid.clear();
+        grid.resize(gw * (y1 - y0 + 2), UNREACHED);
+        let mut any = false;
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let i = self.at(x, y);
+                if self.samples[i] > 0 {
+                    any = true;
+                    grid[(y - y0 + 1) * gw + x - x0 + 1] = i as u64;
+                    let n = &mut self.normal[i * 4..i * 4 + 3];
+                    let t = tangent.convert([n[0], n[1], n[2]]);
+                    n.copy_from_slice(&t);
+                }
+            }
+        }
+        if any {
+            self.dilate(rect, grid);
+        }
+        any
+    }
+
+    /// Gives each uncovered texel of the cell `[x0, x1, y0, y1]` the colour and normal of a
+    /// covered texel nearest it in chessboard distance (`grid`, see [`CellTexels::finish`]:
+    /// each covered texel itself at distance 0): the two raster passes of Rosenfeld and
+    /// Pfaltz over 8-neighbours, exact for this distance, each texel keeping the least of
+    /// its entry and its four neighbours' behind it, one step further (on a tie of distance,
+    /// the source first in row order). A texel costs four comparisons a pass, with no
+    /// queue and no bounds test (the ring is never reached).
+    fn dilate(&mut self, [x0, x1, y0, y1]: [usize; 4], grid: &mut [u64]) {
+        let gw = x1 - x0 + 2;
+        for y in 1..=y1 - y0 {
+            for i in y * gw + 1..y * gw + gw - 1 {
+                let near = grid[i - 1]
+                    .min(grid[i - gw - 1])
+                    .min(grid[i - gw])
+                    .min(grid[i - gw + 1]);
+                grid[i] = grid[i].min(near + STEP);
+            }
+        }
+        for y in (1..=y1 - y0).rev() {
+            for i in (y * gw + 1..y * gw + gw - 1).rev() {
+                let near = grid[i + 1]
+                    .min(grid[i + gw + 1])
+                    .min(grid[i + gw])
+                    .min(grid[i + gw - 1]);
+                grid[i] = grid[i].min(near + STEP);
+            }
+        }
+        for y in y0..y1 {
+            let row = &grid[(y - y0 + 1) * gw + 1..][..x1 - x0];
+            for (x, &entry) in (x0..x1).zip(row) {
+                let to = self.at(x, y);
+                let from = (entry & u64::from(u32::MAX)) as usize;
+                if (STEP..UNREACHED).contains(&entry) {
+                    let colour: [u8; 3] = [0, 1, 2].map(|k| self.color[from * 4 + k]);
+                    let normal: [u8; 3] = [0, 1, 2].map(|k| self.normal[from * 4 + k]);
+                    self.color[to * 4..to * 4 + 3].copy_from_slice(&colour);
+                    self.normal[to * 4..to * 4 + 3].copy_from_slice(&normal);
+                }
             }
         }
     }
-    // `queue[next..]` is still to expand.
-    let mut next = 0;
-    while let Some(&(x, y)) = queue.get(next) {
-        next += 1;
-        let src = source[y * cw + x];
-        for (dx, dy) in [
-            (-1, 0),
-            (1, 0),
-            (0, -1),
-            (0, 1),
-            (-1, -1),
-            (1, -1),
-            (-1, 1),
-            (1, 1),
-        ] {
-            let (nx, ny) = (x as isize + dx, y as isize + dy);
-            if nx < 0 || ny < 0 || nx >= cw as isize || ny >= ch as isize {
-                continue;
-            }
-            let j = ny as usize * cw + nx as usize;
-            if source[j] == usize::MAX {
-                source[j] = src;
-                queue.push((nx as usize, ny as usize));
+
+    /// Sets the alpha of the covered texels of the cell `[x0, x1, y0, y1]`: opaque from
+    /// `threshold` covered samples, clear below ([`preserve_coverage`]: binary, so that
+    /// bilinear magnification keeps an isolated passing texel, 61 % of its area, instead of
+    /// eroding one that barely passes to nothing).
+    fn threshold(&mut self, [x0, x1, y0, y1]: [usize; 4], threshold: u32) {
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let i = self.at(x, y);
+                let n = u32::from(self.samples[i]);
+                if n > 0 {
+                    let alpha = if n >= threshold { 255 } else { 0 };
+                    self.color[i * 4 + 3] = alpha;
+                    self.normal[i * 4 + 3] = alpha;
+                }
             }
         }
     }
-    source
+
+    /// Fills the padded cell `[x0, x1, y0, y1]` of `quad`, none of it covered, with the colour
+    /// `fallback` and the quad's own front normal (alpha staying 0).
+    fn fill(&mut self, [x0, x1, y0, y1]: [usize; 4], quad: &Quad, fallback: [u8; 3]) {
+        let front = TangentSpace::of(quad).front();
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let i = self.at(x, y);
+                self.color[i * 4..i * 4 + 3].copy_from_slice(&fallback);
+                self.normal[i * 4..i * 4 + 3].copy_from_slice(&front);
+            }
+        }
+    }
+}
+
+/// A quad's tangent frame (`axis_u`, `axis_v`, front normal), rewriting atlas normal bytes
+/// (world space, `[0, 0, 0]` for "no normal": the quad's own) as tangent-space ones.
+struct TangentSpace {
+    u: Vec3,
+    v: Vec3,
+    front: Vec3,
+    /// The last bytes converted and what they became: neighbouring texels mostly share
+    /// their normal (a flat card).
+    last: Option<([u8; 3], [u8; 3])>,
+}
+
+impl TangentSpace {
+    fn of(quad: &Quad) -> Self {
+        TangentSpace {
+            u: quad.axis_u.normalize_or_zero(),
+            v: quad.axis_v.normalize_or_zero(),
+            front: front_normal(quad),
+            last: None,
+        }
+    }
+
+    /// The quad's own front normal in its tangent frame, as bytes.
+    fn front(&mut self) -> [u8; 3] {
+        self.convert([0, 0, 0])
+    }
+
+    /// World-space normal bytes `n` in the tangent frame, as bytes.
+    fn convert(&mut self, n: [u8; 3]) -> [u8; 3] {
+        if let Some((_, t)) = self.last.filter(|(seen, _)| *seen == n) {
+            return t;
+        }
+        let decode = |v: u8| f32::from(v) / 255.0 * 2.0 - 1.0;
+        let world = if n == [0, 0, 0] {
+            let [x, y, z, _] = encode_normal(self.front, 0);
+            [x, y, z]
+        } else {
+            n
+        };
+        let m = Vec3::new(decode(world[0]), decode(world[1]), decode(world[2]))
+            .normalize_or(self.front);
+        let t = Vec3::new(m.dot(self.u), m.dot(self.v), m.dot(self.front)).normalize_or(Vec3::Z);
+        let [r, g, b, _] = encode_normal(t, 0);
+        self.last = Some((n, [r, g, b]));
+        [r, g, b]
+    }
 }
 
 /// Mean colour (in linear light) of all covered texels, mid grey when there are none.
-fn mean_color(d: &Downsampled) -> [u8; 3] {
+fn mean_color(color: &[u8], samples: &[u16]) -> [u8; 3] {
     let lut = &*SRGB_TO_LINEAR;
     let mut sum = [0.0f64; 3];
     let mut n = 0u64;
-    for (i, _) in d.covered.iter().enumerate().filter(|(_, c)| **c) {
+    for (i, _) in samples.iter().enumerate().filter(|(_, n)| **n > 0) {
         for k in 0..3 {
-            sum[k] += f64::from(lut[d.color[i * 4 + k] as usize]);
+            sum[k] += f64::from(lut[color[i * 4 + k] as usize]);
         }
         n += 1;
     }
@@ -1437,6 +1563,74 @@ mod tests {
             assert!(a == 0 || a == 255, "binary alpha, got {a}");
             if d.samples[i] == 0 {
                 assert_eq!(a, 0);
+            }
+        }
+    }
+
+    #[test]
+    fn dilation_copies_a_nearest_covered_texel_of_the_cell() {
+        // Three cells side by side and one below (two bands of rows), padding 2, a few
+        // scattered covered texels each with its own colour; the third cell has none.
+        let (w, h) = (40, 30);
+        let cells = [(2, 2, 8, 9), (14, 2, 9, 6), (27, 2, 6, 6), (2, 17, 12, 10)].map(
+            |(x, y, width, height)| Cell {
+                x,
+                y,
+                width,
+                height,
+            },
+        );
+        let quad = Quad {
+            plane: crate::plane::Plane {
+                normal: Vec3::Z,
+                offset: 0.0,
+            },
+            center: Vec3::ZERO,
+            axis_u: Vec3::X,
+            axis_v: Vec3::Y,
+            half_size: Vec2::ONE,
+        };
+        let mut d = Downsampled::new(w, h);
+        let covered = [
+            (3, 4),
+            (8, 10),
+            (5, 5),
+            (20, 3),
+            (14, 7),
+            (2, 26),
+            (13, 17),
+            (7, 21),
+        ];
+        for (k, &(x, y)) in covered.iter().enumerate() {
+            let i = (y * w + x) as usize;
+            d.samples[i] = 16;
+            d.color[i * 4..i * 4 + 4].copy_from_slice(&[10 + k as u8 * 20, 7, 9, 255]);
+            d.normal[i * 4..i * 4 + 4].copy_from_slice(&[128, 128, 255, 255]);
+        }
+        let atlas = finish_cells(d, &cells, &[quad; 4], 2);
+        for (c, cell) in cells.iter().enumerate() {
+            let [x0, x1, y0, y1] = padded_rect(cell, 2, w, h);
+            let own: Vec<(usize, usize)> = (covered.iter())
+                .map(|&(x, y)| (x as usize, y as usize))
+                .filter(|&(x, y)| (x0..x1).contains(&x) && (y0..y1).contains(&y))
+                .collect();
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let i = y * w as usize + x;
+                    let texel = &atlas.color[i * 4..i * 4 + 4];
+                    if own.is_empty() {
+                        // No covered texel: the mean colour, alpha 0.
+                        assert_eq!(texel[3], 0, "cell {c} ({x},{y})");
+                        continue;
+                    }
+                    let distance = |&(sx, sy): &(usize, usize)| sx.abs_diff(x).max(sy.abs_diff(y));
+                    let nearest = own.iter().map(distance).min().expect("own texels");
+                    let source = (own.iter())
+                        .find(|&&(sx, sy)| atlas.color[(sy * w as usize + sx) * 4] == texel[0]);
+                    let source = source.unwrap_or_else(|| panic!("cell {c} ({x},{y}) {texel:?}"));
+                    assert_eq!(distance(source), nearest, "cell {c} ({x},{y})");
+                    assert_eq!(&atlas.normal[i * 4..i * 4 + 3], &[128, 128, 255]);
+                }
             }
         }
     }

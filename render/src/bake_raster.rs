@@ -413,33 +413,26 @@ impl<'a> BakeTarget<'a> {
             colour: vec![[0.0; 3]; w * h],
             normal: vec![[0.0; 3]; w * h],
         };
-        // One pixel row's samples shaded: colour, and the normal where it has one.
-        let mut shaded = vec![(Vec3::ZERO, None); ss * width];
+        // Per pixel of the row: its covered samples, their colours' and normals' sums.
+        let mut sums = vec![(0u16, Vec3::ZERO, Vec3::ZERO); w];
         // The triangle of the last samples shaded: neighbouring samples mostly share it.
         let mut shader: Option<(u32, Shader)> = None;
         for py in 0..h {
+            sums.fill((0, Vec3::ZERO, Vec3::ZERO));
             for dy in 0..ss {
                 let y = py * ss + dy;
                 let row = &winner[y * width..(y + 1) * width];
-                let out = &mut shaded[dy * width..(dy + 1) * width];
-                self.shade_row(row, [region.x0, region.y0 + y], out, &mut shader, linear);
-            }
-            for px in 0..w {
-                let (mut count, mut colour, mut normal) = (0u16, Vec3::ZERO, Vec3::ZERO);
-                for dy in 0..ss {
-                    let y = py * ss + dy;
-                    for x in px * ss..(px + 1) * ss {
-                        if winner[y * width + x] == EMPTY {
-                            continue;
-                        }
-                        let (c, n) = shaded[dy * width + x];
-                        colour += c;
-                        if let Some(n) = n {
-                            normal += n;
-                        }
-                        count += 1;
+                let at = [region.x0, region.y0 + y];
+                self.shade_row(row, at, &mut shader, linear, |x, (c, n)| {
+                    let (count, colour, normal) = &mut sums[x / ss];
+                    *colour += c;
+                    if let Some(n) = n {
+                        *normal += n;
                     }
-                }
+                    *count += 1;
+                });
+            }
+            for (px, &(count, colour, normal)) in sums.iter().enumerate() {
                 let i = py * w + px;
                 image.samples[i] = count;
                 if count > 0 {
@@ -452,19 +445,22 @@ impl<'a> BakeTarget<'a> {
     }
 
     /// Shades the covered samples of one row of a region (`row`, its winners, from sample
-    /// `[x0, y]`) into `out`: eight at a time where one triangle won several of them and the
-    /// machine can, one by one otherwise. `shader` is the last triangle's.
+    /// `[x0, y]`) and hands each to `add` with its column in the row, in column order: eight
+    /// at a time where one triangle won several of them and the machine can, one by one
+    /// otherwise. `shader` is the last triangle's.
     fn shade_row<'s>(
         &'s self,
         row: &[u32],
         [x0, y]: [usize; 2],
-        out: &mut [(Vec3, Option<Vec3>)],
         shader: &mut Option<(u32, Shader<'s>)>,
         linear: &[f32; 256],
+        mut add: impl FnMut(usize, (Vec3, Option<Vec3>)),
     ) {
+        let mut out = [(Vec3::ZERO, None); 8];
         for x in (0..row.len()).step_by(8) {
             let group = &row[x..(x + 8).min(row.len())];
-            let mut pending = lanes_where(group, |ti| ti != EMPTY);
+            let covered = lanes_where(group, |ti| ti != EMPTY);
+            let mut pending = covered;
             while pending != 0 {
                 let ti = group[pending.trailing_zeros() as usize];
                 let s = match shader {
@@ -481,14 +477,20 @@ impl<'a> BakeTarget<'a> {
                     while done != 0 {
                         let i = done.trailing_zeros() as usize;
                         done &= done - 1;
-                        out[x + i] = s.lane(&r, i);
+                        out[i] = s.lane(&r, i);
                     }
                 }
                 while same != 0 {
                     let i = same.trailing_zeros() as usize;
                     same &= same - 1;
-                    out[x + i] = self.shade(s, [x0 + x + i, y], linear);
+                    out[i] = self.shade(s, [x0 + x + i, y], linear);
                 }
+            }
+            let mut covered = covered;
+            while covered != 0 {
+                let i = covered.trailing_zeros() as usize;
+                covered &= covered - 1;
+                add(x + i, out[i]);
             }
         }
     }
