@@ -13,9 +13,10 @@
 //! then transformed on the CPU into the supersampled atlas (the quad's rectangle maps onto its
 //! texture's cell, depth runs from the quad's far to near member), clipped to its cell, and the
 //! whole supersampled atlas is drawn with identity-matrix renders. By default the CPU bake
-//! rasteriser ([`frond_render::BakeTarget`]) sets up strips of whole atlas rows, a few
-//! targets in all, and draws each cell's part of a strip alone from its own triangles, in
-//! parallel, colour and normals in one pass (the same atlas on every machine);
+//! rasteriser ([`frond_render::BakeTarget`]) frames strips of whole atlas rows, a few
+//! targets in all, and draws each cell's part of a strip alone from its own triangles, set
+//! up as it is drawn, in parallel, colour and normals in one pass (the same atlas on every
+//! machine);
 //! [`BakeRasteriser::Wgpu`] draws square tiles through the wgpu renderer, a colour and a
 //! normal pass each.
 
@@ -848,7 +849,7 @@ fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeErr
     let ss = job.params.supersample;
     let (total, needed) = (ss * ss, cutoff_samples(job.params));
     let prepared = SoftwareTextures::for_bake(job.textures)?;
-    let mut scene = job.scene();
+    let scene = job.scene();
     let strips = (0..out.height).step_by(CPU_STRIP_TEXELS as usize);
     let (whole, shorter): (Vec<u32>, Vec<u32>) =
         strips.partition(|&ty| out.height - ty >= CPU_STRIP_TEXELS);
@@ -857,23 +858,29 @@ fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeErr
             continue;
         };
         let th = CPU_STRIP_TEXELS.min(out.height - first);
-        let regions = cell_regions(job, &group, [out.width, th], &mut scene.meshes);
+        let regions = cell_regions(job, &group, [out.width, th]);
         let target = BakeTarget::new(&scene, &prepared, Mat4::IDENTITY, out.width, th, ss)?;
+        let strip_rect = |ty: u32| [0, ty * ss, out.width * ss, th * ss];
         let texels: Vec<Vec<CoveredTexel>> = regions
             .par_iter()
-            .map_init(BakeScratch::default, |scratch, region| {
-                let image = target.render(region.rect, region.meshes.clone(), scratch);
-                (image.samples.iter().enumerate())
-                    .filter(|&(_, &n)| n > 0)
-                    .map(|(i, &n)| {
-                        let normal = Vec3::from(image.normal[i]);
-                        let (c, nb) =
-                            texel_bytes(u32::from(n), total, needed, image.colour[i], normal);
-                        (i, n, c, nb)
-                    })
-                    .collect()
-            })
-            .collect();
+            .map_init(
+                || (BakeScratch::default(), Vec::new()),
+                |(scratch, meshes), region| {
+                    let tris = &job.placed_triangles[region.cell];
+                    cell_meshes(meshes, tris, strip_rect(region.ty), job.materials.len());
+                    let image = target.render(region.rect, meshes, scratch)?;
+                    Ok((image.samples.iter().enumerate())
+                        .filter(|&(_, &n)| n > 0)
+                        .map(|(i, &n)| {
+                            let normal = Vec3::from(image.normal[i]);
+                            let (c, nb) =
+                                texel_bytes(u32::from(n), total, needed, image.colour[i], normal);
+                            (i, n, c, nb)
+                        })
+                        .collect())
+                },
+            )
+            .collect::<Result<_, BakeError>>()?;
         store_texels(out, &regions, &texels);
     }
     Ok(())
@@ -885,53 +892,27 @@ struct CellRegion {
     ty: u32,
     /// Its texels `[x, y, w, h]`, rows counted from the strip's first.
     rect: [u32; 4],
-    /// The meshes holding its triangles.
-    meshes: Range<usize>,
+    /// The cell.
+    cell: usize,
 }
 
-/// The regions of the cells with triangles in the strips `group` (first rows) of
-/// `th` rows of an atlas `width` texels wide, strip by strip, their meshes (in NDC of their
-/// strip's supersampled rectangle) made in parallel into `meshes` (emptied first).
-fn cell_regions(
-    job: &AtlasJob,
-    group: &[u32],
-    [width, th]: [u32; 2],
-    meshes: &mut Vec<DrawMesh>,
-) -> Vec<CellRegion> {
+/// The regions of the cells with triangles in the strips `group` (first rows) of `th` rows
+/// of an atlas `width` texels wide, strip by strip.
+fn cell_regions(job: &AtlasJob, group: &[u32], [width, th]: [u32; 2]) -> Vec<CellRegion> {
     let ss = job.params.supersample;
-    let strip_rect = |ty: u32| [0, ty * ss, width * ss, th * ss];
-    // Every (strip, cell) pair where the cell has triangles in the strip.
-    let parts: Vec<(u32, usize)> = (group.iter())
+    (group.iter())
         .flat_map(|&ty| {
+            let strip = [0, ty * ss, width * ss, th * ss];
             (job.cells.iter().zip(job.placed_triangles).enumerate())
-                .filter(move |(_, (cell, tris))| {
-                    !tris.is_empty() && cell_in_tile(cell, ss, strip_rect(ty))
+                .filter(move |(_, (cell, tris))| !tris.is_empty() && cell_in_tile(cell, ss, strip))
+                .map(move |(c, (cell, _))| {
+                    let (y0, y1) = (cell.y.max(ty), (cell.y + cell.height).min(ty + th));
+                    CellRegion {
+                        ty,
+                        rect: [cell.x, y0 - ty, cell.width, y1 - y0],
+                        cell: c,
+                    }
                 })
-                .map(move |(c, _)| (ty, c))
-        })
-        .collect();
-    let made: Vec<Vec<DrawMesh>> = parts
-        .par_iter()
-        .map(|&(ty, c)| {
-            cell_meshes(
-                &job.placed_triangles[c],
-                strip_rect(ty),
-                job.materials.len(),
-            )
-        })
-        .collect();
-    meshes.clear();
-    (parts.iter().zip(made))
-        .map(|(&(ty, c), made)| {
-            let cell = &job.cells[c];
-            let (y0, y1) = (cell.y.max(ty), (cell.y + cell.height).min(ty + th));
-            let first = meshes.len();
-            meshes.extend(made);
-            CellRegion {
-                ty,
-                rect: [cell.x, y0 - ty, cell.width, y1 - y0],
-                meshes: first..meshes.len(),
-            }
         })
         .collect()
 }
@@ -974,31 +955,40 @@ fn store_texels(out: &mut Downsampled, regions: &[CellRegion], texels: &[Vec<Cov
 type CoveredTexel = (usize, u16, [u8; 4], [u8; 4]);
 
 /// One cell's triangles `tris` (supersampled atlas coordinates) in NDC of the supersampled
-/// rectangle `rect` (as [`tile_meshes`] places them, with their normals): one mesh per
-/// material, in material order (the order [`tile_meshes`] draws a cell's triangles in).
-fn cell_meshes(tris: &[PlacedTriangle], rect: [u32; 4], material_count: usize) -> Vec<DrawMesh> {
-    (0..material_count)
-        .filter_map(|material| {
-            let of_material = |t: &&PlacedTriangle| t.material as usize == material;
-            let vertices = 3 * tris.iter().filter(of_material).count();
-            if vertices == 0 {
-                return None;
-            }
-            let mut mesh = DrawMesh {
-                positions: Vec::with_capacity(vertices),
-                uvs: Some(Vec::with_capacity(vertices)),
-                indices: Vec::with_capacity(vertices),
-                material,
-                ..Default::default()
-            };
-            let mut normals = Vec::with_capacity(vertices);
-            for t in tris.iter().filter(of_material) {
-                push_triangle(&mut mesh, &mut normals, t, rect);
-            }
-            mesh.normals = Some(normals);
-            Some(mesh)
-        })
-        .collect()
+/// rectangle `rect` (as [`tile_meshes`] places them, with their normals) written into
+/// `meshes` (its buffers reused): one mesh per material with triangles, in material order
+/// (the order [`tile_meshes`] draws a cell's triangles in).
+fn cell_meshes(
+    meshes: &mut Vec<DrawMesh>,
+    tris: &[PlacedTriangle],
+    rect: [u32; 4],
+    material_count: usize,
+) {
+    let mut used = 0;
+    for material in 0..material_count {
+        let of_material = |t: &&PlacedTriangle| t.material as usize == material;
+        if !tris.iter().any(|t| of_material(&t)) {
+            continue;
+        }
+        if meshes.len() == used {
+            meshes.push(DrawMesh::default());
+        }
+        let mesh = &mut meshes[used];
+        used += 1;
+        mesh.material = material;
+        mesh.positions.clear();
+        mesh.indices.clear();
+        let mut uvs = mesh.uvs.take().unwrap_or_default();
+        let mut normals = mesh.normals.take().unwrap_or_default();
+        uvs.clear();
+        normals.clear();
+        mesh.uvs = Some(uvs);
+        for t in tris.iter().filter(of_material) {
+            push_triangle(mesh, &mut normals, t, rect);
+        }
+        mesh.normals = Some(normals);
+    }
+    meshes.truncate(used);
 }
 
 /// Appends triangle `t` (supersampled atlas coordinates) to `mesh` in NDC of the

@@ -19,9 +19,10 @@
 //! once ([`crate::bake_lanes`]); the colour is filtered from levels decoded to linear light
 //! beforehand. Each gives the same bits (on oak_dense's fixed per-bone configuration the bake
 //! went from 1.33 to 0.68–0.72 s with them and the regions below; docs/performance.md has
-//! each step). A [`BakeTarget`] sets a render's triangles up once; its regions are then drawn one by one,
-//! each from its own meshes into buffers of its own size, and resolved alone: the billboard
-//! bake draws each atlas cell so, in parallel ([`render_bake`] draws bands of rows). Regions are
+//! each step). A [`BakeTarget`] holds a render's frame, materials and textures; its regions
+//! are drawn one by one, each from its own meshes (set up as it is drawn) into buffers of its
+//! own size, and resolved alone: the billboard bake draws each atlas cell so, in parallel
+//! ([`render_bake`] draws bands of rows, each setting every mesh up). Regions are
 //! independent, so the image is the same whatever the thread count, and from machine to
 //! machine.
 //!
@@ -32,8 +33,6 @@
 //! normal, flipped on back faces so it faces the viewer (improved-billboard-cloud §4 items 4
 //! and 7).
 
-use std::ops::Range;
-
 use frond_scene::Wrap;
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
@@ -42,10 +41,10 @@ use crate::bake_lanes::{LaneShading, ShadeLanes};
 use crate::error::RenderError;
 use crate::pipeline::SRGB_LINEAR;
 use crate::sample_lanes::{self, LaneTest, TriangleLanes};
-use crate::scene::DrawScene;
+use crate::scene::{DrawMesh, DrawScene, validate_mesh};
 use crate::software::{
-    AlphaCutoff, BAND_PIXELS, LinearLevel, Setup, Shading, SoftwareTextures, checked_target,
-    setup_meshes,
+    AlphaCutoff, BAND_PIXELS, LinearLevel, SetUpMeshes, Setup, Shading, SoftwareTextures,
+    checked_target,
 };
 use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
 
@@ -120,15 +119,14 @@ fn bake_with(
         [width, height, supersample],
         shortcuts,
     )?;
-    let meshes = 0..scene.meshes.len();
     let bands: Vec<BakeImage> = (0..height.div_ceil(BAND_PIXELS as u32))
         .into_par_iter()
         .map_init(BakeScratch::default, |scratch, b| {
             let y = b * BAND_PIXELS as u32;
             let rows = (BAND_PIXELS as u32).min(height - y);
-            target.render([0, y, width, rows], meshes.clone(), scratch)
+            target.render([0, y, width, rows], &scene.meshes, scratch)
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     let pixels = width as usize * height as usize;
     let mut image = BakeImage {
         width,
@@ -145,39 +143,34 @@ fn bake_with(
     Ok(image)
 }
 
-/// Meshes a thread sets up at a time.
-const SETUP_MESHES: usize = 256;
-
 /// No triangle at this sample.
 const EMPTY: u32 = u32::MAX;
 
-/// One thread's per-sample buffers, reused from region to region: the nearest depth so far
-/// and the triangle there.
+/// One thread's buffers, reused from region to region: the region's triangles set up, and
+/// per sample the nearest depth so far and the triangle there.
 #[derive(Debug, Default)]
 pub struct BakeScratch {
+    set_up: SetUpMeshes,
     depth: Vec<f32>,
     winner: Vec<u32>,
 }
 
-/// A bake render's triangles set up once, for its regions to be drawn one by one
-/// ([`BakeTarget::render`]), each from its own meshes: a billboard atlas is thousands of
-/// small cells whose triangles lie within them, and a cell drawn alone keeps its samples in
-/// the core's cache and resolves no empty texel around it. Every sample is the one
-/// [`render_bake`] draws when a region's meshes hold every triangle reaching into it.
+/// A bake render's target, materials and textures, for its regions to be drawn one by one
+/// ([`BakeTarget::render`]), each from its own meshes, set up as it is drawn: a billboard
+/// atlas is thousands of small cells whose triangles lie within them, and a cell drawn alone
+/// keeps its triangles and samples in the core's cache and resolves no empty texel around
+/// it. Every sample is the one [`render_bake`] draws when a region's meshes hold every
+/// triangle reaching into it, in the scene's order.
 pub struct BakeTarget<'a> {
     scene: &'a DrawScene,
     textures: &'a SoftwareTextures,
+    view_proj: Mat4,
     /// Per material, its alpha test.
     cutoffs: Vec<Option<AlphaCutoff>>,
     /// Per material with a textured alpha test, where its test can pass: a triangle's rows
     /// are walked only within the octagon of the level its samples are tested at (the bake's
     /// alpha test reads one, [`SoftwareTextures::bake_alpha_test`]).
     hulls: Vec<Option<HullLevels<'a>>>,
-    triangles: Vec<Setup>,
-    /// Per triangle, its shading (the textures are prepared with colour).
-    shading: Vec<Shading>,
-    /// Per mesh, its first triangle; one entry more, the count.
-    mesh_starts: Vec<u32>,
     /// The target's size in samples.
     size: [usize; 2],
     ss: usize,
@@ -187,9 +180,10 @@ pub struct BakeTarget<'a> {
 }
 
 impl<'a> BakeTarget<'a> {
-    /// `scene`'s triangles set up through `view_proj` for a target of `width`×`height` pixels
-    /// of `supersample`² samples, with `textures` prepared from `scene.textures` with colour
-    /// ([`SoftwareTextures::for_bake`]).
+    /// A target of `width`×`height` pixels of `supersample`² samples seen through
+    /// `view_proj`, drawing with the materials and textures of `scene` (its meshes are
+    /// checked but not drawn: each region names its own), `textures` prepared from
+    /// `scene.textures` with colour ([`SoftwareTextures::for_bake`]).
     pub fn new(
         scene: &'a DrawScene,
         textures: &'a SoftwareTextures,
@@ -222,26 +216,6 @@ impl<'a> BakeTarget<'a> {
                 reason: "a bake render needs textures prepared with colour".into(),
             });
         }
-        // Set up in parallel, a run of meshes at a time (an atlas's cells are thousands of
-        // small meshes), then joined in mesh order.
-        let chunks: Vec<_> = (0..scene.meshes.len().div_ceil(SETUP_MESHES))
-            .into_par_iter()
-            .map(|c| {
-                let meshes = c * SETUP_MESHES..((c + 1) * SETUP_MESHES).min(scene.meshes.len());
-                setup_meshes(scene, meshes, textures, view_proj, [sw as f32, sh as f32])
-            })
-            .collect();
-        let count = chunks.iter().map(|c| c.0.len()).sum();
-        let mut triangles = Vec::with_capacity(count);
-        let mut shading = Vec::with_capacity(count);
-        let mut mesh_starts = Vec::with_capacity(scene.meshes.len() + 1);
-        for (t, s, starts) in chunks {
-            let offset = triangles.len() as u32;
-            mesh_starts.extend(starts[..starts.len() - 1].iter().map(|&i| i + offset));
-            triangles.extend(t);
-            shading.extend(s);
-        }
-        mesh_starts.push(triangles.len() as u32);
         let cutoffs = AlphaCutoff::of_materials(scene);
         let hulls = if shortcuts.hulls {
             HullLevels::of_materials(scene, textures, &cutoffs)
@@ -251,11 +225,9 @@ impl<'a> BakeTarget<'a> {
         Ok(BakeTarget {
             scene,
             textures,
+            view_proj,
             cutoffs,
             hulls,
-            triangles,
-            shading,
-            mesh_starts,
             size: [sw, sh],
             ss: supersample.max(1) as usize,
             lanes: shortcuts.lanes && sample_lanes::available(),
@@ -263,41 +235,54 @@ impl<'a> BakeTarget<'a> {
     }
 
     /// The pixels `[x, y, w, h]` (clamped to the target) drawn with the triangles of
-    /// `meshes` alone and resolved, `scratch` holding the samples meanwhile.
+    /// `meshes` (of the target's materials) alone and resolved, `scratch` holding the
+    /// triangles and samples meanwhile. A mesh that is not valid for the scene is an error.
     pub fn render(
         &self,
         [x, y, w, h]: [u32; 4],
-        meshes: Range<usize>,
+        meshes: &[DrawMesh],
         scratch: &mut BakeScratch,
-    ) -> BakeImage {
+    ) -> Result<BakeImage, RenderError> {
+        for (i, mesh) in meshes.iter().enumerate() {
+            validate_mesh(i, mesh, self.scene.materials.len())?;
+        }
         let ss = self.ss;
         let clamp = |v: u32, side: usize| (v as usize * ss).min(side);
         let (x0, y0) = (clamp(x, self.size[0]), clamp(y, self.size[1]));
         let x1 = clamp(x.saturating_add(w), self.size[0]).max(x0);
         let y1 = clamp(y.saturating_add(h), self.size[1]).max(y0);
-        let last = self.scene.meshes.len();
-        let (m0, m1) = (meshes.start.min(last), meshes.end.min(last));
-        let triangles = if m0 < m1 {
-            self.mesh_starts[m0]..self.mesh_starts[m1]
-        } else {
-            0..0
-        };
         let region = Region { x0, x1, y0, y1 };
-        let BakeScratch { depth, winner } = scratch;
+        let BakeScratch {
+            set_up,
+            depth,
+            winner,
+        } = scratch;
+        let size = self.size.map(|s| s as f32);
+        (set_up).set_up(
+            meshes,
+            &self.scene.materials,
+            self.textures,
+            self.view_proj,
+            size,
+        );
+        let drawn = Drawn {
+            triangles: &set_up.triangles,
+            shading: &set_up.shading,
+        };
         depth.clear();
         depth.resize(region.samples(), f32::INFINITY);
         winner.clear();
         winner.resize(region.samples(), EMPTY);
-        for ti in triangles {
-            self.draw(ti, &region, depth, winner);
+        for ti in 0..drawn.triangles.len() as u32 {
+            self.draw(&drawn, ti, &region, depth, winner);
         }
-        self.resolve(&region, winner)
+        Ok(self.resolve(&drawn, &region, winner))
     }
 
     /// Draws triangle `ti` into the samples of `region`: each sample it covers nearer than
     /// the depth there, where its alpha test passes, takes it.
-    fn draw(&self, ti: u32, region: &Region, depth: &mut [f32], winner: &mut [u32]) {
-        let t = &self.triangles[ti as usize];
+    fn draw(&self, drawn: &Drawn, ti: u32, region: &Region, depth: &mut [f32], winner: &mut [u32]) {
+        let t = &drawn.triangles[ti as usize];
         if (t.max[0].max(0) as usize) < region.x0
             || t.min[0].max(0) as usize >= region.x1
             || (t.max[1].max(0) as usize) < region.y0
@@ -401,7 +386,7 @@ impl<'a> BakeTarget<'a> {
     /// normal) and sums them per pixel, in the order of its samples (rows, then columns).
     /// Where the machine can, the arithmetic of eight samples of a row won by one triangle is
     /// done at once ([`crate::bake_lanes`]: the same bits).
-    fn resolve(&self, region: &Region, winner: &[u32]) -> BakeImage {
+    fn resolve(&self, drawn: &Drawn, region: &Region, winner: &[u32]) -> BakeImage {
         let linear = &*SRGB_LINEAR;
         let ss = self.ss;
         let width = region.x1 - region.x0;
@@ -423,7 +408,7 @@ impl<'a> BakeTarget<'a> {
                 let y = py * ss + dy;
                 let row = &winner[y * width..(y + 1) * width];
                 let at = [region.x0, region.y0 + y];
-                self.shade_row(row, at, &mut shader, linear, |x, (c, n)| {
+                self.shade_row(drawn, row, at, &mut shader, linear, |x, (c, n)| {
                     let (count, colour, normal) = &mut sums[x / ss];
                     *colour += c;
                     if let Some(n) = n {
@@ -450,6 +435,7 @@ impl<'a> BakeTarget<'a> {
     /// otherwise. `shader` is the last triangle's.
     fn shade_row<'s>(
         &'s self,
+        drawn: &Drawn<'s>,
         row: &[u32],
         [x0, y]: [usize; 2],
         shader: &mut Option<(u32, Shader<'s>)>,
@@ -465,7 +451,7 @@ impl<'a> BakeTarget<'a> {
                 let ti = group[pending.trailing_zeros() as usize];
                 let s = match shader {
                     Some((last, s)) if *last == ti => s,
-                    _ => &shader.insert((ti, self.shader(ti))).1,
+                    _ => &shader.insert((ti, self.shader(drawn, ti))).1,
                 };
                 let mut same = lanes_where(group, |t| t == ti);
                 pending &= !same;
@@ -522,8 +508,8 @@ impl<'a> BakeTarget<'a> {
 
 impl BakeTarget<'_> {
     /// What shading a sample of triangle `ti` reads, looked up once.
-    fn shader(&self, ti: u32) -> Shader<'_> {
-        let triangle = &self.triangles[ti as usize];
+    fn shader<'s>(&'s self, drawn: &Drawn<'s>, ti: u32) -> Shader<'s> {
+        let triangle = &drawn.triangles[ti as usize];
         let material = &self.scene.materials[triangle.material as usize];
         let lod = triangle.lod;
         let texels = match material.texture {
@@ -540,7 +526,7 @@ impl BakeTarget<'_> {
             }
         };
         let [r, g, b, _] = material.base_color;
-        let nq = self.shading[ti as usize].nq;
+        let nq = drawn.shading[ti as usize].nq;
         let size = |level: &LinearLevel| [level.width, level.height];
         let levels = match texels {
             Texels::White => Some([None; 2]),
@@ -565,6 +551,12 @@ impl BakeTarget<'_> {
             }),
         }
     }
+}
+
+/// The triangles of a region set up ([`BakeTarget::render`]), and their shading.
+struct Drawn<'a> {
+    triangles: &'a [Setup],
+    shading: &'a [Shading],
 }
 
 /// What the shading of a triangle's samples reads ([`BakeTarget::shader`]).
@@ -903,7 +895,7 @@ mod tests {
         ];
         let mut compared = 0;
         for (rect, meshes) in regions {
-            let image = target.render(rect, meshes, &mut scratch);
+            let image = (target.render(rect, &scene.meshes[meshes], &mut scratch)).expect("render");
             let [x, y, _, _] = rect.map(|v| v as usize);
             let (rw, rh) = (image.width as usize, image.height as usize);
             assert_eq!(

@@ -136,7 +136,11 @@ impl DrawScene {
     }
 }
 
-fn validate_mesh(index: usize, mesh: &DrawMesh, material_count: usize) -> Result<(), RenderError> {
+pub(crate) fn validate_mesh(
+    index: usize,
+    mesh: &DrawMesh,
+    material_count: usize,
+) -> Result<(), RenderError> {
     let vertex_count = mesh.positions.len();
     if !mesh.indices.len().is_multiple_of(3) {
         return Err(RenderError::IndexCount {

@@ -31,7 +31,7 @@ use rayon::prelude::*;
 use crate::error::RenderError;
 use crate::pipeline::{LIGHT_DIRECTION, SRGB_LINEAR, alpha_mip_chain, linear_mip_chain, mip_chain};
 use crate::sample_lanes::{self, LaneFilter, LaneLevel, LaneTest, TriangleLanes};
-use crate::scene::{DrawMaterial, DrawScene, DrawTexture};
+use crate::scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
 use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
 
 /// Most samples per side of the supersampled image (coordinates stay exact in `f32`).
@@ -817,34 +817,101 @@ pub(crate) fn setup(
     sw: f32,
     sh: f32,
 ) -> (Vec<Setup>, Vec<Shading>, Vec<u32>) {
-    setup_meshes(scene, 0..scene.meshes.len(), textures, view_proj, [sw, sh])
+    let mut set_up = SetUpMeshes::default();
+    set_up.set_up(
+        &scene.meshes,
+        &scene.materials,
+        textures,
+        view_proj,
+        [sw, sh],
+    );
+    let SetUpMeshes {
+        triangles,
+        shading,
+        mesh_starts,
+        ..
+    } = set_up;
+    (triangles, shading, mesh_starts)
 }
 
-/// [`setup`] of the meshes `meshes` of `scene` alone (the first triangle of the first of them
-/// at 0).
-pub(crate) fn setup_meshes(
-    scene: &DrawScene,
-    meshes: std::ops::Range<usize>,
+/// Triangles set up by [`SetUpMeshes::set_up`], its buffers reused from call to call.
+#[derive(Debug, Default)]
+pub(crate) struct SetUpMeshes {
+    pub(crate) triangles: Vec<Setup>,
+    /// Per triangle, its shading (when the textures were prepared with colour).
+    pub(crate) shading: Vec<Shading>,
+    /// Per mesh, its first triangle; one entry more, the count.
+    pub(crate) mesh_starts: Vec<u32>,
+    /// A mesh's positions in clip space.
+    clip: Vec<Vec4>,
+}
+
+impl SetUpMeshes {
+    /// [`setup`] of `meshes` (of `materials`) alone, replacing what was set up before.
+    pub(crate) fn set_up(
+        &mut self,
+        meshes: &[DrawMesh],
+        materials: &[DrawMaterial],
+        textures: &SoftwareTextures,
+        view_proj: Mat4,
+        [sw, sh]: [f32; 2],
+    ) {
+        let SetUpMeshes {
+            triangles: out,
+            shading,
+            mesh_starts,
+            clip,
+        } = self;
+        // Reserved up front: growing it (tens of megabytes for a large tree) was a tenth of a
+        // small render's time.
+        let count = meshes.iter().map(|m| m.indices.len() / 3).sum();
+        let shade = textures.colour;
+        out.clear();
+        out.reserve(count);
+        shading.clear();
+        shading.reserve(if shade { count } else { 0 });
+        mesh_starts.clear();
+        mesh_starts.reserve(meshes.len() + 1);
+        for mesh in meshes {
+            set_up_mesh(
+                mesh,
+                materials,
+                textures,
+                view_proj,
+                [sw, sh],
+                clip,
+                out,
+                shading,
+                mesh_starts,
+            );
+        }
+        mesh_starts.push(out.len() as u32);
+    }
+}
+
+/// One mesh of [`SetUpMeshes::set_up`]: its first triangle's index pushed to `mesh_starts`,
+/// its triangles to `out` and their shading to `shading`; `clip` is scratch.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the buffers of SetUpMeshes, borrowed apart"
+)]
+fn set_up_mesh(
+    mesh: &DrawMesh,
+    materials: &[DrawMaterial],
     textures: &SoftwareTextures,
     view_proj: Mat4,
     [sw, sh]: [f32; 2],
-) -> (Vec<Setup>, Vec<Shading>, Vec<u32>) {
-    let meshes = &scene.meshes[meshes];
-    // Reserved up front: growing it (tens of megabytes for a large tree) was a tenth of a small
-    // render's time.
-    let count = meshes.iter().map(|m| m.indices.len() / 3).sum();
+    clip: &mut Vec<Vec4>,
+    out: &mut Vec<Setup>,
+    shading: &mut Vec<Shading>,
+    mesh_starts: &mut Vec<u32>,
+) {
     let shade = textures.colour;
-    let mut out = Vec::with_capacity(count);
-    let mut shading = Vec::with_capacity(if shade { count } else { 0 });
-    let mut mesh_starts = Vec::with_capacity(meshes.len() + 1);
-    for mesh in meshes {
+    {
         mesh_starts.push(out.len() as u32);
-        let material = &scene.materials[mesh.material];
-        let clip: Vec<Vec4> = mesh
-            .positions
-            .iter()
-            .map(|p| view_proj * Vec3::from(*p).extend(1.0))
-            .collect();
+        let material = &materials[mesh.material];
+        clip.clear();
+        clip.extend((mesh.positions.iter()).map(|p| view_proj * Vec3::from(*p).extend(1.0)));
         let texture = material.texture.map(|t| &textures.textures[t]);
         let lit = mesh.normals.is_some();
         // The normal map applies to lit meshes with tangents when it was prepared (colour).
@@ -891,8 +958,6 @@ pub(crate) fn setup_meshes(
             }
         }
     }
-    mesh_starts.push(out.len() as u32);
-    (out, shading, mesh_starts)
 }
 
 /// `polygon` clipped to `0 ≤ z ≤ w` (wgpu's depth range), Sutherland–Hodgman.
