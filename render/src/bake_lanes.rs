@@ -162,3 +162,86 @@ impl ShadeLanes {
         unreachable!("eight-sample lanes are only used where available() is true")
     }
 }
+
+/// The depth test of eight samples `x..x + 8` of a row in the lanes of `hits` (those whose
+/// alpha test passed), whose weights at the span's first sample are `start`, changing by
+/// `step` a sample, with `k0 = x − x0` ([`crate::software`]'s `RowSpan`): each lane whose
+/// depth, interpolated from the corners' `z`, is below `depth`'s there takes it and the
+/// triangle `ti` in `winner`. Every operation is the scalar test's, in its order: the same
+/// depths and winners. The other lanes are written back as read.
+///
+/// # Safety
+/// The machine must have AVX2 ([`crate::sample_lanes::available`]); `depth` and `winner`
+/// hold at least eight entries.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "a row span's and a triangle's parts"
+)]
+pub(crate) unsafe fn depth_test(
+    k0: i32,
+    start: [f32; 3],
+    step: [f32; 3],
+    z: [f32; 3],
+    hits: u32,
+    ti: u32,
+    depth: &mut [f32],
+    winner: &mut [u32],
+) {
+    use std::arch::x86_64::*;
+    assert!(depth.len() >= 8 && winner.len() >= 8);
+    let k = _mm256_cvtepi32_ps(_mm256_add_epi32(
+        _mm256_set1_epi32(k0),
+        _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+    ));
+    // `RowSpan::weights_at`, then `Σ b·z` left to right.
+    let b = [0, 1, 2].map(|j| {
+        _mm256_add_ps(
+            _mm256_set1_ps(start[j]),
+            _mm256_mul_ps(_mm256_set1_ps(step[j]), k),
+        )
+    });
+    let lane_z = weighted_sum(&b, z);
+    let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    let wanted = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+        _mm256_and_si256(_mm256_set1_epi32(hits as i32), bits),
+        bits,
+    ));
+    // SAFETY: both slices hold eight entries (asserted); unaligned loads and stores.
+    unsafe {
+        let old = _mm256_loadu_ps(depth.as_ptr());
+        // `z < depth`: false on a NaN, as the scalar comparison.
+        let take = _mm256_and_ps(wanted, _mm256_cmp_ps::<_CMP_LT_OQ>(lane_z, old));
+        _mm256_storeu_ps(depth.as_mut_ptr(), _mm256_blendv_ps(old, lane_z, take));
+        let owner = _mm256_loadu_si256(winner.as_ptr().cast());
+        let new = _mm256_blendv_epi8(
+            owner,
+            _mm256_set1_epi32(ti as i32),
+            _mm256_castps_si256(take),
+        );
+        _mm256_storeu_si256(winner.as_mut_ptr().cast(), new);
+    }
+}
+
+/// Never called: [`crate::sample_lanes::available`] is false off x86-64.
+///
+/// # Safety
+/// None needed; it only mirrors the x86-64 signature.
+#[cfg(not(target_arch = "x86_64"))]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "a row span's and a triangle's parts"
+)]
+pub(crate) unsafe fn depth_test(
+    _: i32,
+    _: [f32; 3],
+    _: [f32; 3],
+    _: [f32; 3],
+    _: u32,
+    _: u32,
+    _: &mut [f32],
+    _: &mut [u32],
+) {
+    unreachable!("eight-sample lanes are only used where available() is true")
+}

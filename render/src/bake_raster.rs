@@ -37,7 +37,7 @@ use frond_scene::Wrap;
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 
-use crate::bake_lanes::{LaneShading, ShadeLanes};
+use crate::bake_lanes::{self, LaneShading, ShadeLanes};
 use crate::error::RenderError;
 use crate::pipeline::SRGB_LINEAR;
 use crate::sample_lanes::{self, LaneTest, TriangleLanes};
@@ -269,10 +269,11 @@ impl<'a> BakeTarget<'a> {
             triangles: &set_up.triangles,
             shading: &set_up.shading,
         };
+        // Eight samples more: the depth test reads and writes a row's samples eight at a time.
         depth.clear();
-        depth.resize(region.samples(), f32::INFINITY);
+        depth.resize(region.samples() + 8, f32::INFINITY);
         winner.clear();
-        winner.resize(region.samples(), EMPTY);
+        winner.resize(region.samples() + 8, EMPTY);
         for ti in 0..drawn.triangles.len() as u32 {
             self.draw(&drawn, ti, &region, depth, winner);
         }
@@ -332,22 +333,21 @@ impl<'a> BakeTarget<'a> {
                     } else {
                         0xff
                     };
-                    let mut hits = r.passing(todo, |uv| {
+                    let hits = r.passing(todo, |uv| {
                         let (Some(cutoff), Some(texture)) = (cutoff, material.texture) else {
                             return false;
                         };
                         (self.textures).bake_alpha_test(texture, uv, t.lod, material.wrap, cutoff)
                     });
-                    while hits != 0 {
-                        let i = hits.trailing_zeros() as usize;
-                        hits &= hits - 1;
-                        let b = span.weights_at(x + i);
-                        let s = row + x + i - region.x0;
-                        let z = b[0] * t.z[0] + b[1] * t.z[1] + b[2] * t.z[2];
-                        if z < depth[s] {
-                            depth[s] = z;
-                            winner[s] = ti;
-                        }
+                    if hits != 0 {
+                        let s = row + x - region.x0;
+                        let (depth, winner) = (&mut depth[s..s + 8], &mut winner[s..s + 8]);
+                        // SAFETY: as above; the buffers hold eight samples past the last.
+                        unsafe {
+                            bake_lanes::depth_test(
+                                k0, span.start, span.step, t.z, hits, ti, depth, winner,
+                            )
+                        };
                     }
                     x += 8;
                 }
