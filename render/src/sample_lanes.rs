@@ -42,6 +42,15 @@ pub(crate) enum LaneTest<'a> {
         fail_below: u16,
         filter: LaneFilter<'a>,
     },
+    /// The bilinear alpha of `filter.a` (a single level: `filter.b` is not read) from one
+    /// gather of a footprint's four texels, `quads` holding them for every footprint within
+    /// the level (`crate::software`'s `footprint_quads`); only the footprints on the level's
+    /// last row or column (which wrap) are left to `filter`. The same answers as `Table` of
+    /// the same level and test, which decides from bounds only what this filter would.
+    Quads {
+        quads: &'a [u32],
+        filter: LaneFilter<'a>,
+    },
 }
 
 /// The scalar alpha test's filter (`Levels::alpha_test` after its bounds): the bilinear alpha
@@ -231,12 +240,150 @@ unsafe fn bilinear(
     (value, on)
 }
 
+/// [`LaneTest::Quads`] of the samples at `(u, v)` in the lanes of `inside` (`inside_bits`
+/// as bits): the footprints within the level filtered from their quad, the others left to
+/// `filter` as [`TriangleLanes::test`] leaves its open lanes.
+///
+/// # Safety
+/// AVX2. `quads` must hold an entry for every footprint within `filter.a`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn quads_test(
+    quads: &[u32],
+    filter: &LaneFilter,
+    u: std::arch::x86_64::__m256,
+    v: std::arch::x86_64::__m256,
+    inside: std::arch::x86_64::__m256,
+    inside_bits: u32,
+) -> LaneResult {
+    use std::arch::x86_64::*;
+    let level = &filter.a;
+    let half = _mm256_set1_ps(0.5);
+    // `bilinear`'s footprint: `floor(u·w − 0.5)`, its weights the remainders.
+    let x = _mm256_sub_ps(_mm256_mul_ps(u, _mm256_set1_ps(level.width as f32)), half);
+    let y = _mm256_sub_ps(_mm256_mul_ps(v, _mm256_set1_ps(level.height as f32)), half);
+    let (x0, y0) = (_mm256_floor_ps(x), _mm256_floor_ps(y));
+    let (fx, fy) = (_mm256_sub_ps(x, x0), _mm256_sub_ps(y, y0));
+    // Within the level: its first texel at most the last but one of its row and column (a
+    // NaN is not).
+    let within = |c: __m256, n: u32| {
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GE_OQ>(c, _mm256_setzero_ps()),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(c, _mm256_set1_ps(n as f32 - 1.0)),
+        )
+    };
+    let on = _mm256_and_ps(
+        _mm256_and_ps(within(x0, level.width), within(y0, level.height)),
+        inside,
+    );
+    let cell = _mm256_add_epi32(
+        _mm256_mullo_epi32(
+            _mm256_cvttps_epi32(_mm256_and_ps(y0, on)),
+            _mm256_set1_epi32(level.width as i32),
+        ),
+        _mm256_cvttps_epi32(_mm256_and_ps(x0, on)),
+    );
+    // SAFETY: an on lane's cell is a footprint within the level, which `quads` holds; off
+    // lanes are not read.
+    let quad = unsafe {
+        _mm256_mask_i32gather_epi32::<4>(
+            _mm256_setzero_si256(),
+            quads.as_ptr().cast::<i32>(),
+            cell,
+            _mm256_castps_si256(on),
+        )
+    };
+    let byte = |shift: i32| {
+        _mm256_cvtepi32_ps(_mm256_and_si256(
+            _mm256_srlv_epi32(quad, _mm256_set1_epi32(shift)),
+            _mm256_set1_epi32(0xff),
+        ))
+    };
+    let (a, b, c, d) = (byte(0), byte(8), byte(16), byte(24));
+    // `bilerp`: the same operations in the same order.
+    let upper = _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), fx));
+    let lower = _mm256_add_ps(c, _mm256_mul_ps(_mm256_sub_ps(d, c), fx));
+    let alpha = _mm256_add_ps(upper, _mm256_mul_ps(_mm256_sub_ps(lower, upper), fy));
+    // `passes_cutoff`: kept unless below the cutoff (a NaN is kept).
+    let tested = _mm256_mul_ps(
+        _mm256_div_ps(alpha, _mm256_set1_ps(255.0)),
+        _mm256_set1_ps(filter.scale),
+    );
+    let passes = _mm256_cmp_ps::<_CMP_NLT_UQ>(tested, _mm256_set1_ps(filter.cutoff));
+    let on_bits = _mm256_movemask_ps(on) as u32;
+    let mut r = LaneResult {
+        pass: on_bits & _mm256_movemask_ps(passes) as u32,
+        open: inside_bits & !on_bits,
+        u: [0.0; 8],
+        v: [0.0; 8],
+    };
+    if r.open != 0 {
+        // SAFETY: AVX2, as this function's.
+        unsafe { filter_open(&mut r, filter, u, v) };
+    }
+    r
+}
+
+/// The open lanes of `r` filtered by `filter` at `(u, v)` where they can be (`Levels::
+/// alpha_test` after its bounds), passed or closed; those left open get their coordinates
+/// for the scalar test.
+///
+/// # Safety
+/// AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn filter_open(
+    r: &mut LaneResult,
+    filter: &LaneFilter,
+    u: std::arch::x86_64::__m256,
+    v: std::arch::x86_64::__m256,
+) {
+    use std::arch::x86_64::*;
+    if r.open != 0 {
+        let open = lane_mask(r.open);
+        // SAFETY: AVX2, as this function's.
+        let (alpha, on) = unsafe {
+            let (a, on_a) = bilinear(&filter.a, u, v, open);
+            match &filter.b {
+                Some(level) => {
+                    let (b, on_b) = bilinear(level, u, v, open);
+                    let blend = _mm256_add_ps(
+                        a,
+                        _mm256_mul_ps(_mm256_sub_ps(b, a), _mm256_set1_ps(filter.f)),
+                    );
+                    (blend, _mm256_and_ps(on_a, on_b))
+                }
+                None => (a, on_a),
+            }
+        };
+        // `passes_cutoff`: kept unless below the cutoff (a NaN is kept).
+        let tested = _mm256_mul_ps(
+            _mm256_div_ps(alpha, _mm256_set1_ps(255.0)),
+            _mm256_set1_ps(filter.scale),
+        );
+        let passes = _mm256_cmp_ps::<_CMP_NLT_UQ>(tested, _mm256_set1_ps(filter.cutoff));
+        let on_bits = _mm256_movemask_ps(on) as u32 & r.open;
+        r.pass |= on_bits & _mm256_movemask_ps(passes) as u32;
+        r.open &= !on_bits;
+    }
+    if r.open != 0 {
+        // SAFETY: unaligned stores of eight floats into arrays of eight.
+        unsafe {
+            _mm256_storeu_ps(r.u.as_mut_ptr(), u);
+            _mm256_storeu_ps(r.v.as_mut_ptr(), v);
+        }
+    }
+}
+
 impl TriangleLanes<'_> {
     /// Tests the samples `x..x + 8` of a row whose weights at sample `x0` are `start`, changing
     /// by `step` a sample ([`crate::software`]'s `RowSpan`), with `k0 = x − x0`.
     ///
     /// # Safety
-    /// The machine must have AVX2 ([`available`]). A `Table` must hold `width · height + 1`
+    /// The machine must have AVX2 ([`available`]). A `Quads` table must hold every footprint
+    /// within its level, and a `Table` `width · height + 1`
     /// entries.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
@@ -273,23 +420,38 @@ impl TriangleLanes<'_> {
                 v: [0.0; 8],
             };
         }
-        let LaneTest::Table {
-            table,
-            pass_from,
-            fail_below,
-            filter,
-        } = self.test
-        else {
+        if let LaneTest::Opaque = self.test {
             return LaneResult {
                 pass: inside_bits,
                 open: 0,
                 u: [0.0; 8],
                 v: [0.0; 8],
             };
-        };
+        }
         let q = dot(self.q);
         let u = _mm256_div_ps(dot(self.uq.map(|t| t[0])), q);
         let v = _mm256_div_ps(dot(self.uq.map(|t| t[1])), q);
+        let (table, pass_from, fail_below, filter) = match self.test {
+            LaneTest::Table {
+                table,
+                pass_from,
+                fail_below,
+                filter,
+            } => (table, pass_from, fail_below, filter),
+            LaneTest::Quads { quads, filter } => {
+                // SAFETY: AVX2, as this function's; a `Quads` test's table holds every
+                // footprint within its level.
+                return unsafe { quads_test(quads, &filter, u, v, inside, inside_bits) };
+            }
+            LaneTest::Opaque => {
+                return LaneResult {
+                    pass: inside_bits,
+                    open: 0,
+                    u: [0.0; 8],
+                    v: [0.0; 8],
+                };
+            }
+        };
         // The footprint's cell: `floor(u·w − 0.5)`, kept when on the level (a NaN is not, and
         // goes to the filter, which places it as the scalar path does).
         let (width, height) = (filter.a.width, filter.a.height);
@@ -342,40 +504,8 @@ impl TriangleLanes<'_> {
             u: [0.0; 8],
             v: [0.0; 8],
         };
-        if r.open != 0 {
-            let open = lane_mask(r.open);
-            // SAFETY: AVX2, as this function's.
-            let (alpha, on) = unsafe {
-                let (a, on_a) = bilinear(&filter.a, u, v, open);
-                match &filter.b {
-                    Some(level) => {
-                        let (b, on_b) = bilinear(level, u, v, open);
-                        let blend = _mm256_add_ps(
-                            a,
-                            _mm256_mul_ps(_mm256_sub_ps(b, a), _mm256_set1_ps(filter.f)),
-                        );
-                        (blend, _mm256_and_ps(on_a, on_b))
-                    }
-                    None => (a, on_a),
-                }
-            };
-            // `passes_cutoff`: kept unless below the cutoff (a NaN is kept).
-            let tested = _mm256_mul_ps(
-                _mm256_div_ps(alpha, _mm256_set1_ps(255.0)),
-                _mm256_set1_ps(filter.scale),
-            );
-            let passes = _mm256_cmp_ps::<_CMP_NLT_UQ>(tested, _mm256_set1_ps(filter.cutoff));
-            let on_bits = _mm256_movemask_ps(on) as u32 & r.open;
-            r.pass |= on_bits & _mm256_movemask_ps(passes) as u32;
-            r.open &= !on_bits;
-        }
-        if r.open != 0 {
-            // SAFETY: unaligned stores of eight floats into arrays of eight.
-            unsafe {
-                _mm256_storeu_ps(r.u.as_mut_ptr(), u);
-                _mm256_storeu_ps(r.v.as_mut_ptr(), v);
-            }
-        }
+        // SAFETY: AVX2, as this function's.
+        unsafe { filter_open(&mut r, &filter, u, v) };
         r
     }
 

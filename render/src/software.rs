@@ -98,6 +98,11 @@ pub struct SoftwareTextures {
     /// ([`SoftwareTextures::for_bake`]: what [`SoftwareTextures::bake_lanes`] filters); empty
     /// otherwise.
     bake_alpha: Vec<Levels>,
+    /// Per texture and level of `bake_alpha`, each bilinear footprint's four alphas (top
+    /// left, top right, bottom left, bottom right, a byte each from the lowest) at its top
+    /// left texel, for the footprints within the level (0 on its last row and column): what
+    /// the eight-sample test gathers, one read a sample ([`LaneTest::Quads`]).
+    bake_quads: Vec<Vec<Vec<u32>>>,
     /// Per texture and level, when prepared for the bake, its colour decoded to linear light
     /// on first use where the level holds at most [`MAX_LINEAR_TEXELS`] texels: what
     /// [`SoftwareTextures::bake_rgb`] filters; empty otherwise.
@@ -223,6 +228,21 @@ struct AlphaBounds {
     trilinear: Vec<[u8; 2]>,
 }
 
+/// An alpha level's bilinear footprints as four bytes each ([`SoftwareTextures::bake_quads`]):
+/// `[top left, top right, bottom left, bottom right]` at the top left texel's index, for
+/// the footprints within the level; 0 on its last row and column, where footprints wrap.
+fn footprint_quads((w, h, alpha): &(u32, u32, Vec<u8>)) -> Vec<u32> {
+    let (w, h) = (*w as usize, *h as usize);
+    let mut quads = vec![0u32; alpha.len()];
+    for y in 0..h.saturating_sub(1) {
+        let (top, bottom) = (&alpha[y * w..(y + 1) * w], &alpha[(y + 1) * w..(y + 2) * w]);
+        for x in 0..w - 1 {
+            quads[y * w + x] = u32::from_le_bytes([top[x], top[x + 1], bottom[x], bottom[x + 1]]);
+        }
+    }
+    quads
+}
+
 impl AlphaBounds {
     fn new((w, h, alpha): &(u32, u32, Vec<u8>), next: Option<&(u32, u32, Vec<u8>)>) -> AlphaBounds {
         let (w, h) = (*w as usize, *h as usize);
@@ -339,6 +359,9 @@ impl SoftwareTextures {
                 )
             })
             .collect();
+        prepared.bake_quads = (prepared.bake_alpha.iter())
+            .map(|levels| levels.0.par_iter().map(footprint_quads).collect())
+            .collect();
         prepared.bake_linear = (prepared.textures.iter())
             .map(|levels| {
                 levels
@@ -429,16 +452,13 @@ impl SoftwareTextures {
         cutoff: &AlphaCutoff,
     ) -> Option<TriangleLanes<'_>> {
         let level = t.lod.nearest();
-        let table = &self.alpha_bounds.get(texture)?.get(level)?.footprint;
+        let quads = self.bake_quads.get(texture)?.get(level)?;
         let (width, height, texels) = self.bake_alpha.get(texture)?.0.get(level)?;
-        let (pass_from, fail_below) = cutoff.thresholds?;
         Some(TriangleLanes {
             q: t.q,
             uq: t.uq,
-            test: LaneTest::Table {
-                table,
-                pass_from,
-                fail_below,
+            test: LaneTest::Quads {
+                quads,
                 filter: LaneFilter {
                     a: LaneLevel {
                         texels,
@@ -516,6 +536,7 @@ impl SoftwareTextures {
             textures,
             alpha_bounds,
             bake_alpha: Vec::new(),
+            bake_quads: Vec::new(),
             bake_linear: Vec::new(),
             normal_maps,
             colour,
@@ -2441,6 +2462,7 @@ mod tests {
                         .map(|l| match l.test {
                             LaneTest::Opaque => 0,
                             LaneTest::Table { filter, .. } => 1 + usize::from(filter.b.is_some()),
+                            LaneTest::Quads { .. } => unreachable!("coverage tests by bounds"),
                         })
                 });
                 let mut counts = [0usize; 4];
