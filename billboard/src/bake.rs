@@ -848,7 +848,18 @@ const CPU_STRIP_TEXELS: u32 = 256;
 fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeError> {
     let ss = job.params.supersample;
     let (total, needed) = (ss * ss, cutoff_samples(job.params));
-    let prepared = SoftwareTextures::for_bake(job.textures)?;
+    // Only the textures of the materials drawn are prepared.
+    let mut used = vec![false; job.textures.len()];
+    for t in job.placed_triangles.iter().flatten() {
+        let material = job.materials.get(t.material as usize);
+        if let Some(u) = material
+            .and_then(|m| m.texture)
+            .and_then(|i| used.get_mut(i))
+        {
+            *u = true;
+        }
+    }
+    let prepared = SoftwareTextures::for_bake_of(job.textures, &used)?;
     let scene = job.scene();
     let strips = (0..out.height).step_by(CPU_STRIP_TEXELS as usize);
     let (whole, shorter): (Vec<u32>, Vec<u32>) =

@@ -245,6 +245,14 @@ impl<'a> BakeTarget<'a> {
     ) -> Result<BakeImage, RenderError> {
         for (i, mesh) in meshes.iter().enumerate() {
             validate_mesh(i, mesh, self.scene.materials.len())?;
+            if let Some(t) = self.scene.materials[mesh.material].texture
+                && !self.textures.prepared(t)
+            {
+                return Err(RenderError::InvalidTexture {
+                    texture: t,
+                    reason: format!("mesh {i} is drawn with it but it was not prepared"),
+                });
+            }
         }
         let ss = self.ss;
         let clamp = |v: u32, side: usize| (v as usize * ss).min(side);
@@ -726,6 +734,47 @@ mod tests {
             assert_eq!(image.colour[y * 8 + 7], [0.0, 0.0, 1.0]);
             assert_eq!(image.samples[y * 8 + 7], 16);
         }
+    }
+
+    #[test]
+    fn textures_left_out_of_the_preparation_are_an_error_where_drawn() {
+        let textured = DrawMaterial {
+            texture: Some(1),
+            ..DrawMaterial::opaque([1.0; 4])
+        };
+        let texture = |v: u8| DrawTexture {
+            width: 2,
+            height: 2,
+            rgba: vec![v; 16],
+        };
+        let scene = DrawScene {
+            meshes: Vec::new(),
+            materials: vec![DrawMaterial::opaque([0.0, 0.0, 1.0, 1.0]), textured],
+            textures: vec![texture(10), texture(200)],
+        };
+        let only_first =
+            SoftwareTextures::for_bake_of(&scene.textures, &[true, false]).expect("textures");
+        assert!(only_first.prepared(0) && !only_first.prepared(1));
+        let target = BakeTarget::new(&scene, &only_first, Mat4::IDENTITY, 8, 4, 2).expect("target");
+        let mut scratch = BakeScratch::default();
+        let plain = [quad(-1.0, 1.0, 0.5, false, 0, [0.0, 0.0, 1.0])];
+        let image = target
+            .render([0, 0, 8, 4], &plain, &mut scratch)
+            .expect("render");
+        assert!(image.samples.iter().all(|&n| n == 4));
+        let drawn = [quad(-1.0, 1.0, 0.5, false, 1, [0.0, 0.0, 1.0])];
+        let err = target.render([0, 0, 8, 4], &drawn, &mut scratch);
+        assert!(
+            matches!(err, Err(RenderError::InvalidTexture { texture: 1, .. })),
+            "{err:?}"
+        );
+        // Prepared, the same mesh draws its texture.
+        let all = SoftwareTextures::for_bake_of(&scene.textures, &[true, true]).expect("all");
+        let target = BakeTarget::new(&scene, &all, Mat4::IDENTITY, 8, 4, 2).expect("target");
+        let image = target
+            .render([0, 0, 8, 4], &drawn, &mut scratch)
+            .expect("render");
+        assert!(image.samples.iter().all(|&n| n == 4));
     }
 
     /// The shortcuts change nothing, alone or together: walking only the parts of triangles

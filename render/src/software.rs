@@ -344,8 +344,21 @@ impl SoftwareTextures {
     /// billboard bake ([`crate::render_bake`]) draws them: one preparation serves all the
     /// atlas's tiles, whichever meshes each tile holds.
     pub fn for_bake(textures: &[DrawTexture]) -> Result<SoftwareTextures, RenderError> {
+        Self::for_bake_of(textures, &vec![true; textures.len()])
+    }
+
+    /// [`SoftwareTextures::for_bake`] of the textures `used` marks alone (every texture is
+    /// still checked): a tree's bark maps are not drawn on its leaves' billboards. A bake
+    /// render of a material whose texture was left out is an error.
+    pub fn for_bake_of(
+        textures: &[DrawTexture],
+        used: &[bool],
+    ) -> Result<SoftwareTextures, RenderError> {
         let n = textures.len();
-        let mut prepared = Self::prepare(textures, vec![true; n], vec![false; n], true)?;
+        let used = (0..n)
+            .map(|i| used.get(i).copied().unwrap_or(false))
+            .collect();
+        let mut prepared = Self::prepare(textures, used, vec![false; n], true)?;
         // The bake's alpha test reads one level's alpha channel: kept alone (the eight-sample
         // test gathers it a byte a texel), with its footprints' bounds.
         prepared.bake_alpha = prepared
@@ -379,6 +392,11 @@ impl SoftwareTextures {
             })
             .collect();
         Ok(prepared)
+    }
+
+    /// Whether texture `texture` was prepared (has levels).
+    pub(crate) fn prepared(&self, texture: usize) -> bool {
+        self.textures.get(texture).is_some_and(|l| !l.0.is_empty())
     }
 
     /// The bake's alpha test at `uv` of `texture`'s level nearer `lod`
