@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use frond_render::{TreeParts, scene_from_positions};
+use frond_render::materials_scene;
 use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -95,7 +95,7 @@ pub fn build_animated_cloud(
     clusters: &[FoliageCluster],
     method: &str,
 ) -> Result<(AnimatedBillboardCloud, BuildTimings), CloudError> {
-    let (renderer, tree, sampled, params) = (ctx.renderer, ctx.tree, ctx.sampled, ctx.cloud);
+    let (renderer, tree, params) = (ctx.renderer, ctx.tree, ctx.cloud);
     let clock = ctx.clock.clone();
     let mut timings = BuildTimings::default();
     let t0 = Instant::now();
@@ -151,7 +151,7 @@ pub fn build_animated_cloud(
     let baked = if bake.is_empty() {
         None
     } else {
-        let draw = scene_from_positions(tree, &sampled.average, None, TreeParts::Foliage);
+        let draw = materials_scene(tree);
         let bake_quads: Vec<Quad> = bake.iter().map(|&i| quads[i]).collect();
         let bake_drawn: Vec<Vec<usize>> = bake.iter().map(|&i| drawn[i].clone()).collect();
         // The atlas budget holds as many billboards as the chain allowed for it; one that a

@@ -65,4 +65,4 @@ pub use software::{
     CoverageImage, Lighting, SoftwareTextures, depth_complexity, render_coverage,
     render_coverage_with_depth,
 };
-pub use tree::{PosedTree, TreeParts, scene_from_positions, tree_scene};
+pub use tree::{PosedTree, TreeParts, materials_scene, scene_from_positions, tree_scene};

@@ -188,10 +188,35 @@ fn build_scene(
         meshes.push(mesh);
         sources.push(src);
     }
+    let (materials, textures) = materials_and_textures(tree, &mapped);
+    (
+        DrawScene {
+            meshes,
+            materials,
+            textures,
+        },
+        sources,
+    )
+}
+
+/// A draw scene of `tree`'s materials and textures, without meshes (and without normal
+/// maps, as [`scene_from_positions`] has them): what a render of meshes made elsewhere, such
+/// as the billboard bake's, draws with.
+pub fn materials_scene(tree: &Tree) -> DrawScene {
+    let (materials, textures) = materials_and_textures(tree, &vec![false; tree.materials.len()]);
+    DrawScene {
+        meshes: Vec::new(),
+        materials,
+        textures,
+    }
+}
+
+/// `tree`'s materials as drawn, with their normal maps where `mapped`, and its textures.
+fn materials_and_textures(tree: &Tree, mapped: &[bool]) -> (Vec<DrawMaterial>, Vec<DrawTexture>) {
     let materials = tree
         .materials
         .iter()
-        .zip(&mapped)
+        .zip(mapped)
         .map(|(m, &mapped)| DrawMaterial {
             wrap: m.base_color_wrap,
             base_color: m.base_color,
@@ -214,12 +239,5 @@ fn build_scene(
             rgba: t.rgba.clone(),
         })
         .collect();
-    (
-        DrawScene {
-            meshes,
-            materials,
-            textures,
-        },
-        sources,
-    )
+    (materials, textures)
 }
