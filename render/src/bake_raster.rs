@@ -153,6 +153,9 @@ pub struct BakeScratch {
     set_up: SetUpMeshes,
     depth: Vec<f32>,
     winner: Vec<u32>,
+    /// Per sample row, a bit per eight samples (from the region's left) that a triangle
+    /// took one of: the resolve reads those alone (most of a cell is clear).
+    touched: Vec<u64>,
 }
 
 /// A bake render's target, materials and textures, for its regions to be drawn one by one
@@ -264,6 +267,7 @@ impl<'a> BakeTarget<'a> {
             set_up,
             depth,
             winner,
+            touched,
         } = scratch;
         let size = self.size.map(|s| s as f32);
         (set_up).set_up(
@@ -282,16 +286,29 @@ impl<'a> BakeTarget<'a> {
         depth.resize(region.samples() + 8, f32::INFINITY);
         winner.clear();
         winner.resize(region.samples() + 8, EMPTY);
+        touched.clear();
+        touched.resize((region.y1 - region.y0) * region.touched_words(), 0);
+        let mut samples = Samples {
+            depth,
+            winner,
+            touched,
+        };
         for ti in 0..drawn.triangles.len() as u32 {
-            self.draw(&drawn, ti, &region, depth, winner);
+            self.draw(&drawn, ti, &region, &mut samples);
         }
-        Ok(self.resolve(&drawn, &region, winner))
+        Ok(self.resolve(&drawn, &region, winner, touched))
     }
 
     /// Draws triangle `ti` into the samples of `region`: each sample it covers nearer than
     /// the depth there, where its alpha test passes, takes it.
-    fn draw(&self, drawn: &Drawn, ti: u32, region: &Region, depth: &mut [f32], winner: &mut [u32]) {
+    fn draw(&self, drawn: &Drawn, ti: u32, region: &Region, samples: &mut Samples) {
         let t = &drawn.triangles[ti as usize];
+        let words = region.touched_words();
+        let Samples {
+            depth,
+            winner,
+            touched,
+        } = samples;
         if (t.max[0].max(0) as usize) < region.x0
             || t.min[0].max(0) as usize >= region.x1
             || (t.max[1].max(0) as usize) < region.y0
@@ -322,6 +339,8 @@ impl<'a> BakeTarget<'a> {
         let width = region.x1 - region.x0;
         for span in t.row_spans(region.y0, region.y1) {
             let row = (span.y - region.y0) * width;
+            let touched = &mut touched[(span.y - region.y0) * words..][..words];
+            let mut touch = |x: usize| touched[x / 512] |= 1 << (x / 8 % 64);
             let (first, last) = (span.first.max(region.x0), span.last.min(region.x1 - 1));
             if first > last {
                 continue;
@@ -349,6 +368,8 @@ impl<'a> BakeTarget<'a> {
                     });
                     if hits != 0 {
                         let s = row + x - region.x0;
+                        touch(x - region.x0 + hits.trailing_zeros() as usize);
+                        touch(x - region.x0 + 31 - hits.leading_zeros() as usize);
                         let (depth, winner) = (&mut depth[s..s + 8], &mut winner[s..s + 8]);
                         // SAFETY: as above; the buffers hold eight samples past the last.
                         unsafe {
@@ -386,6 +407,7 @@ impl<'a> BakeTarget<'a> {
                 }
                 depth[s] = z;
                 winner[s] = ti;
+                touch(x - region.x0);
             }
         }
     }
@@ -394,7 +416,13 @@ impl<'a> BakeTarget<'a> {
     /// normal) and sums them per pixel, in the order of its samples (rows, then columns).
     /// Where the machine can, the arithmetic of eight samples of a row won by one triangle is
     /// done at once ([`crate::bake_lanes`]: the same bits).
-    fn resolve(&self, drawn: &Drawn, region: &Region, winner: &[u32]) -> BakeImage {
+    fn resolve(
+        &self,
+        drawn: &Drawn,
+        region: &Region,
+        winner: &[u32],
+        touched: &[u64],
+    ) -> BakeImage {
         let linear = &*SRGB_LINEAR;
         let ss = self.ss;
         let width = region.x1 - region.x0;
@@ -416,7 +444,9 @@ impl<'a> BakeTarget<'a> {
                 let y = py * ss + dy;
                 let row = &winner[y * width..(y + 1) * width];
                 let at = [region.x0, region.y0 + y];
-                self.shade_row(drawn, row, at, &mut shader, linear, |x, (c, n)| {
+                let words = region.touched_words();
+                let groups = &touched[y * words..(y + 1) * words];
+                self.shade_row(drawn, row, groups, at, &mut shader, linear, |x, (c, n)| {
                     let (count, colour, normal) = &mut sums[x / ss];
                     *colour += c;
                     if let Some(n) = n {
@@ -441,17 +471,29 @@ impl<'a> BakeTarget<'a> {
     /// `[x0, y]`) and hands each to `add` with its column in the row, in column order: eight
     /// at a time where one triangle won several of them and the machine can, one by one
     /// otherwise. `shader` is the last triangle's.
+    #[expect(clippy::too_many_arguments, reason = "a row, where to find it, and its sink")]
     fn shade_row<'s>(
         &'s self,
         drawn: &Drawn<'s>,
         row: &[u32],
+        groups: &[u64],
         [x0, y]: [usize; 2],
         shader: &mut Option<(u32, Shader<'s>)>,
         linear: &[f32; 256],
         mut add: impl FnMut(usize, (Vec3, Option<Vec3>)),
     ) {
         let mut out = [(Vec3::ZERO, None); 8];
-        for x in (0..row.len()).step_by(8) {
+        let touched = (groups.iter().enumerate()).flat_map(|(k, &word)| {
+            let mut word = word;
+            std::iter::from_fn(move || {
+                (word != 0).then(|| {
+                    let g = word.trailing_zeros() as usize;
+                    word &= word - 1;
+                    (k * 64 + g) * 8
+                })
+            })
+        });
+        for x in touched {
             let group = &row[x..(x + 8).min(row.len())];
             let covered = lanes_where(group, |ti| ti != EMPTY);
             let mut pending = covered;
@@ -625,6 +667,13 @@ fn lanes_where(group: &[u32], f: impl Fn(u32) -> bool) -> u32 {
         .fold(0, |m, (i, _)| m | 1 << i)
 }
 
+/// A region's per-sample buffers as triangles are drawn into it ([`BakeScratch`]).
+struct Samples<'a> {
+    depth: &'a mut [f32],
+    winner: &'a mut [u32],
+    touched: &'a mut [u64],
+}
+
 /// The samples `x0..x1` × `y0..y1` of a region being drawn (whole pixels).
 struct Region {
     x0: usize,
@@ -634,6 +683,11 @@ struct Region {
 }
 
 impl Region {
+    /// Words of a row's bits of eight samples.
+    fn touched_words(&self) -> usize {
+        (self.x1 - self.x0).div_ceil(8).div_ceil(64)
+    }
+
     fn samples(&self) -> usize {
         (self.x1 - self.x0) * (self.y1 - self.y0)
     }
