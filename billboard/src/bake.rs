@@ -651,9 +651,35 @@ static LINEAR_THRESHOLDS: LazyLock<[f32; 255]> = LazyLock::new(|| {
     })
 });
 
-/// Linear value -> nearest sRGB byte (rounding in sRGB space).
+/// Per 1/[`SRGB_BUCKETS`] of linear light from 0 to 1 (one more entry: 1), how many of
+/// [`LINEAR_THRESHOLDS`] lie at or below its start: where [`linear_to_srgb`] starts counting.
+static SRGB_BUCKET_STARTS: LazyLock<[u8; SRGB_BUCKETS + 1]> = LazyLock::new(|| {
+    std::array::from_fn(|b| {
+        let start = b as f32 / SRGB_BUCKETS as f32;
+        LINEAR_THRESHOLDS.partition_point(|&t| t <= start) as u8
+    })
+});
+
+/// Buckets of [`SRGB_BUCKET_STARTS`]: narrower than the thresholds' least spacing (1/3294,
+/// near 0), so a value is at most one threshold past its bucket's start.
+const SRGB_BUCKETS: usize = 4096;
+
+/// Linear value -> nearest sRGB byte (rounding in sRGB space): the thresholds at or below
+/// `x` counted from its bucket's start (a binary search over all 255 was a tenth of the
+/// bake's conversion of texels to bytes).
 fn linear_to_srgb(x: f32) -> u8 {
-    LINEAR_THRESHOLDS.partition_point(|&t| t <= x) as u8
+    // The least threshold is above 0: nothing is at or below 0, a negative value or NaN.
+    if !(x > 0.0) {
+        return 0;
+    }
+    // `x · 4096` is exact (a power of two), so the bucket's start is at or below `x`.
+    let bucket = ((x * SRGB_BUCKETS as f32) as usize).min(SRGB_BUCKETS);
+    let thresholds = &*LINEAR_THRESHOLDS;
+    let mut k = usize::from(SRGB_BUCKET_STARTS[bucket]);
+    while k < thresholds.len() && thresholds[k] <= x {
+        k += 1;
+    }
+    k as u8
 }
 
 /// Alpha byte of a texel with `n` of `total` supersamples covered: 0 when none, 255 when all,
@@ -1497,6 +1523,20 @@ fn mean_color(color: &[u8], samples: &[u16]) -> [u8; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bucketed_conversion_matches_the_binary_search() {
+        // Every threshold and its float neighbours, a sweep, and the edges.
+        let mut values = vec![0.0f32, -0.0, -1.0, 1.0, 1.5, f32::NAN, f32::INFINITY, 1e-30];
+        for &t in LINEAR_THRESHOLDS.iter() {
+            values.extend([t, t.next_down(), t.next_up()]);
+        }
+        values.extend((0..=100_000).map(|i| i as f32 / 100_000.0));
+        for x in values {
+            let searched = LINEAR_THRESHOLDS.partition_point(|&t| t <= x) as u8;
+            assert_eq!(linear_to_srgb(x), searched, "{x}");
+        }
+    }
 
     #[test]
     fn srgb_round_trip_and_rounding() {

@@ -471,7 +471,10 @@ impl<'a> BakeTarget<'a> {
     /// `[x0, y]`) and hands each to `add` with its column in the row, in column order: eight
     /// at a time where one triangle won several of them and the machine can, one by one
     /// otherwise. `shader` is the last triangle's.
-    #[expect(clippy::too_many_arguments, reason = "a row, where to find it, and its sink")]
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "a row, where to find it, and its sink"
+    )]
     fn shade_row<'s>(
         &'s self,
         drawn: &Drawn<'s>,
