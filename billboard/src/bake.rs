@@ -669,7 +669,7 @@ const SRGB_BUCKETS: usize = 4096;
 /// bake's conversion of texels to bytes).
 fn linear_to_srgb(x: f32) -> u8 {
     // The least threshold is above 0: nothing is at or below 0, a negative value or NaN.
-    if !(x > 0.0) {
+    if x.is_nan() || x <= 0.0 {
         return 0;
     }
     // `x · 4096` is exact (a power of two), so the bucket's start is at or below `x`.
