@@ -874,6 +874,10 @@ const CPU_STRIP_TEXELS: u32 = 256;
 fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeError> {
     let ss = job.params.supersample;
     let (total, needed) = (ss * ss, cutoff_samples(job.params));
+    // Per count of covered samples, its alpha.
+    let alphas: Vec<u8> = (0..=total)
+        .map(|n| coverage_alpha(n, total, needed))
+        .collect();
     // Only the textures of the materials drawn are prepared.
     let mut used = vec![false; job.textures.len()];
     for t in job.placed_triangles.iter().flatten() {
@@ -910,8 +914,8 @@ fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeErr
                         .filter(|&(_, &n)| n > 0)
                         .map(|(i, &n)| {
                             let normal = Vec3::from(image.normal[i]);
-                            let (c, nb) =
-                                texel_bytes(u32::from(n), total, needed, image.colour[i], normal);
+                            let alpha = alphas[usize::from(n).min(alphas.len() - 1)];
+                            let (c, nb) = texel_bytes(alpha, image.colour[i], normal);
                             (i, n, c, nb)
                         })
                         .collect())
@@ -1186,7 +1190,7 @@ fn downsample(
             let x = ox + col;
             let mean = sum.map(|c| c / n as f32);
             let normal = if nn > 0 { nsum } else { Vec3::ZERO };
-            let (c, nb) = texel_bytes(n, total, needed, mean, normal);
+            let (c, nb) = texel_bytes(coverage_alpha(n, total, needed), mean, normal);
             samples_row[x] = n as u16;
             color_row[x * 4..x * 4 + 4].copy_from_slice(&c);
             normal_row[x * 4..x * 4 + 4].copy_from_slice(&nb);
@@ -1194,18 +1198,11 @@ fn downsample(
     });
 }
 
-/// One covered texel's colour and normal bytes: `n` of `total` supersamples covered (alpha
-/// from [`coverage_alpha`]), `mean` their linear colour, `normal_sum` the sum of their
-/// normals (rgb 0 when it has no direction: "no normal", which no unit vector encodes to and
+/// One covered texel's colour and normal bytes: `alpha` its coverage's
+/// ([`coverage_alpha`]), `mean` its covered samples' linear colour, `normal_sum` the sum of
+/// their normals (rgb 0 when it has no direction: "no normal", which no unit vector encodes to and
 /// dilation replaces with the quad's normal).
-fn texel_bytes(
-    n: u32,
-    total: u32,
-    needed: u32,
-    mean: [f32; 3],
-    normal_sum: Vec3,
-) -> ([u8; 4], [u8; 4]) {
-    let alpha = coverage_alpha(n, total, needed);
+fn texel_bytes(alpha: u8, mean: [f32; 3], normal_sum: Vec3) -> ([u8; 4], [u8; 4]) {
     let [r, g, b] = mean.map(linear_to_srgb);
     let unit = normal_sum.normalize_or_zero();
     let normal = if unit == Vec3::ZERO {

@@ -49,6 +49,9 @@ pub(crate) enum LaneTest<'a> {
     /// the same level and test, which decides from bounds only what this filter would.
     Quads {
         quads: &'a [u32],
+        /// The least alpha (bytes' units) that passes, where the test is monotone: then one
+        /// comparison decides (the same answers).
+        least_passing: Option<f32>,
         filter: LaneFilter<'a>,
     },
 }
@@ -251,6 +254,7 @@ unsafe fn bilinear(
 #[inline]
 unsafe fn quads_test(
     quads: &[u32],
+    least_passing: Option<f32>,
     filter: &LaneFilter,
     u: std::arch::x86_64::__m256,
     v: std::arch::x86_64::__m256,
@@ -306,11 +310,16 @@ unsafe fn quads_test(
     let lower = _mm256_add_ps(c, _mm256_mul_ps(_mm256_sub_ps(d, c), fx));
     let alpha = _mm256_add_ps(upper, _mm256_mul_ps(_mm256_sub_ps(lower, upper), fy));
     // `passes_cutoff`: kept unless below the cutoff (a NaN is kept).
-    let tested = _mm256_mul_ps(
-        _mm256_div_ps(alpha, _mm256_set1_ps(255.0)),
-        _mm256_set1_ps(filter.scale),
-    );
-    let passes = _mm256_cmp_ps::<_CMP_NLT_UQ>(tested, _mm256_set1_ps(filter.cutoff));
+    let passes = match least_passing {
+        Some(least) => _mm256_cmp_ps::<_CMP_NLT_UQ>(alpha, _mm256_set1_ps(least)),
+        None => {
+            let tested = _mm256_mul_ps(
+                _mm256_div_ps(alpha, _mm256_set1_ps(255.0)),
+                _mm256_set1_ps(filter.scale),
+            );
+            _mm256_cmp_ps::<_CMP_NLT_UQ>(tested, _mm256_set1_ps(filter.cutoff))
+        }
+    };
     let on_bits = _mm256_movemask_ps(on) as u32;
     let mut r = LaneResult {
         pass: on_bits & _mm256_movemask_ps(passes) as u32,
@@ -438,10 +447,16 @@ impl TriangleLanes<'_> {
                 fail_below,
                 filter,
             } => (table, pass_from, fail_below, filter),
-            LaneTest::Quads { quads, filter } => {
+            LaneTest::Quads {
+                quads,
+                least_passing,
+                filter,
+            } => {
                 // SAFETY: AVX2, as this function's; a `Quads` test's table holds every
                 // footprint within its level.
-                return unsafe { quads_test(quads, &filter, u, v, inside, inside_bits) };
+                return unsafe {
+                    quads_test(quads, least_passing, &filter, u, v, inside, inside_bits)
+                };
             }
             LaneTest::Opaque => {
                 return LaneResult {

@@ -146,6 +146,8 @@ pub(crate) struct AlphaCutoff {
     fail: [bool; 256],
     /// The two tables as thresholds ([`AlphaCutoff::thresholds`]).
     thresholds: Option<(u16, u16)>,
+    /// The least filtered alpha (in bytes' units) that passes ([`AlphaCutoff::least_passing`]).
+    least_passing: Option<f32>,
 }
 
 impl AlphaCutoff {
@@ -161,7 +163,38 @@ impl AlphaCutoff {
             pass,
             fail,
             thresholds: Self::thresholds(&pass, &fail),
+            least_passing: Self::least_passing(scale, cutoff),
         }
+    }
+
+    /// The least alpha `a` (in bytes' units, 0 to 255; infinity when none) with
+    /// `a / 255 · scale ≥ cutoff` as [`passes_cutoff`] computes it, found by bisecting the
+    /// floats: every alpha from it on passes, every one below fails, so one comparison
+    /// decides a filtered alpha (the eight-sample test's division and multiplication were on
+    /// its critical path). `None` where the test is not monotone (a negative or NaN scale, a
+    /// NaN cutoff).
+    fn least_passing(scale: f32, cutoff: f32) -> Option<f32> {
+        if scale.is_nan() || scale < 0.0 || cutoff.is_nan() {
+            return None;
+        }
+        let passes = |a: f32| passes_cutoff(a / 255.0 * scale, cutoff);
+        if passes(0.0) {
+            return Some(0.0);
+        }
+        if !passes(255.0) {
+            return Some(f32::INFINITY);
+        }
+        // Non-negative floats order as their bits; `lo` fails, `hi` passes.
+        let (mut lo, mut hi) = (0.0f32.to_bits(), 255.0f32.to_bits());
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if passes(f32::from_bits(mid)) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        Some(f32::from_bits(hi))
     }
 
     /// The test's answer for every alpha within the footprint bounds `[lo, hi]` (bytes), when
@@ -477,6 +510,7 @@ impl SoftwareTextures {
             uq: t.uq,
             test: LaneTest::Quads {
                 quads,
+                least_passing: cutoff.least_passing,
                 filter: LaneFilter {
                     a: LaneLevel {
                         texels,
@@ -2090,6 +2124,32 @@ impl<'a> Raster<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_least_passing_alpha_splits_the_test() {
+        for (scale, cutoff) in [
+            (1.0, 0.5),
+            (0.8, 0.33),
+            (1.0, 0.001),
+            (0.37, 0.9),
+            (2.0, 0.0),
+        ] {
+            let test = AlphaCutoff::new(scale, cutoff);
+            let least = test.least_passing.expect("monotone");
+            let mut alphas: Vec<f32> = (0..=255 * 64).map(|i| i as f32 / 64.0).collect();
+            alphas.extend([least, least.next_down(), least.next_up(), 255.0, 0.0]);
+            // Filtered alphas lie within their texels' bytes.
+            for a in alphas.into_iter().filter(|a| (0.0..=255.0).contains(a)) {
+                assert_eq!(a >= least, test.passes(a / 255.0), "{scale} {cutoff} {a}");
+            }
+        }
+        assert_eq!(
+            AlphaCutoff::new(0.2, 0.5).least_passing,
+            Some(f32::INFINITY)
+        );
+        assert_eq!(AlphaCutoff::new(-1.0, 0.5).least_passing, None);
+        assert_eq!(AlphaCutoff::new(1.0, f32::NAN).least_passing, None);
+    }
     use crate::camera::{Camera, Projection};
     use crate::scene::DrawMesh;
 
