@@ -57,7 +57,10 @@ pub fn source_copy(soup: &TriangleSoup, quad: &Quad, members: &[usize]) -> Optio
         let d = p - quad.center;
         Vec2::new(d.dot(quad.axis_u), d.dot(quad.axis_v))
     };
-    let mut flat: Vec<[Vec2; 3]> = Vec::with_capacity(members.len());
+    let tri_area = |[a, b, c]: [Vec2; 3]| 0.5 * (b - a).perp_dot(c - a).abs();
+    // The members' area first, without keeping them: most billboards hold many leaves and
+    // fail this test, and are not gathered.
+    let mut member_area = 0.0f32;
     for &t in members {
         if soup.material.get(t) != Some(&material) {
             return None;
@@ -66,13 +69,15 @@ pub fn source_copy(soup: &TriangleSoup, quad: &Quad, members: &[usize]) -> Optio
         if corners.iter().any(|p| !p.is_finite()) {
             return None;
         }
-        flat.push(corners.map(to_plane));
+        member_area += tri_area(corners.map(to_plane));
     }
-    let tri_area = |[a, b, c]: [Vec2; 3]| 0.5 * (b - a).perp_dot(c - a).abs();
-    let member_area: f32 = flat.iter().map(|t| tri_area(*t)).sum();
     if (member_area - area).abs() > TOLERANCE * area * members.len() as f32 {
         return None;
     }
+    let flat: Vec<[Vec2; 3]> = members
+        .iter()
+        .map(|&t| soup.positions[t].map(to_plane))
+        .collect();
     let quad_corners = quad.corners().map(to_plane);
     let on_member = |c: Vec2| flat.iter().any(|t| t.iter().any(|p| p.distance(c) <= tol));
     if !quad_corners.iter().all(|c| on_member(*c)) {
