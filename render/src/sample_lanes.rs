@@ -243,23 +243,22 @@ unsafe fn bilinear(
     (value, on)
 }
 
-/// [`LaneTest::Quads`] of the samples at `(u, v)` in the lanes of `inside` (`inside_bits`
-/// as bits): the footprints within the level filtered from their quad, the others left to
-/// `filter` as [`TriangleLanes::test`] leaves its open lanes.
+/// [`LaneTest::Quads`] of the samples at `(u, v)` in the lanes of `inside`: the lanes whose
+/// footprint lies within the level filtered from its quad and passed or not, the others
+/// (inside) left open for `filter` ([`TriangleLanes::test`]).
 ///
 /// # Safety
 /// AVX2. `quads` must hold an entry for every footprint within `filter.a`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn quads_test(
+unsafe fn quads_decide(
     quads: &[u32],
     least_passing: Option<f32>,
     filter: &LaneFilter,
     u: std::arch::x86_64::__m256,
     v: std::arch::x86_64::__m256,
     inside: std::arch::x86_64::__m256,
-    inside_bits: u32,
 ) -> LaneResult {
     use std::arch::x86_64::*;
     let level = &filter.a;
@@ -321,68 +320,11 @@ unsafe fn quads_test(
         }
     };
     let on_bits = _mm256_movemask_ps(on) as u32;
-    let mut r = LaneResult {
+    LaneResult {
         pass: on_bits & _mm256_movemask_ps(passes) as u32,
-        open: inside_bits & !on_bits,
+        open: _mm256_movemask_ps(inside) as u32 & !on_bits,
         u: [0.0; 8],
         v: [0.0; 8],
-    };
-    if r.open != 0 {
-        // SAFETY: AVX2, as this function's.
-        unsafe { filter_open(&mut r, filter, u, v) };
-    }
-    r
-}
-
-/// The open lanes of `r` filtered by `filter` at `(u, v)` where they can be (`Levels::
-/// alpha_test` after its bounds), passed or closed; those left open get their coordinates
-/// for the scalar test.
-///
-/// # Safety
-/// AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline]
-unsafe fn filter_open(
-    r: &mut LaneResult,
-    filter: &LaneFilter,
-    u: std::arch::x86_64::__m256,
-    v: std::arch::x86_64::__m256,
-) {
-    use std::arch::x86_64::*;
-    if r.open != 0 {
-        let open = lane_mask(r.open);
-        // SAFETY: AVX2, as this function's.
-        let (alpha, on) = unsafe {
-            let (a, on_a) = bilinear(&filter.a, u, v, open);
-            match &filter.b {
-                Some(level) => {
-                    let (b, on_b) = bilinear(level, u, v, open);
-                    let blend = _mm256_add_ps(
-                        a,
-                        _mm256_mul_ps(_mm256_sub_ps(b, a), _mm256_set1_ps(filter.f)),
-                    );
-                    (blend, _mm256_and_ps(on_a, on_b))
-                }
-                None => (a, on_a),
-            }
-        };
-        // `passes_cutoff`: kept unless below the cutoff (a NaN is kept).
-        let tested = _mm256_mul_ps(
-            _mm256_div_ps(alpha, _mm256_set1_ps(255.0)),
-            _mm256_set1_ps(filter.scale),
-        );
-        let passes = _mm256_cmp_ps::<_CMP_NLT_UQ>(tested, _mm256_set1_ps(filter.cutoff));
-        let on_bits = _mm256_movemask_ps(on) as u32 & r.open;
-        r.pass |= on_bits & _mm256_movemask_ps(passes) as u32;
-        r.open &= !on_bits;
-    }
-    if r.open != 0 {
-        // SAFETY: unaligned stores of eight floats into arrays of eight.
-        unsafe {
-            _mm256_storeu_ps(r.u.as_mut_ptr(), u);
-            _mm256_storeu_ps(r.v.as_mut_ptr(), v);
-        }
     }
 }
 
@@ -440,87 +382,119 @@ impl TriangleLanes<'_> {
         let q = dot(self.q);
         let u = _mm256_div_ps(dot(self.uq.map(|t| t[0])), q);
         let v = _mm256_div_ps(dot(self.uq.map(|t| t[1])), q);
-        let (table, pass_from, fail_below, filter) = match self.test {
-            LaneTest::Table {
+        let (mut r, filter) = if let LaneTest::Quads {
+            quads,
+            least_passing,
+            filter,
+        } = self.test
+        {
+            // SAFETY: AVX2, as this function's; a `Quads` test's table holds every footprint
+            // within its level.
+            let r = unsafe { quads_decide(quads, least_passing, &filter, u, v, inside) };
+            (r, filter)
+        } else {
+            let LaneTest::Table {
                 table,
                 pass_from,
                 fail_below,
                 filter,
-            } => (table, pass_from, fail_below, filter),
-            LaneTest::Quads {
-                quads,
-                least_passing,
-                filter,
-            } => {
-                // SAFETY: AVX2, as this function's; a `Quads` test's table holds every
-                // footprint within its level.
-                return unsafe {
-                    quads_test(quads, least_passing, &filter, u, v, inside, inside_bits)
-                };
-            }
-            LaneTest::Opaque => {
+            } = self.test
+            else {
                 return LaneResult {
                     pass: inside_bits,
                     open: 0,
                     u: [0.0; 8],
                     v: [0.0; 8],
                 };
+            };
+            // The footprint's cell: `floor(u·w − 0.5)`, kept when on the level (a NaN is not, and
+            // goes to the filter, which places it as the scalar path does).
+            let (width, height) = (filter.a.width, filter.a.height);
+            let (wf, hf) = (_mm256_set1_ps(width as f32), _mm256_set1_ps(height as f32));
+            let half = _mm256_set1_ps(0.5);
+            let fx = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(u, wf), half));
+            let fy = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(v, hf), half));
+            let on = _mm256_and_ps(
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(fx, zero),
+                    _mm256_cmp_ps::<_CMP_LT_OQ>(fx, wf),
+                ),
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(fy, zero),
+                    _mm256_cmp_ps::<_CMP_LT_OQ>(fy, hf),
+                ),
+            );
+            let on = _mm256_and_ps(on, inside);
+            // Off-level lanes read entry 0 (masked off: the gather leaves them at zero).
+            let cell = _mm256_add_epi32(
+                _mm256_mullo_epi32(
+                    _mm256_cvttps_epi32(_mm256_and_ps(fy, on)),
+                    _mm256_set1_epi32(width as i32),
+                ),
+                _mm256_cvttps_epi32(_mm256_and_ps(fx, on)),
+            );
+            // Entries are two bytes: a 4-byte read at twice the cell holds this entry in its low
+            // half (and the next one, or the padding, in its high half).
+            // SAFETY: every cell of an on-level lane is below `width · height`, and the table has
+            // one entry more, so the four bytes read are within it; off lanes are not read.
+            let entries = unsafe {
+                _mm256_mask_i32gather_epi32::<1>(
+                    _mm256_setzero_si256(),
+                    table.as_ptr().cast::<i32>(),
+                    _mm256_add_epi32(cell, cell),
+                    _mm256_castps_si256(on),
+                )
+            };
+            let byte = _mm256_set1_epi32(0xff);
+            let lo = _mm256_and_si256(entries, byte);
+            let hi = _mm256_and_si256(_mm256_srli_epi32::<8>(entries), byte);
+            let passes = _mm256_cmpgt_epi32(lo, _mm256_set1_epi32(i32::from(pass_from) - 1));
+            let fails = _mm256_cmpgt_epi32(_mm256_set1_epi32(i32::from(fail_below)), hi);
+            let on_bits = _mm256_movemask_ps(on) as u32;
+            let pass = on_bits & _mm256_movemask_ps(_mm256_castsi256_ps(passes)) as u32;
+            let fail = on_bits & _mm256_movemask_ps(_mm256_castsi256_ps(fails)) as u32;
+            let r = LaneResult {
+                pass,
+                open: inside_bits & !(pass | fail),
+                u: [0.0; 8],
+                v: [0.0; 8],
+            };
+            (r, filter)
+        };
+        if r.open != 0 {
+            let open = lane_mask(r.open);
+            // SAFETY: AVX2, as this function's.
+            let (alpha, on) = unsafe {
+                let (a, on_a) = bilinear(&filter.a, u, v, open);
+                match &filter.b {
+                    Some(level) => {
+                        let (b, on_b) = bilinear(level, u, v, open);
+                        let blend = _mm256_add_ps(
+                            a,
+                            _mm256_mul_ps(_mm256_sub_ps(b, a), _mm256_set1_ps(filter.f)),
+                        );
+                        (blend, _mm256_and_ps(on_a, on_b))
+                    }
+                    None => (a, on_a),
+                }
+            };
+            // `passes_cutoff`: kept unless below the cutoff (a NaN is kept).
+            let tested = _mm256_mul_ps(
+                _mm256_div_ps(alpha, _mm256_set1_ps(255.0)),
+                _mm256_set1_ps(filter.scale),
+            );
+            let passes = _mm256_cmp_ps::<_CMP_NLT_UQ>(tested, _mm256_set1_ps(filter.cutoff));
+            let on_bits = _mm256_movemask_ps(on) as u32 & r.open;
+            r.pass |= on_bits & _mm256_movemask_ps(passes) as u32;
+            r.open &= !on_bits;
+        }
+        if r.open != 0 {
+            // SAFETY: unaligned stores of eight floats into arrays of eight.
+            unsafe {
+                _mm256_storeu_ps(r.u.as_mut_ptr(), u);
+                _mm256_storeu_ps(r.v.as_mut_ptr(), v);
             }
-        };
-        // The footprint's cell: `floor(u·w − 0.5)`, kept when on the level (a NaN is not, and
-        // goes to the filter, which places it as the scalar path does).
-        let (width, height) = (filter.a.width, filter.a.height);
-        let (wf, hf) = (_mm256_set1_ps(width as f32), _mm256_set1_ps(height as f32));
-        let half = _mm256_set1_ps(0.5);
-        let fx = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(u, wf), half));
-        let fy = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(v, hf), half));
-        let on = _mm256_and_ps(
-            _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GE_OQ>(fx, zero),
-                _mm256_cmp_ps::<_CMP_LT_OQ>(fx, wf),
-            ),
-            _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GE_OQ>(fy, zero),
-                _mm256_cmp_ps::<_CMP_LT_OQ>(fy, hf),
-            ),
-        );
-        let on = _mm256_and_ps(on, inside);
-        // Off-level lanes read entry 0 (masked off: the gather leaves them at zero).
-        let cell = _mm256_add_epi32(
-            _mm256_mullo_epi32(
-                _mm256_cvttps_epi32(_mm256_and_ps(fy, on)),
-                _mm256_set1_epi32(width as i32),
-            ),
-            _mm256_cvttps_epi32(_mm256_and_ps(fx, on)),
-        );
-        // Entries are two bytes: a 4-byte read at twice the cell holds this entry in its low
-        // half (and the next one, or the padding, in its high half).
-        // SAFETY: every cell of an on-level lane is below `width · height`, and the table has
-        // one entry more, so the four bytes read are within it; off lanes are not read.
-        let entries = unsafe {
-            _mm256_mask_i32gather_epi32::<1>(
-                _mm256_setzero_si256(),
-                table.as_ptr().cast::<i32>(),
-                _mm256_add_epi32(cell, cell),
-                _mm256_castps_si256(on),
-            )
-        };
-        let byte = _mm256_set1_epi32(0xff);
-        let lo = _mm256_and_si256(entries, byte);
-        let hi = _mm256_and_si256(_mm256_srli_epi32::<8>(entries), byte);
-        let passes = _mm256_cmpgt_epi32(lo, _mm256_set1_epi32(i32::from(pass_from) - 1));
-        let fails = _mm256_cmpgt_epi32(_mm256_set1_epi32(i32::from(fail_below)), hi);
-        let on_bits = _mm256_movemask_ps(on) as u32;
-        let pass = on_bits & _mm256_movemask_ps(_mm256_castsi256_ps(passes)) as u32;
-        let fail = on_bits & _mm256_movemask_ps(_mm256_castsi256_ps(fails)) as u32;
-        let mut r = LaneResult {
-            pass,
-            open: inside_bits & !(pass | fail),
-            u: [0.0; 8],
-            v: [0.0; 8],
-        };
-        // SAFETY: AVX2, as this function's.
-        unsafe { filter_open(&mut r, &filter, u, v) };
+        }
         r
     }
 
