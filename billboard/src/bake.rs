@@ -1521,6 +1521,20 @@ fn mean_color(color: &[u8], samples: &[u16]) -> [u8; 3] {
 mod tests {
     use super::*;
 
+    /// A quad in the plane z = 0 facing +z, centred on the origin, `half_size` along x and y.
+    fn flat_quad(half_size: Vec2) -> Quad {
+        Quad {
+            plane: crate::plane::Plane {
+                normal: Vec3::Z,
+                offset: 0.0,
+            },
+            center: Vec3::ZERO,
+            axis_u: Vec3::X,
+            axis_v: Vec3::Y,
+            half_size,
+        }
+    }
+
     #[test]
     fn bucketed_conversion_matches_the_binary_search() {
         // Every threshold and its float neighbours, a sweep, and the edges.
@@ -1618,16 +1632,7 @@ mod tests {
                 height,
             },
         );
-        let quad = Quad {
-            plane: crate::plane::Plane {
-                normal: Vec3::Z,
-                offset: 0.0,
-            },
-            center: Vec3::ZERO,
-            axis_u: Vec3::X,
-            axis_v: Vec3::Y,
-            half_size: Vec2::ONE,
-        };
+        let quad = flat_quad(Vec2::ONE);
         let mut d = Downsampled::new(w, h);
         let covered = [
             (3, 4),
@@ -1789,16 +1794,7 @@ mod tests {
 
     #[test]
     fn texture_sizes_follow_density_and_clamps() {
-        let quad = Quad {
-            plane: crate::plane::Plane {
-                normal: Vec3::Z,
-                offset: 0.0,
-            },
-            center: Vec3::ZERO,
-            axis_u: Vec3::X,
-            axis_v: Vec3::Y,
-            half_size: Vec2::new(1.0, 0.25),
-        };
+        let quad = flat_quad(Vec2::new(1.0, 0.25));
         let p = BakeParams::default();
         assert_eq!(texture_size(&quad, 10.0, &p), (20, 5));
         assert_eq!(texture_size(&quad, 1.0, &p), (4, 4));

@@ -11,7 +11,7 @@
 //! sample), and the operations must stay the scalar ones, in their order.
 
 #[cfg(target_arch = "x86_64")]
-use crate::sample_lanes::weighted_sum;
+use crate::sample_lanes::{span_weights, weighted_sum};
 
 /// What the eight-sample arithmetic needs of the triangle that won the samples.
 #[derive(Clone, Copy)]
@@ -191,18 +191,8 @@ pub(crate) unsafe fn depth_test(
 ) {
     use std::arch::x86_64::*;
     assert!(depth.len() >= 8 && winner.len() >= 8);
-    let k = _mm256_cvtepi32_ps(_mm256_add_epi32(
-        _mm256_set1_epi32(k0),
-        _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
-    ));
     // `RowSpan::weights_at`, then `Σ b·z` left to right.
-    let b = [0, 1, 2].map(|j| {
-        _mm256_add_ps(
-            _mm256_set1_ps(start[j]),
-            _mm256_mul_ps(_mm256_set1_ps(step[j]), k),
-        )
-    });
-    let lane_z = weighted_sum(&b, z);
+    let lane_z = weighted_sum(&span_weights(k0, start, step), z);
     let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
     let wanted = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
         _mm256_and_si256(_mm256_set1_epi32(hits as i32), bits),

@@ -130,6 +130,29 @@ fn lane_mask(bits: u32) -> std::arch::x86_64::__m256 {
     _mm256_castsi256_ps(_mm256_cmpeq_epi32(set, lane))
 }
 
+/// The weights of the samples `k0..k0 + 8` of a row span (`crate::software`'s `RowSpan`:
+/// `start + step · k`, a multiply then an add, as `RowSpan::weights_at`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) fn span_weights(
+    k0: i32,
+    start: [f32; 3],
+    step: [f32; 3],
+) -> [std::arch::x86_64::__m256; 3] {
+    use std::arch::x86_64::*;
+    let k = _mm256_cvtepi32_ps(_mm256_add_epi32(
+        _mm256_set1_epi32(k0),
+        _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+    ));
+    [0, 1, 2].map(|j| {
+        _mm256_add_ps(
+            _mm256_set1_ps(start[j]),
+            _mm256_mul_ps(_mm256_set1_ps(step[j]), k),
+        )
+    })
+}
+
 /// `Σ b·a` of eight lanes of weights `b`, left to right (`(b0·a0 + b1·a1) + b2·a2`): the
 /// scalar sums' roundings, shared by the lanes here and the bake's ([`crate::bake_lanes`]).
 #[cfg(target_arch = "x86_64")]
@@ -341,17 +364,8 @@ impl TriangleLanes<'_> {
     #[inline]
     pub(crate) unsafe fn test(&self, k0: i32, start: [f32; 3], step: [f32; 3]) -> LaneResult {
         use std::arch::x86_64::*;
-        let k = _mm256_cvtepi32_ps(_mm256_add_epi32(
-            _mm256_set1_epi32(k0),
-            _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
-        ));
         // The scalar `start + step · k`, then `Σ b·a` left to right: the same roundings.
-        let b = [0, 1, 2].map(|j| {
-            _mm256_add_ps(
-                _mm256_set1_ps(start[j]),
-                _mm256_mul_ps(_mm256_set1_ps(step[j]), k),
-            )
-        });
+        let b = span_weights(k0, start, step);
         let dot = |a: [f32; 3]| weighted_sum(&b, a);
         let zero = _mm256_setzero_ps();
         // Not below zero (a NaN weight is inside, as the scalar `b < 0.0` test has it).
