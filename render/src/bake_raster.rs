@@ -15,10 +15,11 @@
 //! sample. A triangle's rows are walked only within the octagon of texture coordinates where
 //! its alpha test can pass ([`crate::uv_hull`]): the samples left out would fail it. Where the
 //! machine has AVX2, eight samples of a row are tested at once ([`crate::sample_lanes`], as
-//! coverage renders do), and the arithmetic of eight samples won by one triangle is done at
-//! once ([`crate::bake_lanes`]); the colour is filtered from levels decoded to linear light
+//! coverage renders do: one gather of each footprint's four alphas), their depths too, and
+//! the arithmetic of eight samples won by one triangle is done at once
+//! ([`crate::bake_lanes`]); the colour is filtered from levels decoded to linear light
 //! beforehand. Each gives the same bits (on oak_dense's fixed per-bone configuration the bake
-//! went from 1.33 to 0.68–0.72 s with them and the regions below; docs/performance.md has
+//! went from 1.33 to 0.50–0.54 s with them and the regions below; docs/performance.md has
 //! each step). A [`BakeTarget`] holds a render's frame, materials and textures; its regions
 //! are drawn one by one, each from its own meshes (set up as it is drawn) into buffers of its
 //! own size, and resolved alone: the billboard bake draws each atlas cell so, in parallel
