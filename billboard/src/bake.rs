@@ -1650,6 +1650,7 @@ mod tests {
             d.color[i * 4..i * 4 + 4].copy_from_slice(&[10 + k as u8 * 20, 7, 9, 255]);
             d.normal[i * 4..i * 4 + 4].copy_from_slice(&[128, 128, 255, 255]);
         }
+        let counts = d.samples.clone();
         let atlas = finish_cells(d, &cells, &[quad; 4], 2);
         for (c, cell) in cells.iter().enumerate() {
             let [x0, x1, y0, y1] = padded_rect(cell, 2, w, h);
@@ -1662,8 +1663,11 @@ mod tests {
                     let i = y * w as usize + x;
                     let texel = &atlas.color[i * 4..i * 4 + 4];
                     if own.is_empty() {
-                        // No covered texel: the mean colour, alpha 0.
-                        assert_eq!(texel[3], 0, "cell {c} ({x},{y})");
+                        // No covered texel: the mean covered colour, the quad's own normal,
+                        // alpha 0.
+                        let mean = mean_color(&atlas.color, &counts);
+                        assert_eq!(texel, &[mean[0], mean[1], mean[2], 0], "cell {c} ({x},{y})");
+                        assert_eq!(&atlas.normal[i * 4..i * 4 + 3], &[128, 128, 255]);
                         continue;
                     }
                     let distance = |&(sx, sy): &(usize, usize)| sx.abs_diff(x).max(sy.abs_diff(y));

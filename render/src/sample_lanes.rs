@@ -385,95 +385,96 @@ impl TriangleLanes<'_> {
                 v: [0.0; 8],
             };
         }
-        if let LaneTest::Opaque = self.test {
-            return LaneResult {
-                pass: inside_bits,
-                open: 0,
-                u: [0.0; 8],
-                v: [0.0; 8],
-            };
-        }
-        let q = dot(self.q);
-        let u = _mm256_div_ps(dot(self.uq.map(|t| t[0])), q);
-        let v = _mm256_div_ps(dot(self.uq.map(|t| t[1])), q);
-        let (mut r, filter) = if let LaneTest::Quads {
-            quads,
-            least_passing,
-            filter,
-        } = self.test
-        {
-            // SAFETY: AVX2, as this function's; a `Quads` test's table holds every footprint
-            // within its level.
-            let r = unsafe { quads_decide(quads, least_passing, &filter, u, v, inside) };
-            (r, filter)
-        } else {
-            let LaneTest::Table {
-                table,
-                pass_from,
-                fail_below,
-                filter,
-            } = self.test
-            else {
+        // The texture coordinates, where a texture is read.
+        let uv = || {
+            let q = dot(self.q);
+            (
+                _mm256_div_ps(dot(self.uq.map(|t| t[0])), q),
+                _mm256_div_ps(dot(self.uq.map(|t| t[1])), q),
+            )
+        };
+        let (mut r, filter, u, v) = match self.test {
+            LaneTest::Opaque => {
                 return LaneResult {
                     pass: inside_bits,
                     open: 0,
                     u: [0.0; 8],
                     v: [0.0; 8],
                 };
-            };
-            // The footprint's cell: `floor(u·w − 0.5)`, kept when on the level (a NaN is not, and
-            // goes to the filter, which places it as the scalar path does).
-            let (width, height) = (filter.a.width, filter.a.height);
-            let (wf, hf) = (_mm256_set1_ps(width as f32), _mm256_set1_ps(height as f32));
-            let half = _mm256_set1_ps(0.5);
-            let fx = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(u, wf), half));
-            let fy = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(v, hf), half));
-            let on = _mm256_and_ps(
-                _mm256_and_ps(
-                    _mm256_cmp_ps::<_CMP_GE_OQ>(fx, zero),
-                    _mm256_cmp_ps::<_CMP_LT_OQ>(fx, wf),
-                ),
-                _mm256_and_ps(
-                    _mm256_cmp_ps::<_CMP_GE_OQ>(fy, zero),
-                    _mm256_cmp_ps::<_CMP_LT_OQ>(fy, hf),
-                ),
-            );
-            let on = _mm256_and_ps(on, inside);
-            // Off-level lanes read entry 0 (masked off: the gather leaves them at zero).
-            let cell = _mm256_add_epi32(
-                _mm256_mullo_epi32(
-                    _mm256_cvttps_epi32(_mm256_and_ps(fy, on)),
-                    _mm256_set1_epi32(width as i32),
-                ),
-                _mm256_cvttps_epi32(_mm256_and_ps(fx, on)),
-            );
-            // Entries are two bytes: a 4-byte read at twice the cell holds this entry in its low
-            // half (and the next one, or the padding, in its high half).
-            // SAFETY: every cell of an on-level lane is below `width · height`, and the table has
-            // one entry more, so the four bytes read are within it; off lanes are not read.
-            let entries = unsafe {
-                _mm256_mask_i32gather_epi32::<1>(
-                    _mm256_setzero_si256(),
-                    table.as_ptr().cast::<i32>(),
-                    _mm256_add_epi32(cell, cell),
-                    _mm256_castps_si256(on),
-                )
-            };
-            let byte = _mm256_set1_epi32(0xff);
-            let lo = _mm256_and_si256(entries, byte);
-            let hi = _mm256_and_si256(_mm256_srli_epi32::<8>(entries), byte);
-            let passes = _mm256_cmpgt_epi32(lo, _mm256_set1_epi32(i32::from(pass_from) - 1));
-            let fails = _mm256_cmpgt_epi32(_mm256_set1_epi32(i32::from(fail_below)), hi);
-            let on_bits = _mm256_movemask_ps(on) as u32;
-            let pass = on_bits & _mm256_movemask_ps(_mm256_castsi256_ps(passes)) as u32;
-            let fail = on_bits & _mm256_movemask_ps(_mm256_castsi256_ps(fails)) as u32;
-            let r = LaneResult {
-                pass,
-                open: inside_bits & !(pass | fail),
-                u: [0.0; 8],
-                v: [0.0; 8],
-            };
-            (r, filter)
+            }
+            LaneTest::Quads {
+                quads,
+                least_passing,
+                filter,
+            } => {
+                let (u, v) = uv();
+                // SAFETY: AVX2, as this function's; a `Quads` test's table holds every
+                // footprint within its level.
+                let r = unsafe { quads_decide(quads, least_passing, &filter, u, v, inside) };
+                (r, filter, u, v)
+            }
+            LaneTest::Table {
+                table,
+                pass_from,
+                fail_below,
+                filter,
+            } => {
+                let (u, v) = uv();
+                // The footprint's cell: `floor(u·w − 0.5)`, kept when on the level (a NaN is
+                // not, and goes to the filter, which places it as the scalar path does).
+                let (width, height) = (filter.a.width, filter.a.height);
+                let (wf, hf) = (_mm256_set1_ps(width as f32), _mm256_set1_ps(height as f32));
+                let half = _mm256_set1_ps(0.5);
+                let fx = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(u, wf), half));
+                let fy = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(v, hf), half));
+                let on = _mm256_and_ps(
+                    _mm256_and_ps(
+                        _mm256_cmp_ps::<_CMP_GE_OQ>(fx, zero),
+                        _mm256_cmp_ps::<_CMP_LT_OQ>(fx, wf),
+                    ),
+                    _mm256_and_ps(
+                        _mm256_cmp_ps::<_CMP_GE_OQ>(fy, zero),
+                        _mm256_cmp_ps::<_CMP_LT_OQ>(fy, hf),
+                    ),
+                );
+                let on = _mm256_and_ps(on, inside);
+                // Off-level lanes read entry 0 (masked off: the gather leaves them at zero).
+                let cell = _mm256_add_epi32(
+                    _mm256_mullo_epi32(
+                        _mm256_cvttps_epi32(_mm256_and_ps(fy, on)),
+                        _mm256_set1_epi32(width as i32),
+                    ),
+                    _mm256_cvttps_epi32(_mm256_and_ps(fx, on)),
+                );
+                // Entries are two bytes: a 4-byte read at twice the cell holds this entry in its
+                // low half (and the next one, or the padding, in its high half).
+                // SAFETY: every cell of an on-level lane is below `width · height`, and the table
+                // has one entry more, so the four bytes read are within it; off lanes are not
+                // read.
+                let entries = unsafe {
+                    _mm256_mask_i32gather_epi32::<1>(
+                        _mm256_setzero_si256(),
+                        table.as_ptr().cast::<i32>(),
+                        _mm256_add_epi32(cell, cell),
+                        _mm256_castps_si256(on),
+                    )
+                };
+                let byte = _mm256_set1_epi32(0xff);
+                let lo = _mm256_and_si256(entries, byte);
+                let hi = _mm256_and_si256(_mm256_srli_epi32::<8>(entries), byte);
+                let passes = _mm256_cmpgt_epi32(lo, _mm256_set1_epi32(i32::from(pass_from) - 1));
+                let fails = _mm256_cmpgt_epi32(_mm256_set1_epi32(i32::from(fail_below)), hi);
+                let on_bits = _mm256_movemask_ps(on) as u32;
+                let pass = on_bits & _mm256_movemask_ps(_mm256_castsi256_ps(passes)) as u32;
+                let fail = on_bits & _mm256_movemask_ps(_mm256_castsi256_ps(fails)) as u32;
+                let r = LaneResult {
+                    pass,
+                    open: inside_bits & !(pass | fail),
+                    u: [0.0; 8],
+                    v: [0.0; 8],
+                };
+                (r, filter, u, v)
+            }
         };
         if r.open != 0 {
             let open = lane_mask(r.open);

@@ -264,34 +264,37 @@ struct AlphaBounds {
 /// An alpha level's bilinear footprints as four bytes each ([`SoftwareTextures::bake_quads`]):
 /// `[top left, top right, bottom left, bottom right]` at the top left texel's index, for
 /// the footprints within the level; 0 on its last row and column, where footprints wrap.
-fn footprint_quads((w, h, alpha): &(u32, u32, Vec<u8>)) -> Vec<u32> {
-    let (w, h) = (*w as usize, *h as usize);
-    let mut quads = vec![0u32; alpha.len()];
-    for y in 0..h.saturating_sub(1) {
-        let (top, bottom) = (&alpha[y * w..(y + 1) * w], &alpha[(y + 1) * w..(y + 2) * w]);
-        for x in 0..w - 1 {
-            quads[y * w + x] = u32::from_le_bytes([top[x], top[x + 1], bottom[x], bottom[x + 1]]);
-        }
-    }
+fn footprint_quads(level: &(u32, u32, Vec<u8>)) -> Vec<u32> {
+    let mut quads = vec![0u32; level.2.len()];
+    for_footprints(level, |i, q| quads[i] = u32::from_le_bytes(q));
     quads
 }
 
+/// `f(i, [top left, top right, bottom left, bottom right])` for each bilinear footprint
+/// within an alpha level (its top left texel `i`, not on the last row or column).
+fn for_footprints((w, h, alpha): &(u32, u32, Vec<u8>), mut f: impl FnMut(usize, [u8; 4])) {
+    let (w, h) = (*w as usize, *h as usize);
+    for y in 0..h.saturating_sub(1) {
+        let (top, bottom) = (&alpha[y * w..(y + 1) * w], &alpha[(y + 1) * w..(y + 2) * w]);
+        for x in 0..w - 1 {
+            f(y * w + x, [top[x], top[x + 1], bottom[x], bottom[x + 1]]);
+        }
+    }
+}
+
 impl AlphaBounds {
-    fn new((w, h, alpha): &(u32, u32, Vec<u8>), next: Option<&(u32, u32, Vec<u8>)>) -> AlphaBounds {
+    fn new(level: &(u32, u32, Vec<u8>), next: Option<&(u32, u32, Vec<u8>)>) -> AlphaBounds {
+        let (w, h, alpha) = level;
         let (w, h) = (*w as usize, *h as usize);
         // One entry more than the footprints: the eight-sample test reads each entry as four
         // bytes (`crate::sample_lanes`), the last one's with this padding.
         let mut bounds = vec![[0u8, 255u8]; alpha.len() + 1];
-        for y in 0..h.saturating_sub(1) {
-            let (top, bottom) = (&alpha[y * w..(y + 1) * w], &alpha[(y + 1) * w..(y + 2) * w]);
-            for x in 0..w - 1 {
-                let q = [top[x], top[x + 1], bottom[x], bottom[x + 1]];
-                bounds[y * w + x] = [
-                    q.iter().copied().fold(u8::MAX, u8::min),
-                    q.iter().copied().fold(0, u8::max),
-                ];
-            }
-        }
+        for_footprints(level, |i, q| {
+            bounds[i] = [
+                q.iter().copied().fold(u8::MAX, u8::min),
+                q.iter().copied().fold(0, u8::max),
+            ];
+        });
         let trilinear = next.map_or_else(Vec::new, |(nw, nh, next)| {
             let (nw, nh) = (*nw as usize, *nh as usize);
             // The next level's first footprint texels a point of cell `c` (of `n` a side here,
@@ -854,7 +857,7 @@ impl Bands {
         [sw, sh]: [usize; 2],
         ss: usize,
     ) -> Bands {
-        let (triangles, shading, _) = setup(scene, textures, view_proj, sw as f32, sh as f32);
+        let (triangles, shading) = setup(scene, textures, view_proj, sw as f32, sh as f32);
         let rows = BAND_PIXELS * ss;
         let mut bins: Vec<Vec<u32>> = vec![Vec::new(); sh.div_ceil(rows)];
         for (i, t) in triangles.iter().enumerate() {
@@ -882,14 +885,14 @@ struct Band {
 
 /// Transforms, clips (near and far planes), culls and sets up every triangle of `scene`, in
 /// draw order, for a target of `sw`×`sh` samples, with their shading when the textures were
-/// prepared with colour, and per mesh the first of its triangles (one entry more: the count).
+/// prepared with colour.
 pub(crate) fn setup(
     scene: &DrawScene,
     textures: &SoftwareTextures,
     view_proj: Mat4,
     sw: f32,
     sh: f32,
-) -> (Vec<Setup>, Vec<Shading>, Vec<u32>) {
+) -> (Vec<Setup>, Vec<Shading>) {
     let mut set_up = SetUpMeshes::default();
     set_up.set_up(
         &scene.meshes,
@@ -898,13 +901,7 @@ pub(crate) fn setup(
         view_proj,
         [sw, sh],
     );
-    let SetUpMeshes {
-        triangles,
-        shading,
-        mesh_starts,
-        ..
-    } = set_up;
-    (triangles, shading, mesh_starts)
+    (set_up.triangles, set_up.shading)
 }
 
 /// Triangles set up by [`SetUpMeshes::set_up`], its buffers reused from call to call.
@@ -913,8 +910,6 @@ pub(crate) struct SetUpMeshes {
     pub(crate) triangles: Vec<Setup>,
     /// Per triangle, its shading (when the textures were prepared with colour).
     pub(crate) shading: Vec<Shading>,
-    /// Per mesh, its first triangle; one entry more, the count.
-    pub(crate) mesh_starts: Vec<u32>,
     /// A mesh's positions in clip space.
     clip: Vec<Vec4>,
 }
@@ -927,62 +922,37 @@ impl SetUpMeshes {
         materials: &[DrawMaterial],
         textures: &SoftwareTextures,
         view_proj: Mat4,
+        size: [f32; 2],
+    ) {
+        // Reserved up front: growing it (tens of megabytes for a large tree) was a tenth of a
+        // small render's time.
+        let count = meshes.iter().map(|m| m.indices.len() / 3).sum();
+        self.triangles.clear();
+        self.triangles.reserve(count);
+        self.shading.clear();
+        self.shading
+            .reserve(if textures.colour { count } else { 0 });
+        for mesh in meshes {
+            self.set_up_mesh(mesh, &materials[mesh.material], textures, view_proj, size);
+        }
+    }
+
+    /// One mesh of [`SetUpMeshes::set_up`], drawn with `material`: its triangles and their
+    /// shading appended.
+    fn set_up_mesh(
+        &mut self,
+        mesh: &DrawMesh,
+        material: &DrawMaterial,
+        textures: &SoftwareTextures,
+        view_proj: Mat4,
         [sw, sh]: [f32; 2],
     ) {
         let SetUpMeshes {
             triangles: out,
             shading,
-            mesh_starts,
             clip,
         } = self;
-        // Reserved up front: growing it (tens of megabytes for a large tree) was a tenth of a
-        // small render's time.
-        let count = meshes.iter().map(|m| m.indices.len() / 3).sum();
         let shade = textures.colour;
-        out.clear();
-        out.reserve(count);
-        shading.clear();
-        shading.reserve(if shade { count } else { 0 });
-        mesh_starts.clear();
-        mesh_starts.reserve(meshes.len() + 1);
-        for mesh in meshes {
-            set_up_mesh(
-                mesh,
-                materials,
-                textures,
-                view_proj,
-                [sw, sh],
-                clip,
-                out,
-                shading,
-                mesh_starts,
-            );
-        }
-        mesh_starts.push(out.len() as u32);
-    }
-}
-
-/// One mesh of [`SetUpMeshes::set_up`]: its first triangle's index pushed to `mesh_starts`,
-/// its triangles to `out` and their shading to `shading`; `clip` is scratch.
-#[expect(
-    clippy::too_many_arguments,
-    reason = "the buffers of SetUpMeshes, borrowed apart"
-)]
-fn set_up_mesh(
-    mesh: &DrawMesh,
-    materials: &[DrawMaterial],
-    textures: &SoftwareTextures,
-    view_proj: Mat4,
-    [sw, sh]: [f32; 2],
-    clip: &mut Vec<Vec4>,
-    out: &mut Vec<Setup>,
-    shading: &mut Vec<Shading>,
-    mesh_starts: &mut Vec<u32>,
-) {
-    let shade = textures.colour;
-    {
-        mesh_starts.push(out.len() as u32);
-        let material = &materials[mesh.material];
         clip.clear();
         clip.extend((mesh.positions.iter()).map(|p| view_proj * Vec3::from(*p).extend(1.0)));
         let texture = material.texture.map(|t| &textures.textures[t]);
