@@ -1215,8 +1215,19 @@ fn texel_bytes(alpha: u8, mean: [f32; 3], normal_sum: Vec3) -> ([u8; 4], [u8; 4]
 
 /// `rgb = n * 0.5 + 0.5` as bytes, with the given alpha.
 fn encode_normal(n: Vec3, alpha: u8) -> [u8; 4] {
-    let e = |x: f32| ((x * 0.5 + 0.5) * 255.0).round().clamp(0.0, 255.0) as u8;
+    let e = |x: f32| round_byte((x * 0.5 + 0.5) * 255.0);
     [e(n.x), e(n.y), e(n.z), alpha]
+}
+
+/// `v.round().clamp(0.0, 255.0) as u8` (0 for a NaN), without a call to the C library's
+/// `roundf` (the baseline x86-64 has no rounding instruction): `v` clamped first, which
+/// changes nothing, then its integer part plus one where the rest is at least one half (the
+/// rest is exact below 256), as `round` does.
+#[inline]
+fn round_byte(v: f32) -> u8 {
+    let c = v.clamp(0.0, 255.0);
+    let whole = c as u32;
+    (whole + u32::from(c - whole as f32 >= 0.5)) as u8
 }
 
 /// A quad's padded cell in the atlas: texel columns `x0..x1`, rows `y0..y1`. Padded cells
@@ -1331,6 +1342,62 @@ const STEP: u64 = 1 << 32;
 /// more is still above every reached entry).
 const UNREACHED: u64 = u64::MAX >> 1;
 
+/// The two raster passes of Rosenfeld and Pfaltz over 8-neighbours on a dilation `grid` (rows
+/// of `gw` entries, a ring of [`UNREACHED`] around them, see [`CellTexels::finish`]): each
+/// entry becomes the least of itself and its four neighbours behind it, one [`STEP`] further,
+/// which is exact for the chessboard distance (on a tie of distance, the source first in row
+/// order wins: the entries' low halves). Each row takes the row behind it first, four
+/// entries at a time where the machine has AVX2 (the same integers either way), then its
+/// neighbour behind it in the row, one by one.
+fn chessboard_passes(grid: &mut [u64], gw: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the machine has AVX2, checked just above.
+        return unsafe { chessboard_passes_avx2(grid, gw) };
+    }
+    chessboard_passes_in(grid, gw);
+}
+
+/// [`chessboard_passes`] compiled for AVX2 (the compiler vectorises the rows' first step).
+///
+/// # Safety
+/// The machine must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn chessboard_passes_avx2(grid: &mut [u64], gw: usize) {
+    chessboard_passes_in(grid, gw);
+}
+
+/// [`chessboard_passes`]' work, inlined into each caller's target features.
+#[inline(always)]
+fn chessboard_passes_in(grid: &mut [u64], gw: usize) {
+    let rows = grid.len() / gw;
+    // Each entry of `row` (but the ring's) the least of itself and the three of `behind`
+    // around it, a step further.
+    let from_row = |row: &mut [u64], behind: &[u64]| {
+        let around = behind.windows(3);
+        for (entry, w) in row[1..gw - 1].iter_mut().zip(around) {
+            *entry = (*entry).min(w[0].min(w[1]).min(w[2]) + STEP);
+        }
+    };
+    for y in 1..rows - 1 {
+        let (done, rest) = grid.split_at_mut(y * gw);
+        let row = &mut rest[..gw];
+        from_row(row, &done[(y - 1) * gw..]);
+        for x in 1..gw - 1 {
+            row[x] = row[x].min(row[x - 1] + STEP);
+        }
+    }
+    for y in (1..rows - 1).rev() {
+        let (rest, done) = grid.split_at_mut((y + 1) * gw);
+        let row = &mut rest[y * gw..];
+        from_row(row, &done[..gw]);
+        for x in (1..gw - 1).rev() {
+            row[x] = row[x].min(row[x + 1] + STEP);
+        }
+    }
+}
+
 /// Rows of both atlases from row `y0` (as many as `color` holds), and their texels' covered
 /// samples.
 struct CellTexels<'a> {
@@ -1361,15 +1428,18 @@ impl CellTexels<'_> {
         grid.clear();
         grid.resize(gw * (y1 - y0 + 2), UNREACHED);
         let mut any = false;
+        let (normal, _) = self.normal.as_chunks_mut::<4>();
         for y in y0..y1 {
-            for x in x0..x1 {
-                let i = self.at(x, y);
-                if self.samples[i] > 0 {
+            let at = (y - self.y0) * self.width + x0;
+            let samples = &self.samples[at..at + x1 - x0];
+            let entries = &mut grid[(y - y0 + 1) * gw + 1..][..x1 - x0];
+            for (k, (&n, entry)) in samples.iter().zip(entries).enumerate() {
+                if n > 0 {
                     any = true;
-                    grid[(y - y0 + 1) * gw + x - x0 + 1] = i as u64;
-                    let n = &mut self.normal[i * 4..i * 4 + 3];
-                    let t = tangent.convert([n[0], n[1], n[2]]);
-                    n.copy_from_slice(&t);
+                    *entry = (at + k) as u64;
+                    let [r, g, b, a] = normal[at + k];
+                    let [r, g, b] = tangent.convert([r, g, b]);
+                    normal[at + k] = [r, g, b, a];
                 }
             }
         }
@@ -1381,42 +1451,23 @@ impl CellTexels<'_> {
 
     /// Gives each uncovered texel of the cell `[x0, x1, y0, y1]` the colour and normal of a
     /// covered texel nearest it in chessboard distance (`grid`, see [`CellTexels::finish`]:
-    /// each covered texel itself at distance 0): the two raster passes of Rosenfeld and
-    /// Pfaltz over 8-neighbours, exact for this distance, each texel keeping the least of
-    /// its entry and its four neighbours' behind it, one step further (on a tie of distance,
-    /// the source first in row order). A texel costs four comparisons a pass, with no
-    /// queue and no bounds test (the ring is never reached).
+    /// each covered texel itself at distance 0, found by [`chessboard_passes`]), its alpha
+    /// staying 0. The cell has a covered texel, so the passes reach every texel, and a covered
+    /// texel is its own source: each texel's colour and normal are copied from its source
+    /// with no test.
     fn dilate(&mut self, [x0, x1, y0, y1]: [usize; 4], grid: &mut [u64]) {
         let gw = x1 - x0 + 2;
-        for y in 1..=y1 - y0 {
-            for i in y * gw + 1..y * gw + gw - 1 {
-                let near = grid[i - 1]
-                    .min(grid[i - gw - 1])
-                    .min(grid[i - gw])
-                    .min(grid[i - gw + 1]);
-                grid[i] = grid[i].min(near + STEP);
-            }
-        }
-        for y in (1..=y1 - y0).rev() {
-            for i in (y * gw + 1..y * gw + gw - 1).rev() {
-                let near = grid[i + 1]
-                    .min(grid[i + gw + 1])
-                    .min(grid[i + gw])
-                    .min(grid[i + gw - 1]);
-                grid[i] = grid[i].min(near + STEP);
-            }
-        }
+        chessboard_passes(grid, gw);
+        let (color, _) = self.color.as_chunks_mut::<4>();
+        let (normal, _) = self.normal.as_chunks_mut::<4>();
         for y in y0..y1 {
-            let row = &grid[(y - y0 + 1) * gw + 1..][..x1 - x0];
-            for (x, &entry) in (x0..x1).zip(row) {
-                let to = self.at(x, y);
+            let at = (y - self.y0) * self.width + x0;
+            let entries = &grid[(y - y0 + 1) * gw + 1..][..x1 - x0];
+            for (to, &entry) in (at..).zip(entries) {
                 let from = (entry & u64::from(u32::MAX)) as usize;
-                if (STEP..UNREACHED).contains(&entry) {
-                    let colour: [u8; 3] = [0, 1, 2].map(|k| self.color[from * 4 + k]);
-                    let normal: [u8; 3] = [0, 1, 2].map(|k| self.normal[from * 4 + k]);
-                    self.color[to * 4..to * 4 + 3].copy_from_slice(&colour);
-                    self.normal[to * 4..to * 4 + 3].copy_from_slice(&normal);
-                }
+                let ([r, g, b, _], [nr, ng, nb, _]) = (color[from], normal[from]);
+                color[to] = [r, g, b, color[to][3]];
+                normal[to] = [nr, ng, nb, normal[to][3]];
             }
         }
     }
@@ -1459,10 +1510,15 @@ struct TangentSpace {
     u: Vec3,
     v: Vec3,
     front: Vec3,
-    /// The last bytes converted and what they became: neighbouring texels mostly share
-    /// their normal (a flat card).
-    last: Option<([u8; 3], [u8; 3])>,
+    /// Bytes converted and what they became, by a hash of the bytes (the bytes and a bit
+    /// set above them, 0 for a free slot): a cell's texels mostly share a few normals (flat
+    /// cards), seen again after other cards' (a fifth of a cell's covered texels have a normal
+    /// of their own on oak_dense, where remembering the last one only left a third to do).
+    seen: [(u32, [u8; 3]); CONVERTED_SLOTS],
 }
+
+/// Slots of [`TangentSpace`]'s conversions remembered.
+const CONVERTED_SLOTS: usize = 32;
 
 impl TangentSpace {
     fn of(quad: &Quad) -> Self {
@@ -1470,7 +1526,7 @@ impl TangentSpace {
             u: quad.axis_u.normalize_or_zero(),
             v: quad.axis_v.normalize_or_zero(),
             front: front_normal(quad),
-            last: None,
+            seen: [(0, [0; 3]); CONVERTED_SLOTS],
         }
     }
 
@@ -1481,8 +1537,11 @@ impl TangentSpace {
 
     /// World-space normal bytes `n` in the tangent frame, as bytes.
     fn convert(&mut self, n: [u8; 3]) -> [u8; 3] {
-        if let Some((_, t)) = self.last.filter(|(seen, _)| *seen == n) {
-            return t;
+        let key = u32::from_le_bytes([n[0], n[1], n[2], 1]);
+        // Fibonacci hashing: the product's top bits.
+        let slot = (key.wrapping_mul(0x9e37_79b9) >> (32 - CONVERTED_SLOTS.ilog2())) as usize;
+        if self.seen[slot].0 == key {
+            return self.seen[slot].1;
         }
         let decode = |v: u8| f32::from(v) / 255.0 * 2.0 - 1.0;
         let world = if n == [0, 0, 0] {
@@ -1495,7 +1554,7 @@ impl TangentSpace {
             .normalize_or(self.front);
         let t = Vec3::new(m.dot(self.u), m.dot(self.v), m.dot(self.front)).normalize_or(Vec3::Z);
         let [r, g, b, _] = encode_normal(t, 0);
-        self.last = Some((n, [r, g, b]));
+        self.seen[slot] = (key, [r, g, b]);
         [r, g, b]
     }
 }
@@ -1679,6 +1738,86 @@ mod tests {
                     assert_eq!(&atlas.normal[i * 4..i * 4 + 3], &[128, 128, 255]);
                 }
             }
+        }
+    }
+
+    #[test]
+    fn chessboard_passes_find_the_nearest_source_first_in_row_order() {
+        // Random grids (a ring of unreached entries around each), a few sources each, some
+        // sharing distances: every entry is the least (distance, source) of a brute-force
+        // search, through the dispatched passes and the plain ones alike.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move |n: u64| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state % n
+        };
+        for _ in 0..40 {
+            let (w, h) = (1 + next(19) as usize, 1 + next(13) as usize);
+            let gw = w + 2;
+            let mut grid = vec![UNREACHED; gw * (h + 2)];
+            let sources: Vec<(usize, usize)> = (0..1 + next(4))
+                .map(|_| (next(w as u64) as usize, next(h as u64) as usize))
+                .collect();
+            for &(x, y) in &sources {
+                grid[(y + 1) * gw + x + 1] = (y * w + x) as u64;
+            }
+            let mut plain = grid.clone();
+            chessboard_passes(&mut grid, gw);
+            chessboard_passes_in(&mut plain, gw);
+            assert_eq!(grid, plain);
+            for y in 0..h {
+                for x in 0..w {
+                    let want = (sources.iter())
+                        .map(|&(sx, sy)| {
+                            let d = sx.abs_diff(x).max(sy.abs_diff(y)) as u64;
+                            d * STEP + (sy * w + sx) as u64
+                        })
+                        .min();
+                    assert_eq!(Some(grid[(y + 1) * gw + x + 1]), want, "({x},{y}) {w}×{h}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn byte_rounding_matches_the_library_round() {
+        let mut values = vec![f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -0.0, 0.0, 1e-30];
+        for k in -4..=520 {
+            let half = k as f32 * 0.5;
+            values.extend([half, half.next_down(), half.next_up()]);
+        }
+        values.extend((0..100_000).map(|k| k as f32 * 0.002_7 - 3.0));
+        for v in values {
+            let want = v.round().clamp(0.0, 255.0) as u8;
+            assert_eq!(round_byte(v), want, "{v:?}");
+        }
+    }
+
+    #[test]
+    fn remembered_conversions_are_the_fresh_ones() {
+        // More normals than slots, in an order that revisits them: each conversion equals a
+        // fresh frame's.
+        let quad = Quad {
+            axis_u: Vec3::new(0.6, 0.0, 0.8),
+            axis_v: Vec3::Y,
+            ..flat_quad(Vec2::ONE)
+        };
+        let mut remembered = TangentSpace::of(&quad);
+        for k in 0..2000u32 {
+            let j = k * 7919 % 97;
+            let n = [
+                (j * 37 % 256) as u8,
+                (j * 11 % 256) as u8,
+                (j * 5 % 256) as u8,
+            ];
+            let n = if j == 3 { [0, 0, 0] } else { n };
+            assert_eq!(
+                remembered.convert(n),
+                TangentSpace::of(&quad).convert(n),
+                "{n:?}"
+            );
         }
     }
 
