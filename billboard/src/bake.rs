@@ -905,17 +905,20 @@ fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeErr
         let texels: Vec<Vec<CoveredTexel>> = regions
             .par_iter()
             .map_init(
-                || (BakeScratch::default(), Vec::new()),
-                |(scratch, meshes), region| {
+                || (BakeScratch::default(), Vec::new(), Vec::new()),
+                |(scratch, meshes, pixels), region| {
                     let tris = &job.placed_triangles[region.cell];
                     cell_meshes(meshes, tris, strip_rect(region.ty), job.materials.len());
-                    let image = target.render(region.rect, meshes, scratch)?;
-                    Ok((image.samples.iter().enumerate())
-                        .filter(|&(_, &n)| n > 0)
-                        .map(|(i, &n)| {
-                            let normal = Vec3::from(image.normal[i]);
+                    pixels.clear();
+                    target.render_covered(region.rect, meshes, scratch, |i, pixel| {
+                        pixels.push((i, pixel));
+                    })?;
+                    Ok((pixels.iter())
+                        .map(|&(i, pixel)| {
+                            let n = pixel.samples;
                             let alpha = alphas[usize::from(n).min(alphas.len() - 1)];
-                            let (c, nb) = texel_bytes(alpha, image.colour[i], normal);
+                            let normal = Vec3::from(pixel.normal);
+                            let (c, nb) = texel_bytes(alpha, pixel.colour, normal);
                             (i, n, c, nb)
                         })
                         .collect())

@@ -67,6 +67,18 @@ pub struct BakeImage {
     pub normal: Vec<[f32; 3]>,
 }
 
+/// A pixel of a bake render that a sample of it is covered in ([`BakeTarget::render_covered`]):
+/// its entries of a [`BakeImage`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoveredPixel {
+    /// Its covered samples (at least one).
+    pub samples: u16,
+    /// Their mean linear RGB.
+    pub colour: [f32; 3],
+    /// The sum of their unit normals facing the viewer.
+    pub normal: [f32; 3],
+}
+
 /// Renders `scene` through `view_proj` at `width`×`height` pixels of `supersample`² samples
 /// for baking (see the module docs), with `textures` prepared from `scene.textures` with
 /// colour ([`SoftwareTextures::for_bake`]): bands of rows drawn in parallel.
@@ -243,10 +255,48 @@ impl<'a> BakeTarget<'a> {
     /// triangles and samples meanwhile. A mesh that is not valid for the scene is an error.
     pub fn render(
         &self,
-        [x, y, w, h]: [u32; 4],
+        rect: [u32; 4],
         meshes: &[DrawMesh],
         scratch: &mut BakeScratch,
     ) -> Result<BakeImage, RenderError> {
+        let region = self.region(rect);
+        let (width, height) = (region.x1 - region.x0, region.y1 - region.y0);
+        let pixels = (width / self.ss) * (height / self.ss);
+        let mut image = BakeImage {
+            width: (width / self.ss) as u32,
+            height: (height / self.ss) as u32,
+            samples: vec![0; pixels],
+            colour: vec![[0.0; 3]; pixels],
+            normal: vec![[0.0; 3]; pixels],
+        };
+        self.render_covered(rect, meshes, scratch, |i, pixel| {
+            image.samples[i] = pixel.samples;
+            image.colour[i] = pixel.colour;
+            image.normal[i] = pixel.normal;
+        })?;
+        Ok(image)
+    }
+
+    /// The samples of the pixels `[x, y, w, h]`, clamped to the target.
+    fn region(&self, [x, y, w, h]: [u32; 4]) -> Region {
+        let ss = self.ss;
+        let clamp = |v: u32, side: usize| (v as usize * ss).min(side);
+        let (x0, y0) = (clamp(x, self.size[0]), clamp(y, self.size[1]));
+        let x1 = clamp(x.saturating_add(w), self.size[0]).max(x0);
+        let y1 = clamp(y.saturating_add(h), self.size[1]).max(y0);
+        Region { x0, x1, y0, y1 }
+    }
+
+    /// [`BakeTarget::render`] handing each pixel that a sample of it is covered in to
+    /// `covered`, with its index in the region's pixels (rows of `w`, top first), in that
+    /// order: no image of the region's size is made (most of an atlas cell is clear).
+    pub fn render_covered(
+        &self,
+        rect: [u32; 4],
+        meshes: &[DrawMesh],
+        scratch: &mut BakeScratch,
+        covered: impl FnMut(usize, CoveredPixel),
+    ) -> Result<(), RenderError> {
         for (i, mesh) in meshes.iter().enumerate() {
             validate_mesh(i, mesh, self.scene.materials.len())?;
             if let Some(t) = self.scene.materials[mesh.material].texture
@@ -258,12 +308,7 @@ impl<'a> BakeTarget<'a> {
                 });
             }
         }
-        let ss = self.ss;
-        let clamp = |v: u32, side: usize| (v as usize * ss).min(side);
-        let (x0, y0) = (clamp(x, self.size[0]), clamp(y, self.size[1]));
-        let x1 = clamp(x.saturating_add(w), self.size[0]).max(x0);
-        let y1 = clamp(y.saturating_add(h), self.size[1]).max(y0);
-        let region = Region { x0, x1, y0, y1 };
+        let region = self.region(rect);
         let BakeScratch {
             set_up,
             depth,
@@ -297,7 +342,8 @@ impl<'a> BakeTarget<'a> {
         for ti in 0..drawn.triangles.len() as u32 {
             self.draw(&drawn, ti, &region, &mut samples);
         }
-        Ok(self.resolve(&drawn, &region, winner, touched))
+        self.resolve(&drawn, &region, winner, touched, covered);
+        Ok(())
     }
 
     /// Draws triangle `ti` into the samples of `region`: each sample it covers nearer than
@@ -423,18 +469,12 @@ impl<'a> BakeTarget<'a> {
         region: &Region,
         winner: &[u32],
         touched: &[u64],
-    ) -> BakeImage {
+        mut covered: impl FnMut(usize, CoveredPixel),
+    ) {
         let linear = &*SRGB_LINEAR;
         let ss = self.ss;
         let width = region.x1 - region.x0;
         let (w, h) = (width / ss, (region.y1 - region.y0) / ss);
-        let mut image = BakeImage {
-            width: w as u32,
-            height: h as u32,
-            samples: vec![0; w * h],
-            colour: vec![[0.0; 3]; w * h],
-            normal: vec![[0.0; 3]; w * h],
-        };
         // Per pixel of the row: its covered samples, their colours' and normals' sums.
         let mut sums = vec![(0u16, Vec3::ZERO, Vec3::ZERO); w];
         // The triangle of the last samples shaded: neighbouring samples mostly share it.
@@ -457,15 +497,16 @@ impl<'a> BakeTarget<'a> {
                 });
             }
             for (px, &(count, colour, normal)) in sums.iter().enumerate() {
-                let i = py * w + px;
-                image.samples[i] = count;
                 if count > 0 {
-                    image.colour[i] = (colour / f32::from(count)).to_array();
-                    image.normal[i] = normal.to_array();
+                    let pixel = CoveredPixel {
+                        samples: count,
+                        colour: (colour / f32::from(count)).to_array(),
+                        normal: normal.to_array(),
+                    };
+                    covered(py * w + px, pixel);
                 }
             }
         }
-        image
     }
 
     /// Shades the covered samples of one row of a region (`row`, its winners, from sample
@@ -759,6 +800,49 @@ mod tests {
                 assert_eq!(image.normal[i], normal, "pixel {x},{y}");
             }
         }
+    }
+
+    #[test]
+    fn covered_pixels_are_the_image_s_covered_ones_in_order() {
+        // A quad over the left half of an 8×4 target, drawn into a region that clips it.
+        let scene = DrawScene {
+            meshes: vec![quad(-1.0, 0.1, 0.5, false, 0, [0.0, 0.6, 0.8])],
+            materials: vec![DrawMaterial::opaque([0.2, 0.4, 0.6, 1.0])],
+            textures: vec![],
+        };
+        let textures = SoftwareTextures::for_bake(&scene.textures).expect("textures");
+        let target = BakeTarget::new(&scene, &textures, Mat4::IDENTITY, 8, 4, 2).expect("target");
+        let mut scratch = BakeScratch::default();
+        let rect = [1, 1, 6, 3];
+        let image = (target.render(rect, &scene.meshes, &mut scratch)).expect("render");
+        assert_eq!((image.width, image.height), (6, 3));
+        let mut covered = Vec::new();
+        (target.render_covered(rect, &scene.meshes, &mut scratch, |i, p| {
+            covered.push((i, p))
+        }))
+        .expect("render");
+        let want: Vec<(usize, CoveredPixel)> = (0..image.samples.len())
+            .filter(|&i| image.samples[i] > 0)
+            .map(|i| {
+                let pixel = CoveredPixel {
+                    samples: image.samples[i],
+                    colour: image.colour[i],
+                    normal: image.normal[i],
+                };
+                (i, pixel)
+            })
+            .collect();
+        // Pixel columns 1..=4 of the target are wholly or partly covered (the quad's right
+        // edge at x = 4.4 pixels).
+        assert_eq!(want.len(), 4 * 3);
+        assert_eq!(covered, want);
+        assert!(
+            image
+                .samples
+                .iter()
+                .enumerate()
+                .all(|(i, &n)| n > 0 || image.colour[i] == [0.0; 3])
+        );
     }
 
     #[test]

@@ -54,7 +54,7 @@ mod software;
 mod tree;
 mod uv_hull;
 
-pub use bake_raster::{BakeImage, BakeScratch, BakeTarget, render_bake};
+pub use bake_raster::{BakeImage, BakeScratch, BakeTarget, CoveredPixel, render_bake};
 pub use camera::{Camera, Projection};
 pub use error::RenderError;
 pub use frame::Frame;
