@@ -25,6 +25,8 @@ pub(crate) struct ShadeLanes {
     pub(crate) uq: [[f32; 2]; 3],
     /// Normals divided by `w` at the corners.
     pub(crate) nq: [[f32; 3]; 3],
+    /// The normal is the same at every sample (found once, elsewhere): not computed here.
+    pub(crate) flat: bool,
     /// A back face: its normal is turned to face the viewer.
     pub(crate) back: bool,
     /// The sizes of the levels whose footprints are found (the trilinear pair's, the second
@@ -37,13 +39,14 @@ pub(crate) struct ShadeLanes {
 pub(crate) struct LaneShading {
     /// The lanes done here (the others are left to the scalar path).
     pub(crate) done: u32,
-    /// Of those, the lanes with a normal (not too short to normalise).
+    /// Of those, the lanes with a normal (not too short to normalise); none when the
+    /// triangle is flat.
     pub(crate) with_normal: u32,
     /// Per level, per lane: the footprint's top-left texel and its weights.
     pub(crate) first: [[i32; 8]; 2],
     pub(crate) fx: [[f32; 8]; 2],
     pub(crate) fy: [[f32; 8]; 2],
-    /// Per axis, per lane: the unit normal facing the viewer.
+    /// Per axis, per lane: the unit normal facing the viewer (not when the triangle is flat).
     pub(crate) normal: [[f32; 8]; 3],
 }
 
@@ -127,7 +130,7 @@ impl ShadeLanes {
             }
         }
         out.done = _mm256_movemask_ps(done) as u32;
-        if out.done == 0 {
+        if out.done == 0 || self.flat {
             return out;
         }
         // `(b0·nq0 + b1·nq1 + b2·nq2) / q`, its squared length `(x² + y²) + z²`, then

@@ -32,7 +32,9 @@
 //! trilinearly with the level chosen per triangle) and the wgpu path's bake shaders: colour is
 //! the texel times the material's base colour, unlit; the normal is the interpolated vertex
 //! normal, flipped on back faces so it faces the viewer (improved-billboard-cloud §4 items 4
-//! and 7).
+//! and 7), found once for a triangle whose corners share one normal and one depth (every
+//! billboard member is a flat face seen orthographically: the same normal but for its last
+//! bits).
 
 use frond_scene::Wrap;
 use glam::{Mat4, Vec3};
@@ -107,12 +109,16 @@ struct BakeShortcuts {
     hulls: bool,
     /// Eight samples of a row are tested at once where the machine can ([`sample_lanes`]).
     lanes: bool,
+    /// A flat triangle's normal is found once, not at each sample (see
+    /// [`BakeTarget::shader`]): the same normals but for their last bits.
+    flat: bool,
 }
 
 impl BakeShortcuts {
     const ALL: BakeShortcuts = BakeShortcuts {
         hulls: true,
         lanes: true,
+        flat: true,
     };
 }
 
@@ -193,6 +199,8 @@ pub struct BakeTarget<'a> {
     /// Eight samples of a row tested at once ([`sample_lanes`]) where the machine can: the
     /// same image.
     lanes: bool,
+    /// Flat triangles' normals found once ([`BakeTarget::shader`]).
+    flat: bool,
 }
 
 impl<'a> BakeTarget<'a> {
@@ -247,6 +255,7 @@ impl<'a> BakeTarget<'a> {
             size: [sw, sh],
             ss: supersample.max(1) as usize,
             lanes: shortcuts.lanes && sample_lanes::available(),
+            flat: shortcuts.flat,
         })
     }
 
@@ -591,14 +600,22 @@ impl<'a> BakeTarget<'a> {
             }
             Texels::Bytes(i) => self.textures.bake_rgb(i, uv, t.lod, s.wrap, linear),
         };
-        let nq = &s.nq;
-        let n = (b[0] * nq[0] + b[1] * nq[1] + b[2] * nq[2]) / q;
-        let normal = (n.length_squared() > 1e-12).then(|| {
-            let n = n.normalize();
-            if t.back { -n } else { n }
+        let normal = s.flat.unwrap_or_else(|| {
+            let nq = &s.nq;
+            facing((b[0] * nq[0] + b[1] * nq[1] + b[2] * nq[2]) / q, t.back)
         });
         (s.colour(texel), normal)
     }
+}
+
+/// The unit normal of `n` facing the viewer (turned on a `back` face), `None` when too short
+/// to normalise.
+#[inline]
+fn facing(n: Vec3, back: bool) -> Option<Vec3> {
+    (n.length_squared() > 1e-12).then(|| {
+        let n = n.normalize();
+        if back { -n } else { n }
+    })
 }
 
 impl BakeTarget<'_> {
@@ -628,10 +645,16 @@ impl BakeTarget<'_> {
             Texels::Decoded(a, b) => Some([Some(size(a)), b.map(size)]),
             Texels::Bytes(_) => None,
         };
+        // One normal at every sample where the corners' normals and depths are the same (a
+        // flat face seen orthographically, as each billboard member is).
+        let q = triangle.q;
+        let flat = (self.flat && nq[0] == nq[1] && nq[1] == nq[2] && q[0] == q[1] && q[1] == q[2])
+            .then(|| facing(nq[0] / q[0], triangle.back));
         Shader {
             triangle,
             base: Vec3::new(r, g, b),
             nq,
+            flat,
             wrap: material.wrap,
             texels,
             lanes: levels.map(|levels| ShadeLanes {
@@ -641,6 +664,7 @@ impl BakeTarget<'_> {
                 q: triangle.q,
                 uq: triangle.uq,
                 nq: nq.map(|n| n.to_array()),
+                flat: flat.is_some(),
                 back: triangle.back,
                 levels,
             }),
@@ -659,6 +683,8 @@ struct Shader<'a> {
     triangle: &'a Setup,
     base: Vec3,
     nq: [Vec3; 3],
+    /// The normal of every sample where the triangle is flat (see [`BakeTarget::shader`]).
+    flat: Option<Option<Vec3>>,
     wrap: [Wrap; 2],
     texels: Texels<'a>,
     /// Its eight-sample arithmetic, where its texels are not read from bytes.
@@ -688,8 +714,10 @@ impl Shader<'_> {
             }
             _ => Vec3::ONE,
         };
-        let normal = (r.with_normal >> i & 1 == 1)
-            .then(|| Vec3::new(r.normal[0][i], r.normal[1][i], r.normal[2][i]));
+        let normal = self.flat.unwrap_or_else(|| {
+            (r.with_normal >> i & 1 == 1)
+                .then(|| Vec3::new(r.normal[0][i], r.normal[1][i], r.normal[2][i]))
+        });
         (self.colour(texel), normal)
     }
 }
@@ -800,6 +828,45 @@ mod tests {
                 assert_eq!(image.normal[i], normal, "pixel {x},{y}");
             }
         }
+    }
+
+    #[test]
+    fn a_flat_face_s_one_normal_is_each_sample_s_within_rounding() {
+        // A tilted normal, the same at every corner: found once or at each sample, with and
+        // without eight-sample lanes, the normals agree but for their last bits.
+        let n = Vec3::new(0.3, -0.5, 0.8).normalize().to_array();
+        let scene = DrawScene {
+            meshes: vec![quad(-0.9, 0.7, 0.4, true, 0, n)],
+            materials: vec![DrawMaterial {
+                double_sided: true,
+                ..DrawMaterial::opaque([0.5, 0.6, 0.7, 1.0])
+            }],
+            textures: vec![],
+        };
+        let textures = SoftwareTextures::for_bake(&scene.textures).expect("textures");
+        let bake = |lanes, flat| {
+            let shortcuts = BakeShortcuts {
+                hulls: true,
+                lanes,
+                flat,
+            };
+            bake_with(&scene, &textures, Mat4::IDENTITY, [16, 8, 4], shortcuts).expect("bake")
+        };
+        let once = bake(true, true);
+        assert_eq!(once, bake(false, true));
+        for lanes in [false, true] {
+            let each = bake(lanes, false);
+            assert_eq!((&each.samples, &each.colour), (&once.samples, &once.colour));
+            for (i, (a, b)) in each.normal.iter().zip(&once.normal).enumerate() {
+                let d = Vec3::from(*a).distance(Vec3::from(*b));
+                assert!(d <= 1e-5, "pixel {i}: {a:?} {b:?}");
+            }
+        }
+        // A back face (the quad is wound clockwise): each covered sample's normal is `-n`.
+        let i = 4 * 16 + 4;
+        assert_eq!(once.samples[i], 16);
+        let mean = Vec3::from(once.normal[i]) / 16.0;
+        assert!(mean.distance(-Vec3::from(n)) < 1e-6, "{mean}");
     }
 
     #[test]
@@ -993,11 +1060,24 @@ mod tests {
         let textures = SoftwareTextures::for_bake(&scene.textures).expect("textures");
         for (width, height, ss) in [(64, 48, 2), (200, 150, 4)] {
             let size = [width, height, ss];
-            let bake = |hulls, lanes| {
-                let shortcuts = BakeShortcuts { hulls, lanes };
+            let bake_all = |hulls, lanes, flat| {
+                let shortcuts = BakeShortcuts { hulls, lanes, flat };
                 bake_with(&scene, &textures, Mat4::IDENTITY, size, shortcuts).expect("bake")
             };
+            let bake = |hulls, lanes| bake_all(hulls, lanes, true);
             let plain = bake(false, false);
+            // A flat card's one normal is each sample's but for rounding, both ways.
+            for lanes in [false, true] {
+                let each = bake_all(false, lanes, false);
+                assert_eq!(
+                    (&each.samples, &each.colour),
+                    (&plain.samples, &plain.colour)
+                );
+                for (a, b) in each.normal.iter().zip(&plain.normal) {
+                    let d = Vec3::from(*a).distance(Vec3::from(*b));
+                    assert!(d <= 1e-5, "{a:?} {b:?}");
+                }
+            }
             for (hulls, lanes) in [(true, false), (false, true), (true, true)] {
                 let with = bake(hulls, lanes);
                 let differ = (0..with.samples.len())
