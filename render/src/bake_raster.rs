@@ -487,7 +487,9 @@ impl<'a> BakeTarget<'a> {
         // Per pixel of the row: its covered samples, their colours' and normals' sums.
         let mut sums = vec![(0u16, Vec3::ZERO, Vec3::ZERO); w];
         // The triangle of the last samples shaded: neighbouring samples mostly share it.
-        let mut shader: Option<(u32, Shader)> = None;
+        // Each triangle's shading, looked up when it first wins a sample.
+        let mut shaders: Vec<Option<Shader>> = Vec::new();
+        shaders.resize_with(drawn.triangles.len(), || None);
         for py in 0..h {
             sums.fill((0, Vec3::ZERO, Vec3::ZERO));
             for dy in 0..ss {
@@ -496,7 +498,7 @@ impl<'a> BakeTarget<'a> {
                 let at = [region.x0, region.y0 + y];
                 let words = region.touched_words();
                 let groups = &touched[y * words..(y + 1) * words];
-                self.shade_row(drawn, row, groups, at, &mut shader, linear, |x, (c, n)| {
+                self.shade_row(drawn, row, groups, at, &mut shaders, linear, |x, (c, n)| {
                     let (count, colour, normal) = &mut sums[x / ss];
                     *colour += c;
                     if let Some(n) = n {
@@ -521,7 +523,7 @@ impl<'a> BakeTarget<'a> {
     /// Shades the covered samples of one row of a region (`row`, its winners, from sample
     /// `[x0, y]`) and hands each to `add` with its column in the row, in column order: eight
     /// at a time where one triangle won several of them and the machine can, one by one
-    /// otherwise. `shader` is the last triangle's.
+    /// otherwise. `shaders` holds each triangle's shading once looked up.
     #[expect(
         clippy::too_many_arguments,
         reason = "a row, where to find it, and its sink"
@@ -532,7 +534,7 @@ impl<'a> BakeTarget<'a> {
         row: &[u32],
         groups: &[u64],
         [x0, y]: [usize; 2],
-        shader: &mut Option<(u32, Shader<'s>)>,
+        shaders: &mut [Option<Shader<'s>>],
         linear: &[f32; 256],
         mut add: impl FnMut(usize, (Vec3, Option<Vec3>)),
     ) {
@@ -553,10 +555,7 @@ impl<'a> BakeTarget<'a> {
             let mut pending = covered;
             while pending != 0 {
                 let ti = group[pending.trailing_zeros() as usize];
-                let s = match shader {
-                    Some((last, s)) if *last == ti => s,
-                    _ => &shader.insert((ti, self.shader(drawn, ti))).1,
-                };
+                let s = &*shaders[ti as usize].get_or_insert_with(|| self.shader(drawn, ti));
                 let mut same = lanes_where(group, |t| t == ti);
                 pending &= !same;
                 if let Some(lanes) = s.lanes.filter(|_| self.lanes && same.count_ones() > 1) {
