@@ -21,11 +21,10 @@
 //! normal pass each.
 
 use std::ops::Range;
-use std::sync::LazyLock;
 
 use frond_render::{
     BakeScratch, BakeTarget, DrawMaterial, DrawMesh, DrawScene, DrawTexture, Output, RenderError,
-    Renderer, SoftwareTextures,
+    Renderer, SRGB_LINEAR, SoftwareTextures, linear_to_srgb,
 };
 use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
@@ -626,62 +625,6 @@ impl Downsampled {
     }
 }
 
-/// sRGB byte -> linear value.
-static SRGB_TO_LINEAR: LazyLock<[f32; 256]> = LazyLock::new(|| {
-    std::array::from_fn(|i| {
-        let c = i as f32 / 255.0;
-        if c <= 0.040_45 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    })
-});
-
-/// Linear values at which the nearest sRGB byte steps up: entry k separates k and k + 1.
-static LINEAR_THRESHOLDS: LazyLock<[f32; 255]> = LazyLock::new(|| {
-    std::array::from_fn(|k| {
-        let c = (k as f64 + 0.5) / 255.0;
-        let l = if c <= 0.040_45 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        };
-        l as f32
-    })
-});
-
-/// Per 1/[`SRGB_BUCKETS`] of linear light from 0 to 1 (one more entry: 1), how many of
-/// [`LINEAR_THRESHOLDS`] lie at or below its start: where [`linear_to_srgb`] starts counting.
-static SRGB_BUCKET_STARTS: LazyLock<[u8; SRGB_BUCKETS + 1]> = LazyLock::new(|| {
-    std::array::from_fn(|b| {
-        let start = b as f32 / SRGB_BUCKETS as f32;
-        LINEAR_THRESHOLDS.partition_point(|&t| t <= start) as u8
-    })
-});
-
-/// Buckets of [`SRGB_BUCKET_STARTS`]: narrower than the thresholds' least spacing (1/3294,
-/// near 0), so a value is at most one threshold past its bucket's start.
-const SRGB_BUCKETS: usize = 4096;
-
-/// Linear value -> nearest sRGB byte (rounding in sRGB space): the thresholds at or below
-/// `x` counted from its bucket's start (a binary search over all 255 was a tenth of the
-/// bake's conversion of texels to bytes).
-fn linear_to_srgb(x: f32) -> u8 {
-    // The least threshold is above 0: nothing is at or below 0, a negative value or NaN.
-    if x.is_nan() || x <= 0.0 {
-        return 0;
-    }
-    // `x · 4096` is exact (a power of two), so the bucket's start is at or below `x`.
-    let bucket = ((x * SRGB_BUCKETS as f32) as usize).min(SRGB_BUCKETS);
-    let thresholds = &*LINEAR_THRESHOLDS;
-    let mut k = usize::from(SRGB_BUCKET_STARTS[bucket]);
-    while k < thresholds.len() && thresholds[k] <= x {
-        k += 1;
-    }
-    k as u8
-}
-
 /// Alpha byte of a texel with `n` of `total` supersamples covered: 0 when none, 255 when all,
 /// monotonic, and >= 128 exactly when `n >= needed` (the alpha-cutoff sample count).
 fn coverage_alpha(n: u32, total: u32, needed: u32) -> u8 {
@@ -1147,7 +1090,7 @@ fn downsample(
     needed: u32,
     out: &mut Downsampled,
 ) {
-    let lut = &*SRGB_TO_LINEAR;
+    let lut = &*SRGB_LINEAR;
     let (tex_w, tex_h) = ((color.width / ss) as usize, (color.height / ss) as usize);
     let frame_w = color.width as usize;
     let atlas_w = out.width as usize;
@@ -1564,7 +1507,7 @@ impl TangentSpace {
 
 /// Mean colour (in linear light) of all covered texels, mid grey when there are none.
 fn mean_color(color: &[u8], samples: &[u16]) -> [u8; 3] {
-    let lut = &*SRGB_TO_LINEAR;
+    let lut = &*SRGB_LINEAR;
     let mut sum = [0.0f64; 3];
     let mut n = 0u64;
     for (i, _) in samples.iter().enumerate().filter(|(_, n)| **n > 0) {
@@ -1595,30 +1538,6 @@ mod tests {
             axis_v: Vec3::Y,
             half_size,
         }
-    }
-
-    #[test]
-    fn bucketed_conversion_matches_the_binary_search() {
-        // Every threshold and its float neighbours, a sweep, and the edges.
-        let mut values = vec![0.0f32, -0.0, -1.0, 1.0, 1.5, f32::NAN, f32::INFINITY, 1e-30];
-        for &t in LINEAR_THRESHOLDS.iter() {
-            values.extend([t, t.next_down(), t.next_up()]);
-        }
-        values.extend((0..=100_000).map(|i| i as f32 / 100_000.0));
-        for x in values {
-            let searched = LINEAR_THRESHOLDS.partition_point(|&t| t <= x) as u8;
-            assert_eq!(linear_to_srgb(x), searched, "{x}");
-        }
-    }
-
-    #[test]
-    fn srgb_round_trip_and_rounding() {
-        for b in 0..=255u8 {
-            assert_eq!(linear_to_srgb(SRGB_TO_LINEAR[b as usize]), b);
-        }
-        assert_eq!(linear_to_srgb(0.5), 188);
-        assert_eq!(linear_to_srgb(-1.0), 0);
-        assert_eq!(linear_to_srgb(2.0), 255);
     }
 
     #[test]

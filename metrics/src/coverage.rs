@@ -589,7 +589,7 @@ fn coverage_mask(
         BACKGROUND,
     )?;
     let big_w = w * ss;
-    let linear: Vec<f32> = (0..=255u8).map(srgb_to_linear).collect();
+    let linear = &*frond_render::SRGB_LINEAR;
     let mut mask = vec![false; w * h];
     let mut colour = vec![[0.0f32; 3]; w * h];
     // Rows are independent: downsample them in parallel (each pixel's sum is in a fixed order).
@@ -618,16 +618,6 @@ fn coverage_mask(
             }
         });
     Ok((mask, colour))
-}
-
-/// sRGB byte to linear light.
-fn srgb_to_linear(b: u8) -> f32 {
-    let c = f32::from(b) / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
 }
 
 fn validate(

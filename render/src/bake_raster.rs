@@ -42,13 +42,13 @@ use rayon::prelude::*;
 
 use crate::bake_lanes::{self, LaneShading, ShadeLanes};
 use crate::error::RenderError;
-use crate::pipeline::SRGB_LINEAR;
 use crate::sample_lanes::{self, LaneTest, TriangleLanes};
 use crate::scene::{DrawMesh, DrawScene, validate_mesh};
 use crate::software::{
     AlphaCutoff, BAND_PIXELS, LinearLevel, SetUpMeshes, Setup, Shading, SoftwareTextures,
     checked_target,
 };
+use crate::srgb::SRGB_LINEAR;
 use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
 
 /// A bake render resolved to pixels, top row first.

@@ -51,6 +51,7 @@ mod renderer;
 mod sample_lanes;
 mod scene;
 mod software;
+mod srgb;
 mod tree;
 mod uv_hull;
 
@@ -65,4 +66,5 @@ pub use software::{
     CoverageImage, Lighting, SoftwareTextures, depth_complexity, render_coverage,
     render_coverage_with_depth,
 };
+pub use srgb::{SRGB_LINEAR, linear_to_srgb, srgb_to_linear};
 pub use tree::{PosedTree, TreeParts, materials_scene, scene_from_positions, tree_scene};

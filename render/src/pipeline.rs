@@ -3,6 +3,7 @@
 //! fallback texture.
 
 use crate::batch::Vertex;
+use crate::srgb::{SRGB_LINEAR, linear_to_srgb};
 use frond_scene::Wrap;
 use rayon::prelude::*;
 
@@ -208,40 +209,14 @@ impl Pipelines {
     }
 }
 
-/// [`srgb_to_linear`] of every byte, computed once (256 `powf` calls made per render, or per
-/// bake region, were a measurable part of a bake).
-pub(crate) static SRGB_LINEAR: std::sync::LazyLock<[f32; 256]> =
-    std::sync::LazyLock::new(|| std::array::from_fn(|b| srgb_to_linear(b as u8)));
-
-/// sRGB-encoded byte → linear light.
-pub(crate) fn srgb_to_linear(v: u8) -> f32 {
-    let c = v as f32 / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-/// Linear light → sRGB-encoded byte.
-fn linear_to_srgb(c: f32) -> u8 {
-    let c = c.clamp(0.0, 1.0);
-    let e = if c <= 0.003_130_8 {
-        c * 12.92
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    };
-    (e * 255.0 + 0.5) as u8
-}
-
 /// The next mip level: 2×2 box filter, colour averaged in linear light weighted by alpha (so
 /// transparent texels lend no colour), alpha averaged — minified alpha-tested textures then
 /// cover what their texels cover on average instead of aliasing.
 fn downsample(width: u32, height: u32, rgba: &[u8]) -> (u32, u32, Vec<u8>) {
     let (w2, h2) = ((width / 2).max(1), (height / 2).max(1));
     let mut out = vec![0u8; (w2 * h2 * 4) as usize];
-    // The same values as `srgb_to_linear`, looked up: four texels' three channels an output
-    // texel made `powf` most of a large texture's chain.
+    // Both ways by table ([`crate::srgb`]): four texels' three channels decoded and three
+    // encoded an output texel made `powf` most of a large texture's chain.
     let linear = &*SRGB_LINEAR;
     // Rows in parallel (a 1024² leaf map's first level was most of a bake's preparation).
     (out.par_chunks_mut(w2 as usize * 4).enumerate()).for_each(|(y, row)| {

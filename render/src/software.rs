@@ -29,9 +29,10 @@ use glam::{Mat4, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::error::RenderError;
-use crate::pipeline::{LIGHT_DIRECTION, SRGB_LINEAR, alpha_mip_chain, linear_mip_chain, mip_chain};
+use crate::pipeline::{LIGHT_DIRECTION, alpha_mip_chain, linear_mip_chain, mip_chain};
 use crate::sample_lanes::{self, LaneFilter, LaneLevel, LaneTest, TriangleLanes};
 use crate::scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
+use crate::srgb::SRGB_LINEAR;
 use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
 
 /// Most samples per side of the supersampled image (coordinates stay exact in `f32`).
