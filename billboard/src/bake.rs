@@ -777,10 +777,24 @@ struct AtlasJob<'a> {
 impl AtlasJob<'_> {
     /// A scene of the job's materials and textures, without meshes yet.
     fn scene(&self) -> DrawScene {
+        self.scene_of(&vec![true; self.textures.len()])
+    }
+
+    /// [`AtlasJob::scene`] with only the textures `used` copied, each other one a 1×1
+    /// placeholder keeping the indices (a tree's bark maps are most of its texels, and a bake
+    /// reads only its foliage's).
+    fn scene_of(&self, used: &[bool]) -> DrawScene {
+        let placeholder = || DrawTexture {
+            width: 1,
+            height: 1,
+            rgba: vec![0; 4],
+        };
         DrawScene {
             meshes: Vec::new(),
             materials: self.materials.clone(),
-            textures: self.textures.to_vec(),
+            textures: (self.textures.iter().zip(used))
+                .map(|(t, &used)| if used { t.clone() } else { placeholder() })
+                .collect(),
         }
     }
 
@@ -833,7 +847,7 @@ fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeErr
         }
     }
     let prepared = SoftwareTextures::for_bake_of(job.textures, &used)?;
-    let scene = job.scene();
+    let scene = job.scene_of(&used);
     let strips = (0..out.height).step_by(CPU_STRIP_TEXELS as usize);
     let (whole, shorter): (Vec<u32>, Vec<u32>) =
         strips.partition(|&ty| out.height - ty >= CPU_STRIP_TEXELS);
