@@ -26,9 +26,13 @@ fn decode(v: u8) -> f32 {
 }
 
 /// Linear values at which the nearest sRGB byte steps up: entry `k` separates `k` and
-/// `k + 1` (the midpoint `(k + ½)/255` decoded in double precision).
-static LINEAR_THRESHOLDS: LazyLock<[f32; 255]> = LazyLock::new(|| {
+/// `k + 1` (the midpoint `(k + ½)/255` decoded in double precision); the last entry, +∞,
+/// is past every value.
+static LINEAR_THRESHOLDS: LazyLock<[f32; 256]> = LazyLock::new(|| {
     std::array::from_fn(|k| {
+        if k == 255 {
+            return f32::INFINITY;
+        }
         let c = (k as f64 + 0.5) / 255.0;
         let l = if c <= 0.040_45 {
             c / 12.92
@@ -39,12 +43,12 @@ static LINEAR_THRESHOLDS: LazyLock<[f32; 255]> = LazyLock::new(|| {
     })
 });
 
-/// Per 1/[`BUCKETS`] of linear light from 0 to 1 (one more entry: 1), how many of
+/// Per 1/[`BUCKETS`] of linear light from 0 to 1, how many of
 /// [`LINEAR_THRESHOLDS`] lie at or below its start: where [`linear_to_srgb`] starts counting.
-static BUCKET_STARTS: LazyLock<[u8; BUCKETS + 1]> = LazyLock::new(|| {
+static BUCKET_STARTS: LazyLock<[u8; BUCKETS]> = LazyLock::new(|| {
     std::array::from_fn(|b| {
         let start = b as f32 / BUCKETS as f32;
-        LINEAR_THRESHOLDS.partition_point(|&t| t <= start) as u8
+        LINEAR_THRESHOLDS[..255].partition_point(|&t| t <= start) as u8
     })
 });
 
@@ -53,22 +57,25 @@ static BUCKET_STARTS: LazyLock<[u8; BUCKETS + 1]> = LazyLock::new(|| {
 const BUCKETS: usize = 4096;
 
 /// Linear light → the nearest sRGB byte (rounding in sRGB space; 0 at or below 0 and for a
-/// NaN, 255 from 1): the thresholds at or below `x` counted from its bucket's start (a binary
-/// search over all 255 was a tenth of the bake's conversion of texels to bytes).
+/// NaN, 255 from 1): the thresholds at or below `x` counted from its bucket's start, where
+/// one comparison settles it (a binary search over all 255 was a tenth of the bake's
+/// conversion of texels to bytes, and a loop's unpredictable exit a third of the rest).
 #[inline]
 pub fn linear_to_srgb(x: f32) -> u8 {
-    // The least threshold is above 0: nothing is at or below 0, a negative value or NaN.
+    // The least threshold is above 0: nothing is at or below 0, a negative value or NaN; the
+    // greatest is below 1.
     if x.is_nan() || x <= 0.0 {
         return 0;
     }
-    // `x · 4096` is exact (a power of two), so the bucket's start is at or below `x`.
-    let bucket = ((x * BUCKETS as f32) as usize).min(BUCKETS);
-    let thresholds = &*LINEAR_THRESHOLDS;
-    let mut k = usize::from(BUCKET_STARTS[bucket]);
-    while k < thresholds.len() && thresholds[k] <= x {
-        k += 1;
+    if x >= 1.0 {
+        return 255;
     }
-    k as u8
+    // `x · 4096` is exact (a power of two), so the bucket's start is at or below `x`, and
+    // `x` is at most one threshold past it ([`BUCKETS`]); below 1, the +∞ entry is never
+    // passed.
+    let bucket = (x * BUCKETS as f32) as usize;
+    let k = BUCKET_STARTS[bucket];
+    k + u8::from(LINEAR_THRESHOLDS[usize::from(k)] <= x)
 }
 
 #[cfg(test)]
@@ -79,12 +86,12 @@ mod tests {
     fn bucketed_conversion_matches_the_binary_search() {
         // Every threshold and its float neighbours, a sweep, and the edges.
         let mut values = vec![0.0f32, -0.0, -1.0, 1.0, 1.5, f32::NAN, f32::INFINITY, 1e-30];
-        for &t in LINEAR_THRESHOLDS.iter() {
+        for &t in &LINEAR_THRESHOLDS[..255] {
             values.extend([t, t.next_down(), t.next_up()]);
         }
         values.extend((0..=100_000).map(|i| i as f32 / 100_000.0));
         for x in values {
-            let searched = LINEAR_THRESHOLDS.partition_point(|&t| t <= x) as u8;
+            let searched = LINEAR_THRESHOLDS[..255].partition_point(|&t| t <= x) as u8;
             assert_eq!(linear_to_srgb(x), searched, "{x}");
         }
     }
