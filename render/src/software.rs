@@ -1298,8 +1298,9 @@ impl LinearLevel {
     #[inline]
     pub(crate) fn bilinear_at(&self, first: usize, fx: f32, fy: f32) -> Vec3 {
         let w = self.width as usize;
-        let o = [first, first + 1, first + w, first + w + 1];
-        bilerp(o.map(|k| self.texels[k]), fx, fy).truncate()
+        // One bounds check for the four texels (the footprint's rows are `w` apart).
+        let t = &self.texels[first..first + w + 2];
+        bilerp([t[0], t[1], t[w], t[w + 1]], fx, fy).truncate()
     }
 }
 
