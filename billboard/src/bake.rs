@@ -214,29 +214,37 @@ pub fn bake_cloud(
     let start = std::time::Instant::now();
     validate_params(params)?;
     validate_input(soup, materials, quads, members)?;
-    let layout = layout(quads, params)?;
-    let packed = start.elapsed();
-    let packing = &layout.packing;
     let ss = params.supersample;
-    let cells: Vec<Cell> = layout
-        .sizes
-        .iter()
-        .zip(&packing.origins)
-        .map(|(&(width, height), &(x, y))| Cell {
-            x,
-            y,
-            width,
-            height,
-        })
-        .collect();
-
-    let placed_triangles: Vec<Vec<PlacedTriangle>> = quads
-        .par_iter()
-        .zip(members.par_iter())
-        .zip(cells.par_iter())
-        .map(|((quad, tris), cell)| quad_triangles(soup, quad, tris, cell, ss))
-        .collect();
-
+    // The CPU rasteriser's textures are prepared while the atlas is laid out (one texture's
+    // mip chain is mostly one thread's work).
+    let (placing, prepared) = rayon::join(
+        || -> Result<_, BakeError> {
+            let layout = layout(quads, params)?;
+            let packed = start.elapsed();
+            let cells: Vec<Cell> = (layout.sizes.iter().zip(&layout.packing.origins))
+                .map(|(&(width, height), &(x, y))| Cell {
+                    x,
+                    y,
+                    width,
+                    height,
+                })
+                .collect();
+            let placed_triangles: Vec<Vec<PlacedTriangle>> = quads
+                .par_iter()
+                .zip(members.par_iter())
+                .zip(cells.par_iter())
+                .map(|((quad, tris), cell)| quad_triangles(soup, quad, tris, cell, ss))
+                .collect();
+            Ok((layout, packed, cells, placed_triangles))
+        },
+        || match params.rasteriser {
+            BakeRasteriser::Cpu => bake_textures(soup, materials, textures, members).map(Some),
+            BakeRasteriser::Wgpu => Ok(None),
+        },
+    );
+    let (layout, packed, cells, placed_triangles) = placing?;
+    let prepared = prepared?;
+    let packing = &layout.packing;
     let (width, height) = (packing.width, packing.height);
     let mut samples = Downsampled::new(width, height);
     let placed = start.elapsed();
@@ -244,6 +252,7 @@ pub fn bake_cloud(
         renderer,
         materials,
         textures,
+        prepared.as_ref(),
         &placed_triangles,
         &cells,
         params,
@@ -741,11 +750,45 @@ fn cutoff_samples(params: &BakeParams) -> u32 {
         .unwrap_or(total)
 }
 
-/// Renders the supersampled atlas with the rasteriser `params` names and downsamples it.
+/// The textures of the CPU bake: those the materials of `members`' triangles read, which
+/// alone are prepared.
+struct BakeTextures {
+    prepared: SoftwareTextures,
+    used: Vec<bool>,
+}
+
+/// `textures` prepared for the CPU bake ([`SoftwareTextures::for_bake_of`]).
+fn bake_textures(
+    soup: &TriangleSoup,
+    materials: &[DrawMaterial],
+    textures: &[DrawTexture],
+    members: &[Vec<usize>],
+) -> Result<BakeTextures, BakeError> {
+    let mut used = vec![false; textures.len()];
+    for &t in members.iter().flatten() {
+        let material = materials.get(soup.material[t] as usize);
+        if let Some(u) = material
+            .and_then(|m| m.texture)
+            .and_then(|i| used.get_mut(i))
+        {
+            *u = true;
+        }
+    }
+    let prepared = SoftwareTextures::for_bake_of(textures, &used)?;
+    Ok(BakeTextures { prepared, used })
+}
+
+/// Renders the supersampled atlas and downsamples it: with the CPU bake rasteriser where its
+/// textures are `prepared` (`params` names it), through the wgpu renderer otherwise.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the job's parts, kept apart from the rasteriser's"
+)]
 fn render_atlas(
     renderer: &Renderer,
     materials: &[DrawMaterial],
     textures: &[DrawTexture],
+    prepared: Option<&BakeTextures>,
     placed_triangles: &[Vec<PlacedTriangle>],
     cells: &[Cell],
     params: &BakeParams,
@@ -758,9 +801,9 @@ fn render_atlas(
         cells,
         params,
     };
-    match params.rasteriser {
-        BakeRasteriser::Cpu => render_atlas_cpu(&job, out),
-        BakeRasteriser::Wgpu => render_atlas_wgpu(renderer, &job, out),
+    match prepared {
+        Some(textures) => render_atlas_cpu(&job, textures, out),
+        None => render_atlas_wgpu(renderer, &job, out),
     }
 }
 
@@ -828,26 +871,19 @@ const CPU_STRIP_TEXELS: u32 = 256;
 /// from its own triangles (colour and normals in one pass), in parallel, and stored texel by
 /// texel. The strips of [`CPU_STRIP_TEXELS`] rows share one target (one frame), the shorter
 /// last strip has its own.
-fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeError> {
+fn render_atlas_cpu(
+    job: &AtlasJob,
+    textures: &BakeTextures,
+    out: &mut Downsampled,
+) -> Result<(), BakeError> {
     let ss = job.params.supersample;
     let (total, needed) = (ss * ss, cutoff_samples(job.params));
     // Per count of covered samples, its alpha.
     let alphas: Vec<u8> = (0..=total)
         .map(|n| coverage_alpha(n, total, needed))
         .collect();
-    // Only the textures of the materials drawn are prepared.
-    let mut used = vec![false; job.textures.len()];
-    for t in job.placed_triangles.iter().flatten() {
-        let material = job.materials.get(t.material as usize);
-        if let Some(u) = material
-            .and_then(|m| m.texture)
-            .and_then(|i| used.get_mut(i))
-        {
-            *u = true;
-        }
-    }
-    let prepared = SoftwareTextures::for_bake_of(job.textures, &used)?;
-    let scene = job.scene_of(&used);
+    let prepared = &textures.prepared;
+    let scene = job.scene_of(&textures.used);
     let strips = (0..out.height).step_by(CPU_STRIP_TEXELS as usize);
     let (whole, shorter): (Vec<u32>, Vec<u32>) =
         strips.partition(|&ty| out.height - ty >= CPU_STRIP_TEXELS);
@@ -857,7 +893,7 @@ fn render_atlas_cpu(job: &AtlasJob, out: &mut Downsampled) -> Result<(), BakeErr
         };
         let th = CPU_STRIP_TEXELS.min(out.height - first);
         let regions = cell_regions(job, &group, [out.width, th]);
-        let target = BakeTarget::new(&scene, &prepared, Mat4::IDENTITY, out.width, th, ss)?;
+        let target = BakeTarget::new(&scene, prepared, Mat4::IDENTITY, out.width, th, ss)?;
         let strip_rect = |ty: u32| [0, ty * ss, out.width * ss, th * ss];
         let texels: Vec<Vec<CoveredTexel>> = regions
             .par_iter()
