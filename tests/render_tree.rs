@@ -110,3 +110,36 @@ fn blender_round_trip_poses_like_the_native_file() {
     let blender = frond_testdata::require_tree!("pine_medium_blender.glb");
     poses_like_the_native_file(&native, &blender);
 }
+
+#[test]
+fn a_materials_scene_copies_only_the_drawn_materials_textures() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/sapling.glb");
+    let tree = import(&path, &ImportOptions::default()).expect("imports");
+    let textured: Vec<usize> = (0..tree.materials.len())
+        .filter(|&m| tree.materials[m].base_color_texture.is_some())
+        .collect();
+    assert!(!textured.is_empty(), "the sample has a textured material");
+    // Only the first textured material drawn.
+    let first = textured[0];
+    let mut drawn = vec![false; tree.materials.len()];
+    drawn[first] = true;
+    let scene = frond_render::materials_scene(&tree, &drawn);
+    assert_eq!(scene.materials.len(), tree.materials.len());
+    assert_eq!(scene.textures.len(), tree.textures.len());
+    let read = tree.materials[first].base_color_texture;
+    for (i, (t, source)) in scene.textures.iter().zip(&tree.textures).enumerate() {
+        if Some(i) == read {
+            assert_eq!((t.width, t.height), (source.width, source.height));
+            assert!(t.rgba == source.rgba, "texture {i} copied as it is");
+        } else {
+            assert_eq!((t.width, t.height, t.rgba.len()), (1, 1, 4), "texture {i}");
+        }
+    }
+    // Every material drawn: every texture a material reads is copied.
+    let all = frond_render::materials_scene(&tree, &vec![true; tree.materials.len()]);
+    for m in &tree.materials {
+        if let Some(i) = m.base_color_texture {
+            assert!(all.textures[i].rgba == tree.textures[i].rgba);
+        }
+    }
+}

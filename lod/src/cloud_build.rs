@@ -151,9 +151,18 @@ pub fn build_animated_cloud(
     let baked = if bake.is_empty() {
         None
     } else {
-        let draw = materials_scene(tree);
+        // Only the foliage's materials are drawn.
+        let mut foliage = vec![false; tree.materials.len()];
+        for &m in &soup.material {
+            if let Some(f) = foliage.get_mut(m as usize) {
+                *f = true;
+            }
+        }
+        let draw = materials_scene(tree, &foliage);
         let bake_quads: Vec<Quad> = bake.iter().map(|&i| quads[i]).collect();
-        let bake_drawn: Vec<Vec<usize>> = bake.iter().map(|&i| drawn[i].clone()).collect();
+        let bake_drawn: Vec<Vec<usize>> = (bake.iter())
+            .map(|&i| std::mem::take(&mut drawn[i]))
+            .collect();
         // The atlas budget holds as many billboards as the chain allowed for it; one that a
         // method could not fit (too few texels even at the smallest texture per quad) doubles
         // until it fits, and the report shows it over its texture budget.

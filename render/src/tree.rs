@@ -188,7 +188,7 @@ fn build_scene(
         meshes.push(mesh);
         sources.push(src);
     }
-    let (materials, textures) = materials_and_textures(tree, &mapped);
+    let (materials, textures) = materials_and_textures(tree, &mapped, |_| true);
     (
         DrawScene {
             meshes,
@@ -201,9 +201,18 @@ fn build_scene(
 
 /// A draw scene of `tree`'s materials and textures, without meshes (and without normal
 /// maps, as [`scene_from_positions`] has them): what a render of meshes made elsewhere, such
-/// as the billboard bake's, draws with.
-pub fn materials_scene(tree: &Tree) -> DrawScene {
-    let (materials, textures) = materials_and_textures(tree, &vec![false; tree.materials.len()]);
+/// as the billboard bake's, draws with. Only the textures of the materials flagged in `drawn`
+/// are copied; each other one is a 1×1 placeholder that keeps the indices (a tree's bark maps
+/// are most of its texels, and its foliage is drawn alone).
+pub fn materials_scene(tree: &Tree, drawn: &[bool]) -> DrawScene {
+    let mut read = vec![false; tree.textures.len()];
+    for (m, _) in (tree.materials.iter().zip(drawn)).filter(|(_, d)| **d) {
+        if let Some(r) = m.base_color_texture.and_then(|t| read.get_mut(t)) {
+            *r = true;
+        }
+    }
+    let unmapped = vec![false; tree.materials.len()];
+    let (materials, textures) = materials_and_textures(tree, &unmapped, |t| read[t]);
     DrawScene {
         meshes: Vec::new(),
         materials,
@@ -211,8 +220,13 @@ pub fn materials_scene(tree: &Tree) -> DrawScene {
     }
 }
 
-/// `tree`'s materials as drawn, with their normal maps where `mapped`, and its textures.
-fn materials_and_textures(tree: &Tree, mapped: &[bool]) -> (Vec<DrawMaterial>, Vec<DrawTexture>) {
+/// `tree`'s materials as drawn, with their normal maps where `mapped`, and its textures (those
+/// not `copied` a 1×1 placeholder).
+fn materials_and_textures(
+    tree: &Tree,
+    mapped: &[bool],
+    copied: impl Fn(usize) -> bool,
+) -> (Vec<DrawMaterial>, Vec<DrawTexture>) {
     let materials = tree
         .materials
         .iter()
@@ -230,13 +244,18 @@ fn materials_and_textures(tree: &Tree, mapped: &[bool]) -> (Vec<DrawMaterial>, V
             double_sided: m.double_sided,
         })
         .collect();
-    let textures = tree
-        .textures
-        .iter()
-        .map(|t| DrawTexture {
-            width: t.width,
-            height: t.height,
-            rgba: t.rgba.clone(),
+    let textures = (tree.textures.iter().enumerate())
+        .map(|(i, t)| match copied(i) {
+            true => DrawTexture {
+                width: t.width,
+                height: t.height,
+                rgba: t.rgba.clone(),
+            },
+            false => DrawTexture {
+                width: 1,
+                height: 1,
+                rgba: vec![0; 4],
+            },
         })
         .collect();
     (materials, textures)
