@@ -25,6 +25,9 @@ pub(crate) struct ShadeLanes {
     pub(crate) uq: [[f32; 2]; 3],
     /// Normals divided by `w` at the corners.
     pub(crate) nq: [[f32; 3]; 3],
+    /// The texture coordinates at the corners of an affine triangle, summed without dividing
+    /// by `Σ b·q` (`crate::software`'s `affine_uv`).
+    pub(crate) affine: Option<[[f32; 2]; 3]>,
     /// The normal is the same at every sample (found once, elsewhere): not computed here.
     pub(crate) flat: bool,
     /// A back face: its normal is turned to face the viewer.
@@ -91,8 +94,13 @@ impl ShadeLanes {
         let q = dot(self.q);
         let mut out = LaneShading::default();
         if self.levels[0].is_some() {
-            let u = _mm256_div_ps(dot(self.uq.map(|c| c[0])), q);
-            let v = _mm256_div_ps(dot(self.uq.map(|c| c[1])), q);
+            let (u, v) = match self.affine {
+                Some(c) => (dot(c.map(|t| t[0])), dot(c.map(|t| t[1]))),
+                None => (
+                    _mm256_div_ps(dot(self.uq.map(|c| c[0])), q),
+                    _mm256_div_ps(dot(self.uq.map(|c| c[1])), q),
+                ),
+            };
             for (k, level) in self.levels.iter().enumerate() {
                 let Some([w, h]) = *level else {
                     continue;

@@ -34,7 +34,9 @@
 //! normal, flipped on back faces so it faces the viewer (improved-billboard-cloud §4 items 4
 //! and 7), found once for a triangle whose corners share one normal and one depth (every
 //! billboard member is a flat face seen orthographically: the same normal but for its last
-//! bits).
+//! bits). Likewise an affine triangle's texture coordinates (`1/w` the same at its corners)
+//! are summed from its corners' with no perspective division per sample, by the eight-sample
+//! lanes and the scalar path alike (a few samples at the alpha test's edge change side).
 
 use frond_scene::Wrap;
 use glam::{Mat4, Vec3};
@@ -46,7 +48,7 @@ use crate::sample_lanes::{self, LaneTest, TriangleLanes};
 use crate::scene::{DrawMesh, DrawScene, validate_mesh};
 use crate::software::{
     AlphaCutoff, BAND_PIXELS, LinearLevel, SetUpMeshes, Setup, Shading, SoftwareTextures,
-    checked_target,
+    affine_uv, checked_target,
 };
 use crate::srgb::SRGB_LINEAR;
 use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
@@ -387,11 +389,15 @@ impl<'a> BakeTarget<'a> {
             (None, _) => Some(TriangleLanes {
                 q: t.q,
                 uq: t.uq,
+                affine: None,
                 test: LaneTest::Opaque,
             }),
             (Some(cutoff), Some(i)) => self.textures.bake_lanes(t, i, material.wrap, cutoff),
             (Some(_), None) => None,
         };
+        // An affine triangle's texture coordinates are summed without a division (the
+        // lanes' test does the same: the same samples pass).
+        let affine = t.affine_corners();
         let width = region.x1 - region.x0;
         for span in t.row_spans(region.y0, region.y1) {
             let row = (span.y - region.y0) * width;
@@ -449,7 +455,10 @@ impl<'a> BakeTarget<'a> {
                     continue;
                 }
                 if let Some(cutoff) = cutoff {
-                    let (uv, _) = t.uv(b);
+                    let uv = match &affine {
+                        Some(corners) => affine_uv(corners, b),
+                        None => t.uv(b).0,
+                    };
                     let pass = match material.texture {
                         Some(i) => {
                             self.textures
@@ -589,7 +598,10 @@ impl<'a> BakeTarget<'a> {
     fn shade(&self, s: &Shader, [x, y]: [usize; 2], linear: &[f32; 256]) -> (Vec3, Option<Vec3>) {
         let t = s.triangle;
         let b = t.weights(x as f32 + 0.5, y as f32 + 0.5);
-        let (uv, q) = t.uv(b);
+        let (uv, q) = match &s.affine {
+            Some(corners) => (affine_uv(corners, b), t.q[0]),
+            None => t.uv(b),
+        };
         let texel = match s.texels {
             Texels::White => Vec3::ONE,
             Texels::Decoded(a, b) => {
@@ -649,11 +661,13 @@ impl BakeTarget<'_> {
         let q = triangle.q;
         let flat = (self.flat && nq[0] == nq[1] && nq[1] == nq[2] && q[0] == q[1] && q[1] == q[2])
             .then(|| facing(nq[0] / q[0], triangle.back));
+        let affine = triangle.affine_corners();
         Shader {
             triangle,
             base: Vec3::new(r, g, b),
             nq,
             flat,
+            affine,
             wrap: material.wrap,
             texels,
             lanes: levels.map(|levels| ShadeLanes {
@@ -663,6 +677,7 @@ impl BakeTarget<'_> {
                 q: triangle.q,
                 uq: triangle.uq,
                 nq: nq.map(|n| n.to_array()),
+                affine,
                 flat: flat.is_some(),
                 back: triangle.back,
                 levels,
@@ -684,6 +699,9 @@ struct Shader<'a> {
     nq: [Vec3; 3],
     /// The normal of every sample where the triangle is flat (see [`BakeTarget::shader`]).
     flat: Option<Option<Vec3>>,
+    /// The texture coordinates at the corners of an affine triangle
+    /// ([`Setup::affine_corners`]).
+    affine: Option<[[f32; 2]; 3]>,
     wrap: [Wrap; 2],
     texels: Texels<'a>,
     /// Its eight-sample arithmetic, where its texels are not read from bytes.

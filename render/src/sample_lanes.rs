@@ -22,6 +22,10 @@ pub(crate) struct TriangleLanes<'a> {
     pub(crate) q: [f32; 3],
     /// Texture coordinates divided by `w`.
     pub(crate) uq: [[f32; 2]; 3],
+    /// The texture coordinates at the corners of an affine triangle, summed as they are
+    /// without dividing by `Σ b·q` (the bake's: `crate::software`'s `affine_uv`); `None`
+    /// divides.
+    pub(crate) affine: Option<[[f32; 2]; 3]>,
     /// The test itself: an opaque material passes every inside sample.
     pub(crate) test: LaneTest<'a>,
 }
@@ -386,12 +390,15 @@ impl TriangleLanes<'_> {
             };
         }
         // The texture coordinates, where a texture is read.
-        let uv = || {
-            let q = dot(self.q);
-            (
-                _mm256_div_ps(dot(self.uq.map(|t| t[0])), q),
-                _mm256_div_ps(dot(self.uq.map(|t| t[1])), q),
-            )
+        let uv = || match self.affine {
+            Some(c) => (dot(c.map(|t| t[0])), dot(c.map(|t| t[1]))),
+            None => {
+                let q = dot(self.q);
+                (
+                    _mm256_div_ps(dot(self.uq.map(|t| t[0])), q),
+                    _mm256_div_ps(dot(self.uq.map(|t| t[1])), q),
+                )
+            }
         };
         let (mut r, filter, u, v) = match self.test {
             LaneTest::Opaque => {

@@ -512,6 +512,7 @@ impl SoftwareTextures {
         Some(TriangleLanes {
             q: t.q,
             uq: t.uq,
+            affine: t.affine_corners(),
             test: LaneTest::Quads {
                 quads,
                 least_passing: cutoff.least_passing,
@@ -1136,6 +1137,22 @@ impl Setup {
         let v = b[0] * self.uq[0][1] + b[1] * self.uq[1][1] + b[2] * self.uq[2][1];
         ([u / q, v / q], q)
     }
+
+    /// The texture coordinates at the corners where `1/w` is the same at all three (an affine
+    /// triangle, as every one an orthographic view draws): then the coordinates at weights `b`
+    /// are `Σ b·uv` ([`affine_uv`]), with no division per sample.
+    #[inline]
+    pub(crate) fn affine_corners(&self) -> Option<[[f32; 2]; 3]> {
+        let q = self.q;
+        (q[0] == q[1] && q[1] == q[2]).then(|| self.uq.map(|c| [c[0] / q[0], c[1] / q[0]]))
+    }
+}
+
+/// The texture coordinates at weights `b` of an affine triangle whose corners have `uv`
+/// ([`Setup::affine_corners`]): `Σ b·uv` left to right, as the eight-sample lanes sum them.
+#[inline]
+pub(crate) fn affine_uv(uv: &[[f32; 2]; 3], b: [f32; 3]) -> [f32; 2] {
+    [0, 1].map(|k| b[0] * uv[0][k] + b[1] * uv[1][k] + b[2] * uv[2][k])
 }
 
 /// The mip level of `levels` at `s`'s centroid: log2 of the longer of the texture
@@ -2051,6 +2068,7 @@ impl<'a> Raster<'a> {
         Some(TriangleLanes {
             q: t.q,
             uq: t.uq,
+            affine: None,
             test,
         })
     }
@@ -2611,6 +2629,41 @@ mod tests {
                 )
             },
         );
+    }
+
+    /// An affine triangle's texture coordinates summed without a division are the divided
+    /// ones but for rounding; a perspective triangle has no affine corners.
+    #[test]
+    fn affine_texture_coordinates_are_the_divided_ones() {
+        let setup = |q: [f32; 3]| Setup {
+            x: [1.0, 9.0, 3.0],
+            y: [2.0, 4.0, 11.0],
+            z: [0.0; 3],
+            q,
+            uq: [[0.1, 0.9], [0.7, 0.2], [0.4, 0.5]].map(|[u, v]| [u * q[0], v * q[0]]),
+            inv_area: 1.0 / 68.0,
+            material: 0,
+            lit: false,
+            back: false,
+            lod: Trilinear::default(),
+            min: [1, 2],
+            max: [8, 10],
+        };
+        let t = setup([0.5; 3]);
+        let corners = t.affine_corners().expect("affine");
+        assert_eq!(corners[1], [0.7, 0.2]);
+        for (px, py) in [(2.5, 3.5), (4.5, 6.5), (3.0, 9.0), (7.5, 4.5)] {
+            let b = t.weights(px, py);
+            let (divided, _) = t.uv(b);
+            let summed = affine_uv(&corners, b);
+            for k in 0..2 {
+                assert!(
+                    (divided[k] - summed[k]).abs() < 1e-6,
+                    "{divided:?} {summed:?}"
+                );
+            }
+        }
+        assert!(setup([0.5, 0.25, 0.5]).affine_corners().is_none());
     }
 
     /// A row's span holds every sample the weights put inside the triangle, and at most one
