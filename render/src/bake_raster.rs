@@ -495,7 +495,6 @@ impl<'a> BakeTarget<'a> {
         let (w, h) = (width / ss, (region.y1 - region.y0) / ss);
         // Per pixel of the row: its covered samples, their colours' and normals' sums.
         let mut sums = vec![(0u16, Vec3::ZERO, Vec3::ZERO); w];
-        // The triangle of the last samples shaded: neighbouring samples mostly share it.
         // Each triangle's shading, looked up when it first wins a sample.
         let mut shaders: Vec<Option<Shader>> = Vec::new();
         shaders.resize_with(drawn.triangles.len(), || None);
