@@ -51,7 +51,7 @@ use crate::software::{
     affine_uv, checked_target,
 };
 use crate::srgb::SRGB_LINEAR;
-use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
+use crate::uv_hull::{BAKE_MIN_AREA, HullLevels, TriangleHull, narrowed};
 
 /// A bake render resolved to pixels, top row first.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -377,7 +377,7 @@ impl<'a> BakeTarget<'a> {
         let material = &self.scene.materials[t.material as usize];
         let cutoff = self.cutoffs[t.material as usize].as_ref();
         let hull = match &self.hulls[t.material as usize] {
-            Some(levels) => match levels.level(t.lod.nearest()).rows(t) {
+            Some(levels) => match levels.level(t.lod.nearest()).rows_from(t, BAKE_MIN_AREA) {
                 TriangleHull::Empty => return,
                 TriangleHull::Rows(rows) => Some(rows),
                 TriangleHull::Unbounded => None,
