@@ -19,7 +19,7 @@
 //! the arithmetic of eight samples won by one triangle is done at once
 //! ([`crate::bake_lanes`]); the colour is filtered from levels decoded to linear light
 //! beforehand. Each gives the same bits (on oak_dense's fixed per-bone configuration the bake
-//! went from 1.33 to 0.50–0.54 s with them and the regions below; docs/performance.md has
+//! went from 1.33 to 0.43–0.44 s with them and the regions below; docs/performance.md has
 //! each step). A [`BakeTarget`] holds a render's frame, materials and textures; its regions
 //! are drawn one by one, each from its own meshes (set up as it is drawn) into buffers of its
 //! own size, and resolved alone: the billboard bake draws each atlas cell so, in parallel
