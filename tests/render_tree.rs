@@ -132,7 +132,7 @@ fn a_materials_scene_copies_only_the_drawn_materials_textures() {
             assert_eq!((t.width, t.height), (source.width, source.height));
             assert!(t.rgba == source.rgba, "texture {i} copied as it is");
         } else {
-            assert_eq!((t.width, t.height, t.rgba.len()), (1, 1, 4), "texture {i}");
+            assert_eq!(*t, frond_render::DrawTexture::placeholder(), "texture {i}");
         }
     }
     // Every material drawn: every texture a material reads is copied.

@@ -823,20 +823,20 @@ impl AtlasJob<'_> {
         self.scene_of(&vec![true; self.textures.len()])
     }
 
-    /// [`AtlasJob::scene`] with only the textures `used` copied, each other one a 1×1
-    /// placeholder keeping the indices (a tree's bark maps are most of its texels, and a bake
-    /// reads only its foliage's).
+    /// [`AtlasJob::scene`] with only the textures `used` copied, each other one a
+    /// [`DrawTexture::placeholder`] (a bake reads only its foliage's).
     fn scene_of(&self, used: &[bool]) -> DrawScene {
-        let placeholder = || DrawTexture {
-            width: 1,
-            height: 1,
-            rgba: vec![0; 4],
-        };
         DrawScene {
             meshes: Vec::new(),
             materials: self.materials.clone(),
             textures: (self.textures.iter().zip(used))
-                .map(|(t, &used)| if used { t.clone() } else { placeholder() })
+                .map(|(t, &used)| {
+                    if used {
+                        t.clone()
+                    } else {
+                        DrawTexture::placeholder()
+                    }
+                })
                 .collect(),
         }
     }

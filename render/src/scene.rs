@@ -17,6 +17,19 @@ pub struct DrawTexture {
     pub rgba: Vec<u8>,
 }
 
+impl DrawTexture {
+    /// A 1×1 clear texture standing in for one a render does not read, so that a scene keeps
+    /// its materials' texture indices without a copy of every texture (a tree's bark maps are
+    /// most of its texels, and its foliage is often drawn alone).
+    pub fn placeholder() -> Self {
+        DrawTexture {
+            width: 1,
+            height: 1,
+            rgba: vec![0; 4],
+        }
+    }
+}
+
 /// A metallic-roughness-free subset of a glTF material: base colour, optional base
 /// colour texture, alpha mode (OPAQUE or MASK) and culling.
 #[derive(Clone, Debug, PartialEq)]

@@ -2114,6 +2114,8 @@ impl<'a> Raster<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::{Camera, Projection};
+    use crate::scene::DrawMesh;
 
     #[test]
     fn the_least_passing_alpha_splits_the_test() {
@@ -2140,8 +2142,6 @@ mod tests {
         assert_eq!(AlphaCutoff::new(-1.0, 0.5).least_passing, None);
         assert_eq!(AlphaCutoff::new(1.0, f32::NAN).least_passing, None);
     }
-    use crate::camera::{Camera, Projection};
-    use crate::scene::DrawMesh;
 
     /// A quad over NDC `[x0, x1] × [-1, 1]` at depth `z`, counter-clockwise (front) unless
     /// `flip`, with texture coordinates over the whole texture.

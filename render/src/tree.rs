@@ -202,8 +202,7 @@ fn build_scene(
 /// A draw scene of `tree`'s materials and textures, without meshes (and without normal
 /// maps, as [`scene_from_positions`] has them): what a render of meshes made elsewhere, such
 /// as the billboard bake's, draws with. Only the textures of the materials flagged in `drawn`
-/// are copied; each other one is a 1×1 placeholder that keeps the indices (a tree's bark maps
-/// are most of its texels, and its foliage is drawn alone).
+/// are copied; each other one is a [`DrawTexture::placeholder`].
 pub fn materials_scene(tree: &Tree, drawn: &[bool]) -> DrawScene {
     let mut read = vec![false; tree.textures.len()];
     for (m, _) in (tree.materials.iter().zip(drawn)).filter(|(_, d)| **d) {
@@ -221,7 +220,7 @@ pub fn materials_scene(tree: &Tree, drawn: &[bool]) -> DrawScene {
 }
 
 /// `tree`'s materials as drawn, with their normal maps where `mapped`, and its textures (those
-/// not `copied` a 1×1 placeholder).
+/// not `copied` a [`DrawTexture::placeholder`]).
 fn materials_and_textures(
     tree: &Tree,
     mapped: &[bool],
@@ -251,11 +250,7 @@ fn materials_and_textures(
                 height: t.height,
                 rgba: t.rgba.clone(),
             },
-            false => DrawTexture {
-                width: 1,
-                height: 1,
-                rgba: vec![0; 4],
-            },
+            false => DrawTexture::placeholder(),
         })
         .collect();
     (materials, textures)

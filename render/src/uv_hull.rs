@@ -57,7 +57,7 @@ const ROW_SLACK: f32 = 0.25;
 
 /// The least area, in samples, of a triangle whose rows a coverage render bounds: on smaller
 /// ones the bounds cost more than the samples they save.
-pub(crate) const MIN_AREA: f32 = 256.0;
+const MIN_AREA: f32 = 256.0;
 
 /// [`MIN_AREA`] of the bake, whose alpha test costs more a sample (oak_dense's per-bone bake:
 /// 7 ms less with it, 44 % of its triangles being below 256 samples).
