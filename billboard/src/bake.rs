@@ -867,10 +867,19 @@ fn two_sided(m: &DrawMaterial) -> DrawMaterial {
 /// strip drawn in the strip's frame.
 const CPU_STRIP_TEXELS: u32 = 256;
 
-/// The CPU path: every cell's part of every strip of the atlas drawn alone by [`BakeTarget`]
+/// Texel columns of a frame of an atlas `width` texels wide at `ss`² supersampling: the whole
+/// width where a target can hold it, else as many as one can
+/// ([`BakeTarget::MAX_SIDE_SAMPLES`]: a 16×-supersampled bake of an atlas wider than 2048).
+fn cpu_frame_columns(width: u32, ss: u32) -> u32 {
+    let most = BakeTarget::MAX_SIDE_SAMPLES / ss.max(1);
+    width.min(most.max(1))
+}
+
+/// The CPU path: every cell's part of every frame of the atlas drawn alone by [`BakeTarget`]
 /// from its own triangles (colour and normals in one pass), in parallel, and stored texel by
-/// texel. The strips of [`CPU_STRIP_TEXELS`] rows share one target (one frame), the shorter
-/// last strip has its own.
+/// texel. A frame is a strip of [`CPU_STRIP_TEXELS`] rows, cut into columns where the atlas
+/// is wider than a target ([`cpu_frame_columns`]); frames of one size share one target, the
+/// shorter last strip and narrower last column have their own.
 fn render_atlas_cpu(
     job: &AtlasJob,
     textures: &BakeTextures,
@@ -884,24 +893,34 @@ fn render_atlas_cpu(
         .collect();
     let prepared = &textures.prepared;
     let scene = job.scene_of(&textures.used);
-    let strips = (0..out.height).step_by(CPU_STRIP_TEXELS as usize);
-    let (whole, shorter): (Vec<u32>, Vec<u32>) =
-        strips.partition(|&ty| out.height - ty >= CPU_STRIP_TEXELS);
-    for group in [whole, shorter] {
-        let Some(&first) = group.first() else {
-            continue;
-        };
-        let th = CPU_STRIP_TEXELS.min(out.height - first);
-        let regions = cell_regions(job, &group, [out.width, th]);
-        let target = BakeTarget::new(&scene, prepared, Mat4::IDENTITY, out.width, th, ss)?;
-        let strip_rect = |ty: u32| [0, ty * ss, out.width * ss, th * ss];
+    let columns = cpu_frame_columns(out.width, ss);
+    // Frames `[x, y, w, h]` in texels, strip by strip, grouped by size.
+    let mut groups: Vec<Vec<[u32; 4]>> = Vec::new();
+    for ty in (0..out.height).step_by(CPU_STRIP_TEXELS as usize) {
+        for tx in (0..out.width).step_by(columns as usize) {
+            let size = [
+                columns.min(out.width - tx),
+                CPU_STRIP_TEXELS.min(out.height - ty),
+            ];
+            let frame = [tx, ty, size[0], size[1]];
+            match groups.iter_mut().find(|g| g[0][2..] == size) {
+                Some(group) => group.push(frame),
+                None => groups.push(vec![frame]),
+            }
+        }
+    }
+    for group in groups {
+        let [_, _, tw, th] = group[0];
+        let regions = cell_regions(job, &group);
+        let target = BakeTarget::new(&scene, prepared, Mat4::IDENTITY, tw, th, ss)?;
         let texels: Vec<Vec<CoveredTexel>> = regions
             .par_iter()
             .map_init(
                 || (BakeScratch::default(), Vec::new(), Vec::new()),
                 |(scratch, meshes, pixels), region| {
                     let tris = &job.placed_triangles[region.cell];
-                    cell_meshes(meshes, tris, strip_rect(region.ty), job.materials.len());
+                    let frame = region.frame.map(|v| v * ss);
+                    cell_meshes(meshes, tris, frame, job.materials.len());
                     pixels.clear();
                     target.render_covered(region.rect, meshes, scratch, |i, pixel| {
                         pixels.push((i, pixel));
@@ -923,30 +942,33 @@ fn render_atlas_cpu(
     Ok(())
 }
 
-/// One cell's part of a strip of the atlas, for [`BakeTarget::render`].
+/// One cell's part of a frame of the atlas, for [`BakeTarget::render`].
 struct CellRegion {
-    /// The strip's first texel row.
-    ty: u32,
-    /// Its texels `[x, y, w, h]`, rows counted from the strip's first.
+    /// The frame's texels `[x, y, w, h]` in the atlas.
+    frame: [u32; 4],
+    /// The cell's texels `[x, y, w, h]` in the frame.
     rect: [u32; 4],
     /// The cell.
     cell: usize,
 }
 
-/// The regions of the cells with triangles in the strips `group` (first rows) of `th` rows
-/// of an atlas `width` texels wide, strip by strip.
-fn cell_regions(job: &AtlasJob, group: &[u32], [width, th]: [u32; 2]) -> Vec<CellRegion> {
+/// The regions of the cells with triangles in the frames `group` (texels of the atlas,
+/// strip by strip), frame by frame.
+fn cell_regions(job: &AtlasJob, group: &[[u32; 4]]) -> Vec<CellRegion> {
     let ss = job.params.supersample;
     (group.iter())
-        .flat_map(|&ty| {
-            let strip = [0, ty * ss, width * ss, th * ss];
+        .flat_map(|&frame| {
+            let [tx, ty, tw, th] = frame;
             (job.cells.iter().zip(job.placed_triangles).enumerate())
-                .filter(move |(_, (cell, tris))| !tris.is_empty() && cell_in_tile(cell, ss, strip))
+                .filter(move |(_, (cell, tris))| {
+                    !tris.is_empty() && cell_in_tile(cell, ss, frame.map(|v| v * ss))
+                })
                 .map(move |(c, (cell, _))| {
+                    let (x0, x1) = (cell.x.max(tx), (cell.x + cell.width).min(tx + tw));
                     let (y0, y1) = (cell.y.max(ty), (cell.y + cell.height).min(ty + th));
                     CellRegion {
-                        ty,
-                        rect: [cell.x, y0 - ty, cell.width, y1 - y0],
+                        frame,
+                        rect: [x0 - tx, y0 - ty, x1 - x0, y1 - y0],
                         cell: c,
                     }
                 })
@@ -962,7 +984,7 @@ fn store_texels(out: &mut Downsampled, regions: &[CellRegion], texels: &[Vec<Cov
     // Per strip, its regions (`0..0` until its first).
     let mut per_strip = vec![0..0; (out.height as usize).div_ceil(strip)];
     for (k, region) in regions.iter().enumerate() {
-        let range = &mut per_strip[region.ty as usize / strip];
+        let range = &mut per_strip[region.frame[1] as usize / strip];
         *range = if range.end == 0 {
             k..k + 1
         } else {
@@ -977,6 +999,7 @@ fn store_texels(out: &mut Downsampled, regions: &[CellRegion], texels: &[Vec<Cov
         .for_each(|(((samples, color), normal), range)| {
             for k in range.clone() {
                 let [x, y, w, _] = regions[k].rect.map(|v| v as usize);
+                let x = x + regions[k].frame[0] as usize;
                 for &(i, n, c, nb) in &texels[k] {
                     let at = (y + i / w) * width + x + i % w;
                     samples[at] = n;

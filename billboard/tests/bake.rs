@@ -209,6 +209,53 @@ fn downsampling_averages_covered_samples_in_linear_light() {
     }
 }
 
+#[test]
+fn a_bake_wider_than_one_target_has_no_seam() {
+    let r = renderer();
+    // 2304×32 texels at 16×16 supersampling: 36,864 samples across, more than one target
+    // holds (32,768), so the CPU rasteriser draws it in two frames side by side. Red left of
+    // s = 0.25, green right of it; the frames meet at texel 2048 of the atlas.
+    let q = quad_z(Vec3::ZERO, Vec2::new(1.125, 1.0 / 64.0));
+    let mut soup = TriangleSoup::default();
+    push_rect(&mut soup, &q, [0.0, 0.25], [0.0, 1.0], 0);
+    push_rect(&mut soup, &q, [0.25, 1.0], [0.0, 1.0], 1);
+    let materials = [
+        DrawMaterial::opaque([1.0, 0.0, 0.0, 1.0]),
+        DrawMaterial::opaque([0.0, 1.0, 0.0, 1.0]),
+    ];
+    let cloud = bake_cloud(
+        &r,
+        &soup,
+        &materials,
+        &[],
+        &[q],
+        &[vec![0, 1, 2, 3]],
+        &BakeParams {
+            supersample: 16,
+            max_side: 4096,
+            ..params(1024.0)
+        },
+    )
+    .expect("bake");
+    let c = cloud.cells[0];
+    assert_eq!((c.width, c.height), (2304, 32));
+    assert!((c.x..c.x + c.width).contains(&(32768 / 16)));
+    // Every texel is wholly red or green (their edge is a texel edge), across the frames'
+    // meeting line too.
+    for y in 0..c.height {
+        for x in 0..c.width {
+            let (colour, normal) = texel(&cloud, c.x + x, c.y + y);
+            let want = if x < 576 {
+                [255, 0, 0, 255]
+            } else {
+                [0, 255, 0, 255]
+            };
+            assert_eq!(colour, want, "texel ({x}, {y})");
+            assert!(near(normal, [128, 128, 255, 255], 1), "normal {normal:?}");
+        }
+    }
+}
+
 /// Several quads in different orientations, each with sparse random leaves (triangles
 /// slightly off its plane) of one of three colours.
 fn leafy_cloud(

@@ -47,7 +47,7 @@ use crate::error::RenderError;
 use crate::sample_lanes::{self, LaneTest, TriangleLanes};
 use crate::scene::{DrawMesh, DrawScene, validate_mesh};
 use crate::software::{
-    AlphaCutoff, BAND_PIXELS, LinearLevel, SetUpMeshes, Setup, Shading, SoftwareTextures,
+    AlphaCutoff, BAND_PIXELS, LinearLevel, MAX_SIDE, SetUpMeshes, Setup, Shading, SoftwareTextures,
     affine_uv, checked_target,
 };
 use crate::srgb::SRGB_LINEAR;
@@ -206,6 +206,10 @@ pub struct BakeTarget<'a> {
 }
 
 impl<'a> BakeTarget<'a> {
+    /// Most samples per side of a target (its pixels times the supersampling): a larger
+    /// image is drawn as several targets.
+    pub const MAX_SIDE_SAMPLES: u32 = MAX_SIDE as u32;
+
     /// A target of `width`×`height` pixels of `supersample`² samples seen through
     /// `view_proj`, drawing with the materials and textures of `scene` (its meshes are
     /// checked but not drawn: each region names its own), `textures` prepared from
