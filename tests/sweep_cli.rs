@@ -386,6 +386,24 @@ fn screen_height_grid_and_a_run_past_its_limit() {
 }
 
 #[test]
+fn the_cards_method_is_swept_like_the_others() {
+    // Its LODs are leaf cards, no billboard: foliage all the same, not an empty output.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("sweep");
+    let summary = sweep(
+        &out,
+        &["--method", "cards", "--lods", "60", "--seeds", "1"],
+        "2",
+    );
+    assert_eq!(summary["failed"], 0, "{summary}");
+    let rows = csv_rows(&out.join("results.csv"));
+    assert_eq!(rows.len(), 1);
+    assert_eq!(rows[0]["status"], "ok");
+    assert_eq!(num(&rows[0], "billboards"), 0.0);
+    assert!(num(&rows[0], "triangles") > num(&rows[0], "wood_triangles"));
+}
+
+#[test]
 fn bad_sweep_arguments_fail_cleanly() {
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("sweep");

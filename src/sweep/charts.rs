@@ -557,7 +557,8 @@ where
             }
         }
     }
-    if !p.front.is_empty() {
+    // A front of one point is its ring alone (a line of one point is no line).
+    if p.front.len() > 1 {
         let mut steps = Vec::new();
         for (i, &(x, y)) in p.front.iter().enumerate() {
             if i > 0 {
@@ -570,13 +571,20 @@ where
             .map_err(plot_err)?
             .label("Pareto front")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(1)));
-        chart
+    }
+    if !p.front.is_empty() {
+        let rings = chart
             .draw_series(
                 p.front
                     .iter()
                     .map(|&(x, y)| Circle::new((tx(x), y), 7, BLACK.stroke_width(2))),
             )
             .map_err(plot_err)?;
+        if p.front.len() == 1 {
+            rings
+                .label("Pareto front")
+                .legend(|(x, y)| Circle::new((x + 9, y), 5, BLACK.stroke_width(2)));
+        }
     }
     chart
         .configure_series_labels()
@@ -749,6 +757,53 @@ mod tests {
         );
         assert!(binary_ticks(1.0, 1e9).len() <= 10);
         assert_eq!(Unit::Seconds.tick(0.25), "250 ms");
+    }
+
+    #[test]
+    fn a_front_of_one_point_is_a_ring_without_a_line() {
+        let panel = |front: Vec<(f64, f64)>| Panel {
+            title: "t".into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            x_log: false,
+            x_unit: Unit::Plain,
+            y_unit: Unit::Plain,
+            series: vec![Series {
+                name: "cards".into(),
+                color: PALETTE[0],
+                line: vec![],
+                labels: vec![],
+                points: vec![(1.0, 0.5), (2.0, 0.25)],
+                point_labels: vec!["600 px".into(), "60 px".into()],
+                level: None,
+            }],
+            front,
+        };
+        // Polylines of the SVG, as their numbers of points.
+        let polylines = |front| {
+            let chart = Chart {
+                file_stem: "c".into(),
+                columns: 1,
+                panels: vec![panel(front)],
+            };
+            let svg = chart_svg(&chart).expect("svg");
+            (svg.split("<polyline").skip(1))
+                .map(|p| {
+                    let points = p.split("points=\"").nth(1).unwrap_or_default();
+                    points
+                        .split('"')
+                        .next()
+                        .unwrap_or_default()
+                        .split_whitespace()
+                        .count()
+                })
+                .collect::<Vec<usize>>()
+        };
+        // Two points: a step line of three; one point: no line of one point (which SVG
+        // rasterisers skip with a warning).
+        assert!(polylines(vec![(1.0, 0.5), (2.0, 0.25)]).contains(&3));
+        let one = polylines(vec![(1.0, 0.5)]);
+        assert!(one.iter().all(|&n| n >= 2), "{one:?}");
     }
 
     #[test]

@@ -223,8 +223,11 @@ pub fn add_eval_report(row: &mut Row, eval: &Value) {
 /// Why an evaluated run counts as failed (spec §5.4: a colour error above 1 means no fidelity),
 /// or None.
 pub fn judge(row: &Row, eval: &Value) -> Option<String> {
-    if !row.is_candidate() && row.get("billboards") == 0.0 {
-        return Some("empty output: the LOD has no billboard".into());
+    // Foliage is billboards, or the cards method's leaf cards (triangles beside the wood).
+    // (A missing count is NaN: no card.)
+    let has_cards = row.get("triangles") - row.get("wood_triangles") > 0.0;
+    if !row.is_candidate() && row.get("billboards") == 0.0 && !has_cards {
+        return Some("empty output: the LOD has no foliage (no billboard, no card)".into());
     }
     let discarded = row.get(DISCARDED_PAIRS);
     if discarded > 0.0 {
@@ -519,6 +522,13 @@ mod tests {
         r.values.remove("coverage_static");
         assert!(judge(&r, &ok).unwrap().starts_with("NaN: coverage_static"));
         r.values.insert("billboards".into(), 0.0);
+        assert!(judge(&r, &ok).unwrap().starts_with("empty output"));
+        // The cards method writes leaf cards, no billboard: 1000 triangles beside the wood.
+        r.values.insert("coverage_static".into(), 0.2);
+        r.values.insert("triangles".into(), 1859.0);
+        r.values.insert("wood_triangles".into(), 859.0);
+        assert_eq!(judge(&r, &ok), None);
+        r.values.insert("triangles".into(), 859.0);
         assert!(judge(&r, &ok).unwrap().starts_with("empty output"));
     }
 
