@@ -157,6 +157,24 @@ fn a_card_filling_its_quad_reproduces_the_texture() {
     assert_eq!(checked, 144);
 }
 
+/// The quad `q` baked with an opaque red rectangle and an opaque green one, each
+/// `[[s0, s1], [t0, t1]]` of the quad.
+fn bake_red_and_green(
+    r: &Renderer,
+    q: Quad,
+    [red, green]: [[[f32; 2]; 2]; 2],
+    params: &BakeParams,
+) -> BakedCloud {
+    let mut soup = TriangleSoup::default();
+    push_rect(&mut soup, &q, red[0], red[1], 0);
+    push_rect(&mut soup, &q, green[0], green[1], 1);
+    let materials = [
+        DrawMaterial::opaque([1.0, 0.0, 0.0, 1.0]),
+        DrawMaterial::opaque([0.0, 1.0, 0.0, 1.0]),
+    ];
+    bake_cloud(r, &soup, &materials, &[], &[q], &[vec![0, 1, 2, 3]], params).expect("bake")
+}
+
 #[test]
 fn downsampling_averages_covered_samples_in_linear_light() {
     let r = renderer();
@@ -164,23 +182,8 @@ fn downsampling_averages_covered_samples_in_linear_light() {
     // [0.375, 1] in the top half only: texel column 1 is half red, half green (top) or half
     // red over nothing (bottom).
     let q = quad_z(Vec3::ZERO, Vec2::splat(0.5));
-    let mut soup = TriangleSoup::default();
-    push_rect(&mut soup, &q, [0.0, 0.375], [0.0, 1.0], 0);
-    push_rect(&mut soup, &q, [0.375, 1.0], [0.5, 1.0], 1);
-    let materials = [
-        DrawMaterial::opaque([1.0, 0.0, 0.0, 1.0]),
-        DrawMaterial::opaque([0.0, 1.0, 0.0, 1.0]),
-    ];
-    let cloud = bake_cloud(
-        &r,
-        &soup,
-        &materials,
-        &[],
-        &[q],
-        &[vec![0, 1, 2, 3]],
-        &params(4.0),
-    )
-    .expect("bake");
+    let red_green = [[[0.0, 0.375], [0.0, 1.0]], [[0.375, 1.0], [0.5, 1.0]]];
+    let cloud = bake_red_and_green(&r, q, red_green, &params(4.0));
     let c = cloud.cells[0];
     assert_eq!((c.width, c.height), (4, 4));
     // Bottom rows (t < 0.5 -> image rows 2, 3): column 1 is 50% red over nothing.
@@ -216,27 +219,13 @@ fn a_bake_wider_than_one_target_has_no_seam() {
     // holds (32,768), so the CPU rasteriser draws it in two frames side by side. Red left of
     // s = 0.25, green right of it; the frames meet at texel 2048 of the atlas.
     let q = quad_z(Vec3::ZERO, Vec2::new(1.125, 1.0 / 64.0));
-    let mut soup = TriangleSoup::default();
-    push_rect(&mut soup, &q, [0.0, 0.25], [0.0, 1.0], 0);
-    push_rect(&mut soup, &q, [0.25, 1.0], [0.0, 1.0], 1);
-    let materials = [
-        DrawMaterial::opaque([1.0, 0.0, 0.0, 1.0]),
-        DrawMaterial::opaque([0.0, 1.0, 0.0, 1.0]),
-    ];
-    let cloud = bake_cloud(
-        &r,
-        &soup,
-        &materials,
-        &[],
-        &[q],
-        &[vec![0, 1, 2, 3]],
-        &BakeParams {
-            supersample: 16,
-            max_side: 4096,
-            ..params(1024.0)
-        },
-    )
-    .expect("bake");
+    let red_green = [[[0.0, 0.25], [0.0, 1.0]], [[0.25, 1.0], [0.0, 1.0]]];
+    let params = BakeParams {
+        supersample: 16,
+        max_side: 4096,
+        ..params(1024.0)
+    };
+    let cloud = bake_red_and_green(&r, q, red_green, &params);
     let c = cloud.cells[0];
     assert_eq!((c.width, c.height), (2304, 32));
     assert!((c.x..c.x + c.width).contains(&(32768 / 16)));
