@@ -59,14 +59,11 @@ pub fn run_child(
     tag: &str,
     limit: Duration,
 ) -> Result<ChildRun> {
-    std::fs::create_dir_all(log_dir)
-        .with_context(|| format!("{}: cannot create folder", log_dir.display()))?;
-    let out_path: PathBuf = log_dir.join(format!("{tag}.stdout"));
-    let err_path: PathBuf = log_dir.join(format!("{tag}.stderr"));
-    let stdout = std::fs::File::create(&out_path)
-        .with_context(|| format!("{}: cannot create", out_path.display()))?;
-    let stderr = std::fs::File::create(&err_path)
-        .with_context(|| format!("{}: cannot create", err_path.display()))?;
+    let logs = crate::out_folder::OutFolder::new(log_dir);
+    logs.create()?;
+    let err_path: PathBuf = logs.path(format!("{tag}.stderr"))?;
+    let stdout = logs.create_file(format!("{tag}.stdout"))?;
+    let stderr = logs.create_file(format!("{tag}.stderr"))?;
     let start = Instant::now();
     let mut command = Command::new(exe);
     command

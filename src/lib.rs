@@ -2,12 +2,13 @@
 
 pub mod batch;
 pub mod child_job;
+pub mod csv_text;
 pub mod cli;
 pub mod cloud_cmd;
 pub mod eval_cmd;
 pub mod inspect;
 pub mod lod_cmd;
-pub mod output;
+pub mod out_folder;
 pub mod output_set;
 pub mod render_cmd;
 pub mod sweep;

@@ -4,6 +4,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use frond::cli::Command;
+use frond::cli::terminal::{SafeWriter, safe};
 
 #[derive(Parser)]
 #[command(
@@ -37,17 +38,17 @@ fn main() -> ExitCode {
         .unwrap_or_else(|_| {
             tracing_subscriber::EnvFilter::new(format!("{level},wgpu_hal::gles::egl=off"))
         });
-    // Colour codes only on a terminal: piped or redirected logs stay plain text.
-    let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    // Plain text, every control character in a message made visible (names from the input
+    // reach log lines): see frond::cli::terminal.
     tracing_subscriber::fmt()
         .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .with_ansi(ansi)
+        .with_writer(|| SafeWriter(std::io::stderr()))
+        .with_ansi(false)
         .init();
     match cli.command.run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", safe(&format!("{e:#}")));
             ExitCode::FAILURE
         }
     }

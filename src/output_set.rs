@@ -42,6 +42,8 @@ use std::path::{Component, Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 
+use crate::out_folder::{OutFolder, checked_path};
+
 /// Prefix of staging folders inside an output folder.
 pub const STAGING_PREFIX: &str = ".frond-staging-";
 /// The journal that marks a staged set as committed.
@@ -90,10 +92,11 @@ struct Journal {
 
 /// The files of one tree's run, staged and then installed together (see the module doc).
 pub struct OutputSet {
-    dir: PathBuf,
+    dir: OutFolder,
     name: String,
     report: String,
-    staging: PathBuf,
+    /// The staging folder's name inside `dir`.
+    staging: String,
     staged: Vec<String>,
     created: Option<PathBuf>,
     done: bool,
@@ -109,10 +112,10 @@ impl OutputSet {
         check_output_folder(dir, inputs)?;
         let created = create_folder(dir)?;
         let set = OutputSet {
-            dir: dir.to_path_buf(),
+            dir: OutFolder::new(dir),
             name: name.to_string(),
             report: report.to_string(),
-            staging: dir.join(format!("{STAGING_PREFIX}{name}%{}", std::process::id())),
+            staging: format!("{STAGING_PREFIX}{name}%{}", std::process::id()),
             staged: Vec::new(),
             created,
             done: false,
@@ -120,15 +123,13 @@ impl OutputSet {
             ops: 0,
         };
         set.recover()?;
-        std::fs::create_dir(&set.staging).with_context(|| {
-            format!(
-                "{}: cannot write into the output folder",
-                set.staging.display()
-            )
+        let staging = set.dir.path(&set.staging)?;
+        std::fs::create_dir(&staging).with_context(|| {
+            format!("{}: cannot write into the output folder", staging.display())
         })?;
         // Another run may have started between the look and the mkdir.
         if let Some(pid) = set.live_other_run()? {
-            let _ = std::fs::remove_dir_all(&set.staging);
+            let _ = set.dir.remove_dir_all(&set.staging);
             bail!(
                 "{}: another frond run (pid {pid}) is writing {name} into this folder",
                 dir.display()
@@ -155,16 +156,15 @@ impl OutputSet {
             bail!("{rel}: written twice in one output set");
         }
         self.step()?;
-        let path = self.staging.join(&rel);
-        let result = (|| -> std::io::Result<()> {
-            if let Some(parent) = path.parent() {
-                std::fs::create_dir_all(parent)?;
-            }
-            let mut f = std::fs::File::create(&path)?;
-            f.write_all(bytes)?;
-            f.sync_all()
-        })();
-        result.with_context(|| format!("{}: cannot write", self.dir.join(&rel).display()))?;
+        let staged = format!("{}/{rel}", self.staging);
+        let shown = self.dir.root().join(&rel);
+        let mut f = self
+            .dir
+            .create_file(&staged)
+            .with_context(|| format!("{}: cannot write", shown.display()))?;
+        f.write_all(bytes)
+            .and_then(|()| f.sync_all())
+            .with_context(|| format!("{}: cannot write", shown.display()))?;
         self.staged.push(rel);
         Ok(())
     }
@@ -174,7 +174,7 @@ impl OutputSet {
         self.staged
             .iter()
             .any(|s| s == rel)
-            .then(|| self.staging.join(rel))
+            .then(|| self.dir.root().join(&self.staging).join(rel))
     }
 
     /// Stages the report (`report_bytes`, the set's last file) and installs the whole set.
@@ -204,15 +204,11 @@ impl OutputSet {
         };
         self.step()?;
         let text = serde_json::to_vec_pretty(&journal).context("serialising the journal")?;
-        let tmp = self.staging.join(format!("{JOURNAL}.tmp"));
-        (|| -> std::io::Result<()> {
-            let mut f = std::fs::File::create(&tmp)?;
-            f.write_all(&text)?;
-            f.sync_all()?;
-            std::fs::rename(&tmp, self.staging.join(JOURNAL))?;
-            sync_dir(&self.staging)
-        })()
-        .with_context(|| format!("{}: cannot write the journal", self.staging.display()))?;
+        let staging_path = self.dir.path(&self.staging)?;
+        self.dir
+            .write_atomic(format!("{}/{JOURNAL}", self.staging), &text)
+            .and_then(|()| Ok(sync_dir(&staging_path)?))
+            .with_context(|| format!("{}: cannot write the journal", staging_path.display()))?;
         // Committed: from here a failure is finished by the next run, not undone.
         self.done = true;
         let (dir, staging) = (self.dir.clone(), self.staging.clone());
@@ -227,7 +223,7 @@ impl OutputSet {
             Fault::FailAfter(k) if self.ops > k => {
                 bail!(
                     "{}: no space left on device (FROND_FAULT)",
-                    self.dir.display()
+                    self.dir.root().display()
                 )
             }
             _ => Ok(()),
@@ -235,35 +231,58 @@ impl OutputSet {
     }
 
     /// Finishes or clears what killed runs of this tree left in the folder; refuses when a live
-    /// run is staging it.
+    /// run is staging it, and refuses (touching nothing) a journal that names anything outside
+    /// the folder or a staging entry that is not a plain folder.
     fn recover(&self) -> Result<()> {
         if let Some(pid) = self.live_other_run()? {
             bail!(
                 "{}: another frond run (pid {pid}) is writing {} into this folder",
-                self.dir.display(),
+                self.dir.root().display(),
                 self.name
             );
         }
-        for (path, _) in self.stagings()? {
-            if path == self.staging {
+        let mut journals = Vec::new();
+        let mut leftovers = Vec::new();
+        for (staging, _) in self.stagings()? {
+            if staging == self.staging {
                 continue;
             }
-            let journal = path.join(JOURNAL);
-            if journal.is_file() {
-                let text = std::fs::read(&journal)
-                    .with_context(|| format!("{}: cannot read", journal.display()))?;
-                let j: Journal = serde_json::from_slice(&text)
-                    .with_context(|| format!("{}: not a frond journal", journal.display()))?;
-                tracing::warn!(
-                    "{}: finishing the install of a run that was killed",
-                    self.dir.display()
+            let path = self.dir.path(&staging)?;
+            let is_dir = std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_dir());
+            if !is_dir {
+                bail!(
+                    "{}: is not a staging folder frond made (a link or a file); nothing was \
+                     changed: remove it if no frond run wrote it",
+                    path.display()
                 );
-                install(&self.dir, &path, &j, &mut || Ok(()))?;
-            } else {
-                tracing::info!("{}: removing a killed run's staging", path.display());
-                std::fs::remove_dir_all(&path)
-                    .with_context(|| format!("{}: cannot remove", path.display()))?;
             }
+            let journal = self.dir.path(format!("{staging}/{JOURNAL}"))?;
+            if std::fs::symlink_metadata(&journal).is_ok() {
+                let j = read_journal(&journal)?;
+                check_journal(&self.dir, &staging, &j).with_context(|| {
+                    format!(
+                        "{}: refused: the journal of a killed run names a file outside the \
+                         output folder; nothing was changed: remove {} if no frond run wrote it",
+                        journal.display(),
+                        path.display()
+                    )
+                })?;
+                journals.push((staging, j));
+            } else {
+                leftovers.push(staging);
+            }
+        }
+        // Every journal was checked before any is applied.
+        for (staging, j) in journals {
+            tracing::warn!(
+                "{}: finishing the install of a run that was killed",
+                self.dir.root().display()
+            );
+            install(&self.dir, &staging, &j, &mut || Ok(()))?;
+        }
+        for staging in leftovers {
+            tracing::info!("{staging}: removing a killed run's staging");
+            self.dir.remove_dir_all(&staging)?;
         }
         self.remove_stale_temp_files();
         Ok(())
@@ -272,7 +291,7 @@ impl OutputSet {
     /// `.<file>.tmp-<pid>` files of older frond versions' per-file writes, for this tree, whose
     /// process is gone.
     fn remove_stale_temp_files(&self) {
-        let Ok(entries) = std::fs::read_dir(&self.dir) else {
+        let Ok(entries) = std::fs::read_dir(self.dir.root()) else {
             return;
         };
         let prefix = format!(".{}_", self.name);
@@ -283,21 +302,21 @@ impl OutputSet {
             };
             let ours = stem.starts_with(&prefix) || stem == ".report.json";
             if ours && pid.parse::<u32>().is_ok_and(|p| !process_alive(p)) {
-                let _ = std::fs::remove_file(e.path());
+                let _ = self.dir.remove_file(&file);
             }
         }
     }
 
-    /// Staging folders of this tree in the folder, with their pid.
-    fn stagings(&self) -> Result<Vec<(PathBuf, u32)>> {
+    /// Names of this tree's staging folders in the folder, with their pid.
+    fn stagings(&self) -> Result<Vec<(String, u32)>> {
         let prefix = format!("{STAGING_PREFIX}{}%", self.name);
         let mut out = Vec::new();
-        let entries = std::fs::read_dir(&self.dir)
-            .with_context(|| format!("{}: cannot list", self.dir.display()))?;
+        let entries = std::fs::read_dir(self.dir.root())
+            .with_context(|| format!("{}: cannot list", self.dir.root().display()))?;
         for e in entries.flatten() {
             let file = e.file_name().to_string_lossy().into_owned();
             if let Some(pid) = file.strip_prefix(&prefix).and_then(|p| p.parse().ok()) {
-                out.push((e.path(), pid));
+                out.push((file, pid));
             }
         }
         out.sort();
@@ -316,15 +335,15 @@ impl OutputSet {
 
     /// This tree's previous set: its report and the files it lists.
     fn owned_files(&self) -> Result<Owned> {
-        let current = self.dir.join(&self.report);
+        let current = self.dir.path(&self.report)?;
         if current.is_file() {
             return Ok(Owned {
                 report: Some(self.report.clone()),
-                files: listed_files(&current, &self.dir)?,
+                files: listed_files(&current, self.dir.root())?,
             });
         }
         // frond before 0.2 wrote `report.json`; adopt its set when it is this tree's.
-        let legacy = self.dir.join("report.json");
+        let legacy = self.dir.path("report.json")?;
         if legacy.is_file()
             && let Ok(text) = std::fs::read(&legacy)
             && let Ok(v) = serde_json::from_slice::<serde_json::Value>(&text)
@@ -332,7 +351,7 @@ impl OutputSet {
         {
             return Ok(Owned {
                 report: Some("report.json".into()),
-                files: listed_files(&legacy, &self.dir)?,
+                files: listed_files(&legacy, self.dir.root())?,
             });
         }
         Ok(Owned::default())
@@ -341,14 +360,15 @@ impl OutputSet {
     /// Files listed by the reports of other trees in the folder (shared reference shaders).
     fn files_of_other_reports(&self) -> Result<BTreeSet<String>> {
         let mut out = BTreeSet::new();
-        let entries = std::fs::read_dir(&self.dir)
-            .with_context(|| format!("{}: cannot list", self.dir.display()))?;
+        let entries = std::fs::read_dir(self.dir.root())
+            .with_context(|| format!("{}: cannot list", self.dir.root().display()))?;
         for e in entries.flatten() {
             let file = e.file_name().to_string_lossy().into_owned();
             if file != self.report
                 && (file.ends_with("_report.json") || file.ends_with("_cloud_stats.json"))
+                && let Ok(path) = self.dir.path(&file)
             {
-                out.extend(listed_files(&e.path(), &self.dir).unwrap_or_default());
+                out.extend(listed_files(&path, self.dir.root()).unwrap_or_default());
             }
         }
         Ok(out)
@@ -357,13 +377,13 @@ impl OutputSet {
     /// Refuses when `rel` exists in the folder and is not this tree's (`owned`), nor listed by
     /// another tree's report (`shared`).
     fn check_free(&self, rel: &str, owned: &Owned, shared: &BTreeSet<String>) -> Result<()> {
-        let path = self.dir.join(rel);
+        let path = self.dir.path(rel)?;
         if std::fs::symlink_metadata(&path).is_err() {
             return Ok(());
         }
         let ours = owned.files.iter().any(|f| f == rel) || owned.report.as_deref() == Some(rel);
         if ours || shared.contains(rel) {
-            if !path.is_file() {
+            if !std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()) {
                 bail!(
                     "{}: is in the way and is not a file frond wrote; move it or choose another output folder",
                     path.display()
@@ -387,12 +407,12 @@ impl Drop for OutputSet {
         if self.done {
             return;
         }
-        let _ = std::fs::remove_dir_all(&self.staging);
+        let _ = self.dir.remove_dir_all(&self.staging);
         if let Some(top) = &self.created {
             // Only empty folders: remove_dir refuses anything else.
-            let mut d = Some(self.dir.as_path());
+            let mut d = Some(self.dir.root());
             while let Some(p) = d {
-                if std::fs::remove_dir(p).is_err() || p == top {
+                if !OutFolder::new(p).remove_self_if_empty() || p == top {
                     break;
                 }
                 d = p.parent();
@@ -408,49 +428,70 @@ struct Owned {
     files: Vec<String>,
 }
 
-/// Installs a committed set: removals, then renames (the report last), then the journal and
-/// staging folder go. Idempotent, so a killed install is finished by running it again.
+/// Reads a killed run's journal.
+fn read_journal(path: &Path) -> Result<Journal> {
+    let text = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    serde_json::from_slice(&text).with_context(|| format!("{}: not a frond journal", path.display()))
+}
+
+/// Every name the journal installs or removes is a plain name inside `dir` (and, installed,
+/// inside the staging folder `staging`), with no link out on the way.
+fn check_journal(dir: &OutFolder, staging: &str, journal: &Journal) -> Result<()> {
+    for rel in journal.install.iter().chain(&journal.remove) {
+        checked_relative(rel)?;
+        dir.path(rel)?;
+    }
+    for rel in &journal.install {
+        dir.path(format!("{staging}/{rel}"))?;
+    }
+    Ok(())
+}
+
+/// Installs a committed set (its journal checked by [`check_journal`]): removals, then renames
+/// (the report last), then the journal and staging folder go. Idempotent, so a killed install
+/// is finished by running it again.
 fn install(
-    dir: &Path,
-    staging: &Path,
+    dir: &OutFolder,
+    staging: &str,
     journal: &Journal,
     step: &mut dyn FnMut() -> Result<()>,
 ) -> Result<()> {
+    check_journal(dir, staging, journal)?;
+    let staged = |rel: &str| format!("{staging}/{rel}");
+    let exists = |rel: &str| {
+        dir.path(rel)
+            .is_ok_and(|p| std::fs::symlink_metadata(p).is_ok())
+    };
     for rel in &journal.remove {
-        let path = dir.join(rel);
         // A name the new set also has is removed only while its new file is still staged:
         // once installed (a killed install being finished), it is the new file.
-        let replaced_already = journal.install.contains(rel) && !staging.join(rel).exists();
-        if !replaced_already && std::fs::symlink_metadata(&path).is_ok() {
+        let replaced_already = journal.install.contains(rel) && !exists(&staged(rel));
+        if !replaced_already && exists(rel) {
             step()?;
-            std::fs::remove_file(&path)
-                .with_context(|| format!("{}: cannot remove the old file", path.display()))?;
+            dir.remove_file(rel).context("removing the old file")?;
         }
         if let Some(parent) = Path::new(rel).parent()
             && !parent.as_os_str().is_empty()
         {
             // An emptied subfolder of the old set (shaders/) goes too; a non-empty one stays.
-            let _ = std::fs::remove_dir(dir.join(parent));
+            let _ = dir.remove_dir(parent);
         }
     }
     for rel in &journal.install {
-        let from = staging.join(rel);
-        let to = dir.join(rel);
-        if !from.exists() {
+        if !exists(&staged(rel)) {
             // Installed before a kill.
             continue;
         }
         step()?;
-        if let Some(parent) = to.parent() {
-            std::fs::create_dir_all(parent)
-                .with_context(|| format!("{}: cannot create", parent.display()))?;
+        if let Some(parent) = Path::new(rel).parent()
+            && !parent.as_os_str().is_empty()
+        {
+            dir.create_dir_all(parent)?;
         }
-        std::fs::rename(&from, &to)
-            .with_context(|| format!("{}: cannot move into place", to.display()))?;
+        dir.rename(staged(rel), rel)?;
     }
-    sync_dir(dir).with_context(|| format!("{}: cannot sync", dir.display()))?;
-    std::fs::remove_dir_all(staging)
-        .with_context(|| format!("{}: cannot remove", staging.display()))?;
+    sync_dir(dir.root()).with_context(|| format!("{}: cannot sync", dir.root().display()))?;
+    dir.remove_dir_all(staging)?;
     Ok(())
 }
 
@@ -471,7 +512,7 @@ fn listed_files(report: &Path, dir: &Path) -> Result<Vec<String>> {
 /// One `files` entry as a plain name relative to `dir`. frond 0.2 lists names relative to the
 /// folder; 0.1 listed `<-o as spelt>/<file>` (`out/x.glb`, `/abs/out/x.glb`). Of the entry
 /// itself, its part below `dir` and its file name, the first that names a file in the folder
-/// wins, else the file name.
+/// wins, else the file name. A name through a link out of the folder is never one.
 fn relative_name(entry: &str, dir: &Path) -> Option<String> {
     let p = Path::new(entry);
     let names: Vec<&str> = [
@@ -482,7 +523,7 @@ fn relative_name(entry: &str, dir: &Path) -> Option<String> {
     .into_iter()
     .flatten()
     .filter_map(Path::to_str)
-    .filter(|n| checked_relative(n).is_ok())
+    .filter(|n| checked_relative(n).is_ok() && checked_path(dir, n).is_ok())
     .collect();
     names
         .iter()
@@ -541,8 +582,9 @@ fn create_folder(dir: &Path) -> Result<Option<PathBuf>> {
         top = Some(d.to_path_buf());
         p = d.parent();
     }
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
+    OutFolder::new(dir)
+        .create()
+        .context("cannot create the output folder")?;
     Ok(top)
 }
 

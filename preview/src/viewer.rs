@@ -67,11 +67,29 @@ pub struct ViewLod {
     pub vertex_animated: bool,
 }
 
-/// The JSON of a config, safe inside a `<script>` element (no `</` can end it early).
+/// The JSON of a config, safe inside a `<script>` element: [`script_json`].
 pub(crate) fn config_json(config: &ViewConfig) -> String {
-    serde_json::to_string(config)
-        .unwrap_or_else(|_| "{}".into())
-        .replace("</", "<\\/")
+    script_json(&serde_json::to_string(config).unwrap_or_else(|_| "{}".into()))
+}
+
+/// JSON text made safe to embed in an HTML `<script>` element: every `<`, `>` and `&` written
+/// as a `\u` escape, so no name can end the element (`</script>`) or open a comment (`<!--`,
+/// which puts the HTML parser in its "script data escaped" state and can swallow the rest of
+/// the page); U+2028 and U+2029 escaped too, for scripts that read the text as JavaScript.
+/// Only string contents can hold these characters, where the escapes mean the same.
+pub fn script_json(json: &str) -> String {
+    let mut out = String::with_capacity(json.len());
+    for c in json.chars() {
+        match c {
+            '<' => out.push_str("\\u003c"),
+            '>' => out.push_str("\\u003e"),
+            '&' => out.push_str("\\u0026"),
+            '\u{2028}' => out.push_str("\\u2028"),
+            '\u{2029}' => out.push_str("\\u2029"),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// The scene root node names of a GLB's default scene, grouped by the LOD they belong to: the

@@ -114,8 +114,9 @@ struct Pool {
 /// OUTDIR not writable, a folder without trees); a tree's failure is in its entry.
 pub fn run_batch(req: &BatchRequest, progress: &dyn BatchProgress) -> Result<BatchSummary> {
     let start = Instant::now();
-    std::fs::create_dir_all(&req.out_dir)
-        .with_context(|| format!("{}: cannot create the output folder", req.out_dir.display()))?;
+    crate::out_folder::OutFolder::new(&req.out_dir)
+        .create()
+        .context("cannot create the output folder")?;
     let out_abs = std::fs::canonicalize(&req.out_dir)
         .with_context(|| format!("{}: cannot resolve", req.out_dir.display()))?;
     if let Ok(input_abs) = std::fs::canonicalize(&req.input)
@@ -130,7 +131,7 @@ pub fn run_batch(req: &BatchRequest, progress: &dyn BatchProgress) -> Result<Bat
     if req.context.preview {
         // The trees' preview pages share one copy of the viewer scripts (`--preview-viewer`).
         for (rel, bytes) in frond_preview::viewer_files(true) {
-            crate::output::write_atomic(&out_abs.join(&rel), bytes)?;
+            crate::out_folder::OutFolder::new(&out_abs).write_atomic(&rel, bytes)?;
         }
     }
     let mut trees = discover(&req.input, Some(&out_abs))?;
@@ -228,7 +229,7 @@ pub fn run_batch(req: &BatchRequest, progress: &dyn BatchProgress) -> Result<Bat
     };
     summary.write(&out_abs, &BatchSummary::stem(req.shard))?;
     // Only succeeds when empty (other shards may still be writing theirs).
-    let _ = std::fs::remove_dir(out_abs.join(tree_job::TMP_DIR));
+    let _ = crate::out_folder::OutFolder::new(&out_abs).remove_dir(tree_job::TMP_DIR);
     Ok(summary)
 }
 

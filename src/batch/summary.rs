@@ -8,7 +8,8 @@ use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 
 use super::shard::Shard;
-use crate::output::write_atomic;
+use crate::csv_text::text_cell;
+use crate::out_folder::write_atomic;
 
 /// What happened to a tree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -282,26 +283,26 @@ impl BatchSummary {
                     .unwrap_or_default()
             };
             let mut row = vec![
-                t.tree.clone(),
-                t.output.clone(),
+                text_cell(&t.tree).into_owned(),
+                text_cell(&t.output).into_owned(),
                 serde_json::to_value(t.status)
                     .ok()
                     .and_then(|v| v.as_str().map(str::to_string))
                     .unwrap_or_default(),
-                t.reason.clone().unwrap_or_default(),
+                text_cell(t.reason.as_deref().unwrap_or_default()).into_owned(),
                 t.input_hash.clone().unwrap_or_default(),
                 t.params_hash.clone(),
-                t.preset.clone().unwrap_or_default(),
-                t.args.join(" "),
+                text_cell(t.preset.as_deref().unwrap_or_default()).into_owned(),
+                text_cell(&t.args.join(" ")).into_owned(),
                 t.files.len().to_string(),
                 t.output_bytes.to_string(),
-                join(&|l| l.method.clone()),
+                text_cell(&join(&|l| l.method.clone())).into_owned(),
                 join(&|l| l.screen_height.map(|h| h.to_string()).unwrap_or_default()),
                 join(&|l| l.triangles.to_string()),
                 join(&|l| l.billboards.to_string()),
                 join(&|l| l.bones.to_string()),
                 join(&|l| l.texture_bytes.to_string()),
-                t.warnings.join(" | "),
+                text_cell(&t.warnings.join(" | ")).into_owned(),
                 time("sample"),
                 time("build"),
                 time("export"),

@@ -19,7 +19,7 @@ use crate::child_job::{ChildSpec, JobEnd, run_child};
 use crate::cli::args::{BuildArgs, LimitArgs};
 use crate::cli::lod::LodArgs;
 use crate::cli::values::{AnimationArg, MethodArg};
-use crate::output::write_atomic;
+use crate::out_folder::OutFolder;
 use clap::ValueEnum;
 use frond_preview::VIEWER_DIR;
 
@@ -210,9 +210,10 @@ fn build(
 ) -> Result<Status> {
     let hash = input_hash(&tree.path, &ctx.limits)?;
     entry.input_hash = Some(hash.clone());
-    let final_dir = ctx.out_dir.join(&tree.output);
+    let out = OutFolder::new(&ctx.out_dir);
+    let final_dir = out.path(&tree.output)?;
     let key = tmp_key(&tree.output);
-    let tmp_root = ctx.out_dir.join(TMP_DIR);
+    let tmp_root = out.sub(TMP_DIR)?;
     clear_leftovers(&tmp_root, &key);
     let report = report_file(&tree.path);
     if let Some(stamp) = up_to_date(&final_dir, &report, &hash, &entry.params_hash) {
@@ -226,14 +227,12 @@ fn build(
         return Ok(Status::UpToDate);
     }
 
-    std::fs::create_dir_all(&tmp_root)
-        .with_context(|| format!("{}: cannot create", tmp_root.display()))?;
-    let tmp = tmp_root.join(format!("{key}%{}", std::process::id()));
-    std::fs::create_dir_all(&tmp).with_context(|| format!("{}: cannot create", tmp.display()))?;
+    let tmp_name = format!("{key}%{}", std::process::id());
+    let tmp = tmp_root.create_dir_all(&tmp_name)?;
     let result = build_into(ctx, tree, settings, args, entry, &tmp, &key)
-        .and_then(|()| swap_into_place(&tmp, &final_dir, &tmp_root, &key));
+        .and_then(|()| swap_into_place(&out, &tmp_name, &tree.output, &key));
     if result.is_err() {
-        let _ = std::fs::remove_dir_all(&tmp);
+        let _ = tmp_root.remove_dir_all(&tmp_name);
     }
     result.map(|()| Status::Built)
 }
@@ -241,8 +240,8 @@ fn build(
 /// Removes this tree's folders a killed run left in `tmp_root`: exactly `<key>%<pid>` and
 /// `<key>%old%<pid>` (only this tree's process writes them; other trees' keys may share the
 /// prefix, never the whole name).
-fn clear_leftovers(tmp_root: &Path, key: &str) {
-    let Ok(list) = std::fs::read_dir(tmp_root) else {
+fn clear_leftovers(tmp_root: &OutFolder, key: &str) {
+    let Ok(list) = std::fs::read_dir(tmp_root.root()) else {
         return;
     };
     let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
@@ -253,7 +252,7 @@ fn clear_leftovers(tmp_root: &Path, key: &str) {
             .and_then(|r| r.strip_prefix('%'))
             .is_some_and(|r| digits(r) || r.strip_prefix("old%").is_some_and(digits));
         if mine {
-            let _ = std::fs::remove_dir_all(e.path());
+            let _ = tmp_root.remove_dir_all(&name);
         }
     }
 }
@@ -270,7 +269,7 @@ fn build_into(
 ) -> Result<()> {
     let input = std::path::absolute(&tree.path)
         .with_context(|| format!("{}: cannot resolve", tree.path.display()))?;
-    let log_dir = ctx.out_dir.join(LOG_DIR).join(key);
+    let log_dir = OutFolder::new(&ctx.out_dir).path(format!("{LOG_DIR}/{key}"))?;
     let spec = ChildSpec {
         cwd: Some(tmp),
         env: vec![("RAYON_NUM_THREADS".into(), ctx.threads.max(1).to_string())],
@@ -369,8 +368,8 @@ fn build_into(
         status: Status::Built,
         ..entry.clone()
     };
-    write_atomic(
-        &tmp.join(STAMP),
+    OutFolder::new(tmp).write_atomic(
+        STAMP,
         &serde_json::to_vec_pretty(&stamp).context("serialising the stamp")?,
     )
 }
@@ -422,23 +421,26 @@ fn list_files(dir: &Path) -> Result<Vec<FileEntry>> {
     Ok(out)
 }
 
-/// Replaces `final_dir` by the complete `tmp`: the old output is moved aside first, so at any
-/// moment the path holds a complete output or nothing.
-fn swap_into_place(tmp: &Path, final_dir: &Path, tmp_root: &Path, key: &str) -> Result<()> {
-    if let Some(parent) = final_dir.parent() {
-        std::fs::create_dir_all(parent)
-            .with_context(|| format!("{}: cannot create", parent.display()))?;
+/// Replaces the tree's output folder `output` in `out` by the complete `TMP_DIR/tmp`: the old
+/// output is moved aside first, so at any moment the path holds a complete output or nothing.
+fn swap_into_place(out: &OutFolder, tmp: &str, output: &str, key: &str) -> Result<()> {
+    let final_dir = out.path(output)?;
+    if let Some(parent) = Path::new(output).parent()
+        && !parent.as_os_str().is_empty()
+    {
+        out.create_dir_all(parent)?;
     }
     // Only ever replace what a batch wrote: a folder with a stamp (or an empty one).
-    if final_dir.exists() && !final_dir.is_dir() {
+    let meta = std::fs::symlink_metadata(&final_dir);
+    if meta.as_ref().is_ok_and(|m| !m.is_dir()) {
         anyhow::bail!(
             "{} exists and is not a folder; move it away or choose another output folder",
             final_dir.display()
         );
     }
-    if final_dir.is_dir()
-        && !final_dir.join(STAMP).is_file()
-        && std::fs::read_dir(final_dir).is_ok_and(|mut d| d.next().is_some())
+    if meta.is_ok()
+        && !out.path(format!("{output}/{STAMP}"))?.is_file()
+        && std::fs::read_dir(&final_dir).is_ok_and(|mut d| d.next().is_some())
     {
         anyhow::bail!(
             "{} exists and is not a frond batch output (no {STAMP}); move it away or choose \
@@ -446,20 +448,16 @@ fn swap_into_place(tmp: &Path, final_dir: &Path, tmp_root: &Path, key: &str) -> 
             final_dir.display()
         );
     }
-    let old = tmp_root.join(format!("{key}%old%{}", std::process::id()));
-    let had_old = match std::fs::rename(final_dir, &old) {
-        Ok(()) => true,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => false,
-        Err(e) => {
-            return Err(e).with_context(|| {
-                format!("{}: cannot move the old output aside", final_dir.display())
-            });
-        }
-    };
-    std::fs::rename(tmp, final_dir)
-        .with_context(|| format!("{}: cannot move the output into place", final_dir.display()))?;
+    let old = format!("{TMP_DIR}/{key}%old%{}", std::process::id());
+    let had_old = meta.is_ok();
     if had_old {
-        let _ = std::fs::remove_dir_all(&old);
+        out.rename(output, &old)
+            .context("cannot move the old output aside")?;
+    }
+    out.rename(format!("{TMP_DIR}/{tmp}"), output)
+        .context("cannot move the output into place")?;
+    if had_old {
+        let _ = out.remove_dir_all(&old);
     }
     Ok(())
 }
@@ -483,7 +481,7 @@ mod tests {
         ] {
             std::fs::create_dir_all(dir.path().join(name)).unwrap();
         }
-        clear_leftovers(dir.path(), &key);
+        clear_leftovers(&OutFolder::new(dir.path()), &key);
         let mut left: Vec<String> = std::fs::read_dir(dir.path())
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 
 use crate::batch::summary::{BatchSummary, merge, read_summary, summaries_in};
 use crate::cli::progress::finish_batch;
@@ -39,11 +39,10 @@ impl BatchMergeArgs {
         }
         let (summary, warnings) = merge(&parts)?;
         for w in &warnings {
-            eprintln!("warning: {w}");
+            crate::say_err!("warning: {w}");
         }
         let dir = output.unwrap_or_else(|| outputs[0].clone());
-        std::fs::create_dir_all(&dir)
-            .with_context(|| format!("{}: cannot create", dir.display()))?;
+        crate::out_folder::OutFolder::new(&dir).create()?;
         summary.write(&dir, &BatchSummary::stem(None))?;
         finish_batch(&summary, &dir, json)?;
         Ok(())

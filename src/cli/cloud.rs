@@ -136,7 +136,7 @@ impl CloudArgs {
         if json {
             print_json(&report)?;
         } else {
-            println!(
+            crate::say!(
                 "{}: {} billboards (ε = {:.4}), area {:.1}, atlas {}x{}, coverage error {}, search {:.3} s, bake {:.3} s, total {:.3} s",
                 output.display(),
                 report.billboards,

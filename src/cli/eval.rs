@@ -110,14 +110,14 @@ impl EvalArgs {
                 let m = report.metric(id);
                 let name = id.label();
                 match (m.mean, m.max) {
-                    (Some(a), Some(b)) => println!("{name:36} mean {a:.5}  max {b:.5}"),
-                    _ => println!(
+                    (Some(a), Some(b)) => crate::say!("{name:36} mean {a:.5}  max {b:.5}"),
+                    _ => crate::say!(
                         "{name:36} skipped: {}",
                         m.skipped_reason.as_deref().unwrap_or("-")
                     ),
                 }
             }
-            print!("{}", cost_lines(&report.cost));
+            print!("{}", super::terminal::safe(&cost_lines(&report.cost)));
         }
         Ok(())
     }

@@ -41,7 +41,7 @@ impl InspectArgs {
         if json {
             print_json(&report)?;
         } else {
-            print!("{}", report.text());
+            print!("{}", super::terminal::safe(&report.text()));
         }
         Ok(())
     }

@@ -329,12 +329,12 @@ impl LodArgs {
             print_json(&report)?;
         } else {
             for l in &report.lods {
-                println!(
+                crate::say!(
                     "{}: {} triangles, {} billboards, {} bones, {} texture bytes ({})",
                     l.file, l.triangles, l.billboards, l.bones, l.texture_bytes, l.method
                 );
             }
-            println!(
+            crate::say!(
                 "{}: {} LODs combined; {}; {:.2} s",
                 report.combined,
                 report.lods.len(),
@@ -346,7 +346,7 @@ impl LodArgs {
                 .iter()
                 .find(|f| *f == &frond_preview::preview_name(&report.name))
             {
-                println!(
+                crate::say!(
                     "{page}: the preview ({:.2} s); its live view: frond view {}",
                     report.timings_s["preview"].as_f64().unwrap_or(0.0),
                     self.output.display()

@@ -13,6 +13,7 @@ pub mod progress;
 pub mod render;
 pub mod sample;
 pub mod sweep;
+pub mod terminal;
 pub mod values;
 pub mod view;
 

@@ -22,7 +22,7 @@ impl Spinner {
     pub fn say(&self, msg: &str) {
         tracing::info!("{msg}");
         if let Some(b) = &self.0 {
-            b.set_message(msg.to_string());
+            b.set_message(super::terminal::safe(msg).into_owned());
         }
     }
 }
@@ -58,7 +58,7 @@ impl Progress {
         if let Some(b) = &self.0 {
             b.set_length(total as u64);
             b.set_position(done as u64);
-            b.set_message(msg.to_string());
+            b.set_message(super::terminal::safe(msg).into_owned());
         }
     }
 }
@@ -86,7 +86,7 @@ pub fn finish_batch(summary: &BatchSummary, dir: &std::path::Path, json: bool) -
         );
     }
     if !json {
-        println!("{}: {line}", dir.display());
+        crate::say!("{}: {line}", dir.display());
     }
     Ok(())
 }
@@ -125,9 +125,9 @@ impl BatchBar {
     pub fn line(&self, text: &str) {
         match &self.bars {
             Some((multi, _)) => {
-                let _ = multi.println(text);
+                let _ = multi.println(super::terminal::safe(text));
             }
-            None => eprintln!("{text}"),
+            None => crate::say_err!("{text}"),
         }
     }
 }
@@ -145,7 +145,7 @@ impl BatchProgress for BatchBar {
         if let Some((multi, _)) = &self.bars {
             let s = multi.add(indicatif::ProgressBar::new_spinner());
             s.enable_steady_tick(std::time::Duration::from_millis(120));
-            s.set_message(tree.to_string());
+            s.set_message(super::terminal::safe(tree).into_owned());
             if let Ok(mut r) = self.running.lock() {
                 r.push((tree.to_string(), s));
             }
@@ -193,7 +193,7 @@ impl Drop for BatchBar {
 
 /// Prints a report as pretty JSON on stdout.
 pub fn print_json(report: &impl serde::Serialize) -> Result<()> {
-    println!(
+    crate::say!(
         "{}",
         serde_json::to_string_pretty(report).context("serialising the report")?
     );

@@ -6,7 +6,7 @@ use crate::cli::values::PartsArg;
 use anyhow::Result;
 
 use crate::cli::args::ImportArgs;
-use crate::output::write_atomic;
+use crate::out_folder::write_atomic;
 use crate::render_cmd::{RenderRequest, frame_png, parse_size, render_tree};
 use frond_render::Renderer;
 
@@ -90,7 +90,7 @@ impl RenderArgs {
                 "coverage": frame.coverage_fraction(),
                 "adapter": renderer.adapter_info(),
             });
-            println!("{v}");
+            crate::say!("{v}");
         }
         Ok(())
     }

@@ -159,7 +159,7 @@ impl SweepArgs {
         if json {
             print_json(&summary)?;
         } else {
-            println!(
+            crate::say!(
                 "{}: {} runs ({} failed); results.csv, stability.md, charts; {:.1} s",
                 output.display(),
                 summary.runs,
@@ -168,7 +168,7 @@ impl SweepArgs {
             );
         }
         if summary.failed > 0 {
-            eprintln!(
+            crate::say_err!(
                 "{} of {} runs failed (listed in {})",
                 summary.failed,
                 summary.runs,

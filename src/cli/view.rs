@@ -24,14 +24,14 @@ impl ViewArgs {
     pub fn run(self) -> Result<()> {
         let server = ViewServer::bind(&self.folder, self.port)?;
         let url = server.url()?;
-        println!("{url}");
-        eprintln!(
+        crate::say!("{url}");
+        crate::say_err!(
             "serving {} on {} (read-only; Ctrl-C stops)",
             self.folder.display(),
             server.addr()?
         );
         if !self.no_open && !open_browser(&url) {
-            eprintln!("no browser could be started: open {url} yourself");
+            crate::say_err!("no browser could be started: open {url} yourself");
         }
         server.serve()
     }

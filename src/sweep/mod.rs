@@ -26,7 +26,7 @@ use crate::cli::lod::LodArgs;
 use crate::cli::values::MethodArg;
 use crate::eval_cmd::{EvalContext, EvalRequest, image_for_screen_height, same_bytes};
 use crate::lod_cmd::lod_name;
-use crate::output::write_atomic;
+use crate::out_folder::{OutFolder, write_atomic};
 use frond_lod::method::{MethodName, auto_method};
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, Length, Tree};
@@ -162,34 +162,31 @@ pub fn run_sweep(
     let stability = results::stability(&rows);
     let charts = charts::sweep_charts(&rows);
     let fonts = charts::chart_fonts();
-    let mut files: Vec<(PathBuf, Vec<u8>)> = vec![
-        (out_dir.join("results.csv"), results::results_csv(&rows)?),
+    let mut files: Vec<(String, Vec<u8>)> = vec![
+        ("results.csv".into(), results::results_csv(&rows)?),
+        ("stability.csv".into(), results::stability_csv(&stability)?),
         (
-            out_dir.join("stability.csv"),
-            results::stability_csv(&stability)?,
-        ),
-        (
-            out_dir.join("stability.md"),
+            "stability.md".into(),
             results::stability_markdown(&stability, &rows).into_bytes(),
         ),
     ];
     for c in &charts {
         let svg = charts::chart_svg(c)?;
         let png = charts::svg_to_png(&svg, &fonts)?;
-        files.push((
-            out_dir.join(format!("{}.svg", c.file_stem)),
-            svg.into_bytes(),
-        ));
-        files.push((out_dir.join(format!("{}.png", c.file_stem)), png));
+        files.push((format!("{}.svg", c.file_stem), svg.into_bytes()));
+        files.push((format!("{}.png", c.file_stem), png));
     }
     let pareto: Vec<String> = charts::front(&rows).iter().map(|r| r.run.clone()).collect();
     files.push((
-        out_dir.join("index.html"),
+        "index.html".into(),
         page::sweep_page(&input.display().to_string(), &rows, &charts, &pareto).into_bytes(),
     ));
-    let summary_path = out_dir.join("summary.json");
-    let mut names: Vec<String> = files.iter().map(|(p, _)| p.display().to_string()).collect();
-    names.push(summary_path.display().to_string());
+    let summary_name = "summary.json";
+    let mut names: Vec<String> = files
+        .iter()
+        .map(|(n, _)| out_dir.join(n).display().to_string())
+        .collect();
+    names.push(out_dir.join(summary_name).display().to_string());
     let summary = SweepSummary {
         input: input.display().to_string(),
         methods: req.methods.clone(),
@@ -208,7 +205,13 @@ pub fn run_sweep(
         files: names,
         timings_s: serde_json::json!({ "total": t0.elapsed().as_secs_f64() }),
     };
-    crate::output::write_files_and_report(&files, &summary_path, &summary)?;
+    // The summary last: a summary on disk means the files it lists are there.
+    let out = OutFolder::new(out_dir);
+    for (name, bytes) in &files {
+        out.write_atomic(name, bytes)?;
+    }
+    let json = serde_json::to_vec_pretty(&summary).context("serialising the sweep summary")?;
+    out.write_atomic(summary_name, &json)?;
     Ok(summary)
 }
 
@@ -288,9 +291,9 @@ fn lod_run(
     id: &str,
 ) -> Result<Row> {
     let mut row = new_row(id, method, &p.label(), p.screen_height, Some(seed));
-    if dir.exists() {
-        std::fs::remove_dir_all(dir)
-            .with_context(|| format!("{}: cannot clear an old run", dir.display()))?;
+    if std::fs::symlink_metadata(dir).is_ok() {
+        let (runs, id) = OutFolder::of_file(dir)?;
+        runs.remove_dir_all(&id).context("clearing an old run")?;
     }
     // `auto` picks by LOD rank: each run builds one LOD, so resolve the rule for this grid
     // point's rank among the grid's screen heights (nearest first), as `frond lod` would.
@@ -357,22 +360,19 @@ fn lod_run(
 
 /// Removes a run's LOD files, keeping its report.
 fn prune_run(lod_dir: &Path) -> Result<()> {
+    let folder = OutFolder::new(lod_dir);
     let entries = std::fs::read_dir(lod_dir)
         .with_context(|| format!("{}: cannot list", lod_dir.display()))?;
     for e in entries.flatten() {
-        let path = e.path();
-        if path
-            .file_name()
-            .is_some_and(|n| n.to_string_lossy().ends_with("_report.json"))
-        {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if name.ends_with("_report.json") {
             continue;
         }
-        let r = if path.is_dir() {
-            std::fs::remove_dir_all(&path)
+        if e.file_type().is_ok_and(|t| t.is_dir()) {
+            folder.remove_dir_all(&name)?;
         } else {
-            std::fs::remove_file(&path)
-        };
-        r.with_context(|| format!("{}: cannot remove", path.display()))?;
+            folder.remove_file(&name)?;
+        }
     }
     Ok(())
 }
@@ -392,7 +392,7 @@ fn candidate_run(
         screen_height,
         None,
     );
-    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+    OutFolder::new(dir).create()?;
     evaluate_into(ctx, &mut row, candidate, dir)?;
     Ok(row)
 }

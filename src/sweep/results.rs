@@ -9,6 +9,8 @@ use frond_metrics::statistics::Spread;
 use serde::Serialize;
 use serde_json::Value;
 
+use crate::csv_text::text_cell;
+
 /// Cost columns of `results.csv`: from `frond lod`'s report, or `frond eval`'s for candidates.
 const COST_COLUMNS: &[&str] = &[
     "billboards",
@@ -259,15 +261,15 @@ pub fn results_csv(rows: &[Row]) -> Result<Vec<u8>> {
     w.write_record(&header).context("writing results.csv")?;
     for r in rows {
         let mut rec = vec![
-            r.run.clone(),
-            r.method.clone(),
-            r.lod_method.clone().unwrap_or_default(),
+            text_cell(&r.run).into_owned(),
+            text_cell(&r.method).into_owned(),
+            text_cell(r.lod_method.as_deref().unwrap_or_default()).into_owned(),
             format!("{}", r.screen_height),
             opt(r.epsilon),
             opt(r.epsilon_pct),
             r.seed.map(|s| s.to_string()).unwrap_or_default(),
             if r.failure.is_some() { "failed" } else { "ok" }.to_string(),
-            r.failure.clone().unwrap_or_default(),
+            text_cell(r.failure.as_deref().unwrap_or_default()).into_owned(),
         ];
         rec.extend(columns.iter().map(|c| opt(r.values.get(*c).copied())));
         w.write_record(&rec).context("writing results.csv")?;
@@ -359,13 +361,13 @@ pub fn stability_csv(table: &[Stability]) -> Result<Vec<u8>> {
     for s in table {
         for (q, sp) in &s.spread {
             w.write_record([
-                s.method.clone(),
+                text_cell(&s.method).into_owned(),
                 format!("{}", s.screen_height),
                 opt(s.epsilon),
                 opt(s.epsilon_pct),
                 s.runs.to_string(),
                 s.failed.to_string(),
-                q.clone(),
+                text_cell(q).into_owned(),
                 sp.n.to_string(),
                 format!("{}", sp.mean),
                 format!("{}", sp.min),
