@@ -148,6 +148,7 @@ pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Res
     });
     doc.add_root(node);
     // Wood: one primitive per material, un-indexed vertices re-used per primitive.
+    let images = frond_export::downscale::Downscaler::new(tree);
     let mut prims = Vec::new();
     for m in 0..tree.materials.len() {
         let tris: Vec<_> = tree
@@ -159,7 +160,7 @@ pub fn cloud_glb(tree: &Tree, positions: &[Vec3], cloud: &BillboardCloud) -> Res
             continue;
         }
         let mat = sink
-            .tree_material(&mut doc, tree, m, &Default::default())
+            .tree_material(&mut doc, &images, m, &Default::default())
             .context("writing a wood material")?;
         // The input's own texture coordinate sets: its material is written as it was.
         let sets = &tree.vertices.texcoords;

@@ -2,9 +2,9 @@
 
 pub mod batch;
 pub mod child_job;
-pub mod csv_text;
 pub mod cli;
 pub mod cloud_cmd;
+pub mod csv_text;
 pub mod eval_cmd;
 pub mod inspect;
 pub mod lod_cmd;

@@ -368,6 +368,7 @@ fn unlimited() -> frond_scene::InputLimits {
         max_input_bytes: u64::MAX,
         max_texture_bytes: u64::MAX,
         max_vertices: u64::MAX,
+        max_animation_keys: u64::MAX,
     }
 }
 

@@ -23,7 +23,9 @@ use std::path::{Component, Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum PathRefusal {
     /// Absolute, empty, or holding `..`/`.`: not a plain name inside the folder.
-    #[error("'{name}' is not a plain relative name inside {folder} (absolute, empty, or with '..')")]
+    #[error(
+        "'{name}' is not a plain relative name inside {folder} (absolute, empty, or with '..')"
+    )]
     NotPlain {
         /// The name as given.
         name: String,
@@ -138,8 +140,16 @@ impl OutFolder {
     /// Creates the folder itself and its missing parents (the user named it).
     pub fn create(&self) -> FolderResult<()> {
         std::fs::create_dir_all(&self.root).map_err(|e| {
-            anyhow::Error::new(e).context(format!("{}: cannot create the folder", self.root.display()))
+            anyhow::Error::new(e)
+                .context(format!("{}: cannot create the folder", self.root.display()))
         })
+    }
+
+    /// Creates subfolder `name`, which must not exist yet (Err if it does: a claim).
+    pub fn create_dir(&self, name: impl AsRef<Path>) -> FolderResult<PathBuf> {
+        let path = self.path(name)?;
+        std::fs::create_dir(&path).map_err(|e| cannot(e, "create", &path))?;
+        Ok(path)
     }
 
     /// Creates subfolder `name` and its missing parents inside the folder.
@@ -271,7 +281,10 @@ mod tests {
         f.create().unwrap();
         f.write_atomic("sub/a.txt", b"one").unwrap();
         f.write_atomic("sub/a.txt", b"two").unwrap();
-        assert_eq!(std::fs::read(dir.path().join("new/sub/a.txt")).unwrap(), b"two");
+        assert_eq!(
+            std::fs::read(dir.path().join("new/sub/a.txt")).unwrap(),
+            b"two"
+        );
         let names: Vec<_> = std::fs::read_dir(dir.path().join("new/sub"))
             .unwrap()
             .map(|e| e.unwrap().file_name())

@@ -123,10 +123,9 @@ impl OutputSet {
             ops: 0,
         };
         set.recover()?;
-        let staging = set.dir.path(&set.staging)?;
-        std::fs::create_dir(&staging).with_context(|| {
-            format!("{}: cannot write into the output folder", staging.display())
-        })?;
+        set.dir
+            .create_dir(&set.staging)
+            .context("cannot write into the output folder")?;
         // Another run may have started between the look and the mkdir.
         if let Some(pid) = set.live_other_run()? {
             let _ = set.dir.remove_dir_all(&set.staging);
@@ -431,7 +430,8 @@ struct Owned {
 /// Reads a killed run's journal.
 fn read_journal(path: &Path) -> Result<Journal> {
     let text = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    serde_json::from_slice(&text).with_context(|| format!("{}: not a frond journal", path.display()))
+    serde_json::from_slice(&text)
+        .with_context(|| format!("{}: not a frond journal", path.display()))
 }
 
 /// Every name the journal installs or removes is a plain name inside `dir` (and, installed,

@@ -29,11 +29,11 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use bytes::Bytes;
+use futures_util::StreamExt;
 use http_body_util::{BodyExt, Empty, Full, StreamBody, combinators::BoxBody};
 use hyper::body::Frame;
 use hyper::{Method, Request, Response, StatusCode, header};
 use tokio::sync::Semaphore;
-use futures_util::StreamExt;
 
 use crate::out_folder::checked_path;
 
@@ -455,7 +455,10 @@ mod tests {
         assert!(host_allowed(h("[::1]:8417").as_ref(), 8417));
         assert!(!host_allowed(h("127.0.0.1:9000").as_ref(), 8417));
         assert!(!host_allowed(h("evil.example:8417").as_ref(), 8417));
-        assert!(!host_allowed(h("localhost.evil.example:8417").as_ref(), 8417));
+        assert!(!host_allowed(
+            h("localhost.evil.example:8417").as_ref(),
+            8417
+        ));
         assert!(!host_allowed(None, 8417));
     }
 

@@ -460,3 +460,110 @@ fn a_set_written_by_frond_0_1_is_adopted_and_replaced() {
         ]
     );
 }
+
+/// A folder beside the output folder holding the files a planted journal or report aims at,
+/// with their bytes, to check nothing outside `-o` was touched.
+fn victims(dir: &Path) -> Vec<(std::path::PathBuf, Vec<u8>)> {
+    let v = dir.join("victims");
+    std::fs::create_dir_all(&v).unwrap();
+    ["abs.txt", "rel.txt", "target.txt", "linked.glb"]
+        .iter()
+        .map(|n| {
+            let p = v.join(n);
+            std::fs::write(&p, format!("victim {n}")).unwrap();
+            (p, format!("victim {n}").into_bytes())
+        })
+        .collect()
+}
+
+#[track_caller]
+fn untouched(files: &[(std::path::PathBuf, Vec<u8>)]) {
+    for (p, bytes) in files {
+        assert_eq!(
+            std::fs::read(p).ok().as_ref(),
+            Some(bytes),
+            "{} was changed",
+            p.display()
+        );
+    }
+}
+
+#[test]
+fn a_planted_journal_is_refused_whole_and_nothing_outside_is_touched() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = victims(dir.path());
+    let out = dir.path().join("out");
+    // A killed run's staging folder, as a shared folder or an unpacked archive could hold it:
+    // its journal removes an absolute path and a `../` one and installs over `../target.txt`.
+    let staging = out.join(".frond-staging-sapling%999999");
+    std::fs::create_dir_all(&staging).unwrap();
+    std::fs::write(staging.join("target.txt"), b"planted").unwrap();
+    let journal = serde_json::json!({
+        "install": ["../victims/target.txt"],
+        "remove": [files[0].0.to_str().unwrap(), "../victims/rel.txt"],
+    });
+    std::fs::write(
+        staging.join("frond-commit.json"),
+        serde_json::to_vec(&journal).unwrap(),
+    )
+    .unwrap();
+    std::fs::write(out.join("mine.txt"), b"mine").unwrap();
+    let o = lod(&out, "60", "1", None);
+    assert_eq!(o.status.code(), Some(1), "refused");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("frond-commit.json") && err.contains("outside the output folder"),
+        "{err}"
+    );
+    untouched(&files);
+    assert_eq!(std::fs::read(out.join("mine.txt")).unwrap(), b"mine");
+    assert!(staging.join("frond-commit.json").is_file(), "nothing changed");
+    // One bad entry among good ones refuses the whole journal.
+    let journal = serde_json::json!({ "install": ["a.glb"], "remove": ["ok.glb", "/x/../y"] });
+    std::fs::write(
+        staging.join("frond-commit.json"),
+        serde_json::to_vec(&journal).unwrap(),
+    )
+    .unwrap();
+    std::fs::write(staging.join("a.glb"), b"staged").unwrap();
+    assert_eq!(lod(&out, "60", "1", None).status.code(), Some(1));
+    assert!(!out.join("a.glb").exists(), "nothing installed");
+    // Removed by the user, the next run goes on.
+    std::fs::remove_dir_all(&staging).unwrap();
+    ok(&lod(&out, "60", "1", None));
+    untouched(&files);
+}
+
+#[test]
+fn links_out_of_the_output_folder_are_never_followed() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = victims(dir.path());
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    // A staging folder that is a link to elsewhere: refused, not entered.
+    let staging = out.join(".frond-staging-sapling%999999");
+    std::os::unix::fs::symlink(dir.path().join("victims"), &staging).unwrap();
+    let o = lod(&out, "60", "1", None);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("not a staging folder"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    untouched(&files);
+    std::fs::remove_file(&staging).unwrap();
+    // A report of this tree listing a file through a link out of the folder: the old set's
+    // files are removed on the next run, that one is not.
+    ok(&lod(&out, "60", "1", None));
+    let report = out.join("sapling_report.json");
+    let mut v: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    v["files"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!("away/linked.glb"));
+    std::fs::write(&report, serde_json::to_vec(&v).unwrap()).unwrap();
+    std::os::unix::fs::symlink(dir.path().join("victims"), out.join("away")).unwrap();
+    ok(&lod(&out, "200", "1", None));
+    untouched(&files);
+}

@@ -10,6 +10,7 @@ use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 use common::gltf_cases::*;
+use common::hostile::png_header_only;
 use common::*;
 use serde_json::{Value, json};
 
@@ -181,44 +182,6 @@ fn batch_never_opens_what_the_import_refuses_nor_hangs_on_it() {
     assert_eq!(hash(&outside), before);
 }
 
-/// A PNG whose header declares `w`×`h` RGBA pixels, with almost no data: what a "texture bomb"
-/// looks like to a reader that trusts headers.
-fn png_header_only(w: u32, h: u32) -> Vec<u8> {
-    fn crc32(bytes: &[u8]) -> u32 {
-        let mut c = 0xffff_ffffu32;
-        for &b in bytes {
-            c ^= u32::from(b);
-            for _ in 0..8 {
-                c = if c & 1 != 0 {
-                    0xedb8_8320 ^ (c >> 1)
-                } else {
-                    c >> 1
-                };
-            }
-        }
-        !c
-    }
-    let chunk = |kind: &[u8], data: &[u8]| {
-        let mut out = (data.len() as u32).to_be_bytes().to_vec();
-        let mut body = kind.to_vec();
-        body.extend_from_slice(data);
-        out.extend_from_slice(&body);
-        out.extend_from_slice(&crc32(&body).to_be_bytes());
-        out
-    };
-    let mut ihdr = w.to_be_bytes().to_vec();
-    ihdr.extend_from_slice(&h.to_be_bytes());
-    ihdr.extend_from_slice(&[8, 6, 0, 0, 0]);
-    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
-    png.extend(chunk(b"IHDR", &ihdr));
-    // A zlib stream of one empty stored block: far too little data for the declared size.
-    png.extend(chunk(
-        b"IDAT",
-        &[0x78, 0x01, 0x01, 0x00, 0x00, 0xff, 0xff, 0, 0, 0, 1],
-    ));
-    png.extend(chunk(b"IEND", &[]));
-    png
-}
 
 /// The triangle with `images` textured materials, one image each (PNG files beside it).
 fn textured(dir: &Path, images: &[Vec<u8>]) -> PathBuf {
@@ -268,7 +231,7 @@ fn texture_bombs_are_refused_from_their_headers() {
         &vec![png_header_only(8192, 8192); 4],
     );
     let out = frond_within(&["inspect", four.to_str().unwrap()], QUICK);
-    refused(&out, &four, "its 4 textures decode to 1 GiB");
+    refused(&out, &four, "its 4 images decode to 1 GiB");
     // Raising the limit lets the reader go on to decode the image (which is then found broken).
     let out = frond_within(&["inspect", p, "--max-texture-memory", "1G"], QUICK);
     refused(&out, &one, "cannot decode");

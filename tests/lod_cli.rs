@@ -533,10 +533,12 @@ fn build(path: &Path, per_bone: bool, screen: f32) -> Built {
 /// Writes the cloud alone, re-imports it and compares every billboard corner at every clock
 /// sample with `corners_at`.
 fn round_trip(b: &Built) {
+    let images = frond_export::downscale::Downscaler::new(&b.tree);
     let file = write_glb(
         &[LodInput {
             name: "t_LOD1".into(),
             tree: &b.tree,
+            images: &images,
             rig: &b.cloud.rig,
             parts: Vec::new(),
             cloud: Some(&b.cloud),

@@ -12,6 +12,7 @@ use frond_scene::Tree;
 use crate::ExportError;
 use crate::LodInput;
 use crate::cloud_motion::{spectral_textures, vat_textures};
+use crate::downscale::Downscaler;
 use crate::lod_file::{FileOptions, write_glb, write_named_glb};
 use crate::mapping::Mapping;
 use crate::spectral::SpectralTextures;
@@ -192,12 +193,14 @@ pub fn chain_files(
         .map_err(|e| (format!("building LOD{k}"), e))?;
         motions.push(m);
     }
+    // Every writer's downscaled maps come from one place: each made once, one decode at a time.
+    let images = Downscaler::new(tree);
     let inputs: Vec<LodInput> = chain
         .lods
         .iter()
         .zip(&motions)
         .enumerate()
-        .map(|(k, (lod, m))| lod_input(tree, lod, m, prefix(k), options.billboard_normals))
+        .map(|(k, (lod, m))| lod_input(&images, lod, m, prefix(k), options.billboard_normals))
         .collect();
     // Every LOD's file and the combined one are written at once: each is its own bytes.
     let write_lod = |k: usize, input: &LodInput, entry: &mut LodEntry| {
@@ -276,7 +279,7 @@ pub fn chain_files(
 
 /// What export needs of one LOD.
 fn lod_input<'a>(
-    tree: &'a Tree,
+    images: &'a Downscaler<'a>,
     lod: &'a ChainLod,
     m: &Motion,
     name: String,
@@ -284,7 +287,8 @@ fn lod_input<'a>(
 ) -> LodInput<'a> {
     LodInput {
         name,
-        tree,
+        tree: images.tree(),
+        images,
         rig: lod.rig(),
         parts: lod.parts.iter().collect(),
         cloud: lod.cloud(),

@@ -1,30 +1,141 @@
 //! Images written smaller than the input's for a far LOD (sizes from
-//! `frond_lod::texture_budget`): decoded, resampled (triangle filter), and re-encoded as PNG.
-//! An alpha-tested map keeps its coverage: alpha is scaled so that as many texels pass the
-//! material's cutoff as passed it in the input, in proportion (the coverage-preserving rule of
-//! alpha-tested mip chains, as frond's renderer builds them), so thin foliage does not vanish
-//! when its texture shrinks.
+//! `frond_lod::texture_budget`): decoded, resampled (triangle filter, premultiplied alpha), and
+//! re-encoded. An alpha-tested map keeps its coverage: alpha is scaled so that as many texels
+//! pass the material's cutoff as passed it in the input, in proportion (the coverage-preserving
+//! rule of alpha-tested mip chains, as frond's renderer builds them), so thin foliage does not
+//! vanish when its texture shrinks.
+//!
+//! Memory is what bounds this module: an input map may be 8192² (256 MiB decoded), and every
+//! LOD file and the combined file want their downscaled copies at once. So a [`Downscaler`]
+//! serves one chain's writers: each (image, size, cutoff) is made once and shared, one image is
+//! decoded at a time and kept while it is asked for, and the resampling streams source rows
+//! ([`resample`]). The image crate's `resize` was used before; it converts the whole map to
+//! 16-byte float texels first (1 GiB for 8192²), and a resize crate with alpha support needs a
+//! full premultiplied copy, where this holds a few rows.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, PoisonError};
 
 use frond_scene::Tree;
 use frond_scene::gltf_writer::encode_png;
 use image::RgbaImage;
-use image::imageops::{FilterType, resize};
+use rayon::prelude::*;
 
 use crate::error::ExportError;
 
-/// PNG bytes of image `j` of `tree` resampled to `size`; `cutoff`: the alpha test of the
-/// material it serves (None: alpha is not tested).
-pub fn downscaled_png(
-    tree: &Tree,
-    j: usize,
-    size: [u32; 2],
-    cutoff: Option<f32>,
-) -> Result<Vec<u8>, ExportError> {
-    let small = downscaled_rgba(tree, j, size, cutoff)?;
-    encode_png(small.width(), small.height(), small.as_raw()).map_err(|source| ExportError::Image {
-        name: image_name(tree, j),
-        source,
-    })
+/// What identifies one downscaled image: input image, size, and the cutoff's bits.
+type Key = (usize, [u32; 2], Option<u32>);
+
+/// Makes the downscaled images of one tree for any number of writers at once (see the module
+/// doc): each once, one decode at a time.
+pub struct Downscaler<'t> {
+    tree: &'t Tree,
+    state: Mutex<State>,
+}
+
+#[derive(Default)]
+struct State {
+    /// The input image decoded last (an image that `Tree::textures` does not hold decoded).
+    source: Option<(usize, Arc<RgbaImage>)>,
+    made: HashMap<Key, Arc<RgbaImage>>,
+}
+
+impl<'t> Downscaler<'t> {
+    pub fn new(tree: &'t Tree) -> Self {
+        Downscaler {
+            tree,
+            state: Mutex::new(State::default()),
+        }
+    }
+
+    /// The tree whose images it downscales.
+    pub fn tree(&self) -> &'t Tree {
+        self.tree
+    }
+
+    /// PNG bytes of image `j` resampled to `size`; `cutoff`: the alpha test of the material it
+    /// serves (None: alpha is not tested).
+    pub fn png(
+        &self,
+        j: usize,
+        size: [u32; 2],
+        cutoff: Option<f32>,
+    ) -> Result<Vec<u8>, ExportError> {
+        let small = self.rgba(j, size, cutoff)?;
+        encode_png(small.width(), small.height(), small.as_raw()).map_err(|source| {
+            ExportError::Image {
+                name: image_name(self.tree, j),
+                source,
+            }
+        })
+    }
+
+    /// Image `j` resampled to `size` as RGBA8 (see [`Downscaler::png`]).
+    pub fn rgba(
+        &self,
+        j: usize,
+        size: [u32; 2],
+        cutoff: Option<f32>,
+    ) -> Result<Arc<RgbaImage>, ExportError> {
+        let size = [size[0].max(1), size[1].max(1)];
+        let key = (j, size, cutoff.map(f32::to_bits));
+        // One at a time: the decoded source is the largest thing this module holds.
+        let mut state = self.state.lock().unwrap_or_else(PoisonError::into_inner);
+        if let Some(made) = state.made.get(&key) {
+            return Ok(made.clone());
+        }
+        let small = match self.tree.textures.iter().find(|t| t.image == Some(j)) {
+            Some(t) => downscale(&t.rgba, [t.width, t.height], size, cutoff),
+            None => {
+                let source = state.source(self.tree, j)?;
+                downscale(
+                    source.as_raw(),
+                    [source.width(), source.height()],
+                    size,
+                    cutoff,
+                )
+            }
+        }
+        .ok_or(ExportError::NoTexture(j))?;
+        let small = Arc::new(small);
+        state.made.insert(key, small.clone());
+        Ok(small)
+    }
+}
+
+impl State {
+    /// Input image `j` decoded (kept until another image is asked for).
+    fn source(&mut self, tree: &Tree, j: usize) -> Result<Arc<RgbaImage>, ExportError> {
+        if let Some((k, img)) = &self.source
+            && *k == j
+        {
+            return Ok(img.clone());
+        }
+        // The previous source goes before the next is decoded.
+        self.source = None;
+        let img = Arc::new(decode(tree, j)?);
+        self.source = Some((j, img.clone()));
+        Ok(img)
+    }
+}
+
+/// Input image `j` of `tree` decoded to RGBA8 (PNG, JPEG or KTX2; import checked its declared
+/// size against the texture memory limit).
+fn decode(tree: &Tree, j: usize) -> Result<RgbaImage, ExportError> {
+    let img = tree.images.get(j).ok_or(ExportError::NoTexture(j))?;
+    if img.mime_type == frond_scene::import::KTX2_MIME {
+        let (w, h, rgba) = frond_scene::ktx2::decode_levels(&img.bytes, 1)
+            .ok()
+            .and_then(|mut l| l.pop())
+            .ok_or(ExportError::NoTexture(j))?;
+        return RgbaImage::from_raw(w, h, rgba).ok_or(ExportError::NoTexture(j));
+    }
+    Ok(image::load_from_memory(&img.bytes)
+        .map_err(|source| ExportError::Image {
+            name: image_name(tree, j),
+            source,
+        })?
+        .into_rgba8())
 }
 
 /// Image `j`'s name, or `image<j>`.
@@ -35,64 +146,150 @@ fn image_name(tree: &Tree, j: usize) -> String {
         .unwrap_or_else(|| format!("image{j}"))
 }
 
-/// Image `j` of `tree` resampled to `size` as RGBA8 (see [`downscaled_png`]).
-pub fn downscaled_rgba(
-    tree: &Tree,
-    j: usize,
-    size: [u32; 2],
-    cutoff: Option<f32>,
-) -> Result<RgbaImage, ExportError> {
-    let source: RgbaImage = match tree.textures.iter().find(|t| t.image == Some(j)) {
-        Some(t) => RgbaImage::from_raw(t.width, t.height, t.rgba.clone())
-            .ok_or_else(|| ExportError::NoTexture(j))?,
-        None => {
-            let img = tree.images.get(j).ok_or(ExportError::NoTexture(j))?;
-            if img.mime_type == frond_scene::import::KTX2_MIME {
-                let (w, h, rgba) = frond_scene::ktx2::decode_levels(&img.bytes, 1)
-                    .ok()
-                    .and_then(|mut l| l.pop())
-                    .ok_or(ExportError::NoTexture(j))?;
-                RgbaImage::from_raw(w, h, rgba).ok_or(ExportError::NoTexture(j))?
-            } else {
-                image::load_from_memory(&img.bytes)
-                    .map_err(|source| ExportError::Image {
-                        name: image_name(tree, j),
-                        source,
-                    })?
-                    .to_rgba8()
-            }
-        }
-    };
-    let mut small = resize_premultiplied(&source, size[0].max(1), size[1].max(1));
-    if let Some(c) = cutoff {
-        keep_coverage(source.as_raw(), small.as_mut(), c);
+/// `rgba` (`from` texels) resampled to `to` with the coverage kept for `cutoff`; None when the
+/// bytes do not hold `from`.
+fn downscale(rgba: &[u8], from: [u32; 2], to: [u32; 2], cutoff: Option<f32>) -> Option<RgbaImage> {
+    let texels = from[0] as usize * from[1] as usize;
+    if texels == 0 || rgba.len() != texels * 4 {
+        return None;
     }
-    Ok(small)
+    let mut small = resample(rgba, from, to);
+    if let Some(c) = cutoff {
+        keep_coverage(rgba, small.as_mut(), c);
+    }
+    Some(small)
 }
 
-fn resize_premultiplied(image: &RgbaImage, width: u32, height: u32) -> RgbaImage {
-    let (w, h) = image.dimensions();
-    let mut pre = image::Rgba32FImage::new(w, h);
-    for (p, q) in image.pixels().zip(pre.pixels_mut()) {
-        let a = f32::from(p[3]) / 255.0;
-        *q = image::Rgba([
-            f32::from(p[0]) / 255.0 * a,
-            f32::from(p[1]) / 255.0 * a,
-            f32::from(p[2]) / 255.0 * a,
-            a,
-        ]);
+/// One output texel's source taps along an axis: the first source index and the weights.
+struct Taps {
+    first: usize,
+    weights: Vec<f32>,
+}
+
+/// Triangle-filter taps for resampling `from` texels to `to` along one axis: each output
+/// texel's centre mapped into the source, the filter widened by the scale when shrinking,
+/// weights normalised to 1.
+fn taps(from: u32, to: u32) -> Vec<Taps> {
+    let scale = from as f32 / to as f32;
+    let radius = scale.max(1.0);
+    (0..to)
+        .map(|o| {
+            let centre = (o as f32 + 0.5) * scale;
+            let lo = ((centre - radius).floor().max(0.0)) as usize;
+            let hi = ((centre + radius).ceil() as usize).min(from as usize);
+            let mut weights: Vec<f32> = (lo..hi)
+                .map(|i| (1.0 - ((i as f32 + 0.5 - centre) / radius).abs()).max(0.0))
+                .collect();
+            let sum: f32 = weights.iter().sum();
+            if sum > 0.0 {
+                weights.iter_mut().for_each(|w| *w /= sum);
+            } else {
+                // Narrower than a texel between two centres: the nearest texel.
+                let nearest = (centre as usize).min(from as usize - 1);
+                return Taps {
+                    first: nearest,
+                    weights: vec![1.0],
+                };
+            }
+            Taps { first: lo, weights }
+        })
+        .collect()
+}
+
+/// Output rows resampled together (each band re-reads the few source rows it shares with its
+/// neighbours; the result does not depend on the banding).
+const BAND_ROWS: usize = 32;
+
+/// `rgba` resampled from `from` to `to` texels with a triangle filter over premultiplied alpha
+/// (so transparent texels' colour does not bleed into the edges), streaming: each band of output
+/// rows resamples the source rows it needs horizontally into a window of float rows, then
+/// blends them vertically. Memory: the window and the output, never a full-size float copy.
+pub fn resample(rgba: &[u8], from: [u32; 2], to: [u32; 2]) -> RgbaImage {
+    let (xs, ys) = (taps(from[0], to[0]), taps(from[1], to[1]));
+    let (sw, ow) = (from[0] as usize, to[0] as usize);
+    let mut out = vec![0u8; ow * to[1] as usize * 4];
+    out.par_chunks_mut(ow * 4 * BAND_ROWS)
+        .enumerate()
+        .for_each(|(band, rows)| {
+            let first_row = band * BAND_ROWS;
+            let mut window = RowWindow::default();
+            for (k, row_out) in rows.chunks_exact_mut(ow * 4).enumerate() {
+                let t = &ys[first_row + k];
+                window.drop_before(t.first);
+                let mut acc = vec![0f32; ow * 4];
+                for (i, &w) in t.weights.iter().enumerate() {
+                    let y = t.first + i;
+                    let row =
+                        window.row(y, || horizontal(&rgba[y * sw * 4..(y + 1) * sw * 4], &xs));
+                    for (a, &v) in acc.iter_mut().zip(row) {
+                        *a += w * v;
+                    }
+                }
+                unpremultiply(&acc, row_out);
+            }
+        });
+    RgbaImage::from_raw(to[0], to[1], out).unwrap_or_else(|| RgbaImage::new(to[0], to[1]))
+}
+
+/// Source rows resampled horizontally, kept while later output rows need them.
+#[derive(Default)]
+struct RowWindow {
+    first: usize,
+    rows: std::collections::VecDeque<Vec<f32>>,
+}
+
+impl RowWindow {
+    /// Row `y` (made when not held; rows are asked for in increasing order, after
+    /// [`RowWindow::drop_before`] the first one needed).
+    fn row(&mut self, y: usize, make: impl FnOnce() -> Vec<f32>) -> &[f32] {
+        if y < self.first || y > self.first + self.rows.len() {
+            self.rows.clear();
+            self.first = y;
+        }
+        let k = y - self.first;
+        if k == self.rows.len() {
+            self.rows.push_back(make());
+        }
+        &self.rows[k]
     }
-    let small = resize(&pre, width, height, FilterType::Triangle);
-    let mut out = RgbaImage::new(width, height);
-    for (p, q) in small.pixels().zip(out.pixels_mut()) {
+
+    /// Forgets the rows before `y`.
+    fn drop_before(&mut self, y: usize) {
+        while self.first < y && !self.rows.is_empty() {
+            self.rows.pop_front();
+            self.first += 1;
+        }
+    }
+}
+
+/// One source row (RGBA8) premultiplied and resampled to the output's width (RGBA floats).
+fn horizontal(row: &[u8], xs: &[Taps]) -> Vec<f32> {
+    let mut out = Vec::with_capacity(xs.len() * 4);
+    for t in xs {
+        let mut px = [0f32; 4];
+        for (i, &w) in t.weights.iter().enumerate() {
+            let p = &row[(t.first + i) * 4..(t.first + i) * 4 + 4];
+            let a = f32::from(p[3]) / 255.0;
+            px[0] += w * f32::from(p[0]) / 255.0 * a;
+            px[1] += w * f32::from(p[1]) / 255.0 * a;
+            px[2] += w * f32::from(p[2]) / 255.0 * a;
+            px[3] += w * a;
+        }
+        out.extend_from_slice(&px);
+    }
+    out
+}
+
+/// Premultiplied float texels back to straight-alpha RGBA8.
+fn unpremultiply(acc: &[f32], out: &mut [u8]) {
+    for (p, q) in acc.chunks_exact(4).zip(out.chunks_exact_mut(4)) {
         let a = p[3].clamp(0.0, 1.0);
         let c = |v: f32| {
             let v = if a > 0.0 { v / a } else { 0.0 };
             (v.clamp(0.0, 1.0) * 255.0).round() as u8
         };
-        *q = image::Rgba([c(p[0]), c(p[1]), c(p[2]), (a * 255.0).round() as u8]);
+        q.copy_from_slice(&[c(p[0]), c(p[1]), c(p[2]), (a * 255.0).round() as u8]);
     }
-    out
 }
 
 /// Scales the alpha of `small` (RGBA8) so that the fraction of its texels at or above

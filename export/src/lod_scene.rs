@@ -19,6 +19,7 @@ use frond_scene::rig::{Interpolation, Property};
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use glam::Mat4;
 
+use crate::downscale::Downscaler;
 use crate::error::ExportError;
 use crate::textures::TextureSink;
 
@@ -28,6 +29,8 @@ pub struct LodInput<'a> {
     pub name: String,
     /// Materials and textures of `parts`.
     pub tree: &'a Tree,
+    /// Makes `tree`'s images smaller where `image_sizes` asks, shared by every LOD of a chain.
+    pub images: &'a Downscaler<'a>,
     /// The skeleton; `parts` bones and billboards' `follows` index its nodes.
     pub rig: &'a Rig,
     /// Skinned triangle meshes with the tree's materials (the wood; LOD0's original foliage).
@@ -295,7 +298,7 @@ pub fn add_lod(
                             &cloud.atlas,
                             lod.billboard_normals == BillboardNormals::Baked,
                         )?,
-                        Some(m) => sink.tree_material(doc, lod.tree, m, lod.image_sizes)?,
+                        Some(m) => sink.tree_material(doc, lod.images, m, lod.image_sizes)?,
                     };
                     groups.push(TextureGroup {
                         key,
@@ -385,7 +388,7 @@ pub fn add_lod(
             if prim.indices.is_empty() {
                 continue;
             }
-            let mat = sink.tree_material(doc, lod.tree, prim.material, lod.image_sizes)?;
+            let mat = sink.tree_material(doc, lod.images, prim.material, lod.image_sizes)?;
             // The input's texture coordinate sets as stored (its materials are written as they
             // were, KHR_texture_transform and texCoord included); `uvs` when it carries none.
             let sets = part.texcoords.len().max(1);

@@ -10,13 +10,13 @@
 use std::collections::HashMap;
 
 use frond_scene::gltf_writer::{GltfBuilder, MaterialDesc, WriteAlpha, encode_png};
-use frond_scene::{AlphaMode, MaterialSource, Tree, visit_texture_infos};
+use frond_scene::{AlphaMode, MaterialSource, visit_texture_infos};
 
 use frond_lod::texture_budget::{ImageSizes, material_images};
 
 use frond_scene::import::KTX2_MIME;
 
-use crate::downscale::{downscaled_png, downscaled_rgba};
+use crate::downscale::Downscaler;
 use crate::error::ExportError;
 use crate::ktx2_texture::{MapKind, TextureFormat, ktx2_bytes};
 
@@ -253,12 +253,13 @@ impl TextureSink {
     fn source_texture(
         &mut self,
         doc: &mut GltfBuilder,
-        tree: &Tree,
+        images: &Downscaler,
         t: usize,
         sizes: &ImageSizes,
         cutoff: Option<f32>,
         kind: MapKind,
     ) -> Result<usize, ExportError> {
+        let tree = images.tree();
         let texture = tree
             .source_textures
             .get(t)
@@ -267,7 +268,7 @@ impl TextureSink {
         if let Some(&id) = self.source_textures.get(&(t, size)) {
             return Ok(id);
         }
-        let images = match self.source_images.get(&(texture.image, size)) {
+        let ids = match self.source_images.get(&(texture.image, size)) {
             Some(&ids) => ids,
             None => {
                 let img = tree
@@ -277,7 +278,7 @@ impl TextureSink {
                 let ids = match size {
                     // A downscaled image is frond's own: PNG or KTX2 as asked.
                     Some(s) if self.format != TextureFormat::Png => {
-                        let small = downscaled_rgba(tree, texture.image, s, cutoff)?;
+                        let small = images.rgba(texture.image, s, cutoff)?;
                         let stem = img
                             .name
                             .clone()
@@ -289,7 +290,7 @@ impl TextureSink {
                         // The input's image is written as it was.
                         let (bytes, mime, ext, suffix) = match size {
                             Some(s) => (
-                                downscaled_png(tree, texture.image, s, cutoff)?,
+                                images.png(texture.image, s, cutoff)?,
                                 "image/png".to_string(),
                                 "png",
                                 format!("_{}x{}", s[0], s[1]),
@@ -319,7 +320,7 @@ impl TextureSink {
             }
         };
         let sampler = texture.sampler.clone().map(|s| doc.add_sampler(s));
-        let id = Self::texture_of(doc, images, sampler, texture.json.clone());
+        let id = Self::texture_of(doc, ids, sampler, texture.json.clone());
         self.source_textures.insert((t, size), id);
         Ok(id)
     }
@@ -328,7 +329,7 @@ impl TextureSink {
     fn source_material(
         &mut self,
         doc: &mut GltfBuilder,
-        tree: &Tree,
+        images: &Downscaler,
         name: &str,
         source: &MaterialSource,
         sizes: &ImageSizes,
@@ -343,7 +344,7 @@ impl TextureSink {
                 as usize;
             // Only the base colour carries the alpha the material tests.
             let cutoff = cutoff.filter(|_| key == "baseColorTexture");
-            let id = self.source_texture(doc, tree, t, sizes, cutoff, MapKind::of_key(key))?;
+            let id = self.source_texture(doc, images, t, sizes, cutoff, MapKind::of_key(key))?;
             info.insert("index".into(), serde_json::json!(id));
             Ok::<(), ExportError>(())
         })?;
@@ -352,13 +353,15 @@ impl TextureSink {
 
     /// The document material for tree material `m`, written once: an imported material exactly
     /// as the input described it (see the module docs), one made by frond from its fields.
+    /// `images` makes the tree's images smaller where `sizes` asks.
     pub fn tree_material(
         &mut self,
         doc: &mut GltfBuilder,
-        tree: &Tree,
+        images: &Downscaler,
         m: usize,
         sizes: &ImageSizes,
     ) -> Result<usize, ExportError> {
+        let tree = images.tree();
         let key = (
             m,
             material_images(tree, m)
@@ -372,7 +375,7 @@ impl TextureSink {
         let material = tree.materials.get(m).ok_or(ExportError::NoMaterial(m))?;
         let cutoff = (material.alpha_mode == AlphaMode::Mask).then_some(material.alpha_cutoff);
         if let Some(source) = &material.source {
-            let id = self.source_material(doc, tree, &material.name, source, sizes, cutoff)?;
+            let id = self.source_material(doc, images, &material.name, source, sizes, cutoff)?;
             self.tree_materials.insert(key, id);
             return Ok(id);
         }

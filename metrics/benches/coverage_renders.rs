@@ -33,6 +33,7 @@ fn main() {
             max_input_bytes: u64::MAX,
             max_texture_bytes: u64::MAX,
             max_vertices: u64::MAX,
+            max_animation_keys: u64::MAX,
         },
         white_albedo: false,
         lighting: Default::default(),

@@ -19,7 +19,8 @@ use crate::classify::{MaterialOverrides, PrimitiveInfo, classify_primitives};
 use crate::error::Result;
 use crate::gltf_source::GltfSource;
 use crate::input_file::{
-    InputLimits, MAX_INPUT_OPTION, MAX_TEXTURE_OPTION, MAX_VERTICES_OPTION, human_bytes,
+    InputLimits, MAX_ANIMATION_OPTION, MAX_INPUT_OPTION, MAX_TEXTURE_OPTION, MAX_VERTICES_OPTION,
+    MIN_CHANNEL_KEYS, MIN_CLIP_KEYS, human_bytes,
 };
 use crate::model::*;
 use crate::rig::{Channel, Clip, Interpolation, Property, world_matrices};
@@ -88,7 +89,8 @@ fn import_source(src: &GltfSource, options: &ImportOptions) -> Result<Tree> {
     };
     let mut decoded: Vec<usize> = materials.base.iter().flatten().map(|t| t.0).collect();
     decoded.extend(normal_images.iter().flatten());
-    let (textures, texture_images) = read_textures(src, &decoded, &images, &slot_of_image)?;
+    let sizes = check_texture_budget(src, &images, &slot_of_image)?;
+    let (textures, texture_images) = read_textures(src, &decoded, &images, &sizes, &slot_of_image)?;
     let mut materials_out = materials.materials;
     for ((m, info), normal) in materials_out
         .iter_mut()
@@ -902,18 +904,117 @@ fn read_source_textures(
     Ok((textures, images, slot_of_image))
 }
 
-/// Decodes the images `decoded` (input image indices: the base-colour images materials use,
-/// and the normal maps applied) in parallel from their bytes in `images`.
+/// Checks the decoded size of every image the materials use (every map slot: base colour,
+/// normal, occlusion, metallic-roughness, emissive, extensions' maps; PNG, JPEG and KTX2 alike)
+/// against [`InputLimits::max_texture_bytes`], from the images' headers, before any image is
+/// decoded. frond decodes base-colour maps and applied normal maps on import and may decode any
+/// other map later (a far LOD writes it downscaled), so all of them count, each image once, at
+/// 4 bytes (RGBA8) per texel. A small file that declares huge images (a "texture bomb") is
+/// refused naming the largest image and the map that uses it; an image whose header cannot be
+/// read is refused naming it.
 ///
-/// The decoded size of every image is read from its header first and the total checked
-/// against [`InputLimits::max_texture_bytes`] before anything is decoded, so a small file that
-/// declares huge images (a "texture bomb") is refused without the memory being taken; each
-/// decoder is also held to the budget, in case a header lies. Images only normal, occlusion,
-/// metallic-roughness or emissive maps use (and normal maps not applied) are not decoded at all (they are passed through).
+/// Returns each image slot's declared size, in the order of `images`.
+fn check_texture_budget(
+    src: &GltfSource,
+    images: &[SourceImage],
+    slot_of_image: &HashMap<usize, usize>,
+) -> Result<Vec<(u32, u32)>> {
+    let mut input_of_slot = vec![0usize; images.len()];
+    for (&img, &slot) in slot_of_image {
+        input_of_slot[slot] = img;
+    }
+    let sizes = images
+        .iter()
+        .enumerate()
+        .map(|(slot, image)| {
+            declared_size(image).map_err(|e| {
+                src.invalid(format!(
+                    "{}: cannot read its size ({e})",
+                    image_role(src, input_of_slot[slot])
+                ))
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let bytes = |&(w, h): &(u32, u32)| u64::from(w) * u64::from(h) * 4;
+    let total = sizes.iter().map(bytes).fold(0u64, u64::saturating_add);
+    let budget = src.limits.max_texture_bytes;
+    if total > budget {
+        // The first of the largest.
+        let (slot, &(w, h)) = sizes
+            .iter()
+            .enumerate()
+            .rev()
+            .max_by_key(|(_, s)| bytes(s))
+            .unwrap_or((0, &(0, 0)));
+        return Err(src.invalid(format!(
+            "its {} images decode to {} (largest: {}, {w}×{h} texels, {}), over the texture memory limit of {} (raise it with {MAX_TEXTURE_OPTION})",
+            images.len(),
+            human_bytes(total),
+            image_role(src, input_of_slot[slot]),
+            human_bytes(bytes(&(w, h))),
+            human_bytes(budget)
+        )));
+    }
+    Ok(sizes)
+}
+
+/// An image's width and height as its header declares them (PNG, JPEG or KTX2).
+fn declared_size(image: &SourceImage) -> std::result::Result<(u32, u32), String> {
+    if image.mime_type == KTX2_MIME {
+        let info = crate::ktx2::read_info(&image.bytes).map_err(|e| e.to_string())?;
+        return Ok((info.width, info.height));
+    }
+    image::ImageReader::new(std::io::Cursor::new(&image.bytes))
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?
+        .into_dimensions()
+        .map_err(|e| e.to_string())
+}
+
+/// Input image `img` in words for messages: its index, name, and the first material map that
+/// uses it (`image 2 ('bark_n'), the normalTexture of material 0 ('bark')`).
+fn image_role(src: &GltfSource, img: usize) -> String {
+    let name = src
+        .root
+        .images
+        .get(img)
+        .and_then(|i| i.name.as_deref())
+        .map(|n| format!(" ('{n}')"))
+        .unwrap_or_default();
+    let mut role = None;
+    for (i, m) in src.raw.materials.iter().enumerate() {
+        let mut json = m.clone();
+        let _ = visit_texture_infos(&mut json, &mut |key, info| {
+            let t = info.get("index").and_then(serde_json::Value::as_u64);
+            let uses = t.is_some_and(|t| {
+                let t = t as usize;
+                t < src.root.textures.len()
+                    && (texture_image(src, t, false) == img || texture_image(src, t, true) == img)
+            });
+            if uses && role.is_none() {
+                let material = m
+                    .get("name")
+                    .and_then(serde_json::Value::as_str)
+                    .map(|n| format!(" ('{n}')"))
+                    .unwrap_or_default();
+                role = Some(format!(", the {key} of material {i}{material}"));
+            }
+            Ok::<(), ()>(())
+        });
+    }
+    format!("image {img}{name}{}", role.unwrap_or_default())
+}
+
+/// Decodes the images `decoded` (input image indices: the base-colour images materials use,
+/// and the normal maps applied) in parallel from their bytes in `images`, whose declared
+/// `sizes` [`check_texture_budget`] has checked. Each decoder is held to its image's declared
+/// size, in case a header lies. Images only other maps use (and normal maps not applied) are
+/// not decoded here (they are passed through).
 fn read_textures(
     src: &GltfSource,
     decoded: &[usize],
     images: &[SourceImage],
+    sizes: &[(u32, u32)],
     slot_of_image: &HashMap<usize, usize>,
 ) -> Result<(Vec<Texture>, Vec<usize>)> {
     let mut used: Vec<usize> = decoded.to_vec();
@@ -926,35 +1027,10 @@ fn read_textures(
                 .get(&img)
                 .copied()
                 .ok_or_else(|| src.invalid(format!("image {img} was not read")))?;
-            let bytes = &images[slot].bytes;
-            if images[slot].mime_type == KTX2_MIME {
-                let info = crate::ktx2::read_info(bytes)
-                    .map_err(|e| src.invalid(format!("image {img}: {e}")))?;
-                return Ok((
-                    img,
-                    slot,
-                    u64::from(info.width) * u64::from(info.height) * 4,
-                ));
-            }
-            let (w, h) = image::ImageReader::new(std::io::Cursor::new(bytes))
-                .with_guessed_format()
-                .map_err(|e| src.invalid(format!("image {img}: cannot read ({e})")))?
-                .into_dimensions()
-                .map_err(|e| src.invalid(format!("image {img}: cannot decode ({e})")))?;
+            let (w, h) = sizes[slot];
             Ok((img, slot, u64::from(w) * u64::from(h) * 4))
         })
         .collect::<Result<Vec<_>>>()?;
-    let budget = src.limits.max_texture_bytes;
-    let total = encoded.iter().map(|e| e.2).fold(0u64, u64::saturating_add);
-    if total > budget {
-        let largest = encoded.iter().max_by_key(|e| e.2).map(|e| e.0).unwrap_or(0);
-        return Err(src.invalid(format!(
-            "its {} textures decode to {} (largest: image {largest}), over the texture memory limit of {} (raise it with {MAX_TEXTURE_OPTION})",
-            encoded.len(),
-            human_bytes(total),
-            human_bytes(budget)
-        )));
-    }
     let textures = encoded
         .par_iter()
         .map(|&(img, slot, size)| {
@@ -986,7 +1062,7 @@ fn read_textures(
             let decoded = reader
                 .decode()
                 .map_err(|e| src.invalid(format!("image {img}: cannot decode ({e})")))?
-                .to_rgba8();
+                .into_rgba8();
             Ok(Texture {
                 name,
                 width: decoded.width(),
@@ -1504,6 +1580,89 @@ fn mark_degenerate(tris: &mut [Triangle], pos: &[Vec3], size: f32) {
     }
 }
 
+/// An animation's name, or `animation<i>`.
+fn clip_name(anim: &json::Animation, i: usize) -> String {
+    anim.name.clone().unwrap_or_else(|| format!("animation{i}"))
+}
+
+/// Per animation, the channels read: all but those whose target (node and property) an earlier
+/// channel of the same animation already drives. glTF forbids two channels with one target
+/// (the validator's ANIMATION_DUPLICATE_TARGETS) and players keep one; frond keeps the first,
+/// with a warning naming the animation and how many were dropped.
+fn kept_channels(src: &GltfSource, warnings: &mut Vec<String>) -> Vec<Vec<usize>> {
+    src.root
+        .animations
+        .iter()
+        .enumerate()
+        .map(|(ai, anim)| {
+            let mut seen = std::collections::HashSet::new();
+            let kept: Vec<usize> = (0..anim.channels.len())
+                .filter(|&ci| {
+                    let t = &anim.channels[ci].target;
+                    seen.insert((t.node.value(), format!("{:?}", t.path)))
+                })
+                .collect();
+            let dropped = anim.channels.len() - kept.len();
+            if dropped > 0 {
+                warnings.push(format!(
+                    "animation '{}': {dropped} channel{} drive a target (node and property) an earlier channel already drives; the first channel of each target kept (glTF allows one)",
+                    clip_name(anim, ai),
+                    if dropped == 1 { "" } else { "s" }
+                ));
+            }
+            kept
+        })
+        .collect()
+}
+
+/// Refuses animations whose keys, counted from the time accessors' declared counts before any
+/// is read, exceed [`InputLimits::max_animation_keys`] (see there for how channels and clips
+/// count), naming the clip with the most.
+fn check_animation_budget(src: &GltfSource, kept: &[Vec<usize>]) -> Result<()> {
+    let per_clip: Vec<(u64, usize)> = src
+        .root
+        .animations
+        .iter()
+        .zip(kept)
+        .map(|(anim, kept)| {
+            let keys = kept
+                .iter()
+                .map(|&ci| {
+                    let declared = anim
+                        .samplers
+                        .get(anim.channels[ci].sampler.value())
+                        .and_then(|s| src.root.accessors.get(s.input.value()))
+                        .map_or(0, |a| u64::from(a.count.0));
+                    declared.max(MIN_CHANNEL_KEYS)
+                })
+                .fold(0u64, u64::saturating_add);
+            (keys.max(MIN_CLIP_KEYS), kept.len())
+        })
+        .collect();
+    let total = per_clip.iter().map(|c| c.0).fold(0u64, u64::saturating_add);
+    let limit = src.limits.max_animation_keys;
+    if total <= limit {
+        return Ok(());
+    }
+    // The first of the largest.
+    let (largest, &(keys, channels)) = per_clip
+        .iter()
+        .enumerate()
+        .rev()
+        .max_by_key(|(_, c)| c.0)
+        .unwrap_or((0, &(0, 0)));
+    let name = src
+        .root
+        .animations
+        .get(largest)
+        .map(|a| clip_name(a, largest))
+        .unwrap_or_default();
+    Err(src.invalid(format!(
+        "its {} animations add up to {total} keys (largest: animation '{name}', {keys} keys in {channels} channels), over the animation limit of {limit} keys (raise it with {MAX_ANIMATION_OPTION})",
+        per_clip.len()
+    )))
+}
+
 /// Reads every animation into a [`Clip`], so that each channel's key times are finite,
 /// non-negative, strictly increasing and at most [`MAX_ANIMATION_SECONDS`] — what glTF
 /// requires of a sampler input, and so what frond writes back validates.
@@ -1524,15 +1683,15 @@ fn read_clips(
     node_count: usize,
     warnings: &mut Vec<String>,
 ) -> Result<Vec<Clip>> {
+    let kept = kept_channels(src, warnings);
+    check_animation_budget(src, &kept)?;
     let mut clips = Vec::new();
     for (ai, anim) in src.root.animations.iter().enumerate() {
-        let name = anim
-            .name
-            .clone()
-            .unwrap_or_else(|| format!("animation{ai}"));
+        let name = clip_name(anim, ai);
         let mut channels = Vec::new();
         let (mut start, mut end) = (f32::INFINITY, f32::NEG_INFINITY);
-        for (ci, ch) in anim.channels.iter().enumerate() {
+        for &ci in &kept[ai] {
+            let ch = &anim.channels[ci];
             let what = format!("animation '{name}' channel {ci}");
             let node = ch.target.node.value();
             if node >= node_count {

@@ -26,9 +26,10 @@ pub struct InputLimits {
     /// exceed 4 GiB anyway.
     pub max_input_bytes: u64,
     /// Decoded texture memory of one tree, counted as 4 bytes (RGBA8) per texel of every image
-    /// frond decodes (the base-colour maps), summed before any is decoded. Default 384 MiB
-    /// (`--max-texture-memory`): six 4096² maps. The pipeline holds a few copies of each
-    /// (render upload, coverage mips), so this keeps the whole run within a few GB.
+    /// a material map uses (any slot, any format: frond decodes base-colour and normal maps on
+    /// import and may decode any map to write it smaller), each image once, summed from the
+    /// headers before any is decoded. Default 384 MiB (`--max-texture-memory`): six 4096²
+    /// maps, such as colour, normal and occlusion-roughness-metal on bark and on leaves.
     pub max_texture_bytes: u64,
     /// Vertices of all mesh instances together (a mesh used by n nodes counts n times), checked
     /// from the accessors' declared counts before decoding. Default 8 M
@@ -36,7 +37,20 @@ pub struct InputLimits {
     /// 60 bytes a vertex, so this keeps geometry under half a GB however the file amplifies it
     /// (instancing, accessors without a bufferView).
     pub max_vertices: u64,
+    /// Animation keys of all clips together, counted from the time accessors' declared counts
+    /// before any is read: each channel counts its keys, and at least [`MIN_CHANNEL_KEYS`]
+    /// (frond evaluates a channel at that many poses, and writes it into every LOD file however
+    /// short it is); each clip at least [`MIN_CLIP_KEYS`] (each is evaluated and written on its
+    /// own). Default 2 Mi (`--max-animation-keys`): 28 clips of a 600-bone tree keyed at
+    /// 30 fps for 4 s; the keys are held and written once per LOD file, so this keeps them to a
+    /// few hundred MB however many clips or channels share one accessor.
+    pub max_animation_keys: u64,
 }
+
+/// The least a channel counts towards [`InputLimits::max_animation_keys`].
+pub const MIN_CHANNEL_KEYS: u64 = 64;
+/// The least a clip counts towards [`InputLimits::max_animation_keys`].
+pub const MIN_CLIP_KEYS: u64 = 1024;
 
 /// Default of [`InputLimits::max_input_bytes`].
 pub const DEFAULT_MAX_INPUT_BYTES: u64 = 1 << 30;
@@ -44,6 +58,10 @@ pub const DEFAULT_MAX_INPUT_BYTES: u64 = 1 << 30;
 pub const DEFAULT_MAX_TEXTURE_BYTES: u64 = 384 << 20;
 /// Default of [`InputLimits::max_vertices`].
 pub const DEFAULT_MAX_VERTICES: u64 = 8_000_000;
+/// Default of [`InputLimits::max_animation_keys`].
+pub const DEFAULT_MAX_ANIMATION_KEYS: u64 = 1 << 21;
+/// The option that raises [`InputLimits::max_animation_keys`].
+pub const MAX_ANIMATION_OPTION: &str = "--max-animation-keys";
 /// The option that raises [`InputLimits::max_vertices`].
 pub const MAX_VERTICES_OPTION: &str = "--max-vertices";
 /// The option that raises [`InputLimits::max_input_bytes`].
@@ -57,6 +75,7 @@ impl Default for InputLimits {
             max_input_bytes: DEFAULT_MAX_INPUT_BYTES,
             max_texture_bytes: DEFAULT_MAX_TEXTURE_BYTES,
             max_vertices: DEFAULT_MAX_VERTICES,
+            max_animation_keys: DEFAULT_MAX_ANIMATION_KEYS,
         }
     }
 }

@@ -83,6 +83,13 @@ pub fn gpu_bytes(width: u32, height: u32, levels: u32) -> u64 {
 ///
 /// Deterministic: UASTC blocks are encoded one by one, whatever the encoder's thread count.
 pub fn encode_uastc(levels: &[Level], srgb: bool, alpha: bool) -> Result<Vec<u8>, Ktx2Error> {
+    let blocks = uastc_blocks(levels, srgb)?;
+    Ok(uastc_container(levels[0].0, levels[0].1, &blocks, srgb, alpha))
+}
+
+/// The UASTC blocks of each level of `levels` (see [`encode_uastc`]), 16 bytes a 4×4 block,
+/// rows of blocks top to bottom.
+pub fn uastc_blocks(levels: &[Level], srgb: bool) -> Result<Vec<Vec<u8>>, Ktx2Error> {
     let Some((w0, h0, _)) = levels.first() else {
         return Err(Ktx2Error::Encode("no levels".into()));
     };
@@ -148,13 +155,20 @@ pub fn encode_uastc(levels: &[Level], srgb: bool, alpha: bool) -> Result<Vec<u8>
             .ok_or_else(|| Ktx2Error::Encode(format!("level {l} out of the encoder's file")))?;
         blocks.push(data.to_vec());
     }
-    Ok(container(*w0, *h0, &blocks, srgb, alpha))
+    Ok(blocks)
 }
 
 /// Packs UASTC levels (level 0 first) as a KTX2 file (KTX 2.0 spec §3): header, level index,
 /// a basic data format descriptor for UASTC, the writer's name, the levels Zstandard
-/// supercompressed and stored smallest first.
-fn container(width: u32, height: u32, blocks: &[Vec<u8>], srgb: bool, alpha: bool) -> Vec<u8> {
+/// supercompressed and stored smallest first. `blocks[l]` holds level `l`'s UASTC blocks
+/// ([`uastc_blocks`]); `width`×`height` is level 0's size.
+pub fn uastc_container(
+    width: u32,
+    height: u32,
+    blocks: &[Vec<u8>],
+    srgb: bool,
+    alpha: bool,
+) -> Vec<u8> {
     let n = blocks.len();
     let compressed: Vec<Vec<u8>> = blocks
         .iter()

@@ -75,14 +75,19 @@ pub struct LimitArgs {
     /// units; 1G = 1 GiB).
     #[arg(long, value_name = "SIZE", default_value = "1G", value_parser = parse_size_arg)]
     pub max_input_size: u64,
-    /// Refuse an input whose base-colour textures decode to more than this, at 4 bytes a
-    /// texel (384M = six 4096² maps); checked from the image headers before decoding.
+    /// Refuse an input whose material maps (every slot, each image once) decode to more than
+    /// this, at 4 bytes a texel (384M = six 4096² maps); checked from the image headers before
+    /// decoding.
     #[arg(long, value_name = "SIZE", default_value = "384M", value_parser = parse_size_arg)]
     pub max_texture_memory: u64,
     /// Refuse an input whose mesh instances add up to more vertices than this (counted from
     /// the accessors before decoding; 8000000 is four times the xlarge sample).
     #[arg(long, value_name = "N", default_value_t = frond_scene::input_file::DEFAULT_MAX_VERTICES)]
     pub max_vertices: u64,
+    /// Refuse an input whose animations add up to more keys than this (each channel of each
+    /// clip counts its keys, at least 64; counted from the accessors before reading).
+    #[arg(long, value_name = "N", default_value_t = frond_scene::input_file::DEFAULT_MAX_ANIMATION_KEYS)]
+    pub max_animation_keys: u64,
 }
 
 impl LimitArgs {
@@ -92,13 +97,16 @@ impl LimitArgs {
             max_input_size: limits.max_input_bytes,
             max_texture_memory: limits.max_texture_bytes,
             max_vertices: limits.max_vertices,
+            max_animation_keys: limits.max_animation_keys,
         }
     }
 
     /// The limits again as arguments, each only when not the default (so that a batch's
     /// parameter hash of a default run does not depend on them).
     pub fn option_args(&self) -> Vec<String> {
-        use frond_scene::input_file::{MAX_INPUT_OPTION, MAX_TEXTURE_OPTION, MAX_VERTICES_OPTION};
+        use frond_scene::input_file::{
+            MAX_ANIMATION_OPTION, MAX_INPUT_OPTION, MAX_TEXTURE_OPTION, MAX_VERTICES_OPTION,
+        };
         let defaults = frond_scene::InputLimits::default();
         let mut a = Vec::new();
         for (flag, value, default) in [
@@ -117,6 +125,11 @@ impl LimitArgs {
                 self.max_vertices,
                 defaults.max_vertices,
             ),
+            (
+                MAX_ANIMATION_OPTION,
+                self.max_animation_keys,
+                defaults.max_animation_keys,
+            ),
         ] {
             if value != default {
                 a.extend([flag.to_string(), value.to_string()]);
@@ -130,6 +143,7 @@ impl LimitArgs {
             max_input_bytes: self.max_input_size,
             max_texture_bytes: self.max_texture_memory,
             max_vertices: self.max_vertices,
+            max_animation_keys: self.max_animation_keys,
         }
     }
 }

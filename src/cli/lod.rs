@@ -331,7 +331,12 @@ impl LodArgs {
             for l in &report.lods {
                 crate::say!(
                     "{}: {} triangles, {} billboards, {} bones, {} texture bytes ({})",
-                    l.file, l.triangles, l.billboards, l.bones, l.texture_bytes, l.method
+                    l.file,
+                    l.triangles,
+                    l.billboards,
+                    l.bones,
+                    l.texture_bytes,
+                    l.method
                 );
             }
             crate::say!(

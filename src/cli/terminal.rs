@@ -90,7 +90,9 @@ mod tests {
         assert_eq!(safe("\u{7f}"), "\\x7f");
         assert_eq!(safe("écorce 樹"), "écorce 樹");
         let mut out = Vec::new();
-        SafeWriter(&mut out).write_all(b"ok \x1b[31m \xff\n").unwrap();
+        SafeWriter(&mut out)
+            .write_all(b"ok \x1b[31m \xff\n")
+            .unwrap();
         assert_eq!(out, b"ok \\x1b[31m \\xff\n");
     }
 }

@@ -6,6 +6,7 @@
 //! tree is absent. Fixtures that travel with the repository: [`fixture`], `samples/`.
 
 pub mod gltf_cases;
+pub mod hostile;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -288,5 +289,17 @@ const _: () = {
         gltf_cases::triangle_bin,
         gltf_cases::GOOD,
         gltf_cases::write_case,
+        hostile::Glb::read,
+        hostile::Glb::sample,
+        hostile::Glb::write,
+        hostile::Glb::add_image,
+        hostile::Glb::add_ktx2,
+        hostile::Glb::set_map,
+        hostile::png_header_only,
+        hostile::png_solid,
+        hostile::ktx2_solid,
+        hostile::ktx2_header_only,
+        hostile::frond_measured,
+        hostile::Measured::stderr,
     );
 };
