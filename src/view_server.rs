@@ -223,7 +223,7 @@ fn open_inside(root: &Path, rel: &Path) -> Option<(std::fs::File, u64)> {
     let canon = path.canonicalize().ok()?;
     let named = std::fs::metadata(&canon).ok()?;
     let same = named.dev() == opened.dev() && named.ino() == opened.ino();
-    (canon.starts_with(root) && same).then(|| (file, opened.len()))
+    (canon.starts_with(root) && same).then_some((file, opened.len()))
 }
 
 /// A file streamed in [`CHUNK`]s.

@@ -517,7 +517,10 @@ fn a_planted_journal_is_refused_whole_and_nothing_outside_is_touched() {
     );
     untouched(&files);
     assert_eq!(std::fs::read(out.join("mine.txt")).unwrap(), b"mine");
-    assert!(staging.join("frond-commit.json").is_file(), "nothing changed");
+    assert!(
+        staging.join("frond-commit.json").is_file(),
+        "nothing changed"
+    );
     // One bad entry among good ones refuses the whole journal.
     let journal = serde_json::json!({ "install": ["a.glb"], "remove": ["ok.glb", "/x/../y"] });
     std::fs::write(

@@ -26,10 +26,14 @@ fn refused_cheaply(m: &Measured, file: &Path, out: &Path, needles: &[&str]) {
     let err = m.stderr();
     assert_eq!(m.output.status.code(), Some(1), "refused: {err}");
     assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
-    assert!(err.contains(&file.display().to_string()), "names the file: {err}");
+    assert!(
+        err.contains(&file.display().to_string()),
+        "names the file: {err}"
+    );
     for n in needles {
         assert!(err.contains(n), "says '{n}': {err}");
     }
+    eprintln!("{}: refused, {}", file.display(), m.summary());
     assert!(m.wall < REFUSAL_TIME, "refused in {:?}", m.wall);
     assert!(
         m.peak_rss < REFUSAL_MEMORY,
@@ -137,11 +141,10 @@ fn lod_in_proportion(file: &Path, out: &Path) {
     let textures = decoded_texture_bytes(file);
     let bound = 4 * textures + (500 << 20);
     eprintln!(
-        "{}: peak {} MB, {} MB of decoded textures, {:.1} s",
+        "{}: {}, {} MB of decoded textures",
         file.display(),
-        m.peak_rss >> 20,
-        textures >> 20,
-        m.wall.as_secs_f64()
+        m.summary(),
+        textures >> 20
     );
     assert!(
         m.peak_rss <= bound,
@@ -159,7 +162,11 @@ fn accepted_maps_cost_memory_in_proportion() {
     // An 8000² normal map (256 MB decoded): it took 5 GB once, each LOD file decoding and
     // resampling it at once through a float copy.
     let mut glb = Glb::sample();
-    let t = glb.add_image("n8000", "image/png", &png_solid(8000, 8000, [128, 128, 255]));
+    let t = glb.add_image(
+        "n8000",
+        "image/png",
+        &png_solid(8000, 8000, [128, 128, 255]),
+    );
     glb.set_map(1, "/normalTexture", t);
     let file = glb.write(dir.path(), "normal8000.glb");
     lod_in_proportion(&file, &dir.path().join("out_png"));
@@ -177,9 +184,21 @@ fn six_4096_maps_on_bark_and_leaves_are_accepted_at_the_defaults() {
     let dir = tempfile::tempdir().unwrap();
     let mut glb = Glb::sample();
     for m in 0..2 {
-        let colour = glb.add_image(&format!("c{m}"), "image/png", &png_solid(4096, 4096, [90, 120, 60]));
-        let normal = glb.add_image(&format!("n{m}"), "image/png", &png_solid(4096, 4096, [128, 128, 255]));
-        let orm = glb.add_image(&format!("orm{m}"), "image/png", &png_solid(4096, 4096, [255, 200, 0]));
+        let colour = glb.add_image(
+            &format!("c{m}"),
+            "image/png",
+            &png_solid(4096, 4096, [90, 120, 60]),
+        );
+        let normal = glb.add_image(
+            &format!("n{m}"),
+            "image/png",
+            &png_solid(4096, 4096, [128, 128, 255]),
+        );
+        let orm = glb.add_image(
+            &format!("orm{m}"),
+            "image/png",
+            &png_solid(4096, 4096, [255, 200, 0]),
+        );
         glb.set_map(m, "/pbrMetallicRoughness/baseColorTexture", colour);
         glb.set_map(m, "/normalTexture", normal);
         glb.set_map(m, "/occlusionTexture", orm);
@@ -220,7 +239,12 @@ fn animations_past_the_key_limit_are_refused_from_their_counts() {
     );
     // Raised, it is read.
     let m = frond_measured(
-        &["inspect", file.to_str().unwrap(), "--max-animation-keys", "20000000"],
+        &[
+            "inspect",
+            file.to_str().unwrap(),
+            "--max-animation-keys",
+            "20000000",
+        ],
         LONG,
     );
     assert!(m.output.status.success(), "{}", m.stderr());
@@ -232,10 +256,16 @@ fn duplicate_animation_targets_keep_the_first_channel() {
     // Every channel repeated 2,000 times (the validator's ANIMATION_DUPLICATE_TARGETS): 8.4 GB
     // and 1.97 GB written once.
     let mut glb = Glb::sample();
-    let channels = glb.json["animations"][0]["channels"].as_array().unwrap().clone();
+    let channels = glb.json["animations"][0]["channels"]
+        .as_array()
+        .unwrap()
+        .clone();
     let n = channels.len();
-    glb.json["animations"][0]["channels"] =
-        json!((0..2000).flat_map(|_| channels.iter().cloned()).collect::<Vec<_>>());
+    glb.json["animations"][0]["channels"] = json!(
+        (0..2000)
+            .flat_map(|_| channels.iter().cloned())
+            .collect::<Vec<_>>()
+    );
     let file = glb.write(dir.path(), "dup.glb");
     let out = dir.path().join("out");
     let m = frond_measured(
@@ -259,7 +289,10 @@ fn duplicate_animation_targets_keep_the_first_channel() {
     assert!(m.peak_rss < 1 << 30, "{} MB", m.peak_rss >> 20);
     let written = gltf_json(&out.join("dup_LOD0.glb"));
     assert_eq!(
-        written["animations"][0]["channels"].as_array().unwrap().len(),
+        written["animations"][0]["channels"]
+            .as_array()
+            .unwrap()
+            .len(),
         n
     );
 }
@@ -292,25 +325,40 @@ fn names_reach_pages_terminals_and_spreadsheets_inert() {
     // The terminal: inspect's text and an error naming the clip show escapes, not controls.
     let shown = frond_measured(&["inspect", file.to_str().unwrap()], LONG);
     let stdout = String::from_utf8_lossy(&shown.output.stdout).into_owned();
-    assert!(stdout.contains("Wind<!--<script>\\x1b]0;pwned\\x07\\x1b[2J"), "{stdout}");
+    assert!(
+        stdout.contains("Wind<!--<script>\\x1b]0;pwned\\x07\\x1b[2J"),
+        "{stdout}"
+    );
     assert!(stdout.contains("leaves\\u{9b}31m"), "{stdout}");
     for text in [&stdout, &shown.stderr()] {
         assert!(
-            !text.chars().any(|c| c.is_control() && c != '\n' && c != '\t'),
+            !text
+                .chars()
+                .any(|c| c.is_control() && c != '\n' && c != '\t'),
             "{text:?}"
         );
     }
     let mut glb = Glb::read(&file);
-    let input = glb.json["animations"][0]["samplers"][0]["input"].as_u64().unwrap() as usize;
+    let input = glb.json["animations"][0]["samplers"][0]["input"]
+        .as_u64()
+        .unwrap() as usize;
     glb.json["accessors"][input]["min"] = json!([-1.0]);
     let view = glb.json["accessors"][input]["bufferView"].as_u64().unwrap() as usize;
-    let at = glb.json["bufferViews"][view]["byteOffset"].as_u64().unwrap_or(0) as usize
-        + glb.json["accessors"][input]["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let at = glb.json["bufferViews"][view]["byteOffset"]
+        .as_u64()
+        .unwrap_or(0) as usize
+        + glb.json["accessors"][input]["byteOffset"]
+            .as_u64()
+            .unwrap_or(0) as usize;
     glb.bin[at..at + 4].copy_from_slice(&(-1.0f32).to_le_bytes());
     let broken = glb.write(dir.path(), "broken.glb");
     let failed = frond_measured(&["inspect", broken.to_str().unwrap()], LONG);
     assert_eq!(failed.output.status.code(), Some(1));
-    assert!(failed.stderr().contains("\\x1b]0;pwned"), "{}", failed.stderr());
+    assert!(
+        failed.stderr().contains("\\x1b]0;pwned"),
+        "{}",
+        failed.stderr()
+    );
     assert!(!failed.stderr().contains('\u{1b}'), "{:?}", failed.stderr());
     // A spreadsheet: a tree named as a formula is text in the batch's summary.
     let library = dir.path().join("library");

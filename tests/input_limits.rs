@@ -182,7 +182,6 @@ fn batch_never_opens_what_the_import_refuses_nor_hangs_on_it() {
     assert_eq!(hash(&outside), before);
 }
 
-
 /// The triangle with `images` textured materials, one image each (PNG files beside it).
 fn textured(dir: &Path, images: &[Vec<u8>]) -> PathBuf {
     let mut doc = triangle_gltf();

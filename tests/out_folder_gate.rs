@@ -40,8 +40,16 @@ fn only_the_gate_changes_the_file_system() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files = Vec::new();
     for dir in [
-        "src", "scene/src", "spectral/src", "skeleton/src", "render/src", "billboard/src",
-        "lod/src", "export/src", "metrics/src", "preview/src",
+        "src",
+        "scene/src",
+        "spectral/src",
+        "skeleton/src",
+        "render/src",
+        "billboard/src",
+        "lod/src",
+        "export/src",
+        "metrics/src",
+        "preview/src",
     ] {
         rust_files(&root.join(dir), &mut files);
     }

@@ -323,6 +323,74 @@ mod tests {
     use super::*;
 
     #[test]
+    fn resampling_keeps_flat_colour_and_averages_with_premultiplied_alpha() {
+        // A flat image stays flat at any size, up or down.
+        let flat: Vec<u8> = [30u8, 120, 200, 255].repeat(37 * 23);
+        for to in [[5, 3], [16, 16], [37, 23], [80, 50]] {
+            let small = resample(&flat, [37, 23], to);
+            assert_eq!(small.dimensions(), (to[0], to[1]));
+            assert!(small.pixels().all(|p| p.0 == [30, 120, 200, 255]), "{to:?}");
+        }
+        // Halving a 2×2 checker of opaque red and transparent green: half coverage, and no
+        // green bleeds into the colour (premultiplied).
+        let checker: Vec<u8> = (0..64 * 64)
+            .flat_map(|i| {
+                let (x, y) = (i % 64, i / 64);
+                if (x + y) % 2 == 0 {
+                    [255, 0, 0, 255]
+                } else {
+                    [0, 255, 0, 0]
+                }
+            })
+            .collect();
+        let half = resample(&checker, [64, 64], [32, 32]);
+        for (x, y, p) in half.enumerate_pixels() {
+            assert_eq!([p.0[0], p.0[1]], [255, 0], "{:?}", p.0);
+            // Inside, exactly half; at the border the filter is cut off and renormalised.
+            let border = x == 0 || y == 0 || x == 31 || y == 31;
+            let tolerance = if border { 16 } else { 1 };
+            assert!(
+                (i32::from(p.0[3]) - 128).abs() <= tolerance,
+                "{x},{y}: {:?}",
+                p.0
+            );
+        }
+    }
+
+    #[test]
+    fn each_downscaled_map_is_made_once_from_one_decode() {
+        let glb = frond_scene::generator::generate(frond_scene::generator::Preset::Small, 1)
+            .unwrap()
+            .glb;
+        let mut tree = frond_scene::import_bytes(
+            std::path::Path::new("small.glb"),
+            &glb,
+            &frond_scene::ImportOptions::default(),
+        )
+        .unwrap();
+        let png = encode_png(64, 64, &[90u8, 140, 200, 255].repeat(64 * 64)).unwrap();
+        tree.images.push(frond_scene::SourceImage {
+            name: Some("extra".into()),
+            mime_type: "image/png".into(),
+            bytes: png,
+        });
+        let j = tree.images.len() - 1;
+        let d = Downscaler::new(&tree);
+        let a = d.rgba(j, [16, 16], None).unwrap();
+        let b = d.rgba(j, [16, 16], None).unwrap();
+        assert!(Arc::ptr_eq(&a, &b), "made once");
+        let c = d.rgba(j, [8, 8], Some(0.5)).unwrap();
+        assert_eq!(c.dimensions(), (8, 8));
+        // Opaque stays above the cutoff (the coverage rule scales alpha to it).
+        assert!(
+            c.pixels()
+                .all(|p| p.0[..3] == [90, 140, 200] && p.0[3] >= 128)
+        );
+        let png = d.png(j, [8, 8], Some(0.5)).unwrap();
+        assert_eq!(image::load_from_memory(&png).unwrap().into_rgba8(), *c);
+    }
+
+    #[test]
     fn alpha_scaling_keeps_the_passing_fraction() {
         // A full image with a quarter of its texels opaque (scattered), a downscaled one whose
         // alpha averaged them to 64: without scaling nothing passes 0.5.

@@ -1,5 +1,6 @@
-//! Shared code of frond's cargo-fuzz targets: the harness that imports and samples one input,
-//! GLB splitting, and the structure-aware mutator (`mutator`) used by `import_structured`.
+//! Shared code of frond's cargo-fuzz targets: the harnesses that import and sample one input
+//! (`import_and_sample`) or run `frond lod` on it (`build_lods`), GLB splitting, and the
+//! structure-aware mutator (`mutator`) used by `import_structured` and `lod_chain`.
 
 pub mod mutator;
 
@@ -140,6 +141,75 @@ pub fn import_and_sample(bytes: &[u8]) {
                 check_error(&e, path);
             }
         }
+    }
+}
+
+/// Vertex limit of the trees `build_lods` runs the chain on: small trees, so that one run
+/// takes milliseconds (the importer's bounds are `import_and_sample`'s to test).
+const LOD_MAX_VERTICES: u64 = 20_000;
+
+/// The methods `build_lods` picks from, by the input's hash.
+const LOD_METHODS: [&str; 6] = ["auto", "cards", "per-bone", "static", "spectral", "skeleton"];
+
+/// What `build_lods` keeps between runs: the renderer (made once: starting a GPU adapter takes
+/// far longer than a run) and the output folder.
+struct LodEnv {
+    renderer: frond_render::Renderer,
+    out: PathBuf,
+}
+
+fn lod_env() -> &'static LodEnv {
+    static LOD: OnceLock<LodEnv> = OnceLock::new();
+    LOD.get_or_init(|| {
+        env();
+        let out = std::env::temp_dir().join(format!("frond-fuzz-lod-{}", std::process::id()));
+        LodEnv {
+            renderer: frond_render::Renderer::new().expect("a renderer (GPU or llvmpipe)"),
+            out,
+        }
+    })
+}
+
+/// Runs `frond lod` on `bytes` as a small tree would be: imported with the default limits (and
+/// at most [`LOD_MAX_VERTICES`] vertices), one of [`LOD_METHODS`] chosen by the input's hash,
+/// two LODs, 8 samples, 30 candidate planes, written as an output set into a temporary folder
+/// (measuring and the preview off: they render, which the chain's tests cover). Panics (a
+/// fuzzer crash) only when frond panics, or when an error does not name the input.
+pub fn build_lods(bytes: &[u8]) {
+    let lod = lod_env();
+    let path = env().path.as_path();
+    let options = ImportOptions {
+        limits: frond_scene::InputLimits {
+            max_vertices: LOD_MAX_VERTICES,
+            ..Default::default()
+        },
+        ..ImportOptions::default()
+    };
+    let tree = match import_bytes(path, bytes, &options) {
+        Ok(tree) => tree,
+        Err(e) => {
+            check_error(&e, path);
+            return;
+        }
+    };
+    let hash = bytes
+        .iter()
+        .fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
+    let method = LOD_METHODS[(hash % LOD_METHODS.len() as u64) as usize];
+    let out = lod.out.to_str().unwrap_or("/tmp/frond-fuzz-lod");
+    let args = [
+        "lod", "fuzz.glb", "-o", out, "--method", method, "--lods", "200,60", "--samples", "8",
+        "--planes", "30", "--no-measure", "--no-preview",
+    ];
+    let request = frond::cli::lod::LodArgs::parse_from(args)
+        .expect("the harness's own arguments parse")
+        .request(&tree);
+    let result = request.and_then(|req| {
+        frond::lod_cmd::run_lod(&lod.renderer, &tree, &req, &lod.out, &|_| {})
+    });
+    if let Err(e) = result {
+        let msg = format!("{e:#}");
+        assert!(!msg.contains("panicked"), "{msg}");
     }
 }
 

@@ -193,4 +193,14 @@ mod tests {
         };
         assert!(!config_json(&c).contains("</"));
     }
+
+    #[test]
+    fn script_json_keeps_every_name_inside_its_element() {
+        let name = "Wind<!--<script></script>&\u{2028}";
+        let json = serde_json::to_string(&serde_json::json!({ "clip": name })).unwrap();
+        let safe = script_json(&json);
+        assert!(!safe.contains(['<', '>', '&', '\u{2028}']), "{safe}");
+        let back: serde_json::Value = serde_json::from_str(&safe).unwrap();
+        assert_eq!(back["clip"], name);
+    }
 }

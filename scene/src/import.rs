@@ -1632,7 +1632,7 @@ fn check_animation_budget(src: &GltfSource, kept: &[Vec<usize>]) -> Result<()> {
                         .samplers
                         .get(anim.channels[ci].sampler.value())
                         .and_then(|s| src.root.accessors.get(s.input.value()))
-                        .map_or(0, |a| u64::from(a.count.0));
+                        .map_or(0, |a| a.count.0);
                     declared.max(MIN_CHANNEL_KEYS)
                 })
                 .fold(0u64, u64::saturating_add);

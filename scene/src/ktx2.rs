@@ -84,7 +84,13 @@ pub fn gpu_bytes(width: u32, height: u32, levels: u32) -> u64 {
 /// Deterministic: UASTC blocks are encoded one by one, whatever the encoder's thread count.
 pub fn encode_uastc(levels: &[Level], srgb: bool, alpha: bool) -> Result<Vec<u8>, Ktx2Error> {
     let blocks = uastc_blocks(levels, srgb)?;
-    Ok(uastc_container(levels[0].0, levels[0].1, &blocks, srgb, alpha))
+    Ok(uastc_container(
+        levels[0].0,
+        levels[0].1,
+        &blocks,
+        srgb,
+        alpha,
+    ))
 }
 
 /// The UASTC blocks of each level of `levels` (see [`encode_uastc`]), 16 bytes a 4×4 block,

@@ -46,7 +46,7 @@ impl Glb {
 
     /// Appends `bytes` as an image (in a buffer view) with a texture; returns the texture.
     pub fn add_image(&mut self, name: &str, mime: &str, bytes: &[u8]) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let offset = self.bin.len();
@@ -76,7 +76,8 @@ impl Glb {
     pub fn add_ktx2(&mut self, name: &str, bytes: &[u8]) -> usize {
         let t = self.add_image(name, "image/ktx2", bytes);
         let image = self.json["textures"][t]["source"].clone();
-        self.json["textures"][t] = json!({ "extensions": { "KHR_texture_basisu": { "source": image } } });
+        self.json["textures"][t] =
+            json!({ "extensions": { "KHR_texture_basisu": { "source": image } } });
         for key in ["extensionsUsed", "extensionsRequired"] {
             let list = self.json[key].as_array().cloned().unwrap_or_default();
             if !list.contains(&json!("KHR_texture_basisu")) {
@@ -187,6 +188,15 @@ pub struct Measured {
 impl Measured {
     pub fn stderr(&self) -> String {
         String::from_utf8_lossy(&self.output.stderr).into_owned()
+    }
+
+    /// Its time and peak memory in words.
+    pub fn summary(&self) -> String {
+        format!(
+            "{:.2} s, peak {} MB",
+            self.wall.as_secs_f64(),
+            self.peak_rss >> 20
+        )
     }
 }
 

@@ -301,5 +301,6 @@ const _: () = {
         hostile::ktx2_header_only,
         hostile::frond_measured,
         hostile::Measured::stderr,
+        hostile::Measured::summary,
     );
 };
