@@ -7,14 +7,14 @@
 #   - samples/sapling.glb, shrunk the same way,
 #   - the shared trees in ${FROND_TEST_TREES:-../shared/data/trees}, shrunk; any still larger
 #     than FROND_FUZZ_MAX_LEN (default 262144 bytes) is skipped, with a message.
-# Usage: fuzz/seed.sh [target...]   (default: import_glb import_structured)
+# Usage: fuzz/seed.sh [target...]   (default: import_glb import_structured lod_chain)
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(dirname "$here")"
 trees="${FROND_TEST_TREES:-$root/../shared/data/trees}"
 max_len="${FROND_FUZZ_MAX_LEN:-262144}"
-if [ "$#" -gt 0 ]; then targets=("$@"); else targets=(import_glb import_structured); fi
+if [ "$#" -gt 0 ]; then targets=("$@"); else targets=(import_glb import_structured lod_chain); fi
 
 cargo build --release --quiet --manifest-path "$here/Cargo.toml" -p frond-fuzz-seedgen
 seedgen="$here/target/release/frond-fuzz-seedgen"

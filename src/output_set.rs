@@ -246,7 +246,8 @@ impl OutputSet {
             if staging == self.staging {
                 continue;
             }
-            let path = self.dir.path(&staging)?;
+            // An entry of the folder's own listing, looked at without following it.
+            let path = self.dir.root().join(&staging);
             let is_dir = std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_dir());
             if !is_dir {
                 bail!(

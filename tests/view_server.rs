@@ -132,7 +132,11 @@ fn a_link_swapped_while_serving_never_serves_outside_the_folder() {
             let mut k = 0u64;
             while !stop.load(std::sync::atomic::Ordering::Relaxed) {
                 let tmp = served.join(format!(".swap{}", k % 2));
-                let target = if k.is_multiple_of(2) { &secret } else { &inside };
+                let target = if k.is_multiple_of(2) {
+                    &secret
+                } else {
+                    &inside
+                };
                 let _ = std::fs::remove_file(&tmp);
                 std::os::unix::fs::symlink(target, &tmp).unwrap();
                 std::fs::rename(&tmp, &link).unwrap();
