@@ -26,13 +26,13 @@ impl Drop for Server {
 }
 
 impl Server {
-    /// Serves `folder`; `max_files`: the process's open-file limit (soft and hard).
-    fn start(folder: &Path, max_files: Option<u64>) -> Server {
+    /// Serves `folder`, under `limit` (a resource and its soft and hard value) if given.
+    fn start(folder: &Path, limit: Option<(libc::__rlimit_resource_t, u64)>) -> Server {
         let mut c = Command::new(env!("CARGO_BIN_EXE_frond"));
         c.args(["view", folder.to_str().unwrap(), "--port", "0", "--no-open"])
             .stdout(Stdio::piped())
             .stderr(Stdio::null());
-        if let Some(n) = max_files {
+        if let Some((resource, n)) = limit {
             // SAFETY: setrlimit is async-signal-safe and touches only the child.
             unsafe {
                 c.pre_exec(move || {
@@ -40,7 +40,7 @@ impl Server {
                         rlim_cur: n,
                         rlim_max: n,
                     };
-                    if libc::setrlimit(libc::RLIMIT_NOFILE, &lim) != 0 {
+                    if libc::setrlimit(resource, &lim) != 0 {
                         return Err(std::io::Error::last_os_error());
                     }
                     Ok(())
@@ -240,13 +240,12 @@ fn only_local_host_names_are_answered_and_no_absolute_path_is_shown() {
     assert!(!listing.contains(served.parent().unwrap().to_str().unwrap()));
 }
 
-#[test]
-fn running_out_of_file_descriptors_does_not_stop_the_server() {
-    let (_dir, served, _) = site();
-    let mut server = Server::start(&served, Some(48));
-    // More connections than the server may hold descriptors for.
+/// Opens `n` connections that each send part of a request and stall; checks the server lives
+/// through them and serves again once they are gone.
+#[track_caller]
+fn survives_stalled_crowd(server: &mut Server, n: usize) {
     let mut held = Vec::new();
-    for _ in 0..120 {
+    for _ in 0..n {
         if let Ok(mut s) = TcpStream::connect_timeout(&server.addr, Duration::from_secs(2)) {
             let _ = s.write_all(b"GET / HTTP/1.1\r\n");
             held.push(s);
@@ -255,7 +254,6 @@ fn running_out_of_file_descriptors_does_not_stop_the_server() {
     std::thread::sleep(Duration::from_millis(500));
     assert!(server.alive(), "the server exited");
     drop(held);
-    // Once they are gone, it serves again.
     let t = Instant::now();
     let mut answer = None;
     while answer.is_none() && t.elapsed() < Duration::from_secs(15) {
@@ -263,4 +261,17 @@ fn running_out_of_file_descriptors_does_not_stop_the_server() {
     }
     assert_eq!(answer.map(|a| a.0), Some(200));
     assert!(server.alive());
+}
+
+#[test]
+fn running_out_of_threads_or_descriptors_does_not_stop_the_server() {
+    let (_dir, served, _) = site();
+    // 512 MiB of address space: a thread per connection ran out at 38 clients, and the
+    // failed spawn panicked the server out of its accept loop.
+    let mut server = Server::start(&served, Some((libc::RLIMIT_AS, 512 << 20)));
+    survives_stalled_crowd(&mut server, 400);
+    drop(server);
+    // More connections than the server may hold descriptors for.
+    let mut server = Server::start(&served, Some((libc::RLIMIT_NOFILE, 48)));
+    survives_stalled_crowd(&mut server, 120);
 }
