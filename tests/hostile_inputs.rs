@@ -381,3 +381,68 @@ fn names_reach_pages_terminals_and_spreadsheets_inert() {
     let row = csv.lines().nth(1).expect("a tree's row");
     assert!(row.starts_with("\"'=HYPERLINK("), "{row}");
 }
+
+#[test]
+fn texture_coordinates_far_outside_the_texture_are_baked() {
+    // What the lod_chain fuzz target found: a coordinate of 3e38 floors to i64::MAX texels in
+    // the bake's bilinear footprint, whose `+ 1` overflowed (a panic where overflow is
+    // checked: this test's build).
+    let dir = tempfile::tempdir().unwrap();
+    let mut glb = Glb::sample();
+    let leaves = glb.json["meshes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|m| m["name"] == "leaves")
+        .unwrap();
+    let uv = glb.json["meshes"][leaves]["primitives"][0]["attributes"]["TEXCOORD_0"]
+        .as_u64()
+        .unwrap() as usize;
+    let view = glb.json["accessors"][uv]["bufferView"].as_u64().unwrap() as usize;
+    let at = glb.json["bufferViews"][view]["byteOffset"]
+        .as_u64()
+        .unwrap_or(0) as usize
+        + glb.json["accessors"][uv]["byteOffset"]
+            .as_u64()
+            .unwrap_or(0) as usize;
+    glb.bin[at..at + 4].copy_from_slice(&3e38f32.to_le_bytes());
+    let huge = glb.write(dir.path(), "hugeuv.glb");
+    let found = root().join("fuzz/regressions/lod_bake_uv_overflow.glb");
+    let copy = dir.path().join("found.glb");
+    std::fs::copy(&found, &copy).unwrap();
+    for (file, method) in [
+        (&huge, "static"),
+        (&huge, "per-bone"),
+        (&copy, "static"),
+        (&copy, "spectral"),
+    ] {
+        let out = dir.path().join(format!("out_{method}"));
+        let _ = std::fs::remove_dir_all(&out);
+        let m = frond_measured(
+            &[
+                "lod",
+                file.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "--method",
+                method,
+                "--lods",
+                "200,60",
+                "--samples",
+                "8",
+                "--planes",
+                "30",
+                "--no-preview",
+            ],
+            LONG,
+        );
+        // The fuzzer's file is broken in other ways too: a clean refusal is fine, a panic not.
+        let clean =
+            m.output.status.success() || (file == &copy && m.output.status.code() == Some(1));
+        assert!(
+            clean && !m.stderr().contains("panicked"),
+            "{method}: {}",
+            m.stderr()
+        );
+    }
+}

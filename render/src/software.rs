@@ -1370,14 +1370,16 @@ fn footprint_of(
     let (x0, y0) = (floor_i64(x), floor_i64(y));
     let (fx, fy) = (x - x0 as f32, y - y0 as f32);
     let (wi, hi) = (i64::from(w), i64::from(h));
-    let (xa, xb, ya, yb) = if x0 >= 0 && x0 + 1 < wi && y0 >= 0 && y0 + 1 < hi {
+    // A texture coordinate far outside the texture (a file's 3e38) floors to i64::MAX: the
+    // tests and the `+ 1` below never overflow on it.
+    let (xa, xb, ya, yb) = if x0 >= 0 && x0 < wi - 1 && y0 >= 0 && y0 < hi - 1 {
         (x0 as usize, x0 as usize + 1, y0 as usize, y0 as usize + 1)
     } else {
         (
             wrap_index(x0, w, wrap[0]),
-            wrap_index(x0 + 1, w, wrap[0]),
+            wrap_index(x0.saturating_add(1), w, wrap[0]),
             wrap_index(y0, h, wrap[1]),
-            wrap_index(y0 + 1, h, wrap[1]),
+            wrap_index(y0.saturating_add(1), h, wrap[1]),
         )
     };
     let row = w as usize * stride;

@@ -49,7 +49,7 @@ fn main() {
                         t.vertices.len(),
                         t.triangles.len(),
                         t.bones.len(),
-                        t.clips.len()
+                        t.rig.clips.len()
                     ),
                     Err(e) => println!("error {f}: {e}"),
                 }
