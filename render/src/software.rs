@@ -1190,12 +1190,13 @@ fn hypot(x: f32, y: f32) -> f32 {
 }
 
 /// `x.floor()` as an integer, without the library call `f32::floor` becomes on baseline
-/// x86-64 (a tenth of the rasteriser's time).
+/// x86-64 (a tenth of the rasteriser's time). Saturates at the ends of `i64` (a file's
+/// texture coordinate of ±3e38), as `as` does.
 #[inline]
 fn floor_i64(x: f32) -> i64 {
     let i = x as i64;
     // Without a branch: which way it goes is a coin toss for texel coordinates.
-    i - i64::from((i as f32) > x)
+    i.saturating_sub(i64::from((i as f32) > x))
 }
 
 /// Texel index `i` of a side of `n` texels under `wrap`.
