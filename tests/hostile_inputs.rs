@@ -457,3 +457,46 @@ fn texture_coordinates_far_outside_the_texture_are_baked() {
         );
     }
 }
+
+#[test]
+fn a_stray_vertex_far_away_does_not_blow_up_the_card_coverage_grid() {
+    // What the lod_chain fuzz target found: one leaf vertex thousands of tree heights away.
+    // The cards method's coverage grid followed the height for its spacing and the bounds for
+    // its size: 33 GB asked for, and an abort.
+    let dir = tempfile::tempdir().unwrap();
+    let mut glb = Glb::sample();
+    let leaves = glb.json["meshes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|m| m["name"] == "leaves")
+        .unwrap();
+    let pos = glb.json["meshes"][leaves]["primitives"][0]["attributes"]["POSITION"]
+        .as_u64()
+        .unwrap() as usize;
+    let view = glb.json["accessors"][pos]["bufferView"].as_u64().unwrap() as usize;
+    let at = glb.json["bufferViews"][view]["byteOffset"]
+        .as_u64()
+        .unwrap_or(0) as usize
+        + glb.json["accessors"][pos]["byteOffset"]
+            .as_u64()
+            .unwrap_or(0) as usize;
+    glb.bin[at + 8..at + 12].copy_from_slice(&20_000f32.to_le_bytes());
+    glb.json["accessors"][pos]["max"][2] = json!(20_000.0);
+    let file = glb.write(dir.path(), "stray.glb");
+    let out = dir.path().join("out");
+    let m = frond_measured(
+        &[
+            "lod",
+            file.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--no-measure",
+            "--no-preview",
+        ],
+        LONG,
+    );
+    eprintln!("stray vertex: {}", m.summary());
+    assert!(m.output.status.success(), "{}", m.stderr());
+    assert!(m.peak_rss < 1 << 30, "{} MB", m.peak_rss >> 20);
+}

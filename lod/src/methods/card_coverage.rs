@@ -38,6 +38,11 @@ const MAX_SAMPLES_ACROSS: f32 = 512.0;
 /// pixel are sampled coarser than the screen, which decides the same cards at a fraction of
 /// the work (the sample tree's leaves span 40 pixels at 600 px).
 const CARD_SAMPLES_ACROSS: f32 = 8.0;
+/// At most this many samples along any side of a view (the bounds' diagonal): a tree is
+/// about as wide as it is tall, so [`MAX_SAMPLES_ACROSS`] decides, but a file whose bounds
+/// are far wider than its height (one stray vertex) would otherwise ask for a grid of
+/// gigabytes.
+const MAX_VIEW_SIDE: f32 = 2048.0;
 
 /// What [`CardCoverage::raster`] tells about a card's covered samples.
 trait Sink {
@@ -269,7 +274,8 @@ impl CardCoverage {
         let typical = sides.get(sides.len() / 2).copied().unwrap_or(0.0);
         let spacing = (pixel / SUPERSAMPLE)
             .max(height / MAX_SAMPLES_ACROSS)
-            .max(typical / CARD_SAMPLES_ACROSS);
+            .max(typical / CARD_SAMPLES_ACROSS)
+            .max(bounds.diagonal() / MAX_VIEW_SIDE);
         let views = views(bounds, spacing);
         let mut alpha_maps: Vec<Option<AlphaMap>> =
             (0..tree.textures.len()).map(|_| None).collect();
