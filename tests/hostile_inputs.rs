@@ -47,6 +47,14 @@ fn lod_args<'a>(file: &'a Path, out: &'a Path) -> Vec<&'a str> {
     vec!["lod", file.to_str().unwrap(), "-o", out.to_str().unwrap()]
 }
 
+/// `frond lod FILE -o OUT --no-measure --no-preview` plus `extra`, measured.
+fn lod_unmeasured(file: &Path, out: &Path, extra: &[&str]) -> Measured {
+    let mut args = lod_args(file, out);
+    args.extend(["--no-measure", "--no-preview"]);
+    args.extend(extra);
+    frond_measured(&args, LONG)
+}
+
 /// Decoded bytes (4 a texel) of every image a material map of `file` uses, each once.
 fn decoded_texture_bytes(file: &Path) -> u64 {
     let src = frond_scene::gltf_source::GltfSource::open(file, &Default::default()).unwrap();
@@ -268,17 +276,7 @@ fn duplicate_animation_targets_keep_the_first_channel() {
     );
     let file = glb.write(dir.path(), "dup.glb");
     let out = dir.path().join("out");
-    let m = frond_measured(
-        &[
-            "lod",
-            file.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "--no-measure",
-            "--no-preview",
-        ],
-        LONG,
-    );
+    let m = lod_unmeasured(&file, &out, &[]);
     assert!(m.output.status.success(), "{}", m.stderr());
     assert!(
         m.stderr()
@@ -343,13 +341,7 @@ fn names_reach_pages_terminals_and_spreadsheets_inert() {
         .as_u64()
         .unwrap() as usize;
     glb.json["accessors"][input]["min"] = json!([-1.0]);
-    let view = glb.json["accessors"][input]["bufferView"].as_u64().unwrap() as usize;
-    let at = glb.json["bufferViews"][view]["byteOffset"]
-        .as_u64()
-        .unwrap_or(0) as usize
-        + glb.json["accessors"][input]["byteOffset"]
-            .as_u64()
-            .unwrap_or(0) as usize;
+    let at = glb.accessor_offset(input);
     glb.bin[at..at + 4].copy_from_slice(&(-1.0f32).to_le_bytes());
     let broken = glb.write(dir.path(), "broken.glb");
     let failed = frond_measured(&["inspect", broken.to_str().unwrap()], LONG);
@@ -389,22 +381,8 @@ fn texture_coordinates_far_outside_the_texture_are_baked() {
     // checked: this test's build).
     let dir = tempfile::tempdir().unwrap();
     let mut glb = Glb::sample();
-    let leaves = glb.json["meshes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .position(|m| m["name"] == "leaves")
-        .unwrap();
-    let uv = glb.json["meshes"][leaves]["primitives"][0]["attributes"]["TEXCOORD_0"]
-        .as_u64()
-        .unwrap() as usize;
-    let view = glb.json["accessors"][uv]["bufferView"].as_u64().unwrap() as usize;
-    let at = glb.json["bufferViews"][view]["byteOffset"]
-        .as_u64()
-        .unwrap_or(0) as usize
-        + glb.json["accessors"][uv]["byteOffset"]
-            .as_u64()
-            .unwrap_or(0) as usize;
+    let uv = glb.attribute("leaves", "TEXCOORD_0");
+    let at = glb.accessor_offset(uv);
     glb.bin[at..at + 4].copy_from_slice(&3e38f32.to_le_bytes());
     glb.bin[at + 12..at + 16].copy_from_slice(&(-3e38f32).to_le_bytes());
     let huge = glb.write(dir.path(), "hugeuv.glb");
@@ -429,12 +407,10 @@ fn texture_coordinates_far_outside_the_texture_are_baked() {
             file.file_stem().unwrap().to_string_lossy()
         ));
         let _ = std::fs::remove_dir_all(&out);
-        let m = frond_measured(
+        let m = lod_unmeasured(
+            file,
+            &out,
             &[
-                "lod",
-                file.to_str().unwrap(),
-                "-o",
-                out.to_str().unwrap(),
                 "--method",
                 method,
                 "--lods",
@@ -443,9 +419,7 @@ fn texture_coordinates_far_outside_the_texture_are_baked() {
                 "8",
                 "--planes",
                 "30",
-                "--no-preview",
             ],
-            LONG,
         );
         // The fuzzer's file is broken in other ways too: a clean refusal is fine, a panic not.
         let clean =
@@ -456,6 +430,9 @@ fn texture_coordinates_far_outside_the_texture_are_baked() {
             m.stderr()
         );
     }
+    // The measuring renders and the preview draw those coordinates too.
+    let m = frond_measured(&lod_args(&huge, &dir.path().join("measured")), LONG);
+    assert!(m.output.status.success(), "{}", m.stderr());
 }
 
 #[test]
@@ -465,37 +442,13 @@ fn a_stray_vertex_far_away_does_not_blow_up_the_card_coverage_grid() {
     // its size: 33 GB asked for, and an abort.
     let dir = tempfile::tempdir().unwrap();
     let mut glb = Glb::sample();
-    let leaves = glb.json["meshes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .position(|m| m["name"] == "leaves")
-        .unwrap();
-    let pos = glb.json["meshes"][leaves]["primitives"][0]["attributes"]["POSITION"]
-        .as_u64()
-        .unwrap() as usize;
-    let view = glb.json["accessors"][pos]["bufferView"].as_u64().unwrap() as usize;
-    let at = glb.json["bufferViews"][view]["byteOffset"]
-        .as_u64()
-        .unwrap_or(0) as usize
-        + glb.json["accessors"][pos]["byteOffset"]
-            .as_u64()
-            .unwrap_or(0) as usize;
+    let pos = glb.attribute("leaves", "POSITION");
+    let at = glb.accessor_offset(pos);
     glb.bin[at + 8..at + 12].copy_from_slice(&20_000f32.to_le_bytes());
     glb.json["accessors"][pos]["max"][2] = json!(20_000.0);
     let file = glb.write(dir.path(), "stray.glb");
     let out = dir.path().join("out");
-    let m = frond_measured(
-        &[
-            "lod",
-            file.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "--no-measure",
-            "--no-preview",
-        ],
-        LONG,
-    );
+    let m = lod_unmeasured(&file, &out, &[]);
     eprintln!("stray vertex: {}", m.summary());
     assert!(m.output.status.success(), "{}", m.stderr());
     assert!(m.peak_rss < 1 << 30, "{} MB", m.peak_rss >> 20);

@@ -89,6 +89,29 @@ impl Glb {
         t
     }
 
+    /// The accessor of attribute `attribute` of the first primitive of the mesh named `mesh`.
+    pub fn attribute(&self, mesh: &str, attribute: &str) -> usize {
+        let m = self.json["meshes"]
+            .as_array()
+            .expect("meshes")
+            .iter()
+            .find(|m| m["name"] == mesh)
+            .expect("the mesh");
+        m["primitives"][0]["attributes"][attribute]
+            .as_u64()
+            .expect("the attribute") as usize
+    }
+
+    /// Where accessor `a`'s first element starts in the BIN chunk.
+    pub fn accessor_offset(&self, a: usize) -> usize {
+        let accessor = &self.json["accessors"][a];
+        let view = accessor["bufferView"].as_u64().expect("a view") as usize;
+        self.json["bufferViews"][view]["byteOffset"]
+            .as_u64()
+            .unwrap_or(0) as usize
+            + accessor["byteOffset"].as_u64().unwrap_or(0) as usize
+    }
+
     /// Sets material `m`'s map at `pointer` (`/normalTexture`,
     /// `/pbrMetallicRoughness/metallicRoughnessTexture`, ...) to texture `t`.
     pub fn set_map(&mut self, m: usize, pointer: &str, t: usize) {

@@ -295,6 +295,8 @@ const _: () = {
         hostile::Glb::add_image,
         hostile::Glb::add_ktx2,
         hostile::Glb::set_map,
+        hostile::Glb::attribute,
+        hostile::Glb::accessor_offset,
         hostile::png_header_only,
         hostile::png_solid,
         hostile::ktx2_solid,
