@@ -181,10 +181,23 @@ fn accepted_maps_cost_memory_in_proportion() {
     // A 9000² KTX2 map of a few kilobytes (3.6 GB once).
     let mut glb = Glb::sample();
     let t = glb.add_ktx2("k9000", &ktx2_solid(9000, 9000));
-    glb.set_map(1, "/occlusionTexture", t);
+    glb.set_map(1, "/normalTexture", t);
     let file = glb.write(dir.path(), "ktx9000.glb");
     assert!(std::fs::metadata(&file).unwrap().len() < 2 << 20);
-    lod_in_proportion(&file, &dir.path().join("out_ktx2"));
+    let out = dir.path().join("out_ktx2");
+    lod_in_proportion(&file, &out);
+    // A KTX2 map counts towards every LOD's texture memory and shrinks at the far end like
+    // any other (its size was once unread: kept whole, counted as nothing).
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("ktx9000_report.json")).unwrap()).unwrap();
+    let bytes: Vec<u64> = report["lods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["texture_bytes"].as_u64().unwrap())
+        .collect();
+    assert!(bytes[0] >= 9000 * 9000 * 4, "{bytes:?}");
+    assert!(bytes.last() < bytes.first(), "{bytes:?}");
 }
 
 #[test]

@@ -64,12 +64,17 @@ pub fn material_images(tree: &Tree, m: usize) -> Vec<usize> {
     out
 }
 
-/// Width and height of image `j` as the input stored it (from its header).
+/// Width and height of image `j` as the input stored it (from its header: PNG, JPEG or KTX2).
 pub fn image_dimensions(tree: &Tree, j: usize) -> Option<[u32; 2]> {
     if let Some(t) = tree.textures.iter().find(|t| t.image == Some(j)) {
         return Some([t.width, t.height]);
     }
     let img = tree.images.get(j)?;
+    if img.mime_type == frond_scene::import::KTX2_MIME {
+        return frond_scene::ktx2::read_info(&img.bytes)
+            .ok()
+            .map(|k| [k.width, k.height]);
+    }
     image::ImageReader::new(std::io::Cursor::new(&img.bytes))
         .with_guessed_format()
         .ok()?
