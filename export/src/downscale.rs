@@ -19,7 +19,6 @@ use std::sync::{Arc, Mutex, PoisonError};
 use frond_scene::Tree;
 use frond_scene::gltf_writer::encode_png;
 use image::RgbaImage;
-use rayon::prelude::*;
 
 use crate::error::ExportError;
 
@@ -196,38 +195,33 @@ fn taps(from: u32, to: u32) -> Vec<Taps> {
         .collect()
 }
 
-/// Output rows resampled together (each band re-reads the few source rows it shares with its
-/// neighbours; the result does not depend on the banding).
-const BAND_ROWS: usize = 32;
-
 /// `rgba` resampled from `from` to `to` texels with a triangle filter over premultiplied alpha
-/// (so transparent texels' colour does not bleed into the edges), streaming: each band of output
-/// rows resamples the source rows it needs horizontally into a window of float rows, then
-/// blends them vertically. Memory: the window and the output, never a full-size float copy.
+/// (so transparent texels' colour does not bleed into the edges), streaming: output rows in
+/// order, each blending the source rows it needs, which are resampled horizontally once each
+/// and kept in a window while later rows need them. Memory: the window and the output, never
+/// a full-size float copy.
+///
+/// One thread: [`Downscaler`] runs this under its lock, and a rayon call here could run
+/// another writer's job on this thread while it holds the lock (which that job would then
+/// wait for for ever).
 pub fn resample(rgba: &[u8], from: [u32; 2], to: [u32; 2]) -> RgbaImage {
     let (xs, ys) = (taps(from[0], to[0]), taps(from[1], to[1]));
     let (sw, ow) = (from[0] as usize, to[0] as usize);
     let mut out = vec![0u8; ow * to[1] as usize * 4];
-    out.par_chunks_mut(ow * 4 * BAND_ROWS)
-        .enumerate()
-        .for_each(|(band, rows)| {
-            let first_row = band * BAND_ROWS;
-            let mut window = RowWindow::default();
-            for (k, row_out) in rows.chunks_exact_mut(ow * 4).enumerate() {
-                let t = &ys[first_row + k];
-                window.drop_before(t.first);
-                let mut acc = vec![0f32; ow * 4];
-                for (i, &w) in t.weights.iter().enumerate() {
-                    let y = t.first + i;
-                    let row =
-                        window.row(y, || horizontal(&rgba[y * sw * 4..(y + 1) * sw * 4], &xs));
-                    for (a, &v) in acc.iter_mut().zip(row) {
-                        *a += w * v;
-                    }
-                }
-                unpremultiply(&acc, row_out);
+    let mut window = RowWindow::default();
+    let mut acc = vec![0f32; ow * 4];
+    for (t, row_out) in ys.iter().zip(out.chunks_exact_mut(ow * 4)) {
+        window.drop_before(t.first);
+        acc.fill(0.0);
+        for (i, &w) in t.weights.iter().enumerate() {
+            let y = t.first + i;
+            let row = window.row(y, || horizontal(&rgba[y * sw * 4..(y + 1) * sw * 4], &xs));
+            for (a, &v) in acc.iter_mut().zip(row) {
+                *a += w * v;
             }
-        });
+        }
+        unpremultiply(&acc, row_out);
+    }
     RgbaImage::from_raw(to[0], to[1], out).unwrap_or_else(|| RgbaImage::new(to[0], to[1]))
 }
 
