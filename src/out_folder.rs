@@ -181,8 +181,20 @@ impl OutFolder {
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
         let tmp_name = name.with_file_name(format!(".{file}.tmp-{}", std::process::id()));
-        let mut f = self.create_file(&tmp_name)?;
         let tmp = self.path(&tmp_name)?;
+        if let Some(parent) = name.parent()
+            && !parent.as_os_str().is_empty()
+        {
+            self.create_dir_all(parent)?;
+        }
+        // A new file, never one found there (a link planted after the check is not followed):
+        // a leftover of this pid's is removed first.
+        let _ = std::fs::remove_file(&tmp);
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+            .map_err(|e| cannot(e, "create", &tmp))?;
         let result = f
             .write_all(bytes)
             .and_then(|()| f.sync_all())

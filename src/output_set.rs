@@ -436,14 +436,20 @@ fn read_journal(path: &Path) -> Result<Journal> {
 }
 
 /// Every name the journal installs or removes is a plain name inside `dir` (and, installed,
-/// inside the staging folder `staging`), with no link out on the way.
+/// inside the staging folder `staging`, a regular file while it is there), with no link out on
+/// the way.
 fn check_journal(dir: &OutFolder, staging: &str, journal: &Journal) -> Result<()> {
     for rel in journal.install.iter().chain(&journal.remove) {
         checked_relative(rel)?;
         dir.path(rel)?;
     }
     for rel in &journal.install {
-        dir.path(format!("{staging}/{rel}"))?;
+        let staged = dir.path(format!("{staging}/{rel}"))?;
+        // What is still staged is a file frond wrote, never a link (installed, a relative link
+        // could point out of the folder).
+        if std::fs::symlink_metadata(&staged).is_ok_and(|m| !m.is_file()) {
+            bail!("{}: is not a file frond staged", staged.display());
+        }
     }
     Ok(())
 }

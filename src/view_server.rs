@@ -10,7 +10,8 @@
 //!
 //! - **bounded connections**: at most [`MAX_CONNECTIONS`] are served at once (each a task, not a
 //!   thread, so slow clients cost a few kilobytes each); a connection that sends no complete
-//!   header within [`HEADER_TIMEOUT`], or reads or writes nothing for [`IO_TIMEOUT`], is closed.
+//!   header within [`HEADER_TIMEOUT`], or whose response cannot write a byte for
+//!   [`IO_TIMEOUT`], is closed.
 //!   Accept errors (out of file descriptors) pause the loop briefly; the server never exits on
 //!   a client's account;
 //! - **files streamed** in 64 KiB chunks, never read whole;
@@ -39,10 +40,10 @@ use crate::out_folder::checked_path;
 
 /// Connections served at once; more wait in the listen queue until one closes.
 pub const MAX_CONNECTIONS: usize = 1024;
-/// The whole request header must arrive within this.
+/// The whole request header must arrive within this, counted from the connection's start.
 pub const HEADER_TIMEOUT: Duration = Duration::from_secs(10);
-/// A connection that neither reads nor writes a byte for this long is closed (a stalled
-/// reader of a large file included).
+/// A response that cannot write a byte for this long is dropped (a stalled reader of a large
+/// file).
 pub const IO_TIMEOUT: Duration = Duration::from_secs(30);
 /// Largest request head read (request line and headers).
 const MAX_HEAD_BYTES: usize = 16 * 1024;
@@ -149,8 +150,10 @@ async fn accept_loop(listener: tokio::net::TcpListener, site: Arc<Site>) {
 
 /// Serves one connection (one request: no keep-alive) under the timeouts.
 async fn serve_connection(stream: tokio::net::TcpStream, site: Arc<Site>) {
+    // A write timeout only: while it sends a body, hyper keeps a read pending to notice the
+    // client leave, and a read timeout would cut off any download longer than the timeout.
+    // The request head has hyper's own deadline, which starts as the connection opens.
     let mut io = tokio_io_timeout::TimeoutStream::new(stream);
-    io.set_read_timeout(Some(IO_TIMEOUT));
     io.set_write_timeout(Some(IO_TIMEOUT));
     let io = hyper_util::rt::TokioIo::new(Box::pin(io));
     let service = hyper::service::service_fn(move |req| {
@@ -214,8 +217,15 @@ fn host_allowed(host: Option<&header::HeaderValue>, port: u16) -> bool {
 /// whose canonical path lies in `root` and is the same file. Returns it with its length.
 fn open_inside(root: &Path, rel: &Path) -> Option<(std::fs::File, u64)> {
     use std::os::unix::fs::MetadataExt;
+    use std::os::unix::fs::OpenOptionsExt;
     let path = checked_path(root, rel).ok()?;
-    let file = std::fs::File::open(&path).ok()?;
+    // Non-blocking: opening a named pipe would otherwise wait for a writer, and with it the
+    // whole server; it is then refused as not a regular file.
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK | libc::O_NOCTTY)
+        .open(&path)
+        .ok()?;
     let opened = file.metadata().ok()?;
     if !opened.is_file() {
         return None;

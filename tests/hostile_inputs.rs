@@ -127,6 +127,38 @@ fn every_material_map_counts_towards_the_texture_memory_limit() {
         &out,
         &["image 2 ('ktx2bomb')", "20000×20000"],
     );
+    // Headers declaring 2³¹ texels a side (their bytes once overflowed the count).
+    // (The PNG decoder refuses such a header itself, named alike.)
+    for (name, bytes, mime, says) in [
+        (
+            "ktx2max",
+            ktx2_header_only(1 << 31, 1 << 31),
+            "image/ktx2",
+            "over the texture memory limit",
+        ),
+        (
+            "pngmax",
+            png_header_only(0x7fff_ffff, 0x7fff_ffff),
+            "image/png",
+            "cannot read its size",
+        ),
+    ] {
+        let mut glb = Glb::sample();
+        let t = if mime == "image/ktx2" {
+            glb.add_ktx2(name, &bytes)
+        } else {
+            glb.add_image(name, mime, &bytes)
+        };
+        glb.set_map(0, "/pbrMetallicRoughness/baseColorTexture", t);
+        let file = glb.write(dir.path(), &format!("{name}.glb"));
+        let out = dir.path().join(format!("out_{name}"));
+        refused_cheaply(
+            &frond_measured(&lod_args(&file, &out), LONG),
+            &file,
+            &out,
+            &[&format!("image 2 ('{name}')"), says],
+        );
+    }
     let mut glb = Glb::sample();
     let t = glb.add_image("huge", "image/png", &png_header_only(60_000, 60_000));
     glb.set_map(0, "/occlusionTexture", t);
@@ -465,4 +497,45 @@ fn a_stray_vertex_far_away_does_not_blow_up_the_card_coverage_grid() {
     eprintln!("stray vertex: {}", m.summary());
     assert!(m.output.status.success(), "{}", m.stderr());
     assert!(m.peak_rss < 1 << 30, "{} MB", m.peak_rss >> 20);
+}
+
+#[test]
+fn a_ktx2_map_frond_cannot_decode_is_passed_through_and_counted() {
+    // An ETC1S (BasisLZ) map: frond decodes UASTC only, so it is written as it was, but its
+    // size still counts towards the texture memory limit.
+    let mut ktx2 = ktx2_header_only(64, 64);
+    let dfd = u32::from_le_bytes(ktx2[48..52].try_into().unwrap()) as usize;
+    ktx2[dfd + 12] = 163; // KHR_DF_MODEL_ETC1S
+    let dir = tempfile::tempdir().unwrap();
+    let mut glb = Glb::sample();
+    let t = glb.add_ktx2("etc1s", &ktx2);
+    glb.set_map(1, "/occlusionTexture", t);
+    let file = glb.write(dir.path(), "etc1s.glb");
+    let out = dir.path().join("out");
+    let m = lod_unmeasured(&file, &out, &[]);
+    assert!(m.output.status.success(), "{}", m.stderr());
+    let written = gltf_json(&out.join("etc1s_LOD0.glb"));
+    let images: Vec<&str> = written["images"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|i| i["mimeType"].as_str())
+        .collect();
+    assert!(images.contains(&"image/ktx2"), "{images:?}");
+    // 64² counts: a limit just under the sample's own maps plus it refuses the file.
+    let m = frond_measured(
+        &[
+            "inspect",
+            file.to_str().unwrap(),
+            "--max-texture-memory",
+            "16K",
+        ],
+        LONG,
+    );
+    assert_eq!(m.output.status.code(), Some(1), "{}", m.stderr());
+    assert!(
+        m.stderr().contains("'etc1s'") || m.stderr().contains("images decode"),
+        "{}",
+        m.stderr()
+    );
 }

@@ -427,3 +427,28 @@ fn bad_sweep_arguments_fail_cleanly() {
         assert!(!out.join("results.csv").exists());
     }
 }
+
+#[test]
+fn a_runs_folder_linked_elsewhere_is_refused_not_written_through() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let elsewhere = dir.path().join("elsewhere");
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    let out = dir.path().join("sweep");
+    std::fs::create_dir_all(&out).unwrap();
+    std::os::unix::fs::symlink(&elsewhere, out.join("runs")).unwrap();
+    let sapling = root().join("samples/sapling.glb");
+    let mut args = vec![
+        "sweep",
+        sapling.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--method",
+        "cards",
+    ];
+    args.extend_from_slice(&FAST);
+    let r = frond(&args);
+    assert!(!r.status.success());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("leads outside"), "{err}");
+    assert_eq!(std::fs::read_dir(&elsewhere).unwrap().count(), 0);
+}

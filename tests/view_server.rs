@@ -235,6 +235,15 @@ fn only_local_host_names_are_answered_and_no_absolute_path_is_shown() {
     let listing = String::from_utf8(listing).unwrap();
     assert_eq!(status, 200);
     assert!(listing.contains("tree_preview.html"), "{listing}");
+    // A named pipe in the folder: refused as not a file, without waiting for a writer.
+    let fifo = served.join("pipe.glb");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: mkfifo with a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let t = Instant::now();
+    assert_eq!(server.get("/pipe.glb").map(|a| a.0), Some(404));
+    assert!(t.elapsed() < Duration::from_secs(2));
+    assert_eq!(server.get("/tree_preview.html").map(|a| a.0), Some(200));
     let abs = served.canonicalize().unwrap();
     assert!(!listing.contains(abs.to_str().unwrap()), "{listing}");
     assert!(!listing.contains(served.parent().unwrap().to_str().unwrap()));

@@ -489,7 +489,9 @@ fn image_cost(src: &GltfSource, index: usize, used: bool) -> Result<ImageCost> {
         width,
         height,
         encoded_bytes: bytes.len() as u64,
-        decoded_bytes: u64::from(width) * u64::from(height) * 4,
+        decoded_bytes: u64::from(width)
+            .saturating_mul(u64::from(height))
+            .saturating_mul(4),
         levels,
         gpu_bytes,
         used,
@@ -502,9 +504,14 @@ fn rgba8_mip_bytes(width: u32, height: u32) -> u64 {
         return 0;
     }
     let levels = 32 - width.max(height).leading_zeros();
+    // Saturating: a header may declare 2³² - 1 texels a side.
     (0..levels)
-        .map(|l| u64::from((width >> l).max(1)) * u64::from((height >> l).max(1)) * 4)
-        .sum()
+        .map(|l| {
+            u64::from((width >> l).max(1))
+                .saturating_mul(u64::from((height >> l).max(1)))
+                .saturating_mul(4)
+        })
+        .fold(0u64, u64::saturating_add)
 }
 
 /// Bytes of the distinct external files (buffers and images) the document references.

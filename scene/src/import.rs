@@ -935,7 +935,8 @@ fn check_texture_budget(
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    let bytes = |&(w, h): &(u32, u32)| u64::from(w) * u64::from(h) * 4;
+    // Saturating: a header may declare 2³¹ × 2³¹ texels.
+    let bytes = |&(w, h): &(u32, u32)| u64::from(w).saturating_mul(u64::from(h)).saturating_mul(4);
     let total = sizes.iter().map(bytes).fold(0u64, u64::saturating_add);
     let budget = src.limits.max_texture_bytes;
     if total > budget {
@@ -958,11 +959,11 @@ fn check_texture_budget(
     Ok(sizes)
 }
 
-/// An image's width and height as its header declares them (PNG, JPEG or KTX2).
+/// An image's width and height as its header declares them (PNG, JPEG, or KTX2 of any
+/// format: one frond cannot decode, such as ETC1S, is passed through but still counts).
 fn declared_size(image: &SourceImage) -> std::result::Result<(u32, u32), String> {
     if image.mime_type == KTX2_MIME {
-        let info = crate::ktx2::read_info(&image.bytes).map_err(|e| e.to_string())?;
-        return Ok((info.width, info.height));
+        return crate::ktx2::declared_size(&image.bytes).map_err(|e| e.to_string());
     }
     image::ImageReader::new(std::io::Cursor::new(&image.bytes))
         .with_guessed_format()
@@ -1028,7 +1029,11 @@ fn read_textures(
                 .copied()
                 .ok_or_else(|| src.invalid(format!("image {img} was not read")))?;
             let (w, h) = sizes[slot];
-            Ok((img, slot, u64::from(w) * u64::from(h) * 4))
+            Ok((
+                img,
+                slot,
+                u64::from(w).saturating_mul(u64::from(h)).saturating_mul(4),
+            ))
         })
         .collect::<Result<Vec<_>>>()?;
     let textures = encoded

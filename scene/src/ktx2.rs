@@ -242,11 +242,31 @@ pub fn uastc_container(
     out
 }
 
+/// Largest side of a KTX2 image frond decodes: what GPUs sample (16384 on desktop APIs). A
+/// larger one is refused before its blocks are decompressed (a header may declare 2³¹
+/// texels a side in a few bytes).
+pub const MAX_SIDE: u32 = 16_384;
+
+/// Width and height a KTX2 file's header declares, whatever its format (a height of 0, a 1D
+/// texture, reads as 1).
+pub fn declared_size(bytes: &[u8]) -> Result<(u32, u32), Ktx2Error> {
+    let reader = ktx2::Reader::new(bytes).map_err(|e| Ktx2Error::Format(format!("{e}")))?;
+    let header = reader.header();
+    Ok((header.pixel_width, header.pixel_height.max(1)))
+}
+
 /// Reads a KTX2 file's header and data format descriptor, refusing what [`decode_levels`]
-/// cannot read (anything but 2D UASTC, supercompressed with Zstandard or not at all).
+/// cannot read (anything but 2D UASTC, supercompressed with Zstandard or not at all, at most
+/// [`MAX_SIDE`] a side).
 pub fn read_info(bytes: &[u8]) -> Result<Ktx2Info, Ktx2Error> {
     let reader = ktx2::Reader::new(bytes).map_err(|e| Ktx2Error::Format(format!("{e}")))?;
     let header = reader.header();
+    if header.pixel_width > MAX_SIDE || header.pixel_height > MAX_SIDE {
+        return Err(Ktx2Error::Format(format!(
+            "{}×{} texels, over the {MAX_SIDE} a side frond decodes",
+            header.pixel_width, header.pixel_height
+        )));
+    }
     let dfd = reader
         .basic_dfd()
         .ok_or_else(|| Ktx2Error::Format("no basic data format descriptor".into()))?;

@@ -117,7 +117,11 @@ pub fn run_sweep(
     }
     let mut ctx = EvalContext::new(renderer, tree, eval)?;
     let points = req.grid.points();
-    let runs_dir = out_dir.join("runs");
+    // Every run's folder is a checked name inside OUT/runs, itself checked inside OUT (a
+    // `runs` link to elsewhere is refused, not written through).
+    let out = OutFolder::new(out_dir);
+    out.create()?;
+    let runs = OutFolder::new(out.create_dir_all("runs")?);
     let total = req.methods.len() * points.len() * req.seeds.len()
         + req.candidates.len() * distinct_heights(&points).len();
     let mut done = 0;
@@ -127,7 +131,7 @@ pub fn run_sweep(
             for &seed in &req.seeds {
                 let id = format!("{method}_{}_s{seed}", p.label());
                 progress(done, total, &id);
-                let dir = runs_dir.join(&id);
+                let dir = runs.path(&id)?;
                 rows.push(lod_run(
                     &mut ctx, &tree_name, req, method, p, seed, &dir, &id,
                 )?);
@@ -152,7 +156,7 @@ pub fn run_sweep(
                 cand,
                 &file,
                 h,
-                &runs_dir.join(&id),
+                &runs.path(&id)?,
                 &id,
             )?);
             done += 1;
@@ -206,7 +210,6 @@ pub fn run_sweep(
         timings_s: serde_json::json!({ "total": t0.elapsed().as_secs_f64() }),
     };
     // The summary last: a summary on disk means the files it lists are there.
-    let out = OutFolder::new(out_dir);
     for (name, bytes) in &files {
         out.write_atomic(name, bytes)?;
     }
