@@ -160,15 +160,27 @@ impl OutFolder {
         Ok(path)
     }
 
-    /// Creates (or truncates) file `name` for writing, its folder made as needed.
+    /// Creates (or truncates) file `name` for writing, its folder made as needed. A link
+    /// planted there after the check is not followed (`O_NOFOLLOW`: the open fails).
     pub fn create_file(&self, name: impl AsRef<Path>) -> FolderResult<std::fs::File> {
+        use std::os::unix::fs::OpenOptionsExt;
         let path = self.path(&name)?;
-        if let Some(parent) = name.as_ref().parent()
-            && !parent.as_os_str().is_empty()
-        {
-            self.create_dir_all(parent)?;
+        self.make_parent(name.as_ref())?;
+        std::fs::OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .custom_flags(libc::O_NOFOLLOW)
+            .open(&path)
+            .map_err(|e| cannot(e, "create", &path))
+    }
+
+    /// Creates the folder `name` lies in, when it is a subfolder.
+    fn make_parent(&self, name: &Path) -> FolderResult<()> {
+        match name.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => self.create_dir_all(parent).map(drop),
+            _ => Ok(()),
         }
-        std::fs::File::create(&path).map_err(|e| cannot(e, "create", &path))
     }
 
     /// Writes `bytes` to `name` atomically (a temporary file beside it, synced, then renamed
@@ -182,11 +194,7 @@ impl OutFolder {
             .unwrap_or_default();
         let tmp_name = name.with_file_name(format!(".{file}.tmp-{}", std::process::id()));
         let tmp = self.path(&tmp_name)?;
-        if let Some(parent) = name.parent()
-            && !parent.as_os_str().is_empty()
-        {
-            self.create_dir_all(parent)?;
-        }
+        self.make_parent(name)?;
         // A new file, never one found there (a link planted after the check is not followed):
         // a leftover of this pid's is removed first.
         let _ = std::fs::remove_file(&tmp);
@@ -279,6 +287,11 @@ mod tests {
             assert!(matches!(err, PathRefusal::LinkOut { .. }), "{bad}: {err}");
         }
         assert!(checked_path(d, "alias/x").is_ok());
+        // A file is never created through a link, even one that stays inside.
+        std::fs::write(d.join("inner/target"), b"kept").unwrap();
+        std::os::unix::fs::symlink(d.join("inner/target"), d.join("inner/link")).unwrap();
+        assert!(OutFolder::new(d).create_file("inner/link").is_err());
+        assert_eq!(std::fs::read(d.join("inner/target")).unwrap(), b"kept");
         // Nothing was written through the refused link.
         let f = OutFolder::new(d);
         assert!(f.write_atomic("out/x", b"1").is_err());
