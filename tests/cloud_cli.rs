@@ -153,7 +153,7 @@ fn bad_epsilon_is_a_clear_error_and_writes_nothing() {
 fn increased_density_keeps_the_planes_and_fills_the_cloud() {
     // Baking every triangle valid for a plane (spec §2.4, §3.6.2) leaves the plane choice alone
     // and counters the sparse look: the cloud covers more of what the original covers.
-    use frond::cloud_cmd::{CloudRequest, make_cloud};
+    use frond_app::cloud_cmd::{CloudRequest, make_cloud};
     use frond_billboard::cloud::CloudParams;
     let tree = frond_scene::import(&root().join("samples/sapling.glb"), &Default::default())
         .expect("imports");

@@ -2,7 +2,7 @@
 //! notes): `cargo test --release --test cloud_quality -- --ignored --nocapture`. They use the
 //! shared trees (`FROND_TEST_TREES`) and skip with one line where those are absent.
 
-use frond::cloud_cmd::{CloudRequest, make_cloud};
+use frond_app::cloud_cmd::{CloudRequest, make_cloud};
 use frond_billboard::cloud::CloudParams;
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, import};

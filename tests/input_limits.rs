@@ -175,7 +175,7 @@ fn batch_never_opens_what_the_import_refuses_nor_hangs_on_it() {
     }
     // The hash of the tree whose URI leaves the folder does not depend on what is out there.
     let hash = |path: &Path| {
-        frond::batch::inputs::input_hash(path, &frond_scene::InputLimits::default()).unwrap()
+        frond_app::batch::inputs::input_hash(path, &frond_scene::InputLimits::default()).unwrap()
     };
     let before = hash(&outside);
     std::fs::write(dir.path().join("outside.bin"), b"other secret").unwrap();

@@ -6,7 +6,7 @@ mod common;
 use std::path::Path;
 
 use common::*;
-use frond::render_cmd::{RenderRequest, render_tree};
+use frond_app::render_cmd::{RenderRequest, render_tree};
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, import};
 

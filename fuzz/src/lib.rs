@@ -206,11 +206,12 @@ pub fn build_lods(bytes: &[u8]) {
     ];
     let request = frond::cli::lod::LodArgs::parse_from(args)
         .expect("the harness's own arguments parse")
+        .settings()
         .request(&tree);
     // A refusal (a budget, a tree no method can build) is an answer; only a panic or an
     // out-of-memory is a finding.
     let _ = request.and_then(|req| {
-        frond::lod_cmd::run_lod(&lod.renderer, &tree, &req, &lod.out, &|_| {})
+        frond_app::lod_cmd::run_lod(&lod.renderer, &tree, &req, &lod.out, &|_| {})
     });
 }
 

@@ -5,7 +5,7 @@
 use serde::Serialize;
 
 /// Mean, min, max and average absolute deviation of a sample.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Spread {
     /// Number of values.
     pub n: usize,

@@ -18,7 +18,7 @@ use std::io::Read;
 use std::path::{Component, Path, PathBuf};
 
 /// How much reading one input may cost. Each limit has a command-line option to raise it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct InputLimits {
     /// Bytes of input files read for one tree: the file itself plus every external buffer and
     /// every external image a material uses (all passed through, decoded or not). Default 1 GiB (`--max-input-size`): the

@@ -5,10 +5,10 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use crate::batch::parse_memory;
 use crate::cli::values::BakeRasteriserArg;
-use frond_lod::{SkeletonOptions, SpectralOptions};
-use frond_scene::{ImportOptions, Length, import};
+use frond_app::batch::parse_memory;
+use frond_app::lod_settings::{BuildSettings, ReadSettings, Sampling};
+use frond_scene::Length;
 
 /// Materials the user names as foliage or wood, over the classification heuristics.
 #[derive(clap::Args, Clone, Debug, PartialEq)]
@@ -19,20 +19,6 @@ pub struct MaterialArgs {
     /// Treat this material as wood (repeatable).
     #[arg(long = "wood-material", value_name = "NAME")]
     pub wood_material: Vec<String>,
-}
-
-impl MaterialArgs {
-    /// The arguments again.
-    pub fn option_args(&self) -> Vec<String> {
-        let mut a = Vec::new();
-        for m in &self.foliage_material {
-            a.extend(["--foliage-material".to_string(), m.clone()]);
-        }
-        for m in &self.wood_material {
-            a.extend(["--wood-material".to_string(), m.clone()]);
-        }
-        a
-    }
 }
 
 /// How a tree is read: the input, material overrides, what reading it may cost.
@@ -47,23 +33,18 @@ pub struct ImportArgs {
 }
 
 impl ImportArgs {
-    /// The options again (the input aside): the material overrides, the limits that are not
-    /// the defaults.
-    pub fn option_args(&self) -> Vec<String> {
-        let mut a = self.materials.option_args();
-        a.extend(self.limits.option_args());
-        a
+    /// How the tree is read, as the application takes it.
+    pub fn read(&self) -> ReadSettings {
+        ReadSettings {
+            foliage_materials: self.materials.foliage_material.clone(),
+            wood_materials: self.materials.wood_material.clone(),
+            limits: self.limits.limits(),
+        }
     }
 
     /// Reads the tree.
     pub fn load(&self) -> Result<frond_scene::Tree> {
-        let options = ImportOptions {
-            foliage_materials: self.materials.foliage_material.clone(),
-            wood_materials: self.materials.wood_material.clone(),
-            limits: self.limits.limits(),
-            ..Default::default()
-        };
-        Ok(import(&self.input, &options)?)
+        self.read().load(&self.input)
     }
 }
 
@@ -91,53 +72,7 @@ pub struct LimitArgs {
 }
 
 impl LimitArgs {
-    /// The arguments of `limits`.
-    pub fn of(limits: &frond_scene::InputLimits) -> LimitArgs {
-        LimitArgs {
-            max_input_size: limits.max_input_bytes,
-            max_texture_memory: limits.max_texture_bytes,
-            max_vertices: limits.max_vertices,
-            max_animation_keys: limits.max_animation_keys,
-        }
-    }
-
-    /// The limits again as arguments, each only when not the default (so that a batch's
-    /// parameter hash of a default run does not depend on them).
-    pub fn option_args(&self) -> Vec<String> {
-        use frond_scene::input_file::{
-            MAX_ANIMATION_OPTION, MAX_INPUT_OPTION, MAX_TEXTURE_OPTION, MAX_VERTICES_OPTION,
-        };
-        let defaults = frond_scene::InputLimits::default();
-        let mut a = Vec::new();
-        for (flag, value, default) in [
-            (
-                MAX_INPUT_OPTION,
-                self.max_input_size,
-                defaults.max_input_bytes,
-            ),
-            (
-                MAX_TEXTURE_OPTION,
-                self.max_texture_memory,
-                defaults.max_texture_bytes,
-            ),
-            (
-                MAX_VERTICES_OPTION,
-                self.max_vertices,
-                defaults.max_vertices,
-            ),
-            (
-                MAX_ANIMATION_OPTION,
-                self.max_animation_keys,
-                defaults.max_animation_keys,
-            ),
-        ] {
-            if value != default {
-                a.extend([flag.to_string(), value.to_string()]);
-            }
-        }
-        a
-    }
-
+    /// The limits as the application takes them.
     pub fn limits(&self) -> frond_scene::InputLimits {
         frond_scene::InputLimits {
             max_input_bytes: self.max_input_size,
@@ -194,76 +129,31 @@ pub struct BuildArgs {
 }
 
 impl BuildArgs {
-    /// The spectral and skeleton methods' options (description types at their defaults: the
-    /// method name sets them).
-    pub fn method_options(&self) -> (SpectralOptions, SkeletonOptions) {
-        (
-            SpectralOptions {
-                clusters: self.clusters.map(|k| k as usize),
-                zone_size: self.zone_size,
-                shared_bone: !self.no_shared_bone,
-                ..Default::default()
-            },
-            SkeletonOptions {
-                clouds: self.clouds.map(|c| c as usize),
-                average_bone: self.average_bone,
-                ..Default::default()
-            },
-        )
-    }
-
-    /// The same options as `frond lod` arguments.
-    pub fn to_args(&self) -> Vec<String> {
-        let mut a = vec![
-            "--planes".to_string(),
-            self.planes.to_string(),
-            "--supersample".to_string(),
-            self.supersample.to_string(),
-        ];
-        if let Some(v) = self.view_penalty {
-            a.extend(["--view-penalty".to_string(), v.to_string()]);
+    /// The options as the application takes them.
+    pub fn settings(&self) -> BuildSettings {
+        BuildSettings {
+            planes: self.planes,
+            view_penalty: self.view_penalty,
+            increased_density: self.increased_density,
+            supersample: self.supersample,
+            bake_rasteriser: self.bake_rasteriser.into(),
+            clusters: self.clusters,
+            zone_size: self.zone_size,
+            shared_bone: !self.no_shared_bone,
+            clouds: self.clouds,
+            average_bone: self.average_bone,
         }
-        if self.increased_density {
-            a.push("--increased-density".to_string());
-        }
-        if self.bake_rasteriser != BakeRasteriserArg::Cpu {
-            a.extend([
-                "--bake-rasteriser".to_string(),
-                self.bake_rasteriser.text().to_string(),
-            ]);
-        }
-        if let Some(k) = self.clusters {
-            a.extend(["--clusters".to_string(), k.to_string()]);
-        }
-        if let Some(z) = &self.zone_size {
-            a.extend(["--zone-size".to_string(), z.to_string()]);
-        }
-        if self.no_shared_bone {
-            a.push("--no-shared-bone".to_string());
-        }
-        if let Some(c) = self.clouds {
-            a.extend(["--clouds".to_string(), c.to_string()]);
-        }
-        if self.average_bone {
-            a.push("--average-bone".to_string());
-        }
-        a
     }
 }
 
 impl RunArgs {
-    /// The arguments again.
-    pub fn to_args(&self) -> Vec<String> {
-        let mut a = vec![
-            "--seed".to_string(),
-            self.seed.to_string(),
-            "--samples".to_string(),
-            self.samples.to_string(),
-        ];
-        if let Some(c) = &self.clip {
-            a.extend(["--clip".to_string(), c.clone()]);
+    /// The options as the application takes them.
+    pub fn sampling(&self) -> Sampling {
+        Sampling {
+            seed: self.seed,
+            samples: self.samples,
+            clip: self.clip.clone(),
         }
-        a
     }
 }
 

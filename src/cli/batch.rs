@@ -6,12 +6,13 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use crate::batch::inputs::Overrides;
-use crate::batch::preset::EnginePreset;
-use crate::batch::shard::Shard;
-use crate::batch::tree_job::TreeContext;
-use crate::batch::{BatchRequest, default_max_memory, parse_memory, run_batch};
+use frond_app::batch::inputs::Overrides;
+use frond_app::batch::preset::EnginePreset;
+use frond_app::batch::shard::Shard;
+use frond_app::batch::tree_job::TreeContext;
+use frond_app::batch::{BatchRequest, default_max_memory, parse_memory, run_batch};
 use crate::cli::args::{BuildArgs, LimitArgs, MaterialArgs};
+use frond_app::lod_settings::{Animation, BuildSettings, Engine, Named};
 use crate::cli::progress::{BatchBar, finish_batch};
 use crate::cli::values::{AnimationArg, EngineArg, MethodArg};
 
@@ -113,9 +114,9 @@ impl BatchArgs {
             json,
         } = self;
         let defaults = Overrides {
-            method: method.map(|m| m.text().to_string()),
+            method: method.map(|m| m.0.text().to_string()),
             lods,
-            animation: animation.map(|a| a.text().to_string()),
+            animation: animation.map(|a| Animation::from(a).text().to_string()),
             foliage_material: (!foliage_material.is_empty()).then_some(foliage_material),
             wood_material: (!wood_material.is_empty()).then_some(wood_material),
             clip,
@@ -126,9 +127,9 @@ impl BatchArgs {
             clusters: build.clusters,
         };
         defaults.check("command line")?;
-        let preset = preset.and_then(|p| EnginePreset::named(p.text()));
+        let preset = preset.and_then(|p| EnginePreset::named(Engine::from(p).text()));
         if let (Some(p), Some(a)) = (&preset, animation) {
-            p.check_animation(a)?;
+            p.check_animation(a.into())?;
         }
         let shard = match shard.as_deref() {
             None => None,
@@ -137,10 +138,10 @@ impl BatchArgs {
         };
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         let jobs = jobs.map_or(cores, |j| j as usize);
-        let build = BuildArgs {
+        let build = BuildSettings {
             clouds: None,
             clusters: None,
-            ..build
+            ..build.settings()
         };
         let req = BatchRequest {
             input,

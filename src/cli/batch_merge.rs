@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use crate::batch::summary::{BatchSummary, merge, read_summary, summaries_in};
+use frond_app::batch::summary::{BatchSummary, merge, read_summary, summaries_in};
 use crate::cli::progress::finish_batch;
 
 /// `frond batch-merge`.
@@ -42,7 +42,7 @@ impl BatchMergeArgs {
             crate::say_err!("warning: {w}");
         }
         let dir = output.unwrap_or_else(|| outputs[0].clone());
-        crate::out_folder::OutFolder::new(&dir).create()?;
+        frond_app::out_folder::OutFolder::new(&dir).create()?;
         summary.write(&dir, &BatchSummary::stem(None))?;
         finish_batch(&summary, &dir, json)?;
         Ok(())

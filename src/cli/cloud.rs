@@ -8,8 +8,9 @@ use frond_scene::Length;
 use crate::cli::args::{ImportArgs, RunArgs};
 use crate::cli::progress::{Spinner, print_json};
 use crate::cli::values::BakeRasteriserArg;
-use crate::cloud_cmd::{CloudRequest, run_cloud};
-use crate::render_cmd::parse_size;
+use frond_app::lod_settings::BakeRasteriser;
+use frond_app::cloud_cmd::{CloudRequest, run_cloud};
+use frond_app::render_cmd::parse_size;
 use frond_billboard::cloud::CloudParams;
 use frond_billboard::plane_search::SearchParams;
 use frond_render::Renderer;
@@ -116,7 +117,7 @@ impl CloudArgs {
         params.bake.texels_per_unit =
             texels_per_unit.unwrap_or(1024.0 / diag.max(f32::MIN_POSITIVE));
         params.bake.max_atlas = max_atlas;
-        params.bake.rasteriser = bake_rasteriser.rasteriser();
+        params.bake.rasteriser = BakeRasteriser::from(bake_rasteriser).rasteriser();
         let req = CloudRequest {
             epsilon,
             params,

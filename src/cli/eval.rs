@@ -8,10 +8,8 @@ use anyhow::Result;
 use crate::cli::args::ImportArgs;
 use crate::cli::progress::{Spinner, print_json};
 use crate::cli::values::LightingArg;
-use crate::eval_cmd::{Costs, EvalRequest, evaluate, image_for_screen_height, same_bytes};
-use crate::render_cmd::parse_size;
-use frond_render::Renderer;
-use frond_scene::ImportOptions;
+use frond_app::eval_cmd::{Costs, EvalSettings, run_eval};
+use frond_app::render_cmd::parse_size;
 use frond_scene::input_file::human_bytes;
 
 /// `frond eval`.
@@ -56,76 +54,54 @@ pub struct EvalArgs {
 }
 
 impl EvalArgs {
+    /// The settings the application takes.
+    pub fn settings(&self) -> Result<EvalSettings> {
+        Ok(EvalSettings {
+            input: self.import.input.clone(),
+            candidate: self.candidate.clone(),
+            read: self.import.read(),
+            views: self.views,
+            frames: self.frames,
+            size: self.size.as_deref().map(parse_size).transpose()?,
+            screen_height: self.screen_height,
+            samples: self.samples,
+            clip: self.clip.clone(),
+            white_albedo: self.white_albedo,
+            lighting: self.lighting.into(),
+        })
+    }
+
     /// Runs the command.
     pub fn run(self) -> Result<()> {
-        let EvalArgs {
-            import,
-            candidate,
-            views,
-            frames,
-            size,
-            screen_height,
-            samples,
-            clip,
-            white_albedo,
-            lighting,
-            json,
-        } = self;
-        let original = import.load()?;
-        let cand = frond_scene::import(
-            &candidate,
-            &ImportOptions {
-                allow_empty: true,
-                limits: import.limits.limits(),
-                ..Default::default()
-            },
-        )?;
-        let same_file = same_bytes(&import.input, &candidate);
-        let size = match (size, screen_height) {
-            (Some(s), _) => parse_size(&s)?,
-            (None, Some(h)) if h > 0 => image_for_screen_height(h),
-            (None, Some(_)) => anyhow::bail!("--screen-height must be at least 1"),
-            (None, None) => (800, 600),
-        };
-        let renderer = Renderer::new()?;
-        let req = EvalRequest {
-            views,
-            frames,
-            size,
-            samples,
-            clip,
-            limits: import.limits.limits(),
-            white_albedo,
-            lighting: lighting.lighting(),
-        };
-        let bar = Spinner::start();
-        bar.say(&format!("evaluating {}", candidate.display()));
-        let result = evaluate(&renderer, &original, &cand, same_file, &req);
-        drop(bar);
-        let report = result?;
-        if json {
-            print_json(&report)?;
-        } else {
-            for id in frond_metrics::metric_id::MetricId::ALL {
-                let m = report.metric(id);
-                let name = id.label();
-                match (m.mean, m.max) {
-                    (Some(a), Some(b)) => crate::say!("{name:36} mean {a:.5}  max {b:.5}"),
-                    _ => crate::say!(
-                        "{name:36} skipped: {}",
-                        m.skipped_reason.as_deref().unwrap_or("-")
-                    ),
-                }
-            }
-            print!("{}", super::terminal::safe(&cost_lines(&report.cost)));
-        }
-        Ok(())
+        run_settings(&self.settings()?, self.json)
     }
 }
 
-/// The cost in a few lines, original → candidate: triangles, billboards, joints, channels,
-/// texture bytes (decoded, encoded), file bytes, and the alpha-tested area with the ratio
-/// candidate/original (the relative overdraw).
+/// Runs `frond eval` with `settings` and prints the report (as JSON with `json`): the command's
+/// own run, and a `frond batch` child's.
+pub fn run_settings(settings: &EvalSettings, json: bool) -> Result<()> {
+    let bar = Spinner::start();
+    let result = run_eval(settings, &|m| bar.say(m));
+    drop(bar);
+    let report = result?;
+    if json {
+        return print_json(&report);
+    }
+    for id in frond_metrics::metric_id::MetricId::ALL {
+        let m = report.metric(id);
+        let name = id.label();
+        match (m.mean, m.max) {
+            (Some(a), Some(b)) => crate::say!("{name:36} mean {a:.5}  max {b:.5}"),
+            _ => crate::say!(
+                "{name:36} skipped: {}",
+                m.skipped_reason.as_deref().unwrap_or("-")
+            ),
+        }
+    }
+    print!("{}", super::terminal::safe(&cost_lines(&report.cost)));
+    Ok(())
+}
+
 fn cost_lines(c: &Costs) -> String {
     let (o, k) = (&c.original, &c.candidate);
     let (of, kf) = (&o.file, &k.file);

@@ -4,7 +4,7 @@ use anyhow::Result;
 
 use crate::cli::args::ImportArgs;
 use crate::cli::progress::print_json;
-use crate::inspect::{SamplingSummary, inspect};
+use frond_app::inspect::{SamplingSummary, inspect};
 use frond_scene::{SampleOptions, sample};
 
 /// `frond inspect`.

@@ -5,22 +5,15 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use crate::batch::preset::EnginePreset;
 use crate::cli::args::{BuildArgs, ImportArgs, RunArgs};
 use crate::cli::progress::{Spinner, print_json};
 use crate::cli::values::{
     AnimationArg, EngineArg, MethodArg, NormalsArg, TexturesArg, VatSpaceArg,
 };
-use crate::lod_cmd::{LodRequest, run_lod};
-use frond_lod::method::ignored_options;
-use frond_lod::{
-    ChainRequest, CloudOptions, Method, SkeletonOptions, SpectralOptions, screen_height_at,
-};
+use frond_app::lod_cmd::run_lod;
+use frond_app::lod_settings::{DEFAULT_MAX_ERROR, LodSettings, MethodChoice};
 use frond_render::Renderer;
 use frond_scene::Length;
-
-/// `--max-error`'s default.
-pub const DEFAULT_MAX_ERROR: f32 = 0.15;
 
 /// `frond lod`.
 #[derive(clap::Args, Clone, Debug, PartialEq)]
@@ -36,7 +29,7 @@ pub struct LodArgs {
     /// type; spectral-naive, spectral-dominating-axis and spectral-axis-phase name the type)
     /// or skeleton (SBCS with the axis-angle bone type; skeleton-axis-angle and
     /// skeleton-rotation-spectral name the type).
-    #[arg(long, value_enum, default_value = "auto")]
+    #[arg(long, value_enum, default_value_t = MethodArg(MethodChoice::AUTO))]
     pub method: MethodArg,
     /// Screen heights in pixels the whole tree covers, one LOD each, nearest first.
     #[arg(long, value_delimiter = ',', default_value = "600,200,60")]
@@ -145,146 +138,42 @@ pub struct LodArgs {
 }
 
 impl LodArgs {
-    /// What the arguments ask of the library for `tree`: screen heights from `--lods` or from
-    /// `--distances`, the method with its options. Warns about options the method ignores.
-    pub fn request(&self, tree: &frond_scene::Tree) -> Result<LodRequest> {
-        let screen_heights = match &self.distances {
-            Some(d) => {
-                let h = tree.height();
-                d.iter()
-                    .map(|&z| {
-                        if !(z.is_finite() && z > 0.0) {
-                            anyhow::bail!("--distances: {z} is not a positive distance");
-                        }
-                        Ok(screen_height_at(h, z, self.fov, self.resolution))
-                    })
-                    .collect::<Result<Vec<_>>>()?
-            }
-            None => self.lods.clone(),
-        };
-        let spectral_animation = self.animation == AnimationArg::Spectral;
-        let name = self.method.method();
-        let (spectral, skeleton) = self.build.method_options();
-        for w in ignored_options(
-            name,
-            spectral != SpectralOptions::default(),
-            skeleton != SkeletonOptions::default(),
-            spectral_animation,
-        ) {
-            tracing::warn!("{w}");
-        }
-        let build = &self.build;
-        Ok(LodRequest {
-            chain: ChainRequest {
-                method: Method::new(name, spectral, skeleton),
-                screen_heights,
-                pixel_error: self.pixel_error,
-                epsilon: self.epsilon,
-                animation: self.animation.billboards(),
-                seed: self.run.seed,
-                triangle_ratio: self.triangle_ratio,
-                cost_budgets: !self.no_cost_budgets,
-                samples: self.run.samples,
-                clip: self.run.clip.clone(),
-                cloud: CloudOptions {
-                    planes: build.planes,
-                    view_penalty: build.view_penalty.map(f32::to_radians),
-                    increased_density: build.increased_density,
-                    max_atlas: self.max_atlas,
-                    supersample: build.supersample,
-                    padding: self.padding,
-                    rasteriser: build.bake_rasteriser.rasteriser(),
-                },
-            },
-            animation: self.animation.mode(),
-            measure: (!self.no_measure).then_some(f64::from(self.max_error)),
+    /// The settings the application takes.
+    pub fn settings(&self) -> LodSettings {
+        LodSettings {
+            input: self.import.input.clone(),
+            output: self.output.clone(),
+            read: self.import.read(),
+            method: self.method.0,
+            lods: self.lods.clone(),
+            distances: self.distances.clone(),
+            fov: self.fov,
+            resolution: self.resolution,
+            pixel_error: self.pixel_error,
+            epsilon: self.epsilon,
+            triangle_ratio: self.triangle_ratio,
+            max_error: self.max_error,
+            measure: !self.no_measure,
             preview: !self.no_preview,
             preview_viewer: self.preview_viewer.clone(),
+            cost_budgets: !self.no_cost_budgets,
+            animation: self.animation.into(),
+            sampling: self.run.sampling(),
+            build: self.build.settings(),
+            max_atlas: self.max_atlas,
+            padding: self.padding,
             msft_lod: self.msft_lod,
-            resolution: self.resolution,
-            fov: self.fov,
             external_textures: self.external_textures,
-            textures: self.textures.format(),
+            textures: self.textures.into(),
+            billboard_normals: self.billboard_normals.into(),
             loop_hint: self.loop_hint,
             compress: self.compress,
-            vat_space: self.vat_space.space(),
-            billboard_normals: self.billboard_normals.normals(),
-        })
+            vat_space: self.vat_space.into(),
+            preset: self.preset.map(Into::into),
+        }
     }
 
-    /// The arguments again, as a `frond lod` command line parses them (the subcommand name
-    /// first): child runs of `frond sweep` and `frond batch` are built as a [`LodArgs`] and
-    /// written with this, so every option has one spelling.
-    pub fn to_args(&self) -> Vec<String> {
-        let mut a = vec![
-            "lod".to_string(),
-            self.import.input.display().to_string(),
-            "-o".into(),
-            self.output.display().to_string(),
-        ];
-        a.extend(self.option_args());
-        a
-    }
-
-    /// The options alone (input and output aside), as [`Self::to_args`] writes them.
-    pub fn option_args(&self) -> Vec<String> {
-        let list = |v: &[f32]| v.iter().map(f32::to_string).collect::<Vec<_>>().join(",");
-        let mut a = self.import.option_args();
-        a.extend(["--method".into(), self.method.text().into()]);
-        match &self.distances {
-            Some(d) => a.extend(["--distances".into(), list(d)]),
-            None => a.extend(["--lods".into(), list(&self.lods)]),
-        }
-        a.extend(["--fov".into(), self.fov.to_string()]);
-        a.extend(["--resolution".into(), self.resolution.to_string()]);
-        a.extend(["--pixel-error".into(), self.pixel_error.to_string()]);
-        if let Some(e) = self.epsilon {
-            a.extend(["--epsilon".into(), e.to_string()]);
-        }
-        if let Some(v) = &self.preview_viewer {
-            a.extend(["--preview-viewer".into(), v.clone()]);
-        }
-        a.extend(["--triangle-ratio".into(), self.triangle_ratio.to_string()]);
-        a.extend(["--max-error".into(), self.max_error.to_string()]);
-        for (flag, on) in [
-            ("--no-measure", self.no_measure),
-            ("--no-cost-budgets", self.no_cost_budgets),
-            ("--no-preview", self.no_preview),
-        ] {
-            if on {
-                a.push(flag.into());
-            }
-        }
-        a.extend(["--animation".into(), self.animation.text().into()]);
-        a.extend(self.run.to_args());
-        a.extend(self.build.to_args());
-        a.extend(["--max-atlas".into(), self.max_atlas.to_string()]);
-        a.extend(["--padding".into(), self.padding.to_string()]);
-        a.extend(["--textures".into(), self.textures.text().into()]);
-        a.extend(["--vat-space".into(), self.vat_space.text().into()]);
-        a.extend([
-            "--billboard-normals".into(),
-            self.billboard_normals.text().into(),
-        ]);
-        if let Some(p) = self.preset {
-            a.extend(["--preset".into(), p.text().into()]);
-        }
-        for (flag, on) in [
-            ("--msft-lod", self.msft_lod),
-            ("--loop-hint", self.loop_hint),
-            ("--compress", self.compress),
-            ("--external-textures", self.external_textures),
-            ("--json", self.json),
-        ] {
-            if on {
-                a.push(flag.into());
-            }
-        }
-        a
-    }
-
-    /// Parses a `frond lod` command line (the subcommand name first), as [`Self::to_args`]
-    /// writes it.
+    /// Parses a `frond lod` command line (the subcommand name first).
     pub fn parse_from<I, T>(args: I) -> Result<LodArgs, clap::Error>
     where
         I: IntoIterator<Item = T>,
@@ -298,68 +187,56 @@ impl LodArgs {
         <One as clap::Parser>::try_parse_from(args).map(|one| one.lod)
     }
 
-    /// `frond lod`'s arguments for `input` into `output`, every option at its default.
-    pub fn defaults(input: &std::path::Path, output: &std::path::Path) -> LodArgs {
-        let line = [
-            std::ffi::OsStr::new("lod"),
-            input.as_os_str(),
-            std::ffi::OsStr::new("-o"),
-            output.as_os_str(),
-        ];
-        match LodArgs::parse_from(line) {
-            Ok(args) => args,
-            // Only a required argument could be missing, and both are given.
-            Err(e) => unreachable!("frond lod's defaults do not parse: {e}"),
-        }
-    }
-
     /// Runs the command.
-    pub fn run(mut self) -> Result<()> {
-        if let Some(p) = self.preset.and_then(|p| EnginePreset::named(p.text())) {
-            p.apply(&mut self)?;
-        }
-        let tree = self.import.load()?;
-        let renderer = Renderer::new()?;
-        let req = self.request(&tree)?;
-        let bar = Spinner::start();
-        let result = run_lod(&renderer, &tree, &req, &self.output, &|m: &str| bar.say(m));
-        drop(bar);
-        let report = result?;
-        if self.json {
-            print_json(&report)?;
-        } else {
-            for l in &report.lods {
-                crate::say!(
-                    "{}: {} triangles, {} billboards, {} bones, {} texture bytes ({})",
-                    l.file,
-                    l.triangles,
-                    l.billboards,
-                    l.bones,
-                    l.texture_bytes,
-                    l.method
-                );
-            }
-            crate::say!(
-                "{}: {} LODs combined; {}; {:.2} s",
-                report.combined,
-                report.lods.len(),
-                frond_lod::report::report_name(&report.name),
-                report.timings_s["total"].as_f64().unwrap_or(0.0)
-            );
-            if let Some(page) = report
-                .files
-                .iter()
-                .find(|f| *f == &frond_preview::preview_name(&report.name))
-            {
-                crate::say!(
-                    "{page}: the preview ({:.2} s); its live view: frond view {}",
-                    report.timings_s["preview"].as_f64().unwrap_or(0.0),
-                    self.output.display()
-                );
-            }
-        }
-        Ok(())
+    pub fn run(self) -> Result<()> {
+        run_settings(self.settings(), self.json)
     }
+}
+
+/// Runs `frond lod` with `settings` and prints what it wrote (the report as JSON with `json`):
+/// the command's own run, and a `frond batch` or `frond sweep` child's.
+pub fn run_settings(settings: LodSettings, json: bool) -> Result<()> {
+    let settings = settings.with_preset()?;
+    let tree = settings.load()?;
+    let renderer = Renderer::new()?;
+    let req = settings.request(&tree)?;
+    let bar = Spinner::start();
+    let result = run_lod(&renderer, &tree, &req, &settings.output, &|m: &str| bar.say(m));
+    drop(bar);
+    let report = result?;
+    if json {
+        return print_json(&report);
+    }
+    for l in &report.lods {
+        crate::say!(
+            "{}: {} triangles, {} billboards, {} bones, {} texture bytes ({})",
+            l.file,
+            l.triangles,
+            l.billboards,
+            l.bones,
+            l.texture_bytes,
+            l.method
+        );
+    }
+    crate::say!(
+        "{}: {} LODs combined; {}; {:.2} s",
+        report.combined,
+        report.lods.len(),
+        frond_lod::report::report_name(&report.name),
+        report.timings_s["total"].as_f64().unwrap_or(0.0)
+    );
+    if let Some(page) = report
+        .files
+        .iter()
+        .find(|f| *f == &frond_preview::preview_name(&report.name))
+    {
+        crate::say!(
+            "{page}: the preview ({:.2} s); its live view: frond view {}",
+            report.timings_s["preview"].as_f64().unwrap_or(0.0),
+            settings.output.display()
+        );
+    }
+    Ok(())
 }
 
 /// A ratio in (0, 1].
@@ -377,30 +254,37 @@ fn parse_ratio(s: &str) -> Result<f32, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::Path;
 
     fn parse(args: &[&str]) -> LodArgs {
         LodArgs::parse_from(args).expect("parses")
     }
 
     #[test]
-    fn arguments_round_trip() {
-        for line in [
-            "lod t.glb -o out",
-            "lod t.glb -o out --method spectral --lods 300,75 --epsilon 2% --zone-size 0.5 \
-             --clusters 4 --no-shared-bone --animation vat-png16 --seed 7 --clip Wind \
-             --samples 32 --msft-lod --external-textures --json --foliage-material Leaf \
-             --max-vertices 100 --view-penalty 15 --increased-density",
-            "lod t.glb -o out --method skeleton-rotation-spectral --distances 5,20 --fov 45 \
-             --clouds 3 --average-bone --max-atlas 2048 --padding 4 --supersample 2 --planes 50",
-        ] {
-            let line: Vec<&str> = line.split_whitespace().collect();
-            let a = parse(&line);
-            let again = a.to_args();
-            let b = parse(&again.iter().map(String::as_str).collect::<Vec<_>>());
-            assert_eq!(a, b, "{line:?} -> {again:?}");
-        }
-        let d = LodArgs::defaults(std::path::Path::new("t.glb"), std::path::Path::new("o"));
-        assert_eq!(d, parse(&["lod", "t.glb", "-o", "o"]));
-        assert_eq!(d.method, MethodArg::AUTO);
+    fn the_flags_default_to_the_applications_settings() {
+        let d = parse(&["lod", "t.glb", "-o", "o"]).settings();
+        assert_eq!(d, LodSettings::defaults(Path::new("t.glb"), Path::new("o")));
+    }
+
+    #[test]
+    fn every_flag_reaches_its_setting() {
+        let line = "lod t.glb -o out --method spectral --lods 300,75 --epsilon 2% --zone-size 0.5 \
+                    --clusters 4 --no-shared-bone --animation vat-png16 --seed 7 --clip Wind \
+                    --samples 32 --msft-lod --external-textures --json --foliage-material Leaf \
+                    --max-vertices 100 --view-penalty 15 --increased-density --preset web";
+        let s = parse(&line.split_whitespace().collect::<Vec<_>>()).settings();
+        assert_eq!(s.method.text(), "spectral");
+        assert_eq!(s.lods, [300.0, 75.0]);
+        assert_eq!(s.epsilon, Some(Length::Percent(2.0)));
+        assert_eq!(s.build.zone_size, Some(Length::World(0.5)));
+        assert_eq!((s.build.clusters, s.build.shared_bone), (Some(4), false));
+        assert_eq!(s.animation, frond_app::lod_settings::Animation::VatPng16);
+        assert_eq!((s.sampling.seed, s.sampling.samples), (7, 32));
+        assert_eq!(s.sampling.clip.as_deref(), Some("Wind"));
+        assert!(s.msft_lod && s.external_textures && s.build.increased_density);
+        assert_eq!(s.read.foliage_materials, ["Leaf"]);
+        assert_eq!(s.read.limits.max_vertices, 100);
+        assert_eq!(s.build.view_penalty, Some(15.0));
+        assert_eq!(s.preset, Some(frond_app::lod_settings::Engine::Web));
     }
 }

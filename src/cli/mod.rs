@@ -1,10 +1,11 @@
 //! The command line's clap layer: one file per command with its arguments and `run`, which
 //! turns them into a library request, runs it and prints the result. The work itself lives in
-//! the library functions (`lod_cmd`, `cloud_cmd`, ...) and the pipeline crates.
+//! the application library, [`frond_app`], and the pipeline crates.
 
 pub mod args;
 pub mod batch;
 pub mod batch_merge;
+pub mod child;
 pub mod cloud;
 pub mod eval;
 pub mod inspect;
@@ -50,6 +51,9 @@ pub enum Command {
     /// Serve an output folder on localhost and open its preview page (the live view needs the
     /// files served: browsers do not let a page opened from disk read the GLBs beside it).
     View(view::ViewArgs),
+    /// A child run of `frond batch` or `frond sweep`: its settings on standard input.
+    #[command(hide = true)]
+    Child(child::ChildArgs),
 }
 
 impl Command {
@@ -66,6 +70,7 @@ impl Command {
             Command::BatchMerge(args) => args.run(),
             Command::Sample(args) => args.run(),
             Command::View(args) => args.run(),
+            Command::Child(args) => args.run(),
         }
     }
 }

@@ -3,8 +3,8 @@
 
 use anyhow::{Context, Result};
 
-use crate::batch::BatchProgress;
-use crate::batch::summary::{BatchSummary, Status, TreeEntry};
+use frond_app::batch::BatchProgress;
+use frond_app::batch::summary::{BatchSummary, Status, TreeEntry};
 
 /// A spinner with a message on a terminal (nothing otherwise); messages also go to the log.
 pub struct Spinner(Option<indicatif::ProgressBar>);

@@ -6,8 +6,8 @@ use crate::cli::values::PartsArg;
 use anyhow::Result;
 
 use crate::cli::args::ImportArgs;
-use crate::out_folder::write_atomic;
-use crate::render_cmd::{RenderRequest, frame_png, parse_size, render_tree};
+use frond_app::out_folder::write_atomic;
+use frond_app::render_cmd::{RenderRequest, frame_png, parse_size, render_tree};
 use frond_render::Renderer;
 
 /// `frond render`.

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 
 use crate::cli::values::SampleSize;
-use crate::out_folder::write_atomic;
+use frond_app::out_folder::write_atomic;
 use frond_scene::generator::generate;
 
 /// `frond sample`.

@@ -6,13 +6,13 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use crate::cli::args::{BuildArgs, ImportArgs, RunArgs};
-use crate::cli::lod::LodArgs;
+use crate::cli::args::{BuildArgs, ImportArgs};
+use frond_app::lod_settings::{LodSettings, Sampling};
 use crate::cli::progress::{Progress, print_json};
 use crate::cli::values::MethodArg;
-use crate::eval_cmd::EvalRequest;
-use crate::sweep::grid::{Grid, parse_epsilons};
-use crate::sweep::{SweepRequest, run_sweep};
+use frond_app::eval_cmd::EvalRequest;
+use frond_app::sweep::grid::{Grid, parse_epsilons};
+use frond_app::sweep::{SweepRequest, run_sweep};
 use frond_render::Renderer;
 
 /// `frond sweep`.
@@ -117,15 +117,16 @@ impl SweepArgs {
                 Grid::ScreenHeights(lods)
             }
         };
-        let lod = LodArgs {
-            import: import.clone(),
-            run: RunArgs {
+        let defaults = LodSettings::defaults(&import.input, &output);
+        let lod = LodSettings {
+            read: import.read(),
+            sampling: Sampling {
                 samples,
                 clip: clip.clone(),
-                ..LodArgs::defaults(&import.input, &output).run
+                ..defaults.sampling.clone()
             },
-            build,
-            ..LodArgs::defaults(&import.input, &output)
+            build: build.settings(),
+            ..defaults
         };
         let eval = EvalRequest {
             views,
@@ -140,7 +141,7 @@ impl SweepArgs {
         let req = SweepRequest {
             exe: std::env::current_exe().context("locating the frond executable")?,
             lod,
-            methods: method.iter().map(|m| m.text().to_string()).collect(),
+            methods: method.iter().map(|m| m.0.text().to_string()).collect(),
             grid,
             seeds: (1..=seeds).collect(),
             candidates,
@@ -164,7 +165,7 @@ impl SweepArgs {
                 output.display(),
                 summary.runs,
                 summary.failed,
-                summary.timings_s["total"].as_f64().unwrap_or(0.0)
+                summary.timings_s.total
             );
         }
         if summary.failed > 0 {

@@ -3,64 +3,29 @@
 
 use clap::ValueEnum;
 use clap::builder::PossibleValue;
-use frond_export::AnimationMode;
-use frond_export::vat::VatFormat;
-use frond_lod::{METHOD_NAMES, MethodName};
+use frond_app::eval_cmd::Lighting;
+use frond_app::lod_settings::{
+    Animation, BakeRasteriser, Engine, MethodChoice, Normals, Textures, VatSpace,
+};
 use frond_render::TreeParts;
 use frond_scene::generator::Preset;
 
-/// A `--method` value: one entry of [`METHOD_NAMES`] (by index, so that `spectral` and
-/// `spectral-axis-phase` stay distinct values that name the same method).
+/// A `--method` value: one of the application's [`MethodChoice`]s (kept as written, so that
+/// `spectral` and `spectral-axis-phase` stay distinct values that name the same method).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct MethodArg(usize);
+pub struct MethodArg(pub MethodChoice);
 
-const METHOD_COUNT: usize = METHOD_NAMES.len();
-
-/// Every `--method` value, in [`METHOD_NAMES`] order.
-static METHOD_ARGS: [MethodArg; METHOD_COUNT] = {
-    let mut all = [MethodArg(0); METHOD_COUNT];
-    let mut i = 0;
-    while i < METHOD_COUNT {
-        all[i] = MethodArg(i);
-        i += 1;
-    }
-    all
-};
-
-impl MethodArg {
-    /// `auto`.
-    pub const AUTO: MethodArg = MethodArg(0);
-
-    /// The value as written (`spectral`, `per-bone`, ...).
-    pub fn text(self) -> &'static str {
-        METHOD_NAMES[self.0].0
-    }
-    /// The method it names.
-    pub fn method(self) -> MethodName {
-        METHOD_NAMES[self.0].1
-    }
-    /// The value that names `method` in full (`spectral-axis-phase`, not `spectral`).
-    pub fn named(method: MethodName) -> MethodArg {
-        METHOD_NAMES
-            .iter()
-            .position(|(n, _)| *n == method.name())
-            .map_or(MethodArg::AUTO, MethodArg)
-    }
-    /// The value written `text`, if any.
-    pub fn parse(text: &str) -> Option<MethodArg> {
-        METHOD_NAMES
-            .iter()
-            .position(|(n, _)| *n == text)
-            .map(MethodArg)
-    }
-}
+/// Every `--method` value, in the library's order.
+static METHOD_ARGS: std::sync::LazyLock<Vec<MethodArg>> =
+    std::sync::LazyLock::new(|| MethodChoice::all().map(MethodArg).collect());
 
 impl ValueEnum for MethodArg {
     fn value_variants<'a>() -> &'a [Self] {
         &METHOD_ARGS
     }
+
     fn to_possible_value(&self) -> Option<PossibleValue> {
-        Some(PossibleValue::new(self.text()))
+        Some(PossibleValue::new(self.0.text()))
     }
 }
 
@@ -78,40 +43,19 @@ pub enum AnimationArg {
     Spectral,
 }
 
-impl AnimationArg {
-    /// How the chain builder counts the billboards' joints.
-    pub fn billboards(self) -> frond_lod::joint_budget::BillboardAnimation {
-        use frond_lod::joint_budget::BillboardAnimation as B;
-        match self {
-            AnimationArg::Skin => B::Joints,
-            AnimationArg::Vat | AnimationArg::VatPng16 => B::Vat,
-            AnimationArg::Spectral => B::Spectral,
-        }
-    }
-
-    /// How the files animate billboards.
-    pub fn mode(self) -> AnimationMode {
-        match self {
-            AnimationArg::Skin => AnimationMode::Skin,
-            AnimationArg::Vat => AnimationMode::Vat(VatFormat::ExrHalf),
-            AnimationArg::VatPng16 => AnimationMode::Vat(VatFormat::Png16),
-            AnimationArg::Spectral => AnimationMode::Spectral,
-        }
-    }
-    /// The value as written.
-    pub fn text(self) -> &'static str {
-        match self {
-            AnimationArg::Skin => "skin",
-            AnimationArg::Vat => "vat",
-            AnimationArg::VatPng16 => "vat-png16",
-            AnimationArg::Spectral => "spectral",
+impl From<AnimationArg> for Animation {
+    fn from(a: AnimationArg) -> Animation {
+        match a {
+            AnimationArg::Skin => Animation::Skin,
+            AnimationArg::Vat => Animation::Vat,
+            AnimationArg::VatPng16 => Animation::VatPng16,
+            AnimationArg::Spectral => Animation::Spectral,
         }
     }
 }
 
 /// A `--textures` value: how the textures frond makes are stored.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
 pub enum TexturesArg {
     /// PNG; engines build plain mip chains.
     #[default]
@@ -124,22 +68,12 @@ pub enum TexturesArg {
     Ktx2Png,
 }
 
-impl TexturesArg {
-    /// The export stage's setting.
-    pub fn format(self) -> frond_export::TextureFormat {
-        match self {
-            TexturesArg::Png => frond_export::TextureFormat::Png,
-            TexturesArg::Ktx2 => frond_export::TextureFormat::Ktx2,
-            TexturesArg::Ktx2Png => frond_export::TextureFormat::Ktx2Png,
-        }
-    }
-
-    /// The value as written.
-    pub fn text(self) -> &'static str {
-        match self {
-            TexturesArg::Png => "png",
-            TexturesArg::Ktx2 => "ktx2",
-            TexturesArg::Ktx2Png => "ktx2-png",
+impl From<TexturesArg> for Textures {
+    fn from(t: TexturesArg) -> Textures {
+        match t {
+            TexturesArg::Png => Textures::Png,
+            TexturesArg::Ktx2 => Textures::Ktx2,
+            TexturesArg::Ktx2Png => Textures::Ktx2Png,
         }
     }
 }
@@ -156,22 +90,12 @@ pub enum NormalsArg {
     Flat,
 }
 
-impl NormalsArg {
-    /// The export stage's setting.
-    pub fn normals(self) -> frond_export::BillboardNormals {
-        match self {
-            NormalsArg::Baked => frond_export::BillboardNormals::Baked,
-            NormalsArg::Crown => frond_export::BillboardNormals::Crown,
-            NormalsArg::Flat => frond_export::BillboardNormals::Flat,
-        }
-    }
-
-    /// The value as written.
-    pub fn text(self) -> &'static str {
-        match self {
-            NormalsArg::Baked => "baked",
-            NormalsArg::Crown => "crown",
-            NormalsArg::Flat => "flat",
+impl From<NormalsArg> for Normals {
+    fn from(n: NormalsArg) -> Normals {
+        match n {
+            NormalsArg::Baked => Normals::Baked,
+            NormalsArg::Crown => Normals::Crown,
+            NormalsArg::Flat => Normals::Flat,
         }
     }
 }
@@ -186,12 +110,11 @@ pub enum LightingArg {
     Lambert,
 }
 
-impl LightingArg {
-    /// The renderer's setting.
-    pub fn lighting(self) -> frond_render::Lighting {
-        match self {
-            LightingArg::TwoSided => frond_render::Lighting::TwoSided,
-            LightingArg::Lambert => frond_render::Lighting::Lambert,
+impl From<LightingArg> for Lighting {
+    fn from(l: LightingArg) -> Lighting {
+        match l {
+            LightingArg::TwoSided => Lighting::TwoSided,
+            LightingArg::Lambert => Lighting::Lambert,
         }
     }
 }
@@ -207,27 +130,17 @@ pub enum BakeRasteriserArg {
     Wgpu,
 }
 
-impl BakeRasteriserArg {
-    /// The bake's setting.
-    pub fn rasteriser(self) -> frond_billboard::BakeRasteriser {
-        match self {
-            BakeRasteriserArg::Cpu => frond_billboard::BakeRasteriser::Cpu,
-            BakeRasteriserArg::Wgpu => frond_billboard::BakeRasteriser::Wgpu,
-        }
-    }
-
-    /// The value as written.
-    pub fn text(self) -> &'static str {
-        match self {
-            BakeRasteriserArg::Cpu => "cpu",
-            BakeRasteriserArg::Wgpu => "wgpu",
+impl From<BakeRasteriserArg> for BakeRasteriser {
+    fn from(b: BakeRasteriserArg) -> BakeRasteriser {
+        match b {
+            BakeRasteriserArg::Cpu => BakeRasteriser::Cpu,
+            BakeRasteriserArg::Wgpu => BakeRasteriser::Wgpu,
         }
     }
 }
 
 /// A `--vat-space` value of `frond lod`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
 pub enum VatSpaceArg {
     /// The glTF file's space (right-handed, +Y up, metres): frond's own shaders.
     #[default]
@@ -240,22 +153,12 @@ pub enum VatSpaceArg {
     Unreal,
 }
 
-impl VatSpaceArg {
-    /// The export stage's setting.
-    pub fn space(self) -> frond_export::vat::VatSpace {
-        match self {
-            VatSpaceArg::Gltf => frond_export::vat::VatSpace::Gltf,
-            VatSpaceArg::Unity => frond_export::vat::VatSpace::Unity,
-            VatSpaceArg::Unreal => frond_export::vat::VatSpace::Unreal,
-        }
-    }
-
-    /// The value as written.
-    pub fn text(self) -> &'static str {
-        match self {
-            VatSpaceArg::Gltf => "gltf",
-            VatSpaceArg::Unity => "unity",
-            VatSpaceArg::Unreal => "unreal",
+impl From<VatSpaceArg> for VatSpace {
+    fn from(v: VatSpaceArg) -> VatSpace {
+        match v {
+            VatSpaceArg::Gltf => VatSpace::Gltf,
+            VatSpaceArg::Unity => VatSpace::Unity,
+            VatSpaceArg::Unreal => VatSpace::Unreal,
         }
     }
 }
@@ -311,14 +214,13 @@ pub enum EngineArg {
     Web,
 }
 
-impl EngineArg {
-    /// The preset's name in [`crate::batch::preset::PRESET_NAMES`].
-    pub fn text(self) -> &'static str {
-        match self {
-            EngineArg::Unity => "unity",
-            EngineArg::Unreal => "unreal",
-            EngineArg::Godot => "godot",
-            EngineArg::Web => "web",
+impl From<EngineArg> for Engine {
+    fn from(e: EngineArg) -> Engine {
+        match e {
+            EngineArg::Unity => Engine::Unity,
+            EngineArg::Unreal => Engine::Unreal,
+            EngineArg::Godot => Engine::Godot,
+            EngineArg::Web => Engine::Web,
         }
     }
 }
@@ -326,31 +228,30 @@ impl EngineArg {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::batch::preset::{EnginePreset, PRESET_NAMES};
+    use frond_app::lod_settings::Named;
+
+    /// Every value the command line takes names the application's value of the same text.
+    fn same_names<A: ValueEnum + Into<B> + Copy, B: Named>() {
+        for a in A::value_variants() {
+            let name = a.to_possible_value().expect("a value").get_name().to_string();
+            assert_eq!((*a).into().text(), name);
+        }
+        assert_eq!(A::value_variants().len(), B::ALL.len());
+    }
 
     #[test]
-    fn every_value_names_what_the_library_knows() {
-        assert_eq!(MethodArg::value_variants().len(), METHOD_NAMES.len());
-        for m in MethodArg::value_variants() {
-            assert_eq!(MethodArg::parse(m.text()), Some(*m));
-            assert_eq!(MethodName::parse(m.text()), Some(m.method()));
-        }
-        assert_eq!(MethodArg::AUTO.method(), MethodName::Auto);
-        for (_, m) in METHOD_NAMES {
-            assert_eq!(MethodArg::named(*m).method(), *m);
-            assert_eq!(MethodArg::named(*m).text(), m.name());
-        }
-        for a in AnimationArg::value_variants() {
-            let v = a.to_possible_value().expect("value");
-            assert_eq!(v.get_name(), a.text());
-        }
-        let engines: Vec<&str> = EngineArg::value_variants()
+    fn every_value_names_what_the_application_knows() {
+        same_names::<AnimationArg, Animation>();
+        same_names::<TexturesArg, Textures>();
+        same_names::<NormalsArg, Normals>();
+        same_names::<LightingArg, Lighting>();
+        same_names::<BakeRasteriserArg, BakeRasteriser>();
+        same_names::<VatSpaceArg, VatSpace>();
+        same_names::<EngineArg, Engine>();
+        let methods: Vec<&str> = MethodArg::value_variants()
             .iter()
-            .map(|e| e.text())
+            .map(|m| m.0.text())
             .collect();
-        assert_eq!(engines, PRESET_NAMES);
-        for e in EngineArg::value_variants() {
-            assert!(EnginePreset::named(e.text()).is_some());
-        }
+        assert_eq!(methods, MethodChoice::all().map(|m| m.text()).collect::<Vec<_>>());
     }
 }

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use crate::view_server::{ViewServer, open_browser};
+use frond_app::view_server::{ViewServer, open_browser};
 
 /// `frond view`.
 #[derive(clap::Args, Clone, Debug, PartialEq)]

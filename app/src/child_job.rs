@@ -7,6 +7,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 
+use crate::child_request::ChildRequest;
+
 /// How a child ended.
 #[derive(Clone, Debug, PartialEq)]
 pub enum JobEnd {
@@ -36,16 +38,17 @@ pub struct ChildSpec<'a> {
     pub env: Vec<(String, String)>,
 }
 
-/// Runs `exe args…` with stdout and stderr in files under `log_dir` (named `<tag>.stdout`,
-/// `<tag>.stderr`), killing it once `limit` has passed. Err only when it could not be started.
+/// Runs `exe child` on `request` (written to its standard input) with stdout and stderr in
+/// files under `log_dir` (named `<tag>.stdout`, `<tag>.stderr`), killing it once `limit` has
+/// passed. Err only when it could not be started.
 pub fn run_job(
     exe: &Path,
-    args: &[String],
+    request: &ChildRequest,
     log_dir: &Path,
     tag: &str,
     limit: Duration,
 ) -> Result<JobEnd> {
-    Ok(run_child(exe, args, &ChildSpec::default(), log_dir, tag, limit)?.end)
+    Ok(run_child(exe, request, &ChildSpec::default(), log_dir, tag, limit)?.end)
 }
 
 /// [`run_job`] with a working folder and environment, reporting wall time and peak memory. On
@@ -53,7 +56,7 @@ pub fn run_job(
 /// leaves no orphan writing on.
 pub fn run_child(
     exe: &Path,
-    args: &[String],
+    request: &ChildRequest,
     spec: &ChildSpec,
     log_dir: &Path,
     tag: &str,
@@ -67,9 +70,9 @@ pub fn run_child(
     let start = Instant::now();
     let mut command = Command::new(exe);
     command
-        .args(args)
+        .args(ChildRequest::ARGS)
         .envs(spec.env.iter().map(|(k, v)| (k, v)))
-        .stdin(Stdio::null())
+        .stdin(Stdio::piped())
         .stdout(stdout)
         .stderr(stderr);
     if let Some(dir) = spec.cwd {
@@ -79,6 +82,12 @@ pub fn run_child(
     let mut child = command
         .spawn()
         .with_context(|| format!("cannot start {}", exe.display()))?;
+    // A request is a few kilobytes, well within a pipe's buffer: written whole before the
+    // child reads, then closed so the child sees its end.
+    if let Some(mut stdin) = child.stdin.take() {
+        use std::io::Write;
+        let _ = stdin.write_all(&request.to_bytes());
+    }
     let mut peak_rss = None;
     let status = loop {
         if let Some(rss) = peak_rss_of(child.id()) {

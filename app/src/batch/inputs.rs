@@ -9,10 +9,7 @@ use frond_scene::input_file::{read_regular_file, resolve_uri};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use clap::ValueEnum;
-use frond_lod::{METHOD_NAMES, MethodName};
-
-use crate::cli::values::AnimationArg;
+use crate::lod_settings::{Animation, MethodChoice, Named};
 
 /// Settings a manifest may give every tree (`[defaults]`) or one tree (`[[tree]]`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -61,27 +58,19 @@ impl Overrides {
     /// Refuses names and values `frond lod` would refuse, naming `what` (the manifest entry).
     pub fn check(&self, what: &str) -> Result<()> {
         if let Some(m) = &self.method
-            && MethodName::parse(m).is_none()
+            && MethodChoice::parse(m).is_none()
         {
             bail!(
                 "{what}: unknown method '{m}' (one of {})",
-                METHOD_NAMES
-                    .iter()
-                    .map(|(n, _)| *n)
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                MethodChoice::list()
             );
         }
         if let Some(a) = &self.animation
-            && AnimationArg::from_str(a, false).is_err()
+            && Animation::parse(a).is_none()
         {
-            let names: Vec<&str> = AnimationArg::value_variants()
-                .iter()
-                .map(|v| v.text())
-                .collect();
             bail!(
                 "{what}: unknown animation '{a}' (one of {})",
-                names.join(", ")
+                Animation::list()
             );
         }
         if let Some(l) = &self.lods {

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use anyhow::{Context, Result};
 use frond_metrics::MetricId;
 use frond_metrics::statistics::Spread;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::csv_text::text_cell;
@@ -97,7 +97,7 @@ pub fn stability_quantities() -> Vec<&'static str> {
 }
 
 /// One run of the sweep (or one evaluation of an external candidate).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Row {
     /// Run id, also the folder under `runs/`.
     pub run: String,
@@ -286,7 +286,7 @@ fn opt(x: Option<f64>) -> String {
 }
 
 /// One configuration (method and grid point) over its seeds.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Stability {
     pub method: String,
     pub screen_height: f32,

@@ -56,10 +56,10 @@ pub struct TreeEntry {
     pub reason: Option<String>,
     /// SHA-256 of the input file(s).
     pub input_hash: Option<String>,
-    /// SHA-256 of `frond`'s version, the arguments and `--eval`.
+    /// SHA-256 of `frond`'s version, the settings and `--eval`.
     pub params_hash: String,
-    /// The `frond lod` arguments the tree was built with (input and output aside).
-    pub args: Vec<String>,
+    /// The `frond lod` settings the tree was built with (None when they could not be made).
+    pub settings: Option<crate::lod_settings::LodSettings>,
     pub preset: Option<String>,
     /// The files written (`report.json`, whose size follows its timing fields, aside).
     pub files: Vec<FileEntry>,
@@ -84,7 +84,7 @@ impl TreeEntry {
             reason: Some(reason.to_string()),
             input_hash: None,
             params_hash: String::new(),
-            args: Vec::new(),
+            settings: None,
             preset: None,
             files: Vec::new(),
             output_bytes: 0,
@@ -250,7 +250,7 @@ impl BatchSummary {
             "input_hash",
             "params_hash",
             "preset",
-            "args",
+            "settings",
             "files",
             "output_bytes",
             "methods",
@@ -293,7 +293,13 @@ impl BatchSummary {
                 t.input_hash.clone().unwrap_or_default(),
                 t.params_hash.clone(),
                 text_cell(t.preset.as_deref().unwrap_or_default()).into_owned(),
-                text_cell(&t.args.join(" ")).into_owned(),
+                text_cell(
+                    &t.settings
+                        .as_ref()
+                        .and_then(|s| serde_json::to_string(s).ok())
+                        .unwrap_or_default(),
+                )
+                .into_owned(),
                 t.files.len().to_string(),
                 t.output_bytes.to_string(),
                 text_cell(&join(&|l| l.method.clone())).into_owned(),

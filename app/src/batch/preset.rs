@@ -4,8 +4,8 @@
 
 use anyhow::{Result, bail};
 
-use crate::cli::lod::LodArgs;
-use crate::cli::values::{AnimationArg, TexturesArg, VatSpaceArg};
+use crate::lod_settings::LodSettings;
+use crate::lod_settings::{Animation, Textures, VatSpace};
 use serde::Serialize;
 
 /// One engine's conventions.
@@ -29,7 +29,7 @@ pub struct EnginePreset {
     pub png16_vat: bool,
     /// How frond's own textures are stored (`--textures`): KTX2 where the importer transcodes
     /// it.
-    pub textures: TexturesArg,
+    pub textures: Textures,
     /// Clip names with the `-loop` import hint (`--loop-hint`): Godot loops only clips so
     /// named.
     pub loop_hint: bool,
@@ -37,7 +37,7 @@ pub struct EnginePreset {
     pub compress: bool,
     /// The space VAT data is baked in (`--vat-space`): the engine's, for Houdini VAT 3.0's
     /// stock materials.
-    pub vat_space: VatSpaceArg,
+    pub vat_space: VatSpace,
 }
 
 /// What every engine shares: 4 influences, no joint limit known, 16-bit PNG VATs usable.
@@ -49,10 +49,10 @@ const COMMON: EnginePreset = EnginePreset {
     max_influences: 4,
     max_joints: None,
     png16_vat: true,
-    textures: TexturesArg::Png,
+    textures: Textures::Png,
     loop_hint: false,
     compress: false,
-    vat_space: VatSpaceArg::Gltf,
+    vat_space: VatSpace::Gltf,
 };
 
 /// Every preset, by `--preset` name.
@@ -64,7 +64,7 @@ pub const PRESETS: &[EnginePreset] = &[
         name: "unity",
         external_textures: true,
         msft_lod: true,
-        vat_space: VatSpaceArg::Unity,
+        vat_space: VatSpace::Unity,
         ..COMMON
     },
     // Unreal Engine 5 (Interchange): 8192 is the documented texture limit without .ini
@@ -75,7 +75,7 @@ pub const PRESETS: &[EnginePreset] = &[
         max_atlas: 8192,
         external_textures: true,
         max_joints: Some(256),
-        vat_space: VatSpaceArg::Unreal,
+        vat_space: VatSpace::Unreal,
         ..COMMON
     },
     // Godot 4: embedded images are extracted on import; up to 16384 px; generates its own
@@ -95,7 +95,7 @@ pub const PRESETS: &[EnginePreset] = &[
     EnginePreset {
         name: "web",
         png16_vat: false,
-        textures: TexturesArg::Ktx2,
+        textures: Textures::Ktx2,
         compress: true,
         ..COMMON
     },
@@ -111,8 +111,8 @@ impl EnginePreset {
     }
 
     /// Refuses an animation mode this engine cannot play (16-bit PNG VAT in a browser).
-    pub fn check_animation(&self, animation: AnimationArg) -> Result<()> {
-        if animation == AnimationArg::VatPng16 && !self.png16_vat {
+    pub fn check_animation(&self, animation: Animation) -> Result<()> {
+        if animation == Animation::VatPng16 && !self.png16_vat {
             bail!(
                 "preset {}: browsers decode 16-bit PNG textures to 8 bits; use --animation vat \
                  (EXR, three.js EXRLoader)",
@@ -124,17 +124,17 @@ impl EnginePreset {
 
     /// Sets this preset's `frond lod` options on `args` (atlas size, external textures,
     /// `MSFT_lod`), refusing an animation mode the engine cannot play.
-    pub fn apply(&self, args: &mut LodArgs) -> Result<()> {
+    pub fn apply(&self, args: &mut LodSettings) -> Result<()> {
         self.check_animation(args.animation)?;
         args.max_atlas = self.max_atlas;
         args.external_textures |= self.external_textures;
         args.msft_lod |= self.msft_lod;
         args.loop_hint |= self.loop_hint;
         args.compress |= self.compress;
-        if args.vat_space == VatSpaceArg::Gltf {
+        if args.vat_space == VatSpace::Gltf {
             args.vat_space = self.vat_space;
         }
-        if args.textures == TexturesArg::Png {
+        if args.textures == Textures::Png {
             args.textures = self.textures;
         }
         Ok(())
@@ -190,31 +190,31 @@ mod tests {
             PRESETS.iter().map(|p| p.name).collect::<Vec<_>>()
         );
         let web = EnginePreset::named("web").unwrap();
-        let mut args = LodArgs::defaults(Path::new("t.glb"), Path::new("o"));
+        let mut args = LodSettings::defaults(Path::new("t.glb"), Path::new("o"));
         args.max_atlas = 8192;
-        args.animation = AnimationArg::VatPng16;
+        args.animation = Animation::VatPng16;
         assert!(web.apply(&mut args.clone()).is_err());
-        args.animation = AnimationArg::Skin;
+        args.animation = Animation::Skin;
         let mut on_web = args.clone();
         web.apply(&mut on_web).unwrap();
         assert_eq!(
             (on_web.max_atlas, on_web.external_textures, on_web.msft_lod),
             (4096, false, false)
         );
-        assert_eq!(on_web.textures, TexturesArg::Ktx2);
+        assert_eq!(on_web.textures, Textures::Ktx2);
         let mut on_godot = args.clone();
         EnginePreset::named("godot")
             .unwrap()
             .apply(&mut on_godot)
             .unwrap();
-        assert!(on_godot.loop_hint && on_godot.textures == TexturesArg::Png);
+        assert!(on_godot.loop_hint && on_godot.textures == Textures::Png);
         // A format asked for on the command line stays.
         let mut own = args.clone();
-        own.textures = TexturesArg::Ktx2Png;
+        own.textures = Textures::Ktx2Png;
         web.apply(&mut own).unwrap();
-        assert_eq!(own.textures, TexturesArg::Ktx2Png);
+        assert_eq!(own.textures, Textures::Ktx2Png);
         let unity = EnginePreset::named("unity").unwrap();
-        args.animation = AnimationArg::Vat;
+        args.animation = Animation::Vat;
         unity.apply(&mut args).unwrap();
         assert_eq!(
             (args.max_atlas, args.external_textures, args.msft_lod),

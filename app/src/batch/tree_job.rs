@@ -16,11 +16,12 @@ use super::inputs::{Overrides, TreeInput, hex, input_hash};
 use super::preset::EnginePreset;
 use super::summary::{FileEntry, LodLine, Status, TreeEntry};
 use crate::child_job::{ChildSpec, JobEnd, run_child};
-use crate::cli::args::{BuildArgs, LimitArgs};
-use crate::cli::lod::LodArgs;
-use crate::cli::values::{AnimationArg, MethodArg};
+use crate::child_request::ChildRequest;
+use crate::eval_cmd::EvalSettings;
+use crate::lod_settings::{
+    Animation, BuildSettings, Engine, LodSettings, MethodChoice, Named, ReadSettings,
+};
 use crate::out_folder::OutFolder;
-use clap::ValueEnum;
 use frond_preview::VIEWER_DIR;
 
 /// Name of each tree's stamp, written last into its output folder.
@@ -46,7 +47,7 @@ pub struct TreeContext {
     pub defaults: Overrides,
     /// Plane search and bake options passed to every `frond lod` (clouds and clusters come
     /// from each tree's settings).
-    pub build: BuildArgs,
+    pub build: BuildSettings,
     pub preset: Option<EnginePreset>,
     pub eval: bool,
     /// Each tree's `frond lod` writes its preview page (`frond batch --no-preview` skips it).
@@ -58,76 +59,63 @@ pub struct TreeContext {
     pub limits: InputLimits,
 }
 
-/// The `frond lod` arguments (input and output aside) of a tree with `o` as its settings: a
-/// [`LodArgs`] at `frond lod`'s defaults with the settings, the batch's build options and the
-/// engine preset applied, written back as arguments.
-pub fn lod_args(ctx: &TreeContext, o: &Overrides, output: &str) -> Result<Vec<String>> {
-    let mut l = LodArgs::defaults(Path::new("tree.glb"), Path::new("out"));
+/// The `frond lod` settings of a tree with `o` as its settings (input and output set when it
+/// runs): `frond lod`'s defaults with the settings, the batch's build options and the engine
+/// preset applied.
+pub fn lod_settings(ctx: &TreeContext, o: &Overrides, output: &str) -> Result<LodSettings> {
+    let mut l = LodSettings::defaults(Path::new("tree.glb"), Path::new("."));
     // The batch measures with its own `eval` children when asked (`--eval`): the full report,
     // not the error alone.
-    l.no_measure = true;
-    l.no_preview = !ctx.preview;
+    l.measure = false;
+    l.preview = ctx.preview;
     // One copy of the preview's viewer scripts for the whole batch, in OUTDIR/viewer.
     let depth = Path::new(output).components().count();
     l.preview_viewer = Some(format!("{}{VIEWER_DIR}", "../".repeat(depth)));
     if let Some(m) = &o.method {
-        l.method = MethodArg::parse(m).with_context(|| format!("unknown method '{m}'"))?;
+        l.method = MethodChoice::parse(m).with_context(|| format!("unknown method '{m}'"))?;
     }
     if let Some(h) = &o.lods {
         l.lods = h.clone();
     }
     if let Some(a) = &o.animation {
-        l.animation = AnimationArg::from_str(a, false)
-            .map_err(|e| anyhow::anyhow!("unknown animation '{a}': {e}"))?;
+        l.animation = Animation::parse(a).with_context(|| {
+            format!("unknown animation '{a}' (one of {})", Animation::list())
+        })?;
     }
     if let Some(s) = o.seed {
-        l.run.seed = s;
+        l.sampling.seed = s;
     }
     if let Some(p) = o.pixel_error {
         l.pixel_error = p;
     }
     if let Some(s) = o.samples {
-        l.run.samples = s;
+        l.sampling.samples = s;
     }
-    l.run.clip = o.clip.clone();
-    l.import.materials.foliage_material = o.foliage_material.clone().unwrap_or_default();
-    l.import.materials.wood_material = o.wood_material.clone().unwrap_or_default();
-    l.import.limits = LimitArgs::of(&ctx.limits);
-    l.build = BuildArgs {
+    l.sampling.clip = o.clip.clone();
+    l.read = reading(ctx, o);
+    l.build = BuildSettings {
         clouds: o.clouds,
         clusters: o.clusters,
         ..ctx.build.clone()
     };
-    if let Some(p) = &ctx.preset {
-        p.apply(&mut l)?;
-    }
-    Ok(l.option_args())
+    l.preset = ctx.preset.and_then(|p| Engine::parse(p.name));
+    l.with_preset()
 }
 
-/// How a tree is read and sampled, as arguments `frond eval` takes: samples, clip, foliage
-/// and wood materials, input limits (when not the defaults).
-fn reading_args(ctx: &TreeContext, o: &Overrides) -> Vec<String> {
-    let mut a = LimitArgs::of(&ctx.limits).option_args();
-    if let Some(s) = o.samples {
-        a.extend(["--samples".to_string(), s.to_string()]);
+/// How a tree is read: its foliage and wood materials, the batch's input limits.
+fn reading(ctx: &TreeContext, o: &Overrides) -> ReadSettings {
+    ReadSettings {
+        foliage_materials: o.foliage_material.clone().unwrap_or_default(),
+        wood_materials: o.wood_material.clone().unwrap_or_default(),
+        limits: ctx.limits,
     }
-    if let Some(c) = &o.clip {
-        a.extend(["--clip".to_string(), c.clone()]);
-    }
-    for m in o.foliage_material.iter().flatten() {
-        a.extend(["--foliage-material".to_string(), m.clone()]);
-    }
-    for m in o.wood_material.iter().flatten() {
-        a.extend(["--wood-material".to_string(), m.clone()]);
-    }
-    a
 }
 
 /// The hash of what decides a tree's output besides its input.
-pub fn params_hash(args: &[String], eval: bool) -> String {
+pub fn params_hash(settings: &LodSettings, eval: bool) -> String {
     let key = serde_json::json!({
         "frond": env!("CARGO_PKG_VERSION"),
-        "args": args,
+        "settings": settings,
         "eval": eval,
     });
     hex(&Sha256::digest(key.to_string().as_bytes()))
@@ -160,17 +148,20 @@ fn summary_key(id: MetricId) -> &'static str {
 
 /// Processes one tree; never fails: a failure is the entry's status and reason.
 pub fn process(ctx: &TreeContext, tree: &TreeInput) -> TreeEntry {
-    let settings = tree.overrides.or(&ctx.defaults);
-    let args = lod_args(ctx, &settings, &tree.output);
+    let overrides = tree.overrides.or(&ctx.defaults);
+    let settings = lod_settings(ctx, &overrides, &tree.output);
     let mut entry = TreeEntry {
         reason: None,
-        args: args.as_ref().cloned().unwrap_or_default(),
+        settings: settings.as_ref().ok().cloned(),
         preset: ctx.preset.map(|p| p.name.to_string()),
         ..TreeEntry::failed(tree, "")
     };
-    entry.params_hash = params_hash(&entry.args, ctx.eval);
+    entry.params_hash = settings
+        .as_ref()
+        .map(|s| params_hash(s, ctx.eval))
+        .unwrap_or_default();
     let start = Instant::now();
-    let result = args.and_then(|args| build(ctx, tree, &settings, &args, &mut entry));
+    let result = settings.and_then(|s| build(ctx, tree, &overrides, s, &mut entry));
     entry.wall_s = start.elapsed().as_secs_f64();
     match result {
         Ok(status) => entry.status = status,
@@ -204,8 +195,8 @@ fn up_to_date(dir: &Path, report: &str, input_hash: &str, params_hash: &str) -> 
 fn build(
     ctx: &TreeContext,
     tree: &TreeInput,
-    settings: &Overrides,
-    args: &[String],
+    overrides: &Overrides,
+    settings: LodSettings,
     entry: &mut TreeEntry,
 ) -> Result<Status> {
     let hash = input_hash(&tree.path, &ctx.limits)?;
@@ -229,7 +220,7 @@ fn build(
 
     let tmp_name = format!("{key}%{}", std::process::id());
     let tmp = tmp_root.create_dir_all(&tmp_name)?;
-    let result = build_into(ctx, tree, settings, args, entry, &tmp, &key)
+    let result = build_into(ctx, tree, overrides, settings, entry, &tmp, &key)
         .and_then(|()| swap_into_place(&out, &tmp_name, &tree.output, &key));
     if result.is_err() {
         let _ = tmp_root.remove_dir_all(&tmp_name);
@@ -261,8 +252,8 @@ fn clear_leftovers(tmp_root: &OutFolder, key: &str) {
 fn build_into(
     ctx: &TreeContext,
     tree: &TreeInput,
-    settings: &Overrides,
-    args: &[String],
+    overrides: &Overrides,
+    settings: LodSettings,
     entry: &mut TreeEntry,
     tmp: &Path,
     key: &str,
@@ -274,13 +265,11 @@ fn build_into(
         cwd: Some(tmp),
         env: vec![("RAYON_NUM_THREADS".into(), ctx.threads.max(1).to_string())],
     };
-    let mut lod = vec![
-        "lod".to_string(),
-        input.display().to_string(),
-        "-o".into(),
-        ".".into(),
-    ];
-    lod.extend(args.iter().cloned());
+    let lod = ChildRequest::Lod(LodSettings {
+        input: input.clone(),
+        output: ".".into(),
+        ..settings
+    });
     let run = run_child(&ctx.exe, &lod, &spec, &log_dir, "lod", ctx.timeout)?;
     entry.peak_rss_bytes = run.peak_rss;
     check_end(run.end, "lod")?;
@@ -313,19 +302,16 @@ fn build_into(
 
     if ctx.eval {
         let t0 = Instant::now();
-        let reading = reading_args(ctx, settings);
         for (k, l) in entry.lods.iter_mut().enumerate() {
             let Some(h) = l.screen_height else { continue };
-            let mut eval = vec![
-                "eval".to_string(),
-                input.display().to_string(),
-                l.file.clone(),
-                "--screen-height".into(),
-                (h.round().max(1.0) as u32).to_string(),
-                "--json".into(),
-            ];
-            eval.extend(reading.iter().cloned());
             let tag = format!("eval{k}");
+            let eval = ChildRequest::Eval(EvalSettings {
+                read: reading(ctx, overrides),
+                screen_height: Some(h.round().max(1.0) as u32),
+                samples: overrides.samples.unwrap_or(64),
+                clip: overrides.clip.clone(),
+                ..EvalSettings::defaults(&input, Path::new(&l.file))
+            });
             let run = run_child(&ctx.exe, &eval, &spec, &log_dir, &tag, ctx.timeout)?;
             if let Some(p) = run.peak_rss {
                 entry.peak_rss_bytes = Some(entry.peak_rss_bytes.map_or(p, |q| q.max(p)));

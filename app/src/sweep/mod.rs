@@ -17,13 +17,12 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::child_job::{JobEnd, run_job};
-use crate::cli::args::RunArgs;
-use crate::cli::lod::LodArgs;
-use crate::cli::values::MethodArg;
+use crate::child_request::ChildRequest;
+use crate::lod_settings::{LodSettings, MethodChoice, Sampling};
 use crate::eval_cmd::{EvalContext, EvalRequest, image_for_screen_height, same_bytes};
 use crate::lod_cmd::lod_name;
 use crate::out_folder::{OutFolder, write_atomic};
@@ -38,9 +37,9 @@ use results::{Row, Stability};
 pub struct SweepRequest {
     /// The `frond` executable each run starts.
     pub exe: PathBuf,
-    /// Every run's `frond lod` arguments but output, method, screen height, seed and ε: the
+    /// Every run's `frond lod` settings but output, method, screen height, seed and ε: the
     /// input and how it is read, sampling, plane search and bake options.
-    pub lod: LodArgs,
+    pub lod: LodSettings,
     /// Methods of `frond lod --method`.
     pub methods: Vec<String>,
     pub grid: Grid,
@@ -59,7 +58,7 @@ pub struct SweepRequest {
 }
 
 /// `summary.json`.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct SweepSummary {
     pub input: String,
     pub methods: Vec<String>,
@@ -73,7 +72,14 @@ pub struct SweepSummary {
     /// Runs on the Pareto front of build time vs animated colour error.
     pub pareto_front: Vec<String>,
     pub files: Vec<String>,
-    pub timings_s: Value,
+    pub timings_s: SweepTimings,
+}
+
+/// `summary.json`'s wall times, in seconds.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct SweepTimings {
+    /// The whole sweep.
+    pub total: f64,
 }
 
 impl GridPoint {
@@ -207,7 +213,9 @@ pub fn run_sweep(
         stability,
         pareto_front: pareto,
         files: names,
-        timings_s: serde_json::json!({ "total": t0.elapsed().as_secs_f64() }),
+        timings_s: SweepTimings {
+            total: t0.elapsed().as_secs_f64(),
+        },
     };
     // The summary last: a summary on disk means the files it lists are there.
     for (name, bytes) in &files {
@@ -300,35 +308,41 @@ fn lod_run(
     }
     // `auto` picks by LOD rank: each run builds one LOD, so resolve the rule for this grid
     // point's rank among the grid's screen heights (nearest first), as `frond lod` would.
-    let given = MethodArg::parse(method).with_context(|| format!("unknown method '{method}'"))?;
+    let given =
+        MethodChoice::parse(method).with_context(|| format!("unknown method '{method}'"))?;
     let resolved = match given.method() {
         MethodName::Auto => {
             let heights = distinct_heights(&req.grid.points());
             let rank = heights.iter().filter(|&&h| h > p.screen_height).count();
             let cards = frond_lod::methods::cards::is_card_foliage(ctx.original());
-            MethodArg::named(auto_method(rank, false, cards).0)
+            MethodChoice::named(auto_method(rank, false, cards).0)
         }
         _ => given,
     };
-    let args = LodArgs {
+    let settings = LodSettings {
         output: dir.join("lod"),
         method: resolved,
         lods: vec![p.screen_height],
         epsilon: p.epsilon.map(Length::World),
         // A grid point measures the method at the ε and size asked for: the chain's cost
         // budgets would widen ε to half the input's triangles.
-        no_cost_budgets: true,
+        cost_budgets: false,
         // The sweep evaluates every point itself, and its own page shows the charts.
-        no_measure: true,
-        no_preview: true,
-        run: RunArgs {
+        measure: false,
+        preview: false,
+        sampling: Sampling {
             seed,
-            ..req.lod.run.clone()
+            ..req.lod.sampling.clone()
         },
         ..req.lod.clone()
-    }
-    .to_args();
-    let end = run_job(&req.exe, &args, dir, "lod", req.timeout)?;
+    };
+    let end = run_job(
+        &req.exe,
+        &ChildRequest::Lod(settings),
+        dir,
+        "lod",
+        req.timeout,
+    )?;
     let report_path = dir
         .join("lod")
         .join(frond_lod::report::report_name(tree_name));
