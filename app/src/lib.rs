@@ -11,6 +11,7 @@ pub mod child_job;
 pub mod child_request;
 pub mod cloud_cmd;
 pub mod csv_text;
+pub mod engine_preset;
 pub mod eval_cmd;
 pub mod inspect;
 pub mod lod_cmd;

@@ -11,7 +11,6 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use serde::{Deserialize, Serialize};
 
-use crate::batch::preset::EnginePreset;
 use crate::lod_cmd::LodRequest;
 use frond_export::AnimationMode;
 use frond_export::vat::VatFormat;
@@ -123,7 +122,7 @@ named_enum! {
 }
 
 named_enum! {
-    /// An engine preset (docs/engines.md; [`crate::batch::preset::PRESETS`]).
+    /// An engine preset (docs/engines.md; [`crate::engine_preset::PRESETS`]).
     Engine {
         /// Unity (glTFast, UnityGLTF).
         Unity = "unity",
@@ -468,7 +467,7 @@ pub struct LodSettings {
     pub compress: bool,
     /// The space vertex-animation data is baked in.
     pub vat_space: VatSpace,
-    /// An engine's conventions, applied by [`LodSettings::with_preset`].
+    /// An engine's conventions, applied by [`crate::engine_preset::with_preset`].
     pub preset: Option<Engine>,
 }
 
@@ -506,15 +505,6 @@ impl LodSettings {
             vat_space: VatSpace::Gltf,
             preset: None,
         }
-    }
-
-    /// The settings with the engine preset's conventions applied (see
-    /// [`EnginePreset::apply`]); unchanged without a preset.
-    pub fn with_preset(mut self) -> Result<LodSettings> {
-        if let Some(p) = self.preset.and_then(|e| EnginePreset::named(e.text())) {
-            p.apply(&mut self)?;
-        }
-        Ok(self)
     }
 
     /// Reads the input tree.
@@ -630,9 +620,9 @@ mod tests {
             assert_eq!(Animation::parse(a.text()), Some(*a));
         }
         let engines: Vec<&str> = Engine::ALL.iter().map(|e| e.text()).collect();
-        assert_eq!(engines, crate::batch::preset::PRESET_NAMES);
+        assert_eq!(engines, crate::engine_preset::PRESET_NAMES);
         for e in Engine::ALL {
-            assert!(EnginePreset::named(e.text()).is_some());
+            assert!(crate::engine_preset::EnginePreset::named(e.text()).is_some());
         }
     }
 }

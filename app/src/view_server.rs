@@ -80,7 +80,7 @@ impl ViewServer {
             .canonicalize()
             .with_context(|| format!("{}: cannot resolve the folder", root.display()))?;
         let listener = std::net::TcpListener::bind(("127.0.0.1", port)).with_context(|| {
-            format!("cannot listen on 127.0.0.1:{port} (in use? --port 0 picks a free one)")
+            format!("cannot listen on 127.0.0.1:{port} (in use? port 0 picks a free one)")
         })?;
         let start = start_page(&root)?;
         Ok(ViewServer {

@@ -26,8 +26,10 @@ pub struct MaterialArgs {
 pub struct ImportArgs {
     /// Input tree (.glb or .gltf).
     pub input: PathBuf,
+    /// Materials named as foliage or wood.
     #[command(flatten)]
     pub materials: MaterialArgs,
+    /// What reading the input may cost.
     #[command(flatten)]
     pub limits: LimitArgs,
 }

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 
 use frond_app::batch::inputs::Overrides;
-use frond_app::batch::preset::EnginePreset;
+use frond_app::engine_preset::EnginePreset;
 use frond_app::batch::shard::Shard;
 use frond_app::batch::tree_job::TreeContext;
 use frond_app::batch::{BatchRequest, default_max_memory, parse_memory, run_batch};
@@ -69,10 +69,13 @@ pub struct BatchArgs {
     /// Screen-space error budget in pixels.
     #[arg(long)]
     pub pixel_error: Option<f32>,
+    /// Materials named as foliage or wood.
     #[command(flatten)]
     pub materials: MaterialArgs,
+    /// What reading the input may cost.
     #[command(flatten)]
     pub limits: LimitArgs,
+    /// Plane search, bake and method options.
     #[command(flatten)]
     pub build: BuildArgs,
     /// Seconds one tree's `frond lod` (or one eval) may take before it is stopped and
@@ -133,8 +136,8 @@ impl BatchArgs {
         }
         let shard = match shard.as_deref() {
             None => None,
-            Some("auto") => Some(Shard::from_env(&|k| std::env::var(k).ok())?),
-            Some(s) => Some(Shard::parse(s)?),
+            Some("auto") => Some(Shard::from_env(&|k| std::env::var(k).ok()).context("--shard")?),
+            Some(s) => Some(Shard::parse(s).context("--shard")?),
         };
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         let jobs = jobs.map_or(cores, |j| j as usize);
@@ -149,7 +152,7 @@ impl BatchArgs {
             jobs,
             shard,
             max_memory: match &max_memory {
-                Some(m) => parse_memory(m)?,
+                Some(m) => parse_memory(m).context("--max-memory")?,
                 None => default_max_memory(),
             },
             context: TreeContext {

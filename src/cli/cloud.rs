@@ -18,6 +18,7 @@ use frond_render::Renderer;
 /// `frond cloud`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct CloudArgs {
+    /// The input tree and how it is read.
     #[command(flatten)]
     pub import: ImportArgs,
     /// Largest vertex distance from a billboard: a length, or a percentage of the rest-pose
@@ -27,6 +28,7 @@ pub struct CloudArgs {
     /// Candidate planes per iteration (the thesis's S).
     #[arg(long, default_value_t = 500)]
     pub planes: usize,
+    /// Seed and loop sampling.
     #[command(flatten)]
     pub run: RunArgs,
     /// Favour billboards seen from this elevation in degrees (0 = vertical billboards).

@@ -15,6 +15,7 @@ use frond_scene::input_file::human_bytes;
 /// `frond eval`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct EvalArgs {
+    /// The input tree and how it is read.
     #[command(flatten)]
     pub import: ImportArgs,
     /// The candidate model (.glb/.gltf); a `frond lod` LOD's `.mapping.json` beside it

@@ -10,6 +10,7 @@ use frond_scene::{SampleOptions, sample};
 /// `frond inspect`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct InspectArgs {
+    /// The input tree and how it is read.
     #[command(flatten)]
     pub import: ImportArgs,
     /// Clip to sample (default: the first).

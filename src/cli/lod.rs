@@ -18,6 +18,7 @@ use frond_scene::Length;
 /// `frond lod`.
 #[derive(clap::Args, Clone, Debug, PartialEq)]
 pub struct LodArgs {
+    /// The input tree and how it is read.
     #[command(flatten)]
     pub import: ImportArgs,
     /// Output folder.
@@ -84,8 +85,10 @@ pub struct LodArgs {
     /// terms, with reference shaders; spectral and per-bone methods).
     #[arg(long, value_enum, default_value = "skin")]
     pub animation: AnimationArg,
+    /// Seed and loop sampling.
     #[command(flatten)]
     pub run: RunArgs,
+    /// Plane search, bake and method options.
     #[command(flatten)]
     pub build: BuildArgs,
     /// Largest atlas side per LOD.
@@ -196,7 +199,7 @@ impl LodArgs {
 /// Runs `frond lod` with `settings` and prints what it wrote (the report as JSON with `json`):
 /// the command's own run, and a `frond batch` or `frond sweep` child's.
 pub fn run_settings(settings: LodSettings, json: bool) -> Result<()> {
-    let settings = settings.with_preset()?;
+    let settings = frond_app::engine_preset::with_preset(settings)?;
     let tree = settings.load()?;
     let renderer = Renderer::new()?;
     let req = settings.request(&tree)?;

@@ -10,6 +10,7 @@ use frond_app::batch::summary::{BatchSummary, Status, TreeEntry};
 pub struct Spinner(Option<indicatif::ProgressBar>);
 
 impl Spinner {
+    /// Starts the spinner on standard error (hidden when it is not a terminal).
     pub fn start() -> Self {
         Spinner(
             std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
@@ -19,6 +20,7 @@ impl Spinner {
             }),
         )
     }
+    /// Shows what is being done now.
     pub fn say(&self, msg: &str) {
         tracing::info!("{msg}");
         if let Some(b) = &self.0 {
@@ -39,6 +41,7 @@ impl Drop for Spinner {
 pub struct Progress(Option<indicatif::ProgressBar>);
 
 impl Progress {
+    /// Starts the bar on standard error (hidden when it is not a terminal).
     pub fn start() -> Self {
         Progress(
             std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
@@ -53,6 +56,7 @@ impl Progress {
             }),
         )
     }
+    /// Shows `done` of `total` steps and what is being done now.
     pub fn step(&self, done: usize, total: usize, msg: &str) {
         tracing::info!("[{done}/{total}] {msg}");
         if let Some(b) = &self.0 {
@@ -101,6 +105,7 @@ pub struct BatchBar {
 }
 
 impl BatchBar {
+    /// Starts the bar on standard error (hidden when it is not a terminal).
     pub fn start() -> Self {
         let bars = std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
             let multi = indicatif::MultiProgress::new();

@@ -13,6 +13,7 @@ use frond_render::Renderer;
 /// `frond render`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct RenderArgs {
+    /// The input tree and how it is read.
     #[command(flatten)]
     pub import: ImportArgs,
     /// Time in seconds within the clip.

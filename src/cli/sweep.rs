@@ -18,6 +18,7 @@ use frond_render::Renderer;
 /// `frond sweep`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct SweepArgs {
+    /// The input tree and how it is read.
     #[command(flatten)]
     pub import: ImportArgs,
     /// Output folder.
@@ -62,6 +63,7 @@ pub struct SweepArgs {
     /// Clip to sample (default: the first).
     #[arg(long)]
     pub clip: Option<String>,
+    /// Plane search, bake and method options.
     #[command(flatten)]
     pub build: BuildArgs,
     /// Seconds one run's build (or evaluation) may take before it is stopped and recorded
@@ -106,7 +108,7 @@ impl SweepArgs {
                     anyhow::bail!("--screen-height must be at least 1 pixel");
                 }
                 Grid::Epsilons {
-                    values: parse_epsilons(text, steps, diagonal)?,
+                    values: parse_epsilons(text, steps, diagonal).context("--epsilon")?,
                     screen_height,
                 }
             }

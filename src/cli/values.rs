@@ -166,8 +166,11 @@ impl From<VatSpaceArg> for VatSpace {
 /// A `--parts` value of `frond render`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum PartsArg {
+    /// Wood and foliage.
     All,
+    /// The wood alone.
     Wood,
+    /// The foliage alone.
     Foliage,
 }
 
@@ -208,9 +211,13 @@ impl From<SampleSize> for Preset {
 /// A `--preset` value of `frond batch` (docs/engines.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum EngineArg {
+    /// Unity (glTFast, UnityGLTF).
     Unity,
+    /// Unreal Engine 5 (Interchange).
     Unreal,
+    /// Godot.
     Godot,
+    /// three.js and the web.
     Web,
 }
 

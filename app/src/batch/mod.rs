@@ -3,7 +3,6 @@
 //! and sharded deterministically for job arrays (Kubernetes Indexed Jobs, Slurm).
 
 pub mod inputs;
-pub mod preset;
 pub mod shard;
 pub mod summary;
 pub mod tree_job;
@@ -78,14 +77,14 @@ pub fn parse_memory(text: &str) -> Result<u64> {
         Some('M') => 20,
         Some('G') => 30,
         Some('T') => 40,
-        Some(u) => anyhow::bail!("--max-memory '{text}': unknown unit '{u}' (K, M, G or T)"),
+        Some(u) => anyhow::bail!("memory size '{text}': unknown unit '{u}' (K, M, G or T)"),
     };
     let value: f64 = number
         .trim()
         .parse()
-        .with_context(|| format!("--max-memory '{text}': expected a size like 8G or 512M"))?;
+        .with_context(|| format!("memory size '{text}': expected a size like 8G or 512M"))?;
     if !(value.is_finite() && value > 0.0) {
-        anyhow::bail!("--max-memory '{text}': must be positive");
+        anyhow::bail!("memory size '{text}': must be positive");
     }
     Ok((value * (1u64 << shift) as f64) as u64)
 }

@@ -18,16 +18,16 @@ impl Shard {
     pub fn parse(text: &str) -> Result<Shard> {
         let (i, n) = text
             .split_once('/')
-            .with_context(|| format!("--shard '{text}': expected i/n, like 0/4, or auto"))?;
+            .with_context(|| format!("shard '{text}': expected i/n, like 0/4, or auto"))?;
         let index: u64 = i
             .trim()
             .parse()
-            .with_context(|| format!("--shard '{text}': '{i}' is not a shard index"))?;
+            .with_context(|| format!("shard '{text}': '{i}' is not a shard index"))?;
         let count: u64 = n
             .trim()
             .parse()
-            .with_context(|| format!("--shard '{text}': '{n}' is not a shard count"))?;
-        Shard::new(index, count).with_context(|| format!("--shard '{text}'"))
+            .with_context(|| format!("shard '{text}': '{n}' is not a shard count"))?;
+        Shard::new(index, count).with_context(|| format!("shard '{text}'"))
     }
 
     fn new(index: u64, count: u64) -> Result<Shard> {
@@ -51,33 +51,33 @@ impl Shard {
                     .trim()
                     .parse()
                     .map(Some)
-                    .with_context(|| format!("--shard auto: {name}='{v}' is not a number")),
+                    .with_context(|| format!("shard auto: {name}='{v}' is not a number")),
             }
         };
         if let Some(index) = num("JOB_COMPLETION_INDEX")? {
             let count = num("JOB_COMPLETIONS")?.context(
-                "--shard auto: JOB_COMPLETION_INDEX is set but JOB_COMPLETIONS is not (add it \
+                "shard auto: JOB_COMPLETION_INDEX is set but JOB_COMPLETIONS is not (add it \
                  to the Job's env from spec.completions)",
             )?;
-            return Shard::new(index, count).context("--shard auto (Kubernetes)");
+            return Shard::new(index, count).context("shard auto (Kubernetes)");
         }
         if let Some(id) = num("SLURM_ARRAY_TASK_ID")? {
             let count = num("SLURM_ARRAY_TASK_COUNT")?.context(
-                "--shard auto: SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not",
+                "shard auto: SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not",
             )?;
             let min = num("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
             let index = id.checked_sub(min).with_context(|| {
                 format!(
-                    "--shard auto: SLURM_ARRAY_TASK_ID {id} is below SLURM_ARRAY_TASK_MIN {min}"
+                    "shard auto: SLURM_ARRAY_TASK_ID {id} is below SLURM_ARRAY_TASK_MIN {min}"
                 )
             })?;
             return Shard::new(index, count).context(
-                "--shard auto (Slurm; use a contiguous --array range such as 0-7 so that ID − MIN \
+                "shard auto (Slurm; use a contiguous --array range such as 0-7 so that ID − MIN \
                  runs over 0..COUNT)",
             );
         }
         bail!(
-            "--shard auto: neither JOB_COMPLETION_INDEX (Kubernetes Indexed Job) nor \
+            "shard auto: neither JOB_COMPLETION_INDEX (Kubernetes Indexed Job) nor \
              SLURM_ARRAY_TASK_ID (Slurm array) is set"
         )
     }

@@ -13,7 +13,7 @@ use frond_metrics::MetricId;
 use frond_scene::InputLimits;
 
 use super::inputs::{Overrides, TreeInput, hex, input_hash};
-use super::preset::EnginePreset;
+use crate::engine_preset::EnginePreset;
 use super::summary::{FileEntry, LodLine, Status, TreeEntry};
 use crate::child_job::{ChildSpec, JobEnd, run_child};
 use crate::child_request::ChildRequest;
@@ -99,7 +99,7 @@ pub fn lod_settings(ctx: &TreeContext, o: &Overrides, output: &str) -> Result<Lo
         ..ctx.build.clone()
     };
     l.preset = ctx.preset.and_then(|p| Engine::parse(p.name));
-    l.with_preset()
+    crate::engine_preset::with_preset(l)
 }
 
 /// How a tree is read: its foliage and wood materials, the batch's input limits.
@@ -363,7 +363,7 @@ fn build_into(
 fn check_end(end: JobEnd, what: &str) -> Result<()> {
     match end {
         JobEnd::Done => Ok(()),
-        JobEnd::TimedOut(d) => anyhow::bail!("{what} ran past {} s (--timeout)", d.as_secs()),
+        JobEnd::TimedOut(d) => anyhow::bail!("{what} ran past its time limit of {} s", d.as_secs()),
         JobEnd::Failed(why) => {
             // "exit 1: error: FILE: problem" → "FILE: problem".
             let why = why

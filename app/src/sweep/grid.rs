@@ -60,19 +60,19 @@ pub fn parse_epsilons(text: &str, steps: usize, diagonal: f32) -> Result<Vec<f32
             .trim()
             .parse::<Length>()
             .map(|l| l.resolve(diagonal))
-            .with_context(|| format!("--epsilon '{s}': expected a length or a percentage"))?;
+            .with_context(|| format!("ε '{s}': expected a length or a percentage"))?;
         if !(v.is_finite() && v >= 0.0) {
-            bail!("--epsilon '{s}': must be a non-negative length");
+            bail!("ε '{s}': must be a non-negative length");
         }
         Ok(v)
     };
     if let Some((a, b)) = text.split_once("..") {
         let (a, b) = (one(a)?, one(b)?);
         if steps == 0 {
-            bail!("--steps must be at least 1");
+            bail!("the number of ε steps must be at least 1");
         }
         if b < a {
-            bail!("--epsilon {text}: the range must go from the smaller to the larger value");
+            bail!("the ε range {text}: the range must go from the smaller to the larger value");
         }
         if steps == 1 {
             return Ok(vec![a]);

@@ -111,14 +111,14 @@ pub fn run_sweep(
     let input = tree.source.as_path();
     let tree_name = lod_name(tree);
     if req.methods.is_empty() {
-        bail!("--method: no method to sweep");
+        bail!("no method to sweep");
     }
     if req.seeds.is_empty() {
-        bail!("--seeds must be at least 1");
+        bail!("the number of seeds must be at least 1");
     }
     for c in &req.candidates {
         if !c.is_file() {
-            bail!("--candidate {}: no such file", c.display());
+            bail!("candidate {}: no such file", c.display());
         }
     }
     let mut ctx = EvalContext::new(renderer, tree, eval)?;

@@ -5,7 +5,7 @@
 use anyhow::{Result, bail};
 
 use crate::lod_settings::LodSettings;
-use crate::lod_settings::{Animation, Textures, VatSpace};
+use crate::lod_settings::{Animation, Named, Textures, VatSpace};
 use serde::Serialize;
 
 /// One engine's conventions.
@@ -101,6 +101,15 @@ pub const PRESETS: &[EnginePreset] = &[
     },
 ];
 
+/// `settings` with its engine preset's conventions applied ([`EnginePreset::apply`]);
+/// unchanged without a preset.
+pub fn with_preset(mut settings: LodSettings) -> Result<LodSettings> {
+    if let Some(p) = settings.preset.and_then(|e| EnginePreset::named(e.text())) {
+        p.apply(&mut settings)?;
+    }
+    Ok(settings)
+}
+
 /// Every `--preset` name.
 pub const PRESET_NAMES: &[&str] = &["unity", "unreal", "godot", "web"];
 
@@ -114,7 +123,7 @@ impl EnginePreset {
     pub fn check_animation(&self, animation: Animation) -> Result<()> {
         if animation == Animation::VatPng16 && !self.png16_vat {
             bail!(
-                "preset {}: browsers decode 16-bit PNG textures to 8 bits; use --animation vat \
+                "preset {}: browsers decode 16-bit PNG textures to 8 bits; use the animation mode vat \
                  (EXR, three.js EXRLoader)",
                 self.name
             );
