@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """compare.py REF NEW [HASHES]: compare two output folders of run.sh file by file, bytes
 except timing: JSON keys t_* and timings_s (and the Pareto front, which ranks by time), CSV
-time columns, the stability table's time rows and column, "N.NN s" in logs, and the
+time columns, the stability table's time rows and column, "N.NN s" in logs, log lines' time
+stamps and module paths, the sweep page's time column and Pareto marks, and the
 accuracy_vs_time chart. NEW's absolute path is read as REF's. HASHES: write the sha256 of
 every compared file of REF (as compared) there. Exit status 1 when anything differs."""
 import sys, os, json, csv, io, hashlib
@@ -20,11 +21,20 @@ def norm(path):
         b = b.replace(os.path.abspath(new).encode(), os.path.abspath(ref).encode())
     if path.endswith(('.stdout', '.stderr', '.md')):
         b = re.sub(rb'\d+\.\d+ s\b', b'T s', b)
+    if path.endswith('.stderr'):
+        # Log lines: their time stamps, and the module path of their origin (which crate
+        # holds a file is a refactor's business, not the output's).
+        b = re.sub(rb'^\d{4}-\d\d-\d\dT[0-9:.]+Z +', b'', b, flags=re.M)
+        b = re.sub(rb'^(WARN|INFO|ERROR|DEBUG) [a-z_:]+: ', rb'\1 ', b, flags=re.M)
     n = os.path.basename(path)
     if n == 'log':
         return None
     if 'accuracy_vs_time' in n:
         return None
+    if n == 'index.html' and os.path.exists(os.path.join(os.path.dirname(path), 'results.csv')):
+        # The sweep's page: its time column and the Pareto front (ranked by time).
+        b = re.sub(rb'<td>[0-9.]+ (ms|s)</td>', b'<td>T</td>', b)
+        b = b.replace(b'<td>Pareto front</td>', b'<td></td>')
     if n.endswith('.json'):
         try:
             return json.dumps(strip(json.loads(b)), sort_keys=True).encode()
