@@ -422,19 +422,16 @@ fn manifest_overrides_preset_eval_and_staleness() {
     assert_eq!(trees[0]["tree"], "lib/more/a.glb");
     assert_eq!(trees[0]["output"], "custom/a");
     assert_eq!(trees[1]["output"], "lib/sapling");
-    let args = |t: &serde_json::Value| -> String {
-        t["args"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|a| a.as_str().unwrap())
-            .collect::<Vec<_>>()
-            .join(" ")
-    };
-    assert!(args(&trees[0]).contains("--method skeleton --lods 100"));
-    assert!(args(&trees[0]).contains("--max-atlas 8192"));
-    assert!(args(&trees[0]).contains("--external-textures"));
-    assert!(args(&trees[1]).contains("--method static --lods 60"));
+    // Each tree's settings: the manifest's, the batch's options and the preset's conventions.
+    let typed: frond_app::batch::summary::BatchSummary =
+        serde_json::from_value(first.clone()).unwrap();
+    let settings = |k: usize| typed.trees[k].settings.clone().unwrap();
+    let (a, b) = (settings(0), settings(1));
+    assert_eq!((a.method.text(), a.lods.as_slice()), ("skeleton", &[100.0][..]));
+    assert_eq!((a.max_atlas, a.external_textures), (8192, true));
+    assert_eq!(a.preset, Some(frond_app::lod_settings::Engine::Unreal));
+    assert_eq!(a.build.planes, 60);
+    assert_eq!((b.method.text(), b.lods.as_slice()), ("static", &[60.0][..]));
     // The joint budget keeps every LOD within 256 joints (a static LOD of the sapling once had a
     // joint per moving billboard): nothing to warn about.
     assert!(trees[1]["warnings"].as_array().unwrap().is_empty());
