@@ -82,11 +82,8 @@ pub fn run_child(
     let mut child = command
         .spawn()
         .with_context(|| format!("cannot start {}", exe.display()))?;
-    // A request is a few kilobytes, well within a pipe's buffer: written whole before the
-    // child reads, then closed so the child sees its end.
-    if let Some(mut stdin) = child.stdin.take() {
-        use std::io::Write;
-        let _ = stdin.write_all(&request.to_bytes());
+    if let Some(stdin) = child.stdin.take() {
+        send_request(stdin, request.to_bytes());
     }
     let mut peak_rss = None;
     let status = loop {
@@ -133,6 +130,32 @@ pub fn run_child(
     })
 }
 
+/// Writes `bytes` to a child's standard input and closes it, on a thread of its own: a child
+/// that does not read (or has died) can neither hold up the wall-clock limit nor, through
+/// SIGPIPE, end this process (the binary restores SIGPIPE's default action for its own output);
+/// the thread blocks SIGPIPE for itself, so a write to a closed pipe fails with EPIPE instead.
+fn send_request(mut stdin: std::process::ChildStdin, bytes: Vec<u8>) {
+    std::thread::spawn(move || {
+        use std::io::Write;
+        block_sigpipe_on_this_thread();
+        let _ = stdin.write_all(&bytes);
+    });
+}
+
+#[cfg(unix)]
+fn block_sigpipe_on_this_thread() {
+    // SAFETY: builds a signal set on the stack and changes only the calling thread's mask.
+    unsafe {
+        let mut set = std::mem::MaybeUninit::<libc::sigset_t>::zeroed();
+        libc::sigemptyset(set.as_mut_ptr());
+        libc::sigaddset(set.as_mut_ptr(), libc::SIGPIPE);
+        libc::pthread_sigmask(libc::SIG_BLOCK, set.as_ptr(), std::ptr::null_mut());
+    }
+}
+
+#[cfg(not(unix))]
+fn block_sigpipe_on_this_thread() {}
+
 /// The child's peak resident set so far, from `/proc/<pid>/status` (Linux only).
 fn peak_rss_of(pid: u32) -> Option<u64> {
     let text = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
@@ -169,11 +192,30 @@ fn die_with_parent(_command: &mut Command) {}
 mod tests {
     use super::*;
 
-    fn sh(script: &str, limit_ms: u64) -> (JobEnd, String) {
+    /// An executable shell script of `body` (it gets `child` as its argument and the request
+    /// on standard input, as frond would).
+    fn script(body: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+        use std::os::unix::fs::PermissionsExt;
         let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("child.sh");
+        std::fs::write(&path, format!("#!/bin/sh\n{body}\n")).unwrap();
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755)).unwrap();
+        (dir, path)
+    }
+
+    fn request() -> ChildRequest {
+        ChildRequest::Lod(crate::lod_settings::LodSettings::defaults(
+            Path::new("t.glb"),
+            Path::new("out"),
+        ))
+    }
+
+    fn sh(body: &str, limit_ms: u64) -> (JobEnd, String) {
+        let dir = tempfile::tempdir().unwrap();
+        let (_keep, exe) = script(body);
         let end = run_job(
-            Path::new("/bin/sh"),
-            &["-c".into(), script.into()],
+            &exe,
+            &request(),
             dir.path(),
             "t",
             Duration::from_millis(limit_ms),
@@ -186,6 +228,12 @@ mod tests {
     #[test]
     fn output_failure_and_timeout() {
         assert_eq!(sh("echo hi", 5000), (JobEnd::Done, "hi\n".to_string()));
+        // The child is started as `exe child` with the request on its standard input.
+        let (end, out) = sh("echo \"$1\"; cat", 5000);
+        assert_eq!(end, JobEnd::Done);
+        let (arg, json) = out.split_once('\n').unwrap();
+        assert_eq!(arg, "child");
+        assert_eq!(ChildRequest::read(json.as_bytes()).unwrap(), request());
         assert_eq!(
             sh("echo first >&2; echo 'error: bad tree' >&2; exit 3", 5000).0,
             JobEnd::Failed("exit 3: error: bad tree".into())
@@ -205,10 +253,11 @@ mod tests {
             env: vec![("FROND_T".into(), "xyz".into())],
         };
         // Holds ~64 MB in a shell variable for a moment.
-        let script = "pwd; echo $FROND_T; x=$(head -c 64000000 /dev/zero | tr '\\0' a); sleep 0.3";
+        let (_keep, exe) =
+            script("pwd; echo $FROND_T; x=$(head -c 64000000 /dev/zero | tr '\\0' a); sleep 0.3");
         let run = run_child(
-            Path::new("/bin/sh"),
-            &["-c".into(), script.into()],
+            &exe,
+            &request(),
             &spec,
             dir.path(),
             "t",
