@@ -346,8 +346,8 @@ impl OutputSet {
         let legacy = self.dir.path("report.json")?;
         if legacy.is_file()
             && let Ok(text) = std::fs::read(&legacy)
-            && let Ok(v) = serde_json::from_slice::<serde_json::Value>(&text)
-            && v["name"].as_str() == Some(self.name.as_str())
+            && let Ok(listing) = serde_json::from_slice::<ReportListing>(&text)
+            && listing.name.as_deref() == Some(self.name.as_str())
         {
             return Ok(Owned {
                 report: Some("report.json".into()),
@@ -506,14 +506,26 @@ fn install(
 fn listed_files(report: &Path, dir: &Path) -> Result<Vec<String>> {
     let text =
         std::fs::read(report).with_context(|| format!("{}: cannot read", report.display()))?;
-    let v: serde_json::Value = serde_json::from_slice(&text)
+    let listing: ReportListing = serde_json::from_slice(&text)
         .with_context(|| format!("{}: not a JSON report", report.display()))?;
-    Ok(v["files"]
-        .as_array()
-        .into_iter()
-        .flatten()
-        .filter_map(|f| relative_name(f.as_str()?, dir))
+    Ok(listing
+        .files
+        .iter()
+        .filter_map(|f| relative_name(f, dir))
         .collect())
+}
+
+/// What an output set reads back of a report (`<name>_report.json`, or an older
+/// `report.json`): whose set it is and the files it lists. Typed, and only these two fields, so
+/// that any frond version's report is read.
+#[derive(serde::Deserialize)]
+struct ReportListing {
+    /// The tree's name.
+    #[serde(default)]
+    name: Option<String>,
+    /// Every file of the set, relative to the folder (or, before frond 0.2, to `-o`).
+    #[serde(default)]
+    files: Vec<String>,
 }
 
 /// One `files` entry as a plain name relative to `dir`. frond 0.2 lists names relative to the
