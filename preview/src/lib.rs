@@ -10,6 +10,7 @@
 //! installed beyond a browser; the live view needs the folder served over HTTP or the file
 //! picked by hand (see [`viewer`]).
 
+pub mod charts;
 pub mod error;
 pub mod html;
 pub mod index_page;

@@ -171,7 +171,7 @@ pub fn run_sweep(
     progress(done, total, "writing tables and charts");
     let stability = results::stability(&rows);
     let charts = charts::sweep_charts(&rows);
-    let fonts = charts::chart_fonts();
+    let fonts = frond_preview::charts::chart_fonts();
     let mut files: Vec<(String, Vec<u8>)> = vec![
         ("results.csv".into(), results::results_csv(&rows)?),
         ("stability.csv".into(), results::stability_csv(&stability)?),
@@ -181,8 +181,8 @@ pub fn run_sweep(
         ),
     ];
     for c in &charts {
-        let svg = charts::chart_svg(c)?;
-        let png = charts::svg_to_png(&svg, &fonts)?;
+        let svg = frond_preview::charts::chart_svg(c)?;
+        let png = frond_preview::charts::svg_to_png(&svg, &fonts)?;
         files.push((format!("{}.svg", c.file_stem), svg.into_bytes()));
         files.push((format!("{}.png", c.file_stem), png));
     }

@@ -1,10 +1,11 @@
 //! The sweep's page (`index.html` in its folder, what `frond view OUTDIR` opens): every chart,
 //! the runs as a table in the units people use, the Pareto front, links to the tables.
 
+use frond_preview::charts::Chart;
 use frond_preview::html::{esc, href, page};
 use frond_preview::units;
 
-use super::charts::{ACCURACY, Chart};
+use super::charts::ACCURACY;
 use super::results::Row;
 
 /// The page of a sweep of `input` with `rows`, `charts` (written as `<stem>.png`/`.svg` beside
