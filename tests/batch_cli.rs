@@ -427,11 +427,17 @@ fn manifest_overrides_preset_eval_and_staleness() {
         serde_json::from_value(first.clone()).unwrap();
     let settings = |k: usize| typed.trees[k].settings.clone().unwrap();
     let (a, b) = (settings(0), settings(1));
-    assert_eq!((a.method.text(), a.lods.as_slice()), ("skeleton", &[100.0][..]));
+    assert_eq!(
+        (a.method.text(), a.lods.as_slice()),
+        ("skeleton", &[100.0][..])
+    );
     assert_eq!((a.max_atlas, a.external_textures), (8192, true));
     assert_eq!(a.preset, Some(frond_app::lod_settings::Engine::Unreal));
     assert_eq!(a.build.planes, 60);
-    assert_eq!((b.method.text(), b.lods.as_slice()), ("static", &[60.0][..]));
+    assert_eq!(
+        (b.method.text(), b.lods.as_slice()),
+        ("static", &[60.0][..])
+    );
     // The joint budget keeps every LOD within 256 joints (a static LOD of the sapling once had a
     // joint per moving billboard): nothing to warn about.
     assert!(trees[1]["warnings"].as_array().unwrap().is_empty());

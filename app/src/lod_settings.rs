@@ -16,8 +16,8 @@ use frond_export::AnimationMode;
 use frond_export::vat::VatFormat;
 use frond_lod::method::ignored_options;
 use frond_lod::{
-    ChainRequest, CloudOptions, METHOD_NAMES, Method, MethodName, SkeletonOptions,
-    SpectralOptions, screen_height_at,
+    ChainRequest, CloudOptions, METHOD_NAMES, Method, MethodName, SkeletonOptions, SpectralOptions,
+    screen_height_at,
 };
 use frond_scene::{ImportOptions, InputLimits, Length, Tree, import};
 
@@ -286,7 +286,7 @@ mod length_text {
 
 /// How a tree is read: materials named as foliage or wood over the classification heuristics,
 /// and what reading it may cost.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ReadSettings {
     /// Materials treated as foliage.
     pub foliage_materials: Vec<String>,
@@ -294,16 +294,6 @@ pub struct ReadSettings {
     pub wood_materials: Vec<String>,
     /// What reading one input may cost.
     pub limits: InputLimits,
-}
-
-impl Default for ReadSettings {
-    fn default() -> ReadSettings {
-        ReadSettings {
-            foliage_materials: Vec::new(),
-            wood_materials: Vec::new(),
-            limits: InputLimits::default(),
-        }
-    }
 }
 
 impl ReadSettings {

@@ -13,7 +13,6 @@
 //! per-pair values to report metrics in [`aggregate`]; the report in [`report`]; the whole
 //! evaluation (renders, matching, scores, cost) in [`eval`].
 
-
 pub mod aggregate;
 pub mod cost;
 pub mod coverage;

@@ -6,15 +6,15 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
+use crate::cli::args::{BuildArgs, LimitArgs, MaterialArgs};
+use crate::cli::progress::{BatchBar, finish_batch};
+use crate::cli::values::{AnimationArg, EngineArg, MethodArg};
 use frond_app::batch::inputs::Overrides;
-use frond_app::engine_preset::EnginePreset;
 use frond_app::batch::shard::Shard;
 use frond_app::batch::tree_job::TreeContext;
 use frond_app::batch::{BatchRequest, default_max_memory, parse_memory, run_batch};
-use crate::cli::args::{BuildArgs, LimitArgs, MaterialArgs};
+use frond_app::engine_preset::EnginePreset;
 use frond_app::lod_settings::{Animation, BuildSettings, Engine, Named};
-use crate::cli::progress::{BatchBar, finish_batch};
-use crate::cli::values::{AnimationArg, EngineArg, MethodArg};
 
 /// `frond batch`.
 #[derive(clap::Args, Clone, Debug)]

@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use frond_app::batch::summary::{BatchSummary, merge, read_summary, summaries_in};
 use crate::cli::progress::finish_batch;
+use frond_app::batch::summary::{BatchSummary, merge, read_summary, summaries_in};
 
 /// `frond batch-merge`.
 #[derive(clap::Args, Clone, Debug)]

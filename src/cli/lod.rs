@@ -204,7 +204,9 @@ pub fn run_settings(settings: LodSettings, json: bool) -> Result<()> {
     let renderer = Renderer::new()?;
     let req = settings.request(&tree)?;
     let bar = Spinner::start();
-    let result = run_lod(&renderer, &tree, &req, &settings.output, &|m: &str| bar.say(m));
+    let result = run_lod(&renderer, &tree, &req, &settings.output, &|m: &str| {
+        bar.say(m)
+    });
     drop(bar);
     let report = result?;
     if json {

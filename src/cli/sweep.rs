@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 
 use crate::cli::args::{BuildArgs, ImportArgs};
-use frond_app::lod_settings::{LodSettings, Sampling};
 use crate::cli::progress::{Progress, print_json};
 use crate::cli::values::MethodArg;
 use frond_app::eval_cmd::EvalRequest;
+use frond_app::lod_settings::{LodSettings, Sampling};
 use frond_app::sweep::grid::{Grid, parse_epsilons};
 use frond_app::sweep::{SweepRequest, run_sweep};
 use frond_render::Renderer;

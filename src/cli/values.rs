@@ -240,7 +240,11 @@ mod tests {
     /// Every value the command line takes names the application's value of the same text.
     fn same_names<A: ValueEnum + Into<B> + Copy, B: Named>() {
         for a in A::value_variants() {
-            let name = a.to_possible_value().expect("a value").get_name().to_string();
+            let name = a
+                .to_possible_value()
+                .expect("a value")
+                .get_name()
+                .to_string();
             assert_eq!((*a).into().text(), name);
         }
         assert_eq!(A::value_variants().len(), B::ALL.len());
@@ -259,6 +263,9 @@ mod tests {
             .iter()
             .map(|m| m.0.text())
             .collect();
-        assert_eq!(methods, MethodChoice::all().map(|m| m.text()).collect::<Vec<_>>());
+        assert_eq!(
+            methods,
+            MethodChoice::all().map(|m| m.text()).collect::<Vec<_>>()
+        );
     }
 }

@@ -67,9 +67,7 @@ impl Shard {
             )?;
             let min = num("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
             let index = id.checked_sub(min).with_context(|| {
-                format!(
-                    "shard auto: SLURM_ARRAY_TASK_ID {id} is below SLURM_ARRAY_TASK_MIN {min}"
-                )
+                format!("shard auto: SLURM_ARRAY_TASK_ID {id} is below SLURM_ARRAY_TASK_MIN {min}")
             })?;
             return Shard::new(index, count).context(
                 "shard auto (Slurm; use a contiguous --array range such as 0-7 so that ID − MIN \

@@ -13,10 +13,10 @@ use frond_metrics::MetricId;
 use frond_scene::InputLimits;
 
 use super::inputs::{Overrides, TreeInput, hex, input_hash};
-use crate::engine_preset::EnginePreset;
 use super::summary::{FileEntry, LodLine, Status, TreeEntry};
 use crate::child_job::{ChildSpec, JobEnd, run_child};
 use crate::child_request::ChildRequest;
+use crate::engine_preset::EnginePreset;
 use crate::eval_cmd::EvalSettings;
 use crate::lod_settings::{
     Animation, BuildSettings, Engine, LodSettings, MethodChoice, Named, ReadSettings,
@@ -78,9 +78,8 @@ pub fn lod_settings(ctx: &TreeContext, o: &Overrides, output: &str) -> Result<Lo
         l.lods = h.clone();
     }
     if let Some(a) = &o.animation {
-        l.animation = Animation::parse(a).with_context(|| {
-            format!("unknown animation '{a}' (one of {})", Animation::list())
-        })?;
+        l.animation = Animation::parse(a)
+            .with_context(|| format!("unknown animation '{a}' (one of {})", Animation::list()))?;
     }
     if let Some(s) = o.seed {
         l.sampling.seed = s;

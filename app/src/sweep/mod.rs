@@ -1,6 +1,6 @@
 //! `frond sweep`: `frond lod` over a parameter grid (screen heights, or fixed ε) × methods ×
 //! seeds, every result scored by `frond eval`, external candidates scored beside them; writes
-//! `results.csv`, the stability table, the failures and the charts (issue 5).
+//! `results.csv`, the stability table, the failures and the charts.
 //!
 //! Each build is a child process of the same `frond` binary with a wall-clock limit, so a run
 //! that fails, panics or hangs is recorded with its reason and the sweep goes on. Evaluation
@@ -22,9 +22,9 @@ use serde_json::Value;
 
 use crate::child_job::{JobEnd, run_job};
 use crate::child_request::ChildRequest;
-use crate::lod_settings::{LodSettings, MethodChoice, Sampling};
 use crate::eval_cmd::{EvalContext, EvalRequest, image_for_screen_height, same_bytes};
 use crate::lod_cmd::lod_name;
+use crate::lod_settings::{LodSettings, MethodChoice, Sampling};
 use crate::out_folder::{OutFolder, write_atomic};
 use frond_lod::method::{MethodName, auto_method};
 use frond_render::Renderer;
