@@ -13,7 +13,6 @@
 //! per-pair values to report metrics in [`aggregate`]; the report in [`report`]; the whole
 //! evaluation (renders, matching, scores, cost) in [`eval`].
 
-
 pub mod aggregate;
 pub mod cost;
 pub mod coverage;
@@ -35,4 +34,4 @@ pub use eval::{
     EvalContext, EvalError, EvalRequest, candidate_clip, evaluate, image_for_screen_height,
 };
 pub use metric_id::MetricId;
-pub use report::{Costs, CoverageMetrics, EvalReport, Metric};
+pub use report::{Costs, CoverageMetrics, EvalReport, EvalTimings, Metric};
