@@ -46,6 +46,7 @@ impl AnimationMode {
 pub struct ChainFileOptions {
     /// The tree's name in file names (`<name>_LOD1.glb`).
     pub name: String,
+    /// How billboards are animated: skinned, vertex animation textures or spectral textures.
     pub animation: AnimationMode,
     /// Textures as files next to the GLBs instead of embedded.
     pub external_textures: bool,
@@ -68,7 +69,10 @@ pub struct ChainFileOptions {
 /// The files of a chain, relative to the output folder, and the report lines with the files
 /// filled in.
 pub struct ChainFiles {
+    /// Every file to write (name relative to the output folder, bytes): each LOD's GLB and
+    /// sidecars, the combined file, the shaders.
     pub files: Vec<(String, Vec<u8>)>,
+    /// The chain's report lines, one per LOD, with their files and export time filled in.
     pub entries: Vec<LodEntry>,
     /// The combined file's name.
     pub combined: String,

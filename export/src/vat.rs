@@ -103,8 +103,11 @@ pub struct VatClip {
     pub name: Option<String>,
     /// Clip time of frame `first_frame`, seconds (the sampled loop's start).
     pub start_s: f32,
+    /// The loop's length, seconds (`frames / fps`).
     pub duration_s: f32,
+    /// The texture frame holding the loop's first sample.
     pub first_frame: u32,
+    /// Frames of the loop (it wraps from the last back to `first_frame`).
     pub frames: u32,
 }
 /// Value of [`VatSidecar::row_order`].
@@ -114,7 +117,9 @@ pub const ROW_ORDER: &str = "top_row_first";
 /// where that pivot is and how the piece is rotated relative to its rest orientation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RigidPiece {
+    /// The pivot in the rest pose the mesh holds (world units, glTF space).
     pub pivot: Vec3,
+    /// The pose at each frame (every piece has the same count).
     pub frames: Vec<RigidFrame>,
 }
 
@@ -122,7 +127,9 @@ pub struct RigidPiece {
 /// `rotation * (p - pivot) + position`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RigidFrame {
+    /// Where the pivot is (world units).
     pub position: Vec3,
+    /// The rotation from the rest orientation (need not be normalised; not zero).
     pub rotation: Quat,
 }
 
@@ -154,7 +161,9 @@ impl VatFormat {
 /// One encoded texture file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VatImage {
+    /// Width in texels.
     pub width: u32,
+    /// Height in texels.
     pub height: u32,
     /// The encoded file (EXR or PNG bytes).
     pub bytes: Vec<u8>,
@@ -181,6 +190,7 @@ pub struct VatTextureFiles {
 pub struct VatSidecar {
     /// Always [`LAYOUT`].
     pub layout: String,
+    /// The textures' file format.
     pub format: VatFormat,
     /// True for EXR: texels are raw values, the bounds are not used to decode.
     pub hdr: bool,
@@ -190,22 +200,27 @@ pub struct VatSidecar {
     pub fps: f32,
     /// frames / fps: the loop's duration.
     pub duration_s: f32,
+    /// Rigid pieces (billboards), in the mesh's billboard order.
     pub pieces: u32,
-    /// Texture width and height in texels (both textures have the same size).
+    /// Texture width in texels (both textures have the same size).
     pub width: u32,
+    /// Texture height in texels: `frames × rows_per_frame`.
     pub height: u32,
     /// Texel rows per frame: pieces wrap onto further rows when there are more than `width`.
     pub rows_per_frame: u32,
     /// Always [`ROW_ORDER`]: image row 0 (top) is frame 0's first row.
     pub row_order: String,
+    /// The texture files' names.
     pub textures: VatTextureFiles,
     /// The engine materials' "Bound Min/Max": PNG16 positions decode as min + t * (max - min).
     /// Whole numbers, so the flags Houdini hides in their fractions read as "no padding";
     /// for EXR `bound_max[2]` carries +0.5, Houdini's "raw positions" flag (see VAT.md).
     pub bound_min: [f32; 3],
+    /// The engine materials' "Bound Max" (see `bound_min`).
     pub bound_max: [f32; 3],
-    /// Tight bounds of the pivot trajectories (informational).
+    /// Tight lower bound of the pivot trajectories (informational).
     pub position_min: [f32; 3],
+    /// Tight upper bound of the pivot trajectories (informational).
     pub position_max: [f32; 3],
     /// Always [`PIECE_UV_CHANNEL`].
     pub piece_uv_channel: String,
@@ -231,6 +246,7 @@ pub struct VatSidecar {
     pub clips: Vec<VatClip>,
 }
 
+/// The version of a sidecar without `version`.
 fn version_1() -> u32 {
     1
 }
@@ -238,10 +254,13 @@ fn version_1() -> u32 {
 /// Everything [`encode_rigid`] produces.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VatTextures {
+    /// [`VatTextureFiles::position`].
     pub position: VatImage,
+    /// [`VatTextureFiles::rotation`].
     pub rotation: VatImage,
     /// [`VatTextureFiles::pivot`].
     pub pivot: VatImage,
+    /// What is written beside the textures as JSON.
     pub sidecar: VatSidecar,
     /// Per piece: the texture coordinate to put in the UV channel named in the sidecar
     /// (same for all corners of that billboard).
@@ -260,8 +279,9 @@ pub struct VatOptions {
     pub file_stem: String,
     /// The space the data is baked in (the pieces are given in glTF space).
     pub space: VatSpace,
-    /// The clip the frames are a loop of, and its time at frame 0 (for the sidecar).
+    /// The clip the frames are a loop of (for the sidecar).
     pub clip: Option<String>,
+    /// The clip's time at frame 0, seconds (for the sidecar).
     pub start_s: f32,
 }
 
@@ -280,55 +300,105 @@ impl Default for VatOptions {
 /// Why textures could not be encoded or decoded.
 #[derive(Debug, thiserror::Error)]
 pub enum VatError {
+    /// There is nothing to encode.
     #[error("no pieces to encode")]
     NoPieces,
+    /// The first piece has no frames.
     #[error("the pieces have no frames")]
     NoFrames,
+    /// Pieces disagree on the frame count.
     #[error(
         "piece {piece} has {found} frames, piece 0 has {expected}; all pieces need the same count"
     )]
     FrameCountMismatch {
+        /// The first piece whose count differs.
         piece: usize,
+        /// Piece 0's frame count.
         expected: usize,
+        /// That piece's frame count.
         found: usize,
     },
+    /// The frame rate is zero, negative or not finite.
     #[error("frames per second must be finite and positive, got {0}")]
     InvalidFps(f32),
+    /// A pivot, position or rotation is NaN or infinite.
     #[error("piece {piece}: {what} is not finite")]
-    NonFinite { piece: usize, what: String },
+    NonFinite {
+        /// The piece.
+        piece: usize,
+        /// Which value ("the rest pivot", "the position at frame 3", ...).
+        what: String,
+    },
+    /// A rotation quaternion cannot be normalised.
     #[error("piece {piece} frame {frame}: the rotation quaternion has (near) zero length")]
-    ZeroRotation { piece: usize, frame: usize },
+    ZeroRotation {
+        /// The piece.
+        piece: usize,
+        /// The frame.
+        frame: usize,
+    },
+    /// A value to be stored as a half float is beyond its range (or not finite).
     #[error(
         "piece {piece} frame {frame}: position {value} is beyond the half-float range (±65504)"
     )]
     OutOfHalfRange {
+        /// The piece (the billboard, for spectral textures).
         piece: usize,
+        /// The frame (the term, for spectral textures).
         frame: usize,
+        /// The value.
         value: f32,
     },
+    /// The texture would exceed the largest size allowed.
     #[error(
         "{pieces} pieces × {frames} frames need a {width}×{height} texture, more than the maximum {max}"
     )]
     TooLarge {
+        /// Pieces (billboards) to store.
         pieces: usize,
+        /// Frames (terms per billboard, for spectral textures).
         frames: usize,
+        /// The width needed, texels.
         width: u64,
+        /// The height needed, texels.
         height: u64,
+        /// The largest side allowed, texels.
         max: u32,
     },
+    /// A spectral term's frequency is too high for a half float to hold exactly.
     #[error(
         "billboard {piece}: frequency {frequency} is above 2048 cycles per loop, which half \
          floats cannot hold exactly (sample the loop with at most 4096 samples)"
     )]
-    FrequencyTooHigh { piece: usize, frequency: f32 },
+    FrequencyTooHigh {
+        /// The billboard.
+        piece: usize,
+        /// The frequency, cycles per loop.
+        frequency: f32,
+    },
+    /// The position bounds' extent overflows f32.
     #[error("the positions span more than f32 can hold")]
     RangeOverflow,
+    /// The largest texture size allowed is 0.
     #[error("invalid maximum texture size {0}")]
     InvalidMaxSize(u32),
+    /// A texture file could not be encoded.
     #[error("encoding the {role} texture failed: {message}")]
-    Encode { role: &'static str, message: String },
+    Encode {
+        /// Which texture (`position`, `rotation`).
+        role: &'static str,
+        /// The encoder's reason.
+        message: String,
+    },
+    /// A texture file could not be decoded.
     #[error("decoding the {role} texture failed: {message}")]
-    Decode { role: &'static str, message: String },
+    Decode {
+        /// Which texture (`position`, `rotation`, `pivot`).
+        role: &'static str,
+        /// The decoder's reason.
+        message: String,
+    },
+    /// A sidecar read back is inconsistent (the reason).
     #[error("sidecar does not describe a valid layout: {0}")]
     BadSidecar(String),
 }

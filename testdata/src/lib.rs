@@ -16,7 +16,6 @@
 //! libtest's output capture does not swallow it: it shows in a plain `cargo test` run, and
 //! `grep -c '^skipped: '` counts the skipped tests.
 
-
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
