@@ -46,6 +46,7 @@ impl AnimationMode {
 pub struct ChainFileOptions {
     /// The tree's name in file names (`<name>_LOD1.glb`).
     pub name: String,
+    /// How billboards are animated: skinned, vertex animation textures or spectral textures.
     pub animation: AnimationMode,
     /// Textures as files next to the GLBs instead of embedded.
     pub external_textures: bool,
@@ -68,7 +69,10 @@ pub struct ChainFileOptions {
 /// The files of a chain, relative to the output folder, and the report lines with the files
 /// filled in.
 pub struct ChainFiles {
+    /// Every file to write (name relative to the output folder, bytes): each LOD's GLB and
+    /// sidecars, the combined file, the shaders.
     pub files: Vec<(String, Vec<u8>)>,
+    /// The chain's report lines, one per LOD, with their files and export time filled in.
     pub entries: Vec<LodEntry>,
     /// The combined file's name.
     pub combined: String,
@@ -326,4 +330,92 @@ fn shader_files(mode: AnimationMode, spectral_written: bool) -> Vec<(String, Vec
 /// down to the size the next LOD was built for; the last one to a quarter of its own.
 pub fn msft_coverages(screen_heights: &[f32], resolution: f32) -> Vec<f32> {
     frond_lod::switching::min_screen_fractions(screen_heights, resolution)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{Quat, Vec3};
+    use serde::Serialize;
+    use serde::de::DeserializeOwned;
+
+    use super::*;
+    use crate::mapping::BillboardMapping;
+    use crate::spectral::{SpectralTerm, encode_spectral};
+    use crate::vat::{RigidFrame, RigidPiece, VatFormat, VatOptions, encode_rigid_with};
+
+    /// `value` written as its sidecar is, read back: equal, and written again to the same bytes.
+    fn round_trip<T: Serialize + DeserializeOwned + PartialEq + std::fmt::Debug>(value: &T) {
+        let bytes = json(value).expect("written");
+        let back: T = serde_json::from_slice(&bytes).expect("read back");
+        assert_eq!(&back, value);
+        assert_eq!(json(&back).expect("written again"), bytes);
+    }
+
+    #[test]
+    fn mapping_sidecars_read_back() {
+        round_trip(&Mapping {
+            lod: 2,
+            file: "oak_LOD2.glb".into(),
+            method: "per-bone".into(),
+            unmapped_triangles: vec![7, 9],
+            billboards: vec![
+                BillboardMapping {
+                    billboard: 0,
+                    triangles: vec![0, 1, 4],
+                    follows: Some("branch3_L1_0".into()),
+                    own_motion: true,
+                },
+                BillboardMapping {
+                    billboard: 1,
+                    triangles: vec![2],
+                    follows: None,
+                    own_motion: false,
+                },
+            ],
+        });
+    }
+
+    #[test]
+    fn vat_sidecars_read_back() {
+        let frame = |x: f32, angle: f32| RigidFrame {
+            position: Vec3::new(x, 1.5, -0.25),
+            rotation: Quat::from_rotation_y(angle),
+        };
+        let pieces = vec![
+            RigidPiece {
+                pivot: Vec3::new(0.0, 1.5, -0.25),
+                frames: vec![frame(0.0, 0.0), frame(0.1, 0.2), frame(0.05, 0.1)],
+            },
+            RigidPiece {
+                pivot: Vec3::new(-2.0, 3.0, 1.0),
+                frames: vec![frame(-2.0, 0.3), frame(-2.1, 0.1), frame(-1.9, 0.0)],
+            },
+        ];
+        for format in [VatFormat::ExrHalf, VatFormat::Png16] {
+            for space in [VatSpace::Gltf, VatSpace::Unity, VatSpace::Unreal] {
+                let options = VatOptions {
+                    file_stem: "oak_LOD1_vat".into(),
+                    space,
+                    clip: Some("Wind".into()),
+                    start_s: 0.5,
+                    ..VatOptions::default()
+                };
+                let vat = encode_rigid_with(&pieces, 24.0, format, &options).expect("encoded");
+                round_trip(&vat.sidecar);
+            }
+        }
+    }
+
+    #[test]
+    fn spectral_sidecars_read_back() {
+        let term = |frequency: f32| SpectralTerm {
+            frequency,
+            amplitude: [0.1, 0.02, -0.05],
+            phase: [0.5, -1.0, 2.0],
+        };
+        let terms = vec![vec![term(1.0), term(3.0)], Vec::new(), vec![term(2.0)]];
+        let textures =
+            encode_spectral(&terms, 4.0, 0.25, Some("Wind".into()), "oak_LOD1").expect("encoded");
+        round_trip(&textures.sidecar);
+    }
 }

@@ -40,6 +40,7 @@ struct State {
 }
 
 impl<'t> Downscaler<'t> {
+    /// A downscaler of `tree`'s images that has made none yet.
     pub fn new(tree: &'t Tree) -> Self {
         Downscaler {
             tree,

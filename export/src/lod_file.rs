@@ -36,7 +36,10 @@ pub struct FileOptions {
 
 /// A written document and the external files it references.
 pub struct GltfFile {
+    /// The binary glTF.
     pub glb: Vec<u8>,
+    /// Texture files the GLB references by URI (name relative to the GLB, bytes); empty
+    /// unless textures are written as files.
     pub external: Vec<(String, Vec<u8>)>,
     /// Joints in the skin of each LOD.
     pub joints: Vec<usize>,

@@ -11,12 +11,14 @@
 use std::collections::HashMap;
 
 use frond_lod::texture_budget::ImageSizes;
-use frond_lod::{AnimatedBillboardCloud, BillboardTexture};
+use frond_lod::{
+    AnimatedBillboard, AnimatedBillboardCloud, BillboardTexture, LoopClock, RigidMotion,
+};
 use frond_scene::Rig;
 use frond_scene::Tree;
 use frond_scene::gltf_writer::*;
-use frond_scene::rig::{Interpolation, Property};
-use frond_scene::wood::{NO_BONE, WoodMesh};
+use frond_scene::rig::{Channel, Clip, Interpolation, Property};
+use frond_scene::wood::{NO_BONE, WoodMesh, WoodPrimitive};
 use glam::Mat4;
 
 use crate::downscale::Downscaler;
@@ -75,7 +77,9 @@ pub enum BillboardNormals {
 
 /// Channels of one clip written for one LOD (merged by clip name across LODs).
 pub struct ClipChannels {
+    /// The rig clip's name: channels of the same clip in other LODs join the same animation.
     pub name: String,
+    /// The clip's channels on this LOD's nodes (rig channels, then motion joints' keys).
     pub channels: Vec<ChannelDesc>,
 }
 
@@ -85,13 +89,17 @@ pub struct LodNodes {
     pub mesh_nodes: Vec<usize>,
     /// The rig's root node.
     pub rig_root: usize,
+    /// Each written rig clip's channels, in the order of [`LodInput::clips`].
     pub clips: Vec<ClipChannels>,
+    /// Number of joints made for the LOD's skin.
     pub joints: usize,
 }
 
 /// The billboards of one texture: the atlas (`key` None) or an input material.
 struct TextureGroup {
+    /// The input material whose card the billboards copy; None for the atlas.
     key: Option<usize>,
+    /// The group's primitive, joints and weights left out until every billboard is in.
     prim: PrimitiveDesc,
     /// Per vertex.
     joints: Vec<[u16; 4]>,
@@ -99,6 +107,7 @@ struct TextureGroup {
     billboards: Vec<usize>,
 }
 
+/// How rig interpolation `i` is written in glTF.
 fn interpolation(i: Interpolation) -> WriteInterpolation {
     match i {
         Interpolation::Linear => WriteInterpolation::Linear,
@@ -109,356 +118,531 @@ fn interpolation(i: Interpolation) -> WriteInterpolation {
 
 /// Adds one LOD's nodes, mesh, skin and materials to `doc`; `suffix` is appended to every
 /// node name other than the mesh node's (for combined files). Scene roots are not set here.
+///
+/// The steps run in the order the document's nodes, meshes, materials and images are
+/// numbered in: the rig, the billboards (joints and materials on first use), the skinned
+/// parts, the mesh nodes, then the clips.
 pub fn add_lod(
     doc: &mut GltfBuilder,
     lod: &LodInput,
     suffix: &str,
     sink: &mut TextureSink,
 ) -> Result<LodNodes, ExportError> {
-    let rig = lod.rig;
-    let rest = rig.rest_world();
-    let rig_root = doc.add_node(NodeDesc {
-        name: format!("{}_rig", lod.name),
-        ..Default::default()
-    });
-    // The rig's nodes, parents first.
-    let mut out_node = vec![usize::MAX; rig.nodes.len()];
-    for &i in &rig.order {
-        let n = &rig.nodes[i];
-        let id = doc.add_node(NodeDesc {
-            name: format!("{}{suffix}", n.name),
-            translation: Some(n.rest.translation.to_array()),
-            rotation: Some(n.rest.rotation.to_array()),
-            scale: Some(n.rest.scale.to_array()),
-            extras: n.extras.clone(),
+    let mut skin = SkinBuilder::new(doc, lod.rig, &lod.name, suffix);
+    let (mut prims, vat_prims) = match lod.cloud {
+        Some(cloud) => billboard_primitives(doc, lod, cloud, sink, &mut skin)?,
+        None => (Vec::new(), Vec::new()),
+    };
+    part_primitives(doc, lod, sink, &mut skin, &mut prims)?;
+    let mesh_nodes = add_mesh_nodes(doc, lod, &skin, &prims, &vat_prims);
+    let clips = clip_channels(lod, &skin);
+    Ok(LodNodes {
+        mesh_nodes,
+        rig_root: skin.rig_root,
+        clips,
+        joints: skin.joints.len(),
+    })
+}
+
+/// The skin of one LOD as it is built: the rig's nodes in the document, and the joints,
+/// created on first use (a rig node's, the static joint, one per distinct own motion), with
+/// their inverse bind matrices and the motion joints' animation channels.
+struct SkinBuilder<'a> {
+    /// Appended to the names of the nodes made here (combined files).
+    suffix: &'a str,
+    /// Rest-pose world transform of each rig node.
+    rest: Vec<Mat4>,
+    /// The `<name>_rig` node every rig root and extra joint hangs under.
+    rig_root: usize,
+    /// The document node of each rig node.
+    out_node: Vec<usize>,
+    /// The skin's joint nodes, in joint order.
+    joints: Vec<usize>,
+    /// Each joint's inverse bind matrix.
+    ibms: Vec<Mat4>,
+    /// The joint of each rig node that has one.
+    joint_of_node: HashMap<usize, u16>,
+    /// The `frond_static` joint, once something that does not move needed it.
+    static_joint: Option<u16>,
+    /// Motion joints by followed node and key bits: exactly equal motions share a joint.
+    motion_joints: HashMap<(Option<usize>, Vec<u32>), u16>,
+    /// The motion joints' translation and rotation channels (for the clock's clip).
+    motion_channels: Vec<ChannelDesc>,
+}
+
+impl<'a> SkinBuilder<'a> {
+    /// Adds `<name>_rig` and the rig's nodes under it, parents first, with their rest
+    /// transforms; no joints yet.
+    fn new(doc: &mut GltfBuilder, rig: &Rig, name: &str, suffix: &'a str) -> Self {
+        let rest = rig.rest_world();
+        let rig_root = doc.add_node(NodeDesc {
+            name: format!("{name}_rig"),
             ..Default::default()
         });
-        out_node[i] = id;
-        match n.parent {
-            Some(p) => doc.add_child(out_node[p], id),
-            None => doc.add_child(rig_root, id),
+        let mut out_node = vec![usize::MAX; rig.nodes.len()];
+        for &i in &rig.order {
+            let n = &rig.nodes[i];
+            let id = doc.add_node(NodeDesc {
+                name: format!("{}{suffix}", n.name),
+                translation: Some(n.rest.translation.to_array()),
+                rotation: Some(n.rest.rotation.to_array()),
+                scale: Some(n.rest.scale.to_array()),
+                extras: n.extras.clone(),
+                ..Default::default()
+            });
+            out_node[i] = id;
+            match n.parent {
+                Some(p) => doc.add_child(out_node[p], id),
+                None => doc.add_child(rig_root, id),
+            }
+        }
+        SkinBuilder {
+            suffix,
+            rest,
+            rig_root,
+            out_node,
+            joints: Vec::new(),
+            ibms: Vec::new(),
+            joint_of_node: HashMap::new(),
+            static_joint: None,
+            motion_joints: HashMap::new(),
+            motion_channels: Vec::new(),
         }
     }
 
-    // Joints, created on first use.
-    let mut joints: Vec<usize> = Vec::new();
-    let mut ibms: Vec<Mat4> = Vec::new();
-    let mut joint_of_node: HashMap<usize, u16> = HashMap::new();
-    let mut static_joint: Option<u16> = None;
-    let mut motion_joints: HashMap<(Option<usize>, Vec<u32>), u16> = HashMap::new();
-    let mut motion_channels: Vec<ChannelDesc> = Vec::new();
-    let add_joint = |joints: &mut Vec<usize>, ibms: &mut Vec<Mat4>, node: usize, ibm: Mat4| {
-        joints.push(node);
-        ibms.push(ibm);
-        u16::try_from(joints.len() - 1).map_err(|_| ExportError::TooManyJoints)
-    };
-    let mut joint_for_node = |doc: &mut GltfBuilder,
-                              joints: &mut Vec<usize>,
-                              ibms: &mut Vec<Mat4>,
-                              node: Option<usize>|
-     -> Result<u16, ExportError> {
+    /// Makes `node` the next joint, bound with `ibm`; its index, which must fit a `u16`
+    /// (glTF's `JOINTS_0` as written).
+    fn add_joint(&mut self, node: usize, ibm: Mat4) -> Result<u16, ExportError> {
+        self.joints.push(node);
+        self.ibms.push(ibm);
+        u16::try_from(self.joints.len() - 1).map_err(|_| ExportError::TooManyJoints)
+    }
+
+    /// The joint of rig node `node`, or for None the `frond_static` identity joint (made
+    /// under the rig root on first use): vertices that move with that node, or not at all.
+    fn joint_for_node(
+        &mut self,
+        doc: &mut GltfBuilder,
+        node: Option<usize>,
+    ) -> Result<u16, ExportError> {
         match node {
             Some(n) => {
-                if let Some(&j) = joint_of_node.get(&n) {
+                if let Some(&j) = self.joint_of_node.get(&n) {
                     return Ok(j);
                 }
-                let j = add_joint(joints, ibms, out_node[n], rest[n].inverse())?;
-                joint_of_node.insert(n, j);
+                let j = self.add_joint(self.out_node[n], self.rest[n].inverse())?;
+                self.joint_of_node.insert(n, j);
                 Ok(j)
             }
             None => {
-                if let Some(j) = static_joint {
+                if let Some(j) = self.static_joint {
                     return Ok(j);
                 }
                 let id = doc.add_node(NodeDesc {
-                    name: format!("frond_static{suffix}"),
+                    name: format!("frond_static{}", self.suffix),
                     ..Default::default()
                 });
-                doc.add_child(rig_root, id);
-                let j = add_joint(joints, ibms, id, Mat4::IDENTITY)?;
-                static_joint = Some(j);
+                doc.add_child(self.rig_root, id);
+                let j = self.add_joint(id, Mat4::IDENTITY)?;
+                self.static_joint = Some(j);
                 Ok(j)
             }
         }
-    };
+    }
 
-    let mut prims = Vec::new();
-    let mut vat_prims = Vec::new();
-    // Billboards: one primitive for those baked into the atlas, one per input material for
-    // those that copy an input card (the hybrid cloud), in order of first use.
-    if let Some(cloud) = lod.cloud {
-        let mut groups: Vec<TextureGroup> = Vec::new();
-        // The crown's centre: the middle of the billboards' corners' bounding box.
-        let crown_centre = cloud
-            .billboards
-            .iter()
-            .flat_map(|b| b.quad.corners())
-            .fold(None, |acc: Option<(glam::Vec3, glam::Vec3)>, c| match acc {
-                None => Some((c, c)),
-                Some((lo, hi)) => Some((lo.min(c), hi.max(c))),
-            })
-            .map(|(lo, hi)| 0.5 * (lo + hi));
-        let clock = &cloud.clock;
-        let n = clock.samples.max(1);
-        for (bi, b) in cloud.billboards.iter().enumerate() {
-            let joint = if lod.vat_uvs.is_some() {
-                0
-            } else if lod.spectral_uvs.is_some() {
-                joint_for_node(doc, &mut joints, &mut ibms, b.follows)?
-            } else {
-                match &b.motion {
-                    None => joint_for_node(doc, &mut joints, &mut ibms, b.follows)?,
-                    Some(m) => {
-                        // Local keys of the motion joint: M(t) at the world level, or
-                        // Rest_b⁻¹ · M(t) · Rest_b under the followed node.
-                        let local: Vec<Mat4> = (0..n)
-                            .map(|s| {
-                                let mm = Mat4::from(m.at(s, n));
-                                match b.follows {
-                                    Some(f) => rest[f].inverse() * mm * rest[f],
-                                    None => mm,
-                                }
-                            })
-                            .collect();
-                        // Exactly equal motions share a joint (the screen budget already made
-                        // motions within half a pixel of each other equal).
-                        let key: Vec<u32> = local
-                            .iter()
-                            .flat_map(|m| m.to_cols_array())
-                            .map(f32::to_bits)
-                            .collect();
-                        match motion_joints.get(&(b.follows, key.clone())) {
-                            Some(&j) => j,
-                            None => {
-                                let id = doc.add_node(NodeDesc {
-                                    name: format!("frond_motion_{}{suffix}", motion_joints.len()),
-                                    ..Default::default()
-                                });
-                                let (parent, ibm) = match b.follows {
-                                    Some(f) => (out_node[f], rest[f].inverse()),
-                                    None => (rig_root, Mat4::IDENTITY),
-                                };
-                                doc.add_child(parent, id);
-                                let j = add_joint(&mut joints, &mut ibms, id, ibm)?;
-                                motion_joints.insert((b.follows, key), j);
-                                let mut times: Vec<f32> = (0..n).map(|s| clock.time(s)).collect();
-                                let mut keys = local.clone();
-                                if clock.period > 0.0 {
-                                    times.push(clock.start + clock.period);
-                                    keys.push(local[0]);
-                                }
-                                let mut tv = Vec::new();
-                                let mut rv = Vec::new();
-                                let mut prev: Option<glam::Quat> = None;
-                                for k in &keys {
-                                    let (_, r, t) = k.to_scale_rotation_translation();
-                                    // Keep consecutive keys in one hemisphere.
-                                    let r = match prev {
-                                        Some(p) if p.dot(r) < 0.0 => -r,
-                                        _ => r,
-                                    };
-                                    prev = Some(r);
-                                    tv.extend(t.to_array());
-                                    rv.extend(r.normalize().to_array());
-                                }
-                                motion_channels.push(ChannelDesc {
-                                    node: id,
-                                    path: ChannelPath::Translation,
-                                    times: times.clone(),
-                                    values: tv,
-                                    interpolation: WriteInterpolation::Linear,
-                                });
-                                motion_channels.push(ChannelDesc {
-                                    node: id,
-                                    path: ChannelPath::Rotation,
-                                    times,
-                                    values: rv,
-                                    interpolation: WriteInterpolation::Linear,
-                                });
-                                j
-                            }
-                        }
-                    }
-                }
-            };
-            let (key, texcoords) = match &b.texture {
-                BillboardTexture::Atlas => (None, None),
-                BillboardTexture::Input {
-                    material,
-                    texcoords,
-                } => (Some(*material), Some(texcoords)),
-            };
-            let g = match groups.iter().position(|g| g.key == key) {
-                Some(g) => g,
-                None => {
-                    let material = match key {
-                        None => sink.billboard_material(
-                            doc,
-                            &lod.name,
-                            &cloud.atlas,
-                            lod.billboard_normals == BillboardNormals::Baked,
-                        )?,
-                        Some(m) => sink.tree_material(doc, lod.images, m, lod.image_sizes)?,
-                    };
-                    groups.push(TextureGroup {
-                        key,
-                        prim: PrimitiveDesc {
-                            normals: Some(Vec::new()),
-                            // The atlas's normal map is in each quad's (u, v, front) frame.
-                            tangents: (key.is_none()
-                                && lod.billboard_normals == BillboardNormals::Baked)
-                                .then(Vec::new),
-                            uvs: Some(Vec::new()),
-                            byte_weights: lod.byte_weights,
-                            material: Some(material),
-                            ..Default::default()
-                        },
-                        joints: Vec::new(),
-                        billboards: Vec::new(),
-                    });
-                    groups.len() - 1
-                }
-            };
-            let TextureGroup {
-                prim: p,
-                joints: js,
-                billboards: members,
-                ..
-            } = &mut groups[g];
-            let base = p.positions.len() as u32;
-            // The input's own TEXCOORD_0 where the copy has one (its material is written as
-            // the input had it), else the UVs the billboard samples.
-            let uvs = texcoords.and_then(|t| t.first()).unwrap_or(&b.uv);
-            for (c, uv) in b.quad.corners().iter().zip(uvs) {
-                p.positions.push(c.to_array());
-                if let Some(nrm) = p.normals.as_mut() {
-                    let n = match (lod.billboard_normals, crown_centre) {
-                        (BillboardNormals::Crown, Some(o)) => {
-                            (*c - o).normalize_or(b.quad.plane.normal)
-                        }
-                        _ => b.quad.plane.normal,
-                    };
-                    nrm.push(n.to_array());
-                }
-                if let Some(t) = p.tangents.as_mut() {
-                    // Bitangent = normal × tangent = axis_v, the normal map's +Y (image up).
-                    let u = b.quad.axis_u.normalize_or_zero();
-                    t.push([u.x, u.y, u.z, 1.0]);
-                }
-                if let Some(u) = p.uvs.as_mut() {
-                    u.push(uv.to_array());
-                }
-                js.push([joint, 0, 0, 0]);
-            }
-            p.indices
-                .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
-            members.push(bi);
-        }
-        for TextureGroup {
-            prim: mut p,
-            joints: js,
-            billboards: members,
-            ..
-        } in groups
-        {
-            // Per-billboard animation coordinates, on all four corners.
-            let per_corner = |rows: &[[f32; 2]]| -> Vec<[f32; 2]> {
-                members
-                    .iter()
-                    .flat_map(|&i| [rows.get(i).copied().unwrap_or_default(); 4])
-                    .collect()
-            };
-            if let Some(sets) = &lod.vat_uvs {
-                p.extra_uvs = sets.iter().map(|set| per_corner(set)).collect();
-                vat_prims.push(p);
-            } else {
-                // A group holds at least the billboard that made it.
-                if let Some(rows) = &lod.spectral_uvs {
-                    p.extra_uvs = vec![per_corner(rows)];
-                }
-                p.weights = Some(vec![[1.0, 0.0, 0.0, 0.0]; js.len()]);
-                p.joints = Some(js);
-                prims.push(p);
+    /// The joint billboard `b`'s corners are bound to: 0 for VAT billboards (not skinned),
+    /// the followed node's under spectral animation (own motion comes from the spectral
+    /// texture) or without own motion, else a motion joint playing that motion.
+    fn billboard_joint(
+        &mut self,
+        doc: &mut GltfBuilder,
+        lod: &LodInput,
+        b: &AnimatedBillboard,
+        clock: &LoopClock,
+    ) -> Result<u16, ExportError> {
+        if lod.vat_uvs.is_some() {
+            Ok(0)
+        } else if lod.spectral_uvs.is_some() {
+            self.joint_for_node(doc, b.follows)
+        } else {
+            match &b.motion {
+                None => self.joint_for_node(doc, b.follows),
+                Some(m) => self.motion_joint(doc, b.follows, m, clock),
             }
         }
     }
-    // Skinned parts with the tree's materials.
+
+    /// The `frond_motion_<i>` joint playing motion `m` of a billboard following `follows`:
+    /// an existing one when an earlier billboard has exactly the same keys, else a new joint
+    /// under the followed node (or the rig root) with its channels.
+    fn motion_joint(
+        &mut self,
+        doc: &mut GltfBuilder,
+        follows: Option<usize>,
+        m: &RigidMotion,
+        clock: &LoopClock,
+    ) -> Result<u16, ExportError> {
+        let n = clock.samples.max(1);
+        // Local keys of the motion joint: M(t) at the world level, or
+        // Rest_b⁻¹ · M(t) · Rest_b under the followed node.
+        let local: Vec<Mat4> = (0..n)
+            .map(|s| {
+                let mm = Mat4::from(m.at(s, n));
+                match follows {
+                    Some(f) => self.rest[f].inverse() * mm * self.rest[f],
+                    None => mm,
+                }
+            })
+            .collect();
+        // Exactly equal motions share a joint (the screen budget already made
+        // motions within half a pixel of each other equal).
+        let key: Vec<u32> = local
+            .iter()
+            .flat_map(|m| m.to_cols_array())
+            .map(f32::to_bits)
+            .collect();
+        if let Some(&j) = self.motion_joints.get(&(follows, key.clone())) {
+            return Ok(j);
+        }
+        let id = doc.add_node(NodeDesc {
+            name: format!("frond_motion_{}{}", self.motion_joints.len(), self.suffix),
+            ..Default::default()
+        });
+        let (parent, ibm) = match follows {
+            Some(f) => (self.out_node[f], self.rest[f].inverse()),
+            None => (self.rig_root, Mat4::IDENTITY),
+        };
+        doc.add_child(parent, id);
+        let j = self.add_joint(id, ibm)?;
+        self.motion_joints.insert((follows, key), j);
+        self.motion_channels
+            .extend(motion_joint_channels(id, clock, &local));
+        Ok(j)
+    }
+}
+
+/// The translation and rotation channels of motion joint `node` playing `local` (one key
+/// per clock sample; a looping clock repeats the first key at the end of the period).
+fn motion_joint_channels(node: usize, clock: &LoopClock, local: &[Mat4]) -> [ChannelDesc; 2] {
+    let n = clock.samples.max(1);
+    let mut times: Vec<f32> = (0..n).map(|s| clock.time(s)).collect();
+    let mut keys = local.to_vec();
+    if clock.period > 0.0 {
+        times.push(clock.start + clock.period);
+        keys.push(local[0]);
+    }
+    let mut tv = Vec::new();
+    let mut rv = Vec::new();
+    let mut prev: Option<glam::Quat> = None;
+    for k in &keys {
+        let (_, r, t) = k.to_scale_rotation_translation();
+        // Keep consecutive keys in one hemisphere.
+        let r = match prev {
+            Some(p) if p.dot(r) < 0.0 => -r,
+            _ => r,
+        };
+        prev = Some(r);
+        tv.extend(t.to_array());
+        rv.extend(r.normalize().to_array());
+    }
+    [
+        ChannelDesc {
+            node,
+            path: ChannelPath::Translation,
+            times: times.clone(),
+            values: tv,
+            interpolation: WriteInterpolation::Linear,
+        },
+        ChannelDesc {
+            node,
+            path: ChannelPath::Rotation,
+            times,
+            values: rv,
+            interpolation: WriteInterpolation::Linear,
+        },
+    ]
+}
+
+/// The billboards' primitives, skinned ones and VAT ones: one for those baked into the
+/// atlas, one per input material for those that copy an input card (the hybrid cloud), in
+/// order of first use.
+fn billboard_primitives(
+    doc: &mut GltfBuilder,
+    lod: &LodInput,
+    cloud: &AnimatedBillboardCloud,
+    sink: &mut TextureSink,
+    skin: &mut SkinBuilder,
+) -> Result<(Vec<PrimitiveDesc>, Vec<PrimitiveDesc>), ExportError> {
+    let mut groups: Vec<TextureGroup> = Vec::new();
+    let centre = crown_centre(cloud);
+    for (bi, b) in cloud.billboards.iter().enumerate() {
+        let joint = skin.billboard_joint(doc, lod, b, &cloud.clock)?;
+        let (key, texcoords) = match &b.texture {
+            BillboardTexture::Atlas => (None, None),
+            BillboardTexture::Input {
+                material,
+                texcoords,
+            } => (Some(*material), Some(texcoords)),
+        };
+        let g = texture_group(&mut groups, doc, lod, cloud, sink, key)?;
+        // The input's own TEXCOORD_0 where the copy has one (its material is written as
+        // the input had it), else the UVs the billboard samples.
+        let uvs = texcoords.and_then(|t| t.first()).unwrap_or(&b.uv);
+        groups[g].push_billboard(b, bi, joint, uvs, lod.billboard_normals, centre);
+    }
+    Ok(group_primitives(groups, lod))
+}
+
+/// The crown's centre: the middle of the billboards' corners' bounding box (None without
+/// billboards).
+fn crown_centre(cloud: &AnimatedBillboardCloud) -> Option<glam::Vec3> {
+    cloud
+        .billboards
+        .iter()
+        .flat_map(|b| b.quad.corners())
+        .fold(None, |acc: Option<(glam::Vec3, glam::Vec3)>, c| match acc {
+            None => Some((c, c)),
+            Some((lo, hi)) => Some((lo.min(c), hi.max(c))),
+        })
+        .map(|(lo, hi)| 0.5 * (lo + hi))
+}
+
+/// The index in `groups` of the group of texture `key`; a new group, with its material
+/// written to `doc` now, on the key's first use.
+fn texture_group(
+    groups: &mut Vec<TextureGroup>,
+    doc: &mut GltfBuilder,
+    lod: &LodInput,
+    cloud: &AnimatedBillboardCloud,
+    sink: &mut TextureSink,
+    key: Option<usize>,
+) -> Result<usize, ExportError> {
+    if let Some(g) = groups.iter().position(|g| g.key == key) {
+        return Ok(g);
+    }
+    let material = match key {
+        None => sink.billboard_material(
+            doc,
+            &lod.name,
+            &cloud.atlas,
+            lod.billboard_normals == BillboardNormals::Baked,
+        )?,
+        Some(m) => sink.tree_material(doc, lod.images, m, lod.image_sizes)?,
+    };
+    groups.push(TextureGroup {
+        key,
+        prim: PrimitiveDesc {
+            normals: Some(Vec::new()),
+            // The atlas's normal map is in each quad's (u, v, front) frame.
+            tangents: (key.is_none() && lod.billboard_normals == BillboardNormals::Baked)
+                .then(Vec::new),
+            uvs: Some(Vec::new()),
+            byte_weights: lod.byte_weights,
+            material: Some(material),
+            ..Default::default()
+        },
+        joints: Vec::new(),
+        billboards: Vec::new(),
+    });
+    Ok(groups.len() - 1)
+}
+
+impl TextureGroup {
+    /// Appends billboard `b` (index `index` in the cloud) as a quad of two triangles bound
+    /// to `joint`, its corners sampling `uvs` and lit as `normals` asks (`crown_centre` for
+    /// crown normals).
+    fn push_billboard(
+        &mut self,
+        b: &AnimatedBillboard,
+        index: usize,
+        joint: u16,
+        uvs: &[glam::Vec2; 4],
+        normals: BillboardNormals,
+        crown_centre: Option<glam::Vec3>,
+    ) {
+        let p = &mut self.prim;
+        let base = p.positions.len() as u32;
+        for (c, uv) in b.quad.corners().iter().zip(uvs) {
+            p.positions.push(c.to_array());
+            if let Some(nrm) = p.normals.as_mut() {
+                let n = match (normals, crown_centre) {
+                    (BillboardNormals::Crown, Some(o)) => {
+                        (*c - o).normalize_or(b.quad.plane.normal)
+                    }
+                    _ => b.quad.plane.normal,
+                };
+                nrm.push(n.to_array());
+            }
+            if let Some(t) = p.tangents.as_mut() {
+                // Bitangent = normal × tangent = axis_v, the normal map's +Y (image up).
+                let u = b.quad.axis_u.normalize_or_zero();
+                t.push([u.x, u.y, u.z, 1.0]);
+            }
+            if let Some(u) = p.uvs.as_mut() {
+                u.push(uv.to_array());
+            }
+            self.joints.push([joint, 0, 0, 0]);
+        }
+        p.indices
+            .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        self.billboards.push(index);
+    }
+}
+
+/// The groups' primitives, in group order: VAT primitives carrying the animation
+/// coordinates (`vat_uvs`) unskinned, else skinned primitives (with the spectral
+/// coordinates under spectral animation). Returns (skinned, VAT).
+fn group_primitives(
+    groups: Vec<TextureGroup>,
+    lod: &LodInput,
+) -> (Vec<PrimitiveDesc>, Vec<PrimitiveDesc>) {
+    let mut prims = Vec::new();
+    let mut vat_prims = Vec::new();
+    for TextureGroup {
+        prim: mut p,
+        joints: js,
+        billboards: members,
+        ..
+    } in groups
+    {
+        // Per-billboard animation coordinates, on all four corners.
+        let per_corner = |rows: &[[f32; 2]]| -> Vec<[f32; 2]> {
+            members
+                .iter()
+                .flat_map(|&i| [rows.get(i).copied().unwrap_or_default(); 4])
+                .collect()
+        };
+        if let Some(sets) = &lod.vat_uvs {
+            p.extra_uvs = sets.iter().map(|set| per_corner(set)).collect();
+            vat_prims.push(p);
+        } else {
+            // A group holds at least the billboard that made it.
+            if let Some(rows) = &lod.spectral_uvs {
+                p.extra_uvs = vec![per_corner(rows)];
+            }
+            p.weights = Some(vec![[1.0, 0.0, 0.0, 0.0]; js.len()]);
+            p.joints = Some(js);
+            prims.push(p);
+        }
+    }
+    (prims, vat_prims)
+}
+
+/// Appends the skinned parts' primitives (with the tree's materials, written on first use)
+/// to `prims`, skipping empty ones.
+fn part_primitives(
+    doc: &mut GltfBuilder,
+    lod: &LodInput,
+    sink: &mut TextureSink,
+    skin: &mut SkinBuilder,
+    prims: &mut Vec<PrimitiveDesc>,
+) -> Result<(), ExportError> {
     for part in &lod.parts {
         for prim in &part.primitives {
             if prim.indices.is_empty() {
                 continue;
             }
             let mat = sink.tree_material(doc, lod.images, prim.material, lod.image_sizes)?;
-            // The input's texture coordinate sets as stored (its materials are written as they
-            // were, KHR_texture_transform and texCoord included); `uvs` when it carries none.
-            let sets = part.texcoords.len().max(1);
-            let mut p = PrimitiveDesc {
-                normals: Some(Vec::new()),
-                uvs: Some(Vec::new()),
-                extra_uvs: vec![Vec::new(); sets - 1],
-                joints: Some(Vec::new()),
-                weights: Some(Vec::new()),
-                byte_weights: lod.byte_weights,
-                material: Some(mat),
-                ..Default::default()
-            };
-            let mut remap: HashMap<u32, u32> = HashMap::new();
-            for &v in &prim.indices {
-                let next = p.positions.len() as u32;
-                let id = match remap.get(&v) {
-                    Some(&id) => id,
-                    None => {
-                        let vi = v as usize;
-                        let (bones, weights) = (part.bones[vi], part.weights[vi]);
-                        let mut j = [0u16; 4];
-                        let mut w = [0f32; 4];
-                        for s in 0..4 {
-                            if weights[s] <= 0.0 {
-                                continue;
-                            }
-                            let node = (bones[s] != NO_BONE).then_some(bones[s] as usize);
-                            j[s] = joint_for_node(doc, &mut joints, &mut ibms, node)?;
-                            w[s] = weights[s];
-                        }
-                        p.positions.push(part.positions[vi].to_array());
-                        if let Some(n) = p.normals.as_mut() {
-                            n.push(part.normals[vi].to_array());
-                        }
-                        if let Some(u) = p.uvs.as_mut() {
-                            let uv = match part.texcoords.first() {
-                                Some(set) => set.get(vi).copied().unwrap_or_default(),
-                                None => part.uvs[vi],
-                            };
-                            u.push(uv.to_array());
-                        }
-                        for (out, set) in p.extra_uvs.iter_mut().zip(part.texcoords.iter().skip(1))
-                        {
-                            out.push(set.get(vi).copied().unwrap_or_default().to_array());
-                        }
-                        if let Some(jj) = p.joints.as_mut() {
-                            jj.push(j);
-                        }
-                        if let Some(ww) = p.weights.as_mut() {
-                            ww.push(w);
-                        }
-                        remap.insert(v, next);
-                        next
-                    }
-                };
-                p.indices.push(id);
-            }
-            prims.push(p);
+            prims.push(part_primitive(doc, lod, part, prim, mat, skin)?);
         }
     }
+    Ok(())
+}
+
+/// One primitive of a skinned part with material `mat`: the vertices its indices use, in
+/// order of first use, each bound to the joints of its bones (made on first use).
+fn part_primitive(
+    doc: &mut GltfBuilder,
+    lod: &LodInput,
+    part: &WoodMesh,
+    prim: &WoodPrimitive,
+    mat: usize,
+    skin: &mut SkinBuilder,
+) -> Result<PrimitiveDesc, ExportError> {
+    // The input's texture coordinate sets as stored (its materials are written as they
+    // were, KHR_texture_transform and texCoord included); `uvs` when it carries none.
+    let sets = part.texcoords.len().max(1);
+    let mut p = PrimitiveDesc {
+        normals: Some(Vec::new()),
+        uvs: Some(Vec::new()),
+        extra_uvs: vec![Vec::new(); sets - 1],
+        joints: Some(Vec::new()),
+        weights: Some(Vec::new()),
+        byte_weights: lod.byte_weights,
+        material: Some(mat),
+        ..Default::default()
+    };
+    let mut remap: HashMap<u32, u32> = HashMap::new();
+    for &v in &prim.indices {
+        let next = p.positions.len() as u32;
+        let id = match remap.get(&v) {
+            Some(&id) => id,
+            None => {
+                let vi = v as usize;
+                let (bones, weights) = (part.bones[vi], part.weights[vi]);
+                let mut j = [0u16; 4];
+                let mut w = [0f32; 4];
+                for s in 0..4 {
+                    if weights[s] <= 0.0 {
+                        continue;
+                    }
+                    let node = (bones[s] != NO_BONE).then_some(bones[s] as usize);
+                    j[s] = skin.joint_for_node(doc, node)?;
+                    w[s] = weights[s];
+                }
+                push_part_vertex(&mut p, part, vi, j, w);
+                remap.insert(v, next);
+                next
+            }
+        };
+        p.indices.push(id);
+    }
+    Ok(p)
+}
+
+/// Appends vertex `vi` of `part` to `p`, bound to joints `j` with weights `w`.
+fn push_part_vertex(p: &mut PrimitiveDesc, part: &WoodMesh, vi: usize, j: [u16; 4], w: [f32; 4]) {
+    p.positions.push(part.positions[vi].to_array());
+    if let Some(n) = p.normals.as_mut() {
+        n.push(part.normals[vi].to_array());
+    }
+    if let Some(u) = p.uvs.as_mut() {
+        let uv = match part.texcoords.first() {
+            Some(set) => set.get(vi).copied().unwrap_or_default(),
+            None => part.uvs[vi],
+        };
+        u.push(uv.to_array());
+    }
+    for (out, set) in p.extra_uvs.iter_mut().zip(part.texcoords.iter().skip(1)) {
+        out.push(set.get(vi).copied().unwrap_or_default().to_array());
+    }
+    if let Some(jj) = p.joints.as_mut() {
+        jj.push(j);
+    }
+    if let Some(ww) = p.weights.as_mut() {
+        ww.push(w);
+    }
+}
+
+/// Writes the meshes and their nodes: the skinned mesh `<name>` with its skin (when
+/// anything is skinned) and the unskinned `<name>_vat` (when there are VAT billboards).
+/// Returns the nodes, in that order.
+fn add_mesh_nodes(
+    doc: &mut GltfBuilder,
+    lod: &LodInput,
+    skin: &SkinBuilder,
+    prims: &[PrimitiveDesc],
+    vat_prims: &[PrimitiveDesc],
+) -> Vec<usize> {
     // Zero-weight slots point at joint 0, which always exists once anything is skinned.
     let mut mesh_nodes = Vec::new();
     if !prims.is_empty() {
-        let mesh = doc.add_mesh(&lod.name, &prims);
+        let mesh = doc.add_mesh(&lod.name, prims);
         let skin = doc.add_skin(
             &format!("{}_skin", lod.name),
-            &joints,
-            &ibms,
-            Some(rig_root),
+            &skin.joints,
+            &skin.ibms,
+            Some(skin.rig_root),
         );
         mesh_nodes.push(doc.add_node(NodeDesc {
             name: lod.name.clone(),
@@ -468,73 +652,82 @@ pub fn add_lod(
         }));
     }
     if !vat_prims.is_empty() {
-        let mesh = doc.add_mesh(&format!("{}_vat", lod.name), &vat_prims);
+        let mesh = doc.add_mesh(&format!("{}_vat", lod.name), vat_prims);
         mesh_nodes.push(doc.add_node(NodeDesc {
             name: format!("{}_vat", lod.name),
             mesh: Some(mesh),
             ..Default::default()
         }));
     }
+    mesh_nodes
+}
 
-    // Clips: the rig's channels (verbatim) plus the motion joints' keys for the clock's clip.
+/// The clips' channels: the rig's channels (verbatim) plus the motion joints' keys for the
+/// clock's clip; a clip left without channels keeps its name and length through a constant
+/// key pair on the rig root.
+fn clip_channels(lod: &LodInput, skin: &SkinBuilder) -> Vec<ClipChannels> {
     let clock_clip = lod.cloud.and_then(|c| c.clock.clip);
     let mut clips = Vec::new();
     for &ci in &lod.clips {
-        let Some(clip) = rig.clips.get(ci) else {
+        let Some(clip) = lod.rig.clips.get(ci) else {
             continue;
         };
         let mut channels: Vec<ChannelDesc> = clip
             .channels
             .iter()
-            .map(|c| {
-                let width = if c.property == Property::Rotation {
-                    4
-                } else {
-                    3
-                };
-                ChannelDesc {
-                    node: out_node[c.node],
-                    path: match c.property {
-                        Property::Translation => ChannelPath::Translation,
-                        Property::Rotation => ChannelPath::Rotation,
-                        Property::Scale => ChannelPath::Scale,
-                    },
-                    times: c.times.clone(),
-                    values: c
-                        .values
-                        .iter()
-                        .flat_map(|v| v.to_array().into_iter().take(width))
-                        .collect(),
-                    interpolation: interpolation(c.interpolation),
-                }
-            })
+            .map(|c| rig_channel(c, &skin.out_node))
             .collect();
         if Some(ci) == clock_clip {
-            channels.extend(motion_channels.iter().cloned());
+            channels.extend(skin.motion_channels.iter().cloned());
         }
         if channels.is_empty() {
-            // Keep the clip, its name and its length: a constant key pair on the rig root.
-            channels.push(ChannelDesc {
-                node: rig_root,
-                path: ChannelPath::Translation,
-                times: vec![clip.start, clip.end.max(clip.start)],
-                values: vec![0.0; 6],
-                interpolation: WriteInterpolation::Linear,
-            });
-            if clip.end <= clip.start {
-                channels[0].times.truncate(1);
-                channels[0].values.truncate(3);
-            }
+            channels.push(constant_channel(clip, skin.rig_root));
         }
         clips.push(ClipChannels {
             name: clip.name.clone(),
             channels,
         });
     }
-    Ok(LodNodes {
-        mesh_nodes,
-        rig_root,
-        clips,
-        joints: joints.len(),
-    })
+    clips
+}
+
+/// Rig channel `c` as written, on its node's document node (`out_node`).
+fn rig_channel(c: &Channel, out_node: &[usize]) -> ChannelDesc {
+    let width = if c.property == Property::Rotation {
+        4
+    } else {
+        3
+    };
+    ChannelDesc {
+        node: out_node[c.node],
+        path: match c.property {
+            Property::Translation => ChannelPath::Translation,
+            Property::Rotation => ChannelPath::Rotation,
+            Property::Scale => ChannelPath::Scale,
+        },
+        times: c.times.clone(),
+        values: c
+            .values
+            .iter()
+            .flat_map(|v| v.to_array().into_iter().take(width))
+            .collect(),
+        interpolation: interpolation(c.interpolation),
+    }
+}
+
+/// A constant translation on `rig_root` over `clip` (one key for a clip without length), so
+/// that a clip without channels keeps its name and its length.
+fn constant_channel(clip: &Clip, rig_root: usize) -> ChannelDesc {
+    let mut channel = ChannelDesc {
+        node: rig_root,
+        path: ChannelPath::Translation,
+        times: vec![clip.start, clip.end.max(clip.start)],
+        values: vec![0.0; 6],
+        interpolation: WriteInterpolation::Linear,
+    };
+    if clip.end <= clip.start {
+        channel.times.truncate(1);
+        channel.values.truncate(3);
+    }
+    channel
 }

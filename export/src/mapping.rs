@@ -23,11 +23,15 @@ pub struct BillboardMapping {
 /// The whole sidecar.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Mapping {
+    /// The LOD's index in the chain (1 for `_LOD1`).
     pub lod: usize,
+    /// The LOD's GLB, relative to the sidecar.
     pub file: String,
+    /// The method that built the billboards (`per-bone`, `spectral`, ...).
     pub method: String,
     /// Input foliage triangles that no billboard replaces (dropped as too small to see).
     pub unmapped_triangles: Vec<usize>,
+    /// Every billboard, in billboard order.
     pub billboards: Vec<BillboardMapping>,
 }
 

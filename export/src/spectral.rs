@@ -25,7 +25,9 @@ offset_c = sum_j a_c cos(2 pi f u + ph_c), u = loop fraction";
 pub struct SpectralTerm {
     /// Cycles per loop.
     pub frequency: f32,
+    /// Amplitude per axis (x, y, z), world units.
     pub amplitude: [f32; 3],
+    /// Phase per axis (x, y, z), radians.
     pub phase: [f32; 3],
 }
 
@@ -34,9 +36,13 @@ pub struct SpectralTerm {
 pub struct SpectralSidecar {
     /// Always [`SPECTRAL_LAYOUT`].
     pub layout: String,
+    /// The texture's file name, relative to the sidecar.
     pub texture: String,
+    /// Texture width in texels.
     pub width: u32,
+    /// Texture height in texels (rows of billboard blocks).
     pub height: u32,
+    /// Billboards the texture holds a block for (the LOD's billboards, in order).
     pub billboards: u32,
     /// Terms per billboard the texture has room for.
     pub terms: u32,
@@ -44,21 +50,26 @@ pub struct SpectralSidecar {
     pub per_row: u32,
     /// Non-zero terms over all billboards.
     pub terms_used: u32,
-    /// Loop length and start, seconds, of the clip the motion was sampled from.
+    /// Loop length, seconds, of the clip the motion was sampled from.
     pub period_s: f32,
+    /// Clip time, seconds, where the loop starts (`u = 0`).
     pub start_s: f32,
+    /// The clip's name (None for a tree without clips).
     pub clip: Option<String>,
     /// Always "TEXCOORD_1.x = billboard index + 0.5".
     pub row_channel: String,
     /// Always "added to the vertex position before skinning (the followed bone's rest frame)".
     pub space: String,
+    /// Size of the texture file in bytes.
     pub bytes: usize,
 }
 
 /// The encoded texture and its sidecar.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpectralTextures {
+    /// The coefficient texture (EXR, RGBA half floats).
     pub image: VatImage,
+    /// What is written beside it as JSON.
     pub sidecar: SpectralSidecar,
     /// Per billboard: the value of `TEXCOORD_1` on its four corners (`[i + 0.5, 0]`).
     pub row_uv: Vec<[f32; 2]>,

@@ -103,8 +103,11 @@ pub struct VatClip {
     pub name: Option<String>,
     /// Clip time of frame `first_frame`, seconds (the sampled loop's start).
     pub start_s: f32,
+    /// The loop's length, seconds (`frames / fps`).
     pub duration_s: f32,
+    /// The texture frame holding the loop's first sample.
     pub first_frame: u32,
+    /// Frames of the loop (it wraps from the last back to `first_frame`).
     pub frames: u32,
 }
 /// Value of [`VatSidecar::row_order`].
@@ -114,7 +117,9 @@ pub const ROW_ORDER: &str = "top_row_first";
 /// where that pivot is and how the piece is rotated relative to its rest orientation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RigidPiece {
+    /// The pivot in the rest pose the mesh holds (world units, glTF space).
     pub pivot: Vec3,
+    /// The pose at each frame (every piece has the same count).
     pub frames: Vec<RigidFrame>,
 }
 
@@ -122,7 +127,9 @@ pub struct RigidPiece {
 /// `rotation * (p - pivot) + position`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RigidFrame {
+    /// Where the pivot is (world units).
     pub position: Vec3,
+    /// The rotation from the rest orientation (need not be normalised; not zero).
     pub rotation: Quat,
 }
 
@@ -154,7 +161,9 @@ impl VatFormat {
 /// One encoded texture file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VatImage {
+    /// Width in texels.
     pub width: u32,
+    /// Height in texels.
     pub height: u32,
     /// The encoded file (EXR or PNG bytes).
     pub bytes: Vec<u8>,
@@ -181,6 +190,7 @@ pub struct VatTextureFiles {
 pub struct VatSidecar {
     /// Always [`LAYOUT`].
     pub layout: String,
+    /// The textures' file format.
     pub format: VatFormat,
     /// True for EXR: texels are raw values, the bounds are not used to decode.
     pub hdr: bool,
@@ -190,22 +200,27 @@ pub struct VatSidecar {
     pub fps: f32,
     /// frames / fps: the loop's duration.
     pub duration_s: f32,
+    /// Rigid pieces (billboards), in the mesh's billboard order.
     pub pieces: u32,
-    /// Texture width and height in texels (both textures have the same size).
+    /// Texture width in texels (both textures have the same size).
     pub width: u32,
+    /// Texture height in texels: `frames × rows_per_frame`.
     pub height: u32,
     /// Texel rows per frame: pieces wrap onto further rows when there are more than `width`.
     pub rows_per_frame: u32,
     /// Always [`ROW_ORDER`]: image row 0 (top) is frame 0's first row.
     pub row_order: String,
+    /// The texture files' names.
     pub textures: VatTextureFiles,
     /// The engine materials' "Bound Min/Max": PNG16 positions decode as min + t * (max - min).
     /// Whole numbers, so the flags Houdini hides in their fractions read as "no padding";
     /// for EXR `bound_max[2]` carries +0.5, Houdini's "raw positions" flag (see VAT.md).
     pub bound_min: [f32; 3],
+    /// The engine materials' "Bound Max" (see `bound_min`).
     pub bound_max: [f32; 3],
-    /// Tight bounds of the pivot trajectories (informational).
+    /// Tight lower bound of the pivot trajectories (informational).
     pub position_min: [f32; 3],
+    /// Tight upper bound of the pivot trajectories (informational).
     pub position_max: [f32; 3],
     /// Always [`PIECE_UV_CHANNEL`].
     pub piece_uv_channel: String,
@@ -231,6 +246,7 @@ pub struct VatSidecar {
     pub clips: Vec<VatClip>,
 }
 
+/// The version of a sidecar without `version`.
 fn version_1() -> u32 {
     1
 }
@@ -238,10 +254,13 @@ fn version_1() -> u32 {
 /// Everything [`encode_rigid`] produces.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VatTextures {
+    /// [`VatTextureFiles::position`].
     pub position: VatImage,
+    /// [`VatTextureFiles::rotation`].
     pub rotation: VatImage,
     /// [`VatTextureFiles::pivot`].
     pub pivot: VatImage,
+    /// What is written beside the textures as JSON.
     pub sidecar: VatSidecar,
     /// Per piece: the texture coordinate to put in the UV channel named in the sidecar
     /// (same for all corners of that billboard).
@@ -260,8 +279,9 @@ pub struct VatOptions {
     pub file_stem: String,
     /// The space the data is baked in (the pieces are given in glTF space).
     pub space: VatSpace,
-    /// The clip the frames are a loop of, and its time at frame 0 (for the sidecar).
+    /// The clip the frames are a loop of (for the sidecar).
     pub clip: Option<String>,
+    /// The clip's time at frame 0, seconds (for the sidecar).
     pub start_s: f32,
 }
 
@@ -280,55 +300,105 @@ impl Default for VatOptions {
 /// Why textures could not be encoded or decoded.
 #[derive(Debug, thiserror::Error)]
 pub enum VatError {
+    /// There is nothing to encode.
     #[error("no pieces to encode")]
     NoPieces,
+    /// The first piece has no frames.
     #[error("the pieces have no frames")]
     NoFrames,
+    /// Pieces disagree on the frame count.
     #[error(
         "piece {piece} has {found} frames, piece 0 has {expected}; all pieces need the same count"
     )]
     FrameCountMismatch {
+        /// The first piece whose count differs.
         piece: usize,
+        /// Piece 0's frame count.
         expected: usize,
+        /// That piece's frame count.
         found: usize,
     },
+    /// The frame rate is zero, negative or not finite.
     #[error("frames per second must be finite and positive, got {0}")]
     InvalidFps(f32),
+    /// A pivot, position or rotation is NaN or infinite.
     #[error("piece {piece}: {what} is not finite")]
-    NonFinite { piece: usize, what: String },
+    NonFinite {
+        /// The piece.
+        piece: usize,
+        /// Which value ("the rest pivot", "the position at frame 3", ...).
+        what: String,
+    },
+    /// A rotation quaternion cannot be normalised.
     #[error("piece {piece} frame {frame}: the rotation quaternion has (near) zero length")]
-    ZeroRotation { piece: usize, frame: usize },
+    ZeroRotation {
+        /// The piece.
+        piece: usize,
+        /// The frame.
+        frame: usize,
+    },
+    /// A value to be stored as a half float is beyond its range (or not finite).
     #[error(
         "piece {piece} frame {frame}: position {value} is beyond the half-float range (±65504)"
     )]
     OutOfHalfRange {
+        /// The piece (the billboard, for spectral textures).
         piece: usize,
+        /// The frame (the term, for spectral textures).
         frame: usize,
+        /// The value.
         value: f32,
     },
+    /// The texture would exceed the largest size allowed.
     #[error(
         "{pieces} pieces × {frames} frames need a {width}×{height} texture, more than the maximum {max}"
     )]
     TooLarge {
+        /// Pieces (billboards) to store.
         pieces: usize,
+        /// Frames (terms per billboard, for spectral textures).
         frames: usize,
+        /// The width needed, texels.
         width: u64,
+        /// The height needed, texels.
         height: u64,
+        /// The largest side allowed, texels.
         max: u32,
     },
+    /// A spectral term's frequency is too high for a half float to hold exactly.
     #[error(
         "billboard {piece}: frequency {frequency} is above 2048 cycles per loop, which half \
          floats cannot hold exactly (sample the loop with at most 4096 samples)"
     )]
-    FrequencyTooHigh { piece: usize, frequency: f32 },
+    FrequencyTooHigh {
+        /// The billboard.
+        piece: usize,
+        /// The frequency, cycles per loop.
+        frequency: f32,
+    },
+    /// The position bounds' extent overflows f32.
     #[error("the positions span more than f32 can hold")]
     RangeOverflow,
+    /// The largest texture size allowed is 0.
     #[error("invalid maximum texture size {0}")]
     InvalidMaxSize(u32),
+    /// A texture file could not be encoded.
     #[error("encoding the {role} texture failed: {message}")]
-    Encode { role: &'static str, message: String },
+    Encode {
+        /// Which texture (`position`, `rotation`).
+        role: &'static str,
+        /// The encoder's reason.
+        message: String,
+    },
+    /// A texture file could not be decoded.
     #[error("decoding the {role} texture failed: {message}")]
-    Decode { role: &'static str, message: String },
+    Decode {
+        /// Which texture (`position`, `rotation`, `pivot`).
+        role: &'static str,
+        /// The decoder's reason.
+        message: String,
+    },
+    /// A sidecar read back is inconsistent (the reason).
     #[error("sidecar does not describe a valid layout: {0}")]
     BadSidecar(String),
 }
@@ -517,128 +587,17 @@ pub fn encode_rigid_with(
     let pieces = if space == VatSpace::Gltf {
         pieces
     } else {
-        converted = pieces
-            .iter()
-            .map(|p| RigidPiece {
-                pivot: space.point(p.pivot),
-                frames: p
-                    .frames
-                    .iter()
-                    .map(|f| RigidFrame {
-                        position: space.point(f.position),
-                        rotation: space.rotation(f.rotation),
-                    })
-                    .collect(),
-            })
-            .collect();
+        converted = pieces_in_space(pieces, space);
         &converted
     };
     let rotations = validate(pieces, fps)?;
     let frames = rotations[0].len();
     let grid = Grid::new(pieces.len(), frames, options.max_texture_size)?;
-    // Counts beyond u32 only arise with absurd maxima; refuse them rather than truncate.
-    let (piece_count, frame_count) = match (u32::try_from(pieces.len()), u32::try_from(frames)) {
-        (Ok(p), Ok(f)) => (p, f),
-        _ => {
-            return Err(VatError::TooLarge {
-                pieces: pieces.len(),
-                frames,
-                width: u64::from(grid.width),
-                height: u64::from(grid.height),
-                max: options.max_texture_size,
-            });
-        }
-    };
-
-    // Tight bounds of the pivot trajectories, then the whole-number material bounds.
-    let mut position_min = Vec3::splat(f32::INFINITY);
-    let mut position_max = Vec3::splat(f32::NEG_INFINITY);
-    for (p, piece) in pieces.iter().enumerate() {
-        for (f, frame) in piece.frames.iter().enumerate() {
-            position_min = position_min.min(frame.position);
-            position_max = position_max.max(frame.position);
-            if format == VatFormat::ExrHalf {
-                let largest = frame.position.abs().max_element();
-                if largest > f16::MAX.to_f32() {
-                    return Err(VatError::OutOfHalfRange {
-                        piece: p,
-                        frame: f,
-                        value: largest,
-                    });
-                }
-            }
-        }
-    }
-    let bound_min = position_min.floor();
-    let mut bound_max = position_max.ceil();
-    for axis in 0..3 {
-        if bound_max[axis] <= bound_min[axis] {
-            bound_max[axis] = bound_min[axis] + 1.0;
-        }
-    }
-    let range = bound_max - bound_min;
-    if !range.is_finite() {
-        return Err(VatError::RangeOverflow);
-    }
-    let mut material_bound_max = bound_max;
-    if format.is_hdr() {
-        // Houdini's "positions are raw" flag: frac(Bound Max Z) >= 0.5 (not used to decode EXR).
-        material_bound_max.z += 0.5;
-    }
-
-    // Texels as f32 RGBA in the texture's final meaning (remapped for PNG16).
-    let texels = grid.width as usize * grid.height as usize;
-    let mut position_texels = vec![[0.0f32; 4]; texels];
-    let hdr = format.is_hdr();
-    // Unused texels: identity rotation (stored components 0, which PNG16 maps to 0.5).
-    let unused = if hdr { 0.0 } else { 0.5 };
-    let mut rotation_texels = vec![[unused; 4]; texels];
-    for (p, piece) in pieces.iter().enumerate() {
-        for (f, frame) in piece.frames.iter().enumerate() {
-            let q = rotations[p][f];
-            let next = rotations[p][(f + 1) % frames];
-            let s3 = smallest_three(q);
-            let turns = turns_between(q, next);
-            let index = grid.texel(p, f);
-            let alpha = f32::from(s3.dropped) / 4.0;
-            if hdr {
-                let v = frame.position;
-                position_texels[index] = [v.x, v.y, v.z, alpha];
-                rotation_texels[index] = [s3.kept[0], s3.kept[1], s3.kept[2], turns];
-            } else {
-                let t = ((frame.position - bound_min) / range).clamp(Vec3::ZERO, Vec3::ONE);
-                position_texels[index] = [t.x, t.y, t.z, alpha];
-                let k = s3.kept;
-                rotation_texels[index] = [
-                    k[0] * 0.5 + 0.5,
-                    k[1] * 0.5 + 0.5,
-                    k[2] * 0.5 + 0.5,
-                    turns * 0.5 + 0.5,
-                ];
-            }
-        }
-    }
-
-    let (position_bytes, rotation_bytes) = match format {
-        VatFormat::ExrHalf => (
-            write_exr_half(grid.width, grid.height, &position_texels),
-            write_exr_half(grid.width, grid.height, &rotation_texels),
-        ),
-        VatFormat::Png16 => (
-            write_png16(grid.width, grid.height, &position_texels, true).map_err(|message| {
-                VatError::Encode {
-                    role: "position",
-                    message,
-                }
-            })?,
-            write_png16(grid.width, grid.height, &rotation_texels, false).map_err(|message| {
-                VatError::Encode {
-                    role: "rotation",
-                    message,
-                }
-            })?,
-        ),
-    };
+    let (piece_count, frame_count) = texture_counts(pieces.len(), frames, &grid, options)?;
+    let bounds = PositionBounds::of(pieces, format)?;
+    let (position_texels, rotation_texels) = texels(pieces, &rotations, &grid, &bounds, format);
+    let (position_bytes, rotation_bytes) =
+        encode_textures(format, &grid, &position_texels, &rotation_texels)?;
 
     let extension = format.extension();
     let image = |bytes| VatImage {
@@ -660,11 +619,226 @@ pub fn encode_rigid_with(
         .iter()
         .map(|&pivot| space.pivot_channels(pivot))
         .collect();
+    let sidecar = sidecar(
+        format,
+        fps,
+        &grid,
+        (piece_count, frame_count),
+        &bounds,
+        options,
+    );
+    tracing::debug!(
+        "VAT rigid: {} pieces × {} frames → {}×{} {:?}",
+        pieces.len(),
+        frames,
+        grid.width,
+        grid.height,
+        format
+    );
+    Ok(VatTextures {
+        position: image(position_bytes),
+        rotation: image(rotation_bytes),
+        pivot: pivot_image(&grid, &rest_pivots, space),
+        sidecar,
+        piece_uv,
+        pivot_uv,
+    })
+}
 
-    let sidecar = VatSidecar {
+/// `pieces` (in glTF space) in `space`: pivots, positions and rotations converted.
+fn pieces_in_space(pieces: &[RigidPiece], space: VatSpace) -> Vec<RigidPiece> {
+    pieces
+        .iter()
+        .map(|p| RigidPiece {
+            pivot: space.point(p.pivot),
+            frames: p
+                .frames
+                .iter()
+                .map(|f| RigidFrame {
+                    position: space.point(f.position),
+                    rotation: space.rotation(f.rotation),
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// The piece and frame counts as the sidecar's `u32`s. Counts beyond u32 only arise with
+/// absurd maxima; they are refused rather than truncated.
+fn texture_counts(
+    pieces: usize,
+    frames: usize,
+    grid: &Grid,
+    options: &VatOptions,
+) -> Result<(u32, u32), VatError> {
+    match (u32::try_from(pieces), u32::try_from(frames)) {
+        (Ok(p), Ok(f)) => Ok((p, f)),
+        _ => Err(VatError::TooLarge {
+            pieces,
+            frames,
+            width: u64::from(grid.width),
+            height: u64::from(grid.height),
+            max: options.max_texture_size,
+        }),
+    }
+}
+
+/// The bounds of the pivot trajectories: tight, and the whole-number ones the materials
+/// decode PNG16 positions with.
+struct PositionBounds {
+    /// Smallest pivot position over every piece and frame, per axis.
+    position_min: Vec3,
+    /// Largest pivot position over every piece and frame, per axis.
+    position_max: Vec3,
+    /// `position_min` rounded down: the decode's lower bound.
+    bound_min: Vec3,
+    /// The decode's upper bound as the sidecar gives it: `position_max` rounded up, at least
+    /// 1 above `bound_min`, plus 0.5 on z for raw (HDR) positions, Houdini's flag.
+    material_bound_max: Vec3,
+    /// The decode's range: the upper bound (without the flag) minus `bound_min`.
+    range: Vec3,
+}
+
+impl PositionBounds {
+    /// The bounds of `pieces`' positions; for EXR, refuses a position beyond half floats.
+    fn of(pieces: &[RigidPiece], format: VatFormat) -> Result<PositionBounds, VatError> {
+        // Tight bounds of the pivot trajectories, then the whole-number material bounds.
+        let mut position_min = Vec3::splat(f32::INFINITY);
+        let mut position_max = Vec3::splat(f32::NEG_INFINITY);
+        for (p, piece) in pieces.iter().enumerate() {
+            for (f, frame) in piece.frames.iter().enumerate() {
+                position_min = position_min.min(frame.position);
+                position_max = position_max.max(frame.position);
+                if format == VatFormat::ExrHalf {
+                    let largest = frame.position.abs().max_element();
+                    if largest > f16::MAX.to_f32() {
+                        return Err(VatError::OutOfHalfRange {
+                            piece: p,
+                            frame: f,
+                            value: largest,
+                        });
+                    }
+                }
+            }
+        }
+        let bound_min = position_min.floor();
+        let mut bound_max = position_max.ceil();
+        for axis in 0..3 {
+            if bound_max[axis] <= bound_min[axis] {
+                bound_max[axis] = bound_min[axis] + 1.0;
+            }
+        }
+        let range = bound_max - bound_min;
+        if !range.is_finite() {
+            return Err(VatError::RangeOverflow);
+        }
+        let mut material_bound_max = bound_max;
+        if format.is_hdr() {
+            // Houdini's "positions are raw" flag: frac(Bound Max Z) >= 0.5 (not used to decode EXR).
+            material_bound_max.z += 0.5;
+        }
+        Ok(PositionBounds {
+            position_min,
+            position_max,
+            bound_min,
+            material_bound_max,
+            range,
+        })
+    }
+}
+
+/// The position and rotation textures' texels as f32 RGBA in the texture's final meaning
+/// (remapped for PNG16): per piece and frame, the pivot position with the dropped component
+/// index, and the smallest-three rotation with the turns to the next frame.
+fn texels(
+    pieces: &[RigidPiece],
+    rotations: &[Vec<Quat>],
+    grid: &Grid,
+    bounds: &PositionBounds,
+    format: VatFormat,
+) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+    let frames = rotations[0].len();
+    let texels = grid.width as usize * grid.height as usize;
+    let mut position_texels = vec![[0.0f32; 4]; texels];
+    let hdr = format.is_hdr();
+    // Unused texels: identity rotation (stored components 0, which PNG16 maps to 0.5).
+    let unused = if hdr { 0.0 } else { 0.5 };
+    let mut rotation_texels = vec![[unused; 4]; texels];
+    for (p, piece) in pieces.iter().enumerate() {
+        for (f, frame) in piece.frames.iter().enumerate() {
+            let q = rotations[p][f];
+            let next = rotations[p][(f + 1) % frames];
+            let s3 = smallest_three(q);
+            let turns = turns_between(q, next);
+            let index = grid.texel(p, f);
+            let alpha = f32::from(s3.dropped) / 4.0;
+            if hdr {
+                let v = frame.position;
+                position_texels[index] = [v.x, v.y, v.z, alpha];
+                rotation_texels[index] = [s3.kept[0], s3.kept[1], s3.kept[2], turns];
+            } else {
+                let t = ((frame.position - bounds.bound_min) / bounds.range)
+                    .clamp(Vec3::ZERO, Vec3::ONE);
+                position_texels[index] = [t.x, t.y, t.z, alpha];
+                let k = s3.kept;
+                rotation_texels[index] = [
+                    k[0] * 0.5 + 0.5,
+                    k[1] * 0.5 + 0.5,
+                    k[2] * 0.5 + 0.5,
+                    turns * 0.5 + 0.5,
+                ];
+            }
+        }
+    }
+    (position_texels, rotation_texels)
+}
+
+/// The position and rotation texture files, in `format`.
+fn encode_textures(
+    format: VatFormat,
+    grid: &Grid,
+    position_texels: &[[f32; 4]],
+    rotation_texels: &[[f32; 4]],
+) -> Result<(Vec<u8>, Vec<u8>), VatError> {
+    Ok(match format {
+        VatFormat::ExrHalf => (
+            write_exr_half(grid.width, grid.height, position_texels),
+            write_exr_half(grid.width, grid.height, rotation_texels),
+        ),
+        VatFormat::Png16 => (
+            write_png16(grid.width, grid.height, position_texels, true).map_err(|message| {
+                VatError::Encode {
+                    role: "position",
+                    message,
+                }
+            })?,
+            write_png16(grid.width, grid.height, rotation_texels, false).map_err(|message| {
+                VatError::Encode {
+                    role: "rotation",
+                    message,
+                }
+            })?,
+        ),
+    })
+}
+
+/// The sidecar of textures of `grid` holding `counts` (pieces, frames) at `fps`.
+fn sidecar(
+    format: VatFormat,
+    fps: f32,
+    grid: &Grid,
+    counts: (u32, u32),
+    bounds: &PositionBounds,
+    options: &VatOptions,
+) -> VatSidecar {
+    let (piece_count, frame_count) = counts;
+    let frames = frame_count as usize;
+    let extension = format.extension();
+    let space = options.space;
+    VatSidecar {
         layout: LAYOUT.to_string(),
         format,
-        hdr,
+        hdr: format.is_hdr(),
         frames: frame_count,
         fps,
         duration_s: frames as f32 / fps,
@@ -678,10 +852,10 @@ pub fn encode_rigid_with(
             rotation: format!("{}_rot.{extension}", options.file_stem),
             pivot: Some(format!("{}_pivot.exr", options.file_stem)),
         },
-        bound_min: bound_min.to_array(),
-        bound_max: material_bound_max.to_array(),
-        position_min: position_min.to_array(),
-        position_max: position_max.to_array(),
+        bound_min: bounds.bound_min.to_array(),
+        bound_max: bounds.material_bound_max.to_array(),
+        position_min: bounds.position_min.to_array(),
+        position_max: bounds.position_max.to_array(),
         piece_uv_channel: PIECE_UV_CHANNEL.to_string(),
         pivot_channels: PIVOT_CHANNELS.map(str::to_string),
         rotation_encoding: ROTATION_ENCODING.to_string(),
@@ -697,37 +871,24 @@ pub fn encode_rigid_with(
             first_frame: 0,
             frames: frame_count,
         }],
-    };
-    tracing::debug!(
-        "VAT rigid: {} pieces × {} frames → {}×{} {:?}",
-        pieces.len(),
-        frames,
-        grid.width,
-        grid.height,
-        format
-    );
-    // The rest pivots, as the pivot channels carry them (in the data's space), at each piece's
-    // frame-0 texel.
+    }
+}
+
+/// The pivot texture: the rest pivots (glTF space), as the pivot channels carry them (in
+/// the data's `space`), at each piece's frame-0 texel; one frame's rows, EXR half.
+fn pivot_image(grid: &Grid, rest_pivots: &[Vec3], space: VatSpace) -> VatImage {
     let mut pivot_texels =
         vec![[0.0f32, 0.0, 0.0, 1.0]; grid.width as usize * grid.rows_per_frame as usize];
     for (p, &pivot) in rest_pivots.iter().enumerate() {
         let q = space.point(pivot);
         pivot_texels[grid.texel(p, 0)] = [q.x, q.y, q.z, 1.0];
     }
-    let pivot = VatImage {
+    VatImage {
         width: grid.width,
         height: grid.rows_per_frame,
         bytes: write_exr_half(grid.width, grid.rows_per_frame, &pivot_texels),
         extension: "exr",
-    };
-    Ok(VatTextures {
-        position: image(position_bytes),
-        rotation: image(rotation_bytes),
-        pivot,
-        sidecar,
-        piece_uv,
-        pivot_uv,
-    })
+    }
 }
 
 /// 16-bit code of a [0, 1] value. The position alpha (dropped index / 4) rounds up so that

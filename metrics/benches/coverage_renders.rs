@@ -2,7 +2,7 @@
 //! skipped when absent) as `frond lod` measures its default chain: the input's masks, 5 views ×
 //! 5 frames, at each LOD's image size (600, 200 and 60 px high), drawn by the CPU rasteriser
 //! (eight samples at once where the machine has AVX2). The renders are most of the default
-//! run's time (issue 20); `RAYON_NUM_THREADS=1` gives their CPU time.
+//! run's time; `RAYON_NUM_THREADS=1` gives their CPU time.
 //!
 //! `cargo bench -p frond-metrics --bench coverage_renders` (`FROND_BENCH_RUNS`, default 2).
 

@@ -10,10 +10,10 @@
 
 use frond_scene::{FileCost, Part, Tree};
 use glam::Vec3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// What a model costs (in the JSON, the file's fields sit beside the billboard pair).
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Cost {
     /// Foliage cards: the imported tree's non-degenerate foliage triangles / 2. For a
     /// `frond lod` LOD these are exactly its billboards; for any other model, its leaf cards

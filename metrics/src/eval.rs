@@ -25,7 +25,7 @@ use crate::coverage::{
 use crate::dominating_axis::{AxisMetrics, axis_metrics};
 use crate::matching::{match_foreign, match_triangles};
 use crate::metric_id::MetricId;
-use crate::report::{Costs, CoverageMetrics, EvalReport};
+use crate::report::{Costs, CoverageMetrics, EvalReport, EvalTimings};
 use crate::triangle_metrics::{image_trajectory, triangle_metrics};
 
 /// What `frond eval` was asked for.
@@ -355,8 +355,8 @@ impl<'a> EvalContext<'a> {
             original: cost(self.original, self.original_file.clone()),
             candidate: cost(candidate, candidate_file),
         };
-        report.timings_s["colour"] = serde_json::json!((t1 - t0).as_secs_f64());
-        report.timings_s["total"] = serde_json::json!(t0.elapsed().as_secs_f64());
+        report.timings_s.colour = (t1 - t0).as_secs_f64();
+        report.timings_s.total = t0.elapsed().as_secs_f64();
         Ok(report)
     }
 }
@@ -454,10 +454,12 @@ fn score(
         },
         // Set by the caller, which reads the files.
         cost: Costs::default(),
-        timings_s: serde_json::json!({
-            "matching": (t2 - t1).as_secs_f64(),
-            "trajectories": t2.elapsed().as_secs_f64(),
-        }),
+        // Colour and total are the caller's, which times the renders.
+        timings_s: EvalTimings {
+            matching: (t2 - t1).as_secs_f64(),
+            trajectories: t2.elapsed().as_secs_f64(),
+            ..EvalTimings::default()
+        },
     }
 }
 

@@ -34,4 +34,4 @@ pub use eval::{
     EvalContext, EvalError, EvalRequest, candidate_clip, evaluate, image_for_screen_height,
 };
 pub use metric_id::MetricId;
-pub use report::{Costs, CoverageMetrics, EvalReport, Metric};
+pub use report::{Costs, CoverageMetrics, EvalReport, EvalTimings, Metric};

@@ -2,13 +2,15 @@
 //! with its definition, or why it was skipped, and both models' cost (§5.7). The field order is
 //! the JSON key order, which sweeps and batch summaries read back: keep it.
 
-use serde::Serialize;
+use std::borrow::Cow;
+
+use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::cost::Cost;
 use crate::metric_id::MetricId;
 
 /// One metric: mean and max, or why it was not computed.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Metric {
     /// Mean over (view, frame) pairs or matched triangles; None when skipped.
     pub mean: Option<f64>,
@@ -16,8 +18,8 @@ pub struct Metric {
     pub max: Option<f64>,
     /// Why the metric has no value (no mapping, no foliage, every pair discarded), or None.
     pub skipped_reason: Option<String>,
-    /// How the metric is computed ([`MetricId::definition`]).
-    pub definition: &'static str,
+    /// How the metric is computed ([`MetricId::definition`]; owned when read back).
+    pub definition: Cow<'static, str>,
 }
 
 impl Metric {
@@ -27,7 +29,7 @@ impl Metric {
             mean: Some(mean),
             max: Some(max),
             skipped_reason: None,
-            definition: id.definition(),
+            definition: Cow::Borrowed(id.definition()),
         }
     }
 
@@ -37,13 +39,13 @@ impl Metric {
             mean: None,
             max: None,
             skipped_reason: Some(reason.to_string()),
-            definition: id.definition(),
+            definition: Cow::Borrowed(id.definition()),
         }
     }
 }
 
 /// The static and animated colour (coverage) metric (§5.4).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CoverageMetrics {
     /// The first frame only ([`MetricId::CoverageStatic`]).
     #[serde(rename = "static")]
@@ -59,7 +61,7 @@ pub struct CoverageMetrics {
 
 /// Both models' cost (§5.7): the billboard pair from the imported trees, the rest read from the
 /// two files ([`Cost`]).
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Costs {
     /// The original's.
     pub original: Cost,
@@ -67,8 +69,25 @@ pub struct Costs {
     pub candidate: Cost,
 }
 
+/// Seconds each stage of an evaluation took (`timings_s` in the JSON). The fields are in the
+/// order the JSON has always had its keys (alphabetical); every evaluation sets all four.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct EvalTimings {
+    /// The colour renders of the candidate (and of the original, unless already cached) and
+    /// the static and animated colour metrics' comparison of them (§5.4).
+    pub colour: f64,
+    /// Matching the original's foliage triangles to the candidate's billboards or triangles.
+    pub matching: f64,
+    /// The whole evaluation: file cost, colour metrics, matching, trajectories and cost.
+    pub total: f64,
+    /// The per-triangle and animation metrics over the loop (§5.2–5.5), after the matching,
+    /// with their aggregation into the report.
+    pub trajectories: f64,
+}
+
 /// The report (`frond eval --json`).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EvalReport {
     /// The original's file.
     pub original: String,
@@ -91,7 +110,9 @@ pub struct EvalReport {
     /// [`MetricId::ColourDifference`].
     pub colour_difference: Metric,
     /// The animated colour metric's shift of the mean colour over shared pixels
-    /// ([`crate::coverage::CoverageReport::colour_shift`]); NaN when none is shared.
+    /// ([`crate::coverage::CoverageReport::colour_shift`]); NaN when none is shared, which the
+    /// JSON writes as `null` (read back as NaN, as is a report without the field).
+    #[serde(default = "not_a_number", deserialize_with = "nan_if_null")]
     pub colour_shift: f64,
     /// [`MetricId::PlaneDistance`].
     pub plane_distance: Metric,
@@ -108,9 +129,21 @@ pub struct EvalReport {
     /// How each original foliage triangle was matched to the candidate.
     pub matching: String,
     /// Both models' cost.
+    #[serde(default)]
     pub cost: Costs,
-    /// Seconds per stage (`colour`, `matching`, `trajectories`, `total`).
-    pub timings_s: serde_json::Value,
+    /// Seconds per stage.
+    #[serde(default)]
+    pub timings_s: EvalTimings,
+}
+
+/// NaN: what a float field the JSON lacks reads as.
+fn not_a_number() -> f64 {
+    f64::NAN
+}
+
+/// A float the JSON may hold as `null` (how serde_json writes NaN and the infinities): NaN.
+fn nan_if_null<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 impl EvalReport {
@@ -162,7 +195,7 @@ mod tests {
             dominating_axis_spectral: m(MetricId::DominatingAxisSpectral),
             matching: String::new(),
             cost: Costs::default(),
-            timings_s: serde_json::json!({}),
+            timings_s: EvalTimings::default(),
         }
     }
 
@@ -176,5 +209,59 @@ mod tests {
             assert_eq!(at["skipped_reason"], id.column(), "{id:?}");
             assert_eq!(at["definition"], id.definition(), "{id:?}");
         }
+    }
+
+    /// `report()` with values in every metric, the cost and the timings.
+    fn filled_report() -> EvalReport {
+        let mut r = report();
+        r.coverage.static_ = Metric::value(MetricId::CoverageStatic, 0.25, 0.5);
+        r.plane_distance = Metric::value(MetricId::PlaneDistance, 0.1, 1.25);
+        r.clip = Some("Wind".into());
+        r.colour_shift = 0.0025;
+        r.cost.original.billboards = 12;
+        r.cost.original.billboard_area = 3.5;
+        r.cost.candidate.file.triangles = 24;
+        r.timings_s = EvalTimings {
+            colour: 13.1,
+            matching: 0.003,
+            total: 13.2,
+            trajectories: 0.02,
+        };
+        r
+    }
+
+    #[test]
+    fn reports_read_back_equal() {
+        let r = filled_report();
+        let text = serde_json::to_string_pretty(&r).unwrap();
+        let back: EvalReport = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, r);
+        assert_eq!(serde_json::to_string_pretty(&back).unwrap(), text);
+    }
+
+    #[test]
+    fn a_nan_colour_shift_is_written_null_and_read_back_nan() {
+        let mut r = filled_report();
+        r.colour_shift = f64::NAN;
+        let text = serde_json::to_string(&r).unwrap();
+        assert!(text.contains("\"colour_shift\":null"), "{text}");
+        let back: EvalReport = serde_json::from_str(&text).unwrap();
+        assert!(back.colour_shift.is_nan());
+        assert_eq!(serde_json::to_string(&back).unwrap(), text);
+    }
+
+    #[test]
+    fn timings_are_written_as_the_untyped_map_was() {
+        let t = filled_report().timings_s;
+        let untyped = serde_json::json!({
+            "matching": t.matching,
+            "trajectories": t.trajectories,
+            "colour": t.colour,
+            "total": t.total,
+        });
+        assert_eq!(
+            serde_json::to_string(&t).unwrap(),
+            serde_json::to_string(&untyped).unwrap()
+        );
     }
 }

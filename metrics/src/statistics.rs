@@ -2,10 +2,10 @@
 //! the average absolute deviation `(1/n) Σ |x_i − x̄|` of repeated runs, and the Pareto front
 //! of a two-objective trade-off (both minimised).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Mean, min, max and average absolute deviation of a sample.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Spread {
     /// Number of values.
     pub n: usize,

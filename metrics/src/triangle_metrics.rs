@@ -16,10 +16,10 @@
 //!   signed to face the triangle on average (billboards are double-sided).
 
 use glam::Vec3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Mean and maximum over the loop.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct MeanMax {
     /// Mean over the samples.
     pub mean: f32,
@@ -40,7 +40,7 @@ impl MeanMax {
 }
 
 /// One triangle's metrics over the loop (distances in world units).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct TriangleMetrics {
     /// Centroid to billboard plane.
     pub plane_distance: MeanMax,

@@ -5,6 +5,7 @@ use crate::units;
 
 /// One tree of a batch, as its index line shows it.
 pub struct IndexEntry {
+    /// The tree's name, the line's label.
     pub name: String,
     /// The tree's preview page, relative to the index page (None: the tree failed or wrote no
     /// preview).
@@ -13,6 +14,7 @@ pub struct IndexEntry {
     pub thumbnail: Option<String>,
     /// A line of what was made (LODs, triangles, bytes), or the error.
     pub summary: String,
+    /// The tree failed: the summary is the error, shown as a warning.
     pub failed: bool,
 }
 

@@ -45,6 +45,7 @@ pub struct LodPreviewRequest<'a> {
 
 /// The page and its pictures, as (path relative to the output folder, bytes).
 pub struct PreviewFiles {
+    /// The page, its stills and flip-books, and the viewer scripts unless written elsewhere.
     pub files: Vec<(String, Vec<u8>)>,
     /// Seconds spent rendering and encoding.
     pub seconds: f64,

@@ -150,7 +150,9 @@ pub fn crop(rgba: &[u8], width: u32, rect: [u32; 4]) -> Vec<u8> {
 
 /// An encoded picture and its size in pixels.
 pub struct Picture {
+    /// The PNG file.
     pub png: Vec<u8>,
+    /// Width and height in pixels.
     pub size: [u32; 2],
 }
 

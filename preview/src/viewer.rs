@@ -48,12 +48,14 @@ pub struct ViewConfig {
     pub viewer: String,
     /// The files carry KTX2 textures (the transcoder is beside the page).
     pub ktx2: bool,
+    /// The chain's LODs, LOD0 first.
     pub lods: Vec<ViewLod>,
 }
 
 /// One LOD of the combined file.
 #[derive(Clone, Debug, Serialize)]
 pub struct ViewLod {
+    /// The LOD's own file, relative to the page.
     pub file: String,
     /// The combined file's scene root nodes that are this LOD.
     pub nodes: Vec<String>,
@@ -62,6 +64,7 @@ pub struct ViewLod {
     /// The smallest tree height in pixels it is shown at when switching by screen size (the
     /// report's `min_screen_fraction` times `--resolution`).
     pub shown_down_to_px: f32,
+    /// Triangles the LOD draws (as its file costs, where measured).
     pub triangles: u64,
     /// Vertex-animated (VAT or spectral): three.js plays it still, without its shader.
     pub vertex_animated: bool,
