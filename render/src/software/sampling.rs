@@ -233,6 +233,7 @@ impl Levels {
     }
 
     /// The two levels of a trilinear fetch at `lod`.
+    #[inline]
     pub(super) fn pair(&self, lod: f32) -> Trilinear {
         let last = self.0.len() - 1;
         let a = (floor_i64(lod).max(0) as usize).min(last);
@@ -294,6 +295,7 @@ impl Levels {
 
     /// Trilinear tangent-space normal at `(u, v)` of a normal map's linear chain: each channel
     /// from 0..255 to −1..1 (not normalised; the frame's result is).
+    #[inline]
     pub(super) fn normal(&self, uv: [f32; 2], lod: Trilinear, wrap: [Wrap; 2]) -> Vec3 {
         let at = |l: usize| {
             let c = |channel| bilinear(&self.0[l], uv, wrap, 4, channel, f32::from);
@@ -309,6 +311,7 @@ impl Levels {
     }
 
     /// Trilinear linear RGB at `(u, v)` of an RGBA chain (sRGB decoded before filtering).
+    #[inline]
     pub(crate) fn rgb(
         &self,
         uv: [f32; 2],
