@@ -48,7 +48,7 @@ pub(crate) enum LaneTest<'a> {
     },
     /// The bilinear alpha of `filter.a` (a single level: `filter.b` is not read) from one
     /// gather of a footprint's four texels, `quads` holding them for every footprint within
-    /// the level ([`crate::software::alpha::footprint_quads`]); only the footprints on the level's
+    /// the level (`crate::software::alpha::footprint_quads`); only the footprints on the level's
     /// last row or column (which wrap) are left to `filter`. The same answers as `Table` of
     /// the same level and test, which decides from bounds only what this filter would.
     Quads {

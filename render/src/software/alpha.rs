@@ -150,7 +150,7 @@ pub(crate) struct AlphaBounds {
     pub(super) trilinear: Vec<[u8; 2]>,
 }
 
-/// An alpha level's bilinear footprints as four bytes each ([`SoftwareTextures::bake_quads`]):
+/// An alpha level's bilinear footprints as four bytes each ([`SoftwareTextures::bake_quads`](super::textures::SoftwareTextures::bake_quads)):
 /// `[top left, top right, bottom left, bottom right]` at the top left texel's index, for
 /// the footprints within the level; 0 on its last row and column, where footprints wrap.
 pub(super) fn footprint_quads(level: &(u32, u32, Vec<u8>)) -> Vec<u32> {

@@ -71,7 +71,7 @@ impl SoftwareTextures {
     }
 
     /// The bake's alpha test at `uv` of `texture`'s level nearer `lod`
-    /// ([`Levels::alpha_nearest_level`]): `alpha · scale ≥ cutoff`, decided from the
+    /// (`Levels::alpha_nearest_level`): `alpha · scale ≥ cutoff`, decided from the
     /// footprint's bounds where they settle it (prepared by [`SoftwareTextures::for_bake`]).
     #[inline]
     pub(crate) fn bake_alpha_test(
@@ -120,7 +120,7 @@ impl SoftwareTextures {
     }
 
     /// Level `level` of `texture` decoded to linear light for the bake (decoded on first use),
-    /// `None` when it is not (not prepared for the bake, or over [`MAX_LINEAR_TEXELS`]).
+    /// `None` when it is not (not prepared for the bake, or over [`MAX_LINEAR_TEXELS`](super::sampling::MAX_LINEAR_TEXELS)).
     pub(crate) fn bake_linear_level(&self, texture: usize, level: usize) -> Option<&LinearLevel> {
         let decode = || LinearLevel::new(&self.textures[texture].0[level], &SRGB_LINEAR);
         (self.bake_linear.get(texture)?.get(level)?)

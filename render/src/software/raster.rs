@@ -9,13 +9,13 @@ use super::alpha::AlphaCutoff;
 use super::bands::Bands;
 use super::setup::{Setup, centroid_lod};
 use super::shading::{Shading, Surface};
-use super::spans::{RowSpan, RowWalk};
+use super::spans::RowSpan;
 use super::textures::SoftwareTextures;
 use crate::pipeline::LIGHT_DIRECTION;
 use crate::sample_lanes::{self, LaneFilter, LaneLevel, LaneTest, TriangleLanes};
 use crate::scene::DrawScene;
 use crate::srgb::SRGB_LINEAR;
-use crate::uv_hull::{HullLevels, HullRows, TriangleHull, narrowed};
+use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
 
 /// The shortcuts a coverage render takes, each giving the same image (tests compare them):
 /// see [`Raster::saturate`], [`Raster::lanes`], [`Raster::hulls`] and
@@ -177,24 +177,34 @@ impl<'a> Raster<'a> {
         let Some(first_row) = (rows.clone()).find(|&sy| !band.row_covered(bounds_words, sy)) else {
             return;
         };
-        let Some(draw) = self.triangle_draw(ti, t) else {
-            return;
+        let colour = self.textures.colour;
+        let t = &if colour { *t } else { self.with_lod(t) };
+        let surface = self.surface(ti, t);
+        let lanes = if self.lanes && !colour {
+            self.triangle_lanes(t)
+        } else {
+            None
         };
+        let hull = match self.triangle_hull(*t) {
+            TriangleHull::Empty => return,
+            TriangleHull::Rows(rows) => Some(rows),
+            TriangleHull::Unbounded => None,
+        };
+        let walk = t.row_walk();
         for sy in first_row..rows.end {
             if band.row_covered(bounds_words, sy) {
                 continue;
             }
-            let Some(span) = draw.t.row_span(&draw.walk, sy) else {
+            let Some(span) = t.row_span(&walk, sy) else {
                 continue;
             };
-            let Some((first, last)) = narrowed(draw.hull.as_ref(), sy, span.first, span.last)
-            else {
+            let Some((first, last)) = narrowed(hull.as_ref(), sy, span.first, span.last) else {
                 continue;
             };
-            if let Some(lanes) = &draw.lanes {
-                self.lanes_span(band, &draw.surface, lanes, &span, [first, last]);
+            if let Some(lanes) = &lanes {
+                self.lanes_span(band, &surface, lanes, &span, [first, last]);
             } else {
-                self.scalar_span(band, &draw, &span, [first, last]);
+                self.scalar_span(band, t, &surface, &span, [first, last]);
             }
         }
     }
@@ -216,17 +226,16 @@ impl<'a> Raster<'a> {
         })
     }
 
-    /// Triangle `ti` (`t`) ready to walk: with its mip levels in coverage renders, what its
-    /// samples read, its eight-sample test and its octagon's bounds; `None` when the octagon
-    /// leaves none of its samples able to pass.
+    /// What the samples of triangle `ti` (`t`, with its mip levels) read to be alpha-tested
+    /// and coloured: its material and alpha test, its texture's levels and their alpha
+    /// bounds (coverage renders), its normal map and shading attributes (colour renders).
     #[inline(always)]
-    fn triangle_draw(&self, ti: u32, t: &Setup) -> Option<TriangleDraw<'_>> {
+    fn surface(&self, ti: u32, t: &Setup) -> Surface<'_> {
         let colour = self.textures.colour;
-        let t = if colour { *t } else { self.with_lod(t) };
         // Colour renders' triangles have their shading; coverage renders read none.
         let shading = self.shading.get(ti as usize);
         let material = &self.scene.materials[t.material as usize];
-        let surface = Surface {
+        Surface {
             material,
             cutoff: self.cutoffs[t.material as usize].as_ref(),
             texture: material.texture.map(|i| &self.textures.textures[i]),
@@ -244,24 +253,7 @@ impl<'a> Raster<'a> {
             lod: t.lod,
             lit: t.lit,
             back: t.back,
-        };
-        let lanes = if self.lanes && !colour {
-            self.triangle_lanes(&t)
-        } else {
-            None
-        };
-        let hull = match self.triangle_hull(&t) {
-            TriangleHull::Empty => return None,
-            TriangleHull::Rows(rows) => Some(rows),
-            TriangleHull::Unbounded => None,
-        };
-        Some(TriangleDraw {
-            walk: t.row_walk(),
-            t,
-            surface,
-            lanes,
-            hull,
-        })
+        }
     }
 
     /// The samples `first..=last` of `span` tested eight at a time from the first (coverage
@@ -311,7 +303,8 @@ impl<'a> Raster<'a> {
     fn scalar_span(
         &self,
         band: &mut BandBuffers,
-        draw: &TriangleDraw<'_>,
+        t: &Setup,
+        surface: &Surface<'_>,
         span: &RowSpan,
         [first, end]: [usize; 2],
     ) {
@@ -338,7 +331,7 @@ impl<'a> Raster<'a> {
                 if self.saturate && band.covered[row_word + word] >> bit & 1 == 1 {
                     continue;
                 }
-                self.draw_sample(band, draw, span, word * 64 + bit);
+                self.draw_sample(band, t, surface, span, word * 64 + bit);
             }
             sx = run_end + 1;
         }
@@ -351,11 +344,11 @@ impl<'a> Raster<'a> {
     fn draw_sample(
         &self,
         band: &mut BandBuffers,
-        draw: &TriangleDraw<'_>,
+        t: &Setup,
+        surface: &Surface<'_>,
         span: &RowSpan,
         x: usize,
     ) {
-        let t = &draw.t;
         let b = span.weights_at(x);
         if b[0] < 0.0 || b[1] < 0.0 || b[2] < 0.0 {
             return;
@@ -369,8 +362,8 @@ impl<'a> Raster<'a> {
         }
         let (uv, q) = t.uv(b);
         let stride = if band.colour { 4 } else { 1 };
-        if let Some(cutoff) = draw.surface.cutoff
-            && !draw.surface.passes_alpha(cutoff, uv, stride)
+        if let Some(cutoff) = surface.cutoff
+            && !surface.passes_alpha(cutoff, uv, stride)
         {
             return;
         }
@@ -378,7 +371,7 @@ impl<'a> Raster<'a> {
         if band.colour {
             band.depth[s] = z;
             let lighting = self.textures.lighting;
-            band.rgb[s] = (draw.surface).colour(b, q, uv, lighting, band.light, band.linear);
+            band.rgb[s] = surface.colour(b, q, uv, lighting, band.light, band.linear);
         }
     }
 
@@ -407,8 +400,11 @@ impl<'a> Raster<'a> {
 
     /// What the octagon of coverage render triangle `t`'s levels (`t` with its mip levels,
     /// [`Raster::with_lod`]) does to it: a trilinear test passes only where one of its two
-    /// levels' can.
-    pub(super) fn triangle_hull(&self, t: &Setup) -> TriangleHull {
+    /// levels' can. `t` is a copy: the octagon's code (in another file) sees its address, not
+    /// the address of the triangle the rows are walked with, so the compiler can keep that
+    /// one's corners in registers through the rows (calls in the walk it cannot see into
+    /// could otherwise change them).
+    pub(super) fn triangle_hull(&self, t: Setup) -> TriangleHull {
         let Some(levels) = &self.hulls[t.material as usize] else {
             return TriangleHull::Unbounded;
         };
@@ -418,24 +414,26 @@ impl<'a> Raster<'a> {
         } else {
             levels.level(a)
         };
-        octagon.rows(t)
+        octagon.rows(&t)
     }
 
     /// Coverage render triangle `t` with its texture's mip levels (set up without them:
-    /// [`setup_triangle`]).
-    #[inline]
+    /// [`setup`](super::setup)'s `setup_triangle`).
+    #[inline(always)]
     pub(super) fn with_lod(&self, t: &Setup) -> Setup {
-        let mut t = *t;
+        let mut with = *t;
         let material = &self.scene.materials[t.material as usize];
         if let Some(levels) = material.texture.map(|i| &self.textures.textures[i]) {
-            t.lod = levels.pair(centroid_lod(&t, levels));
+            // The level from `t` (the same corners): the copy's address stays here, which
+            // lets the compiler keep its fields in registers through the triangle's rows.
+            with.lod = levels.pair(centroid_lod(t, levels));
         }
-        t
+        with
     }
 
     /// A coverage render's eight-sample test of triangle `t`, when its material's alpha test
     /// is one the lanes decide as the scalar path does: none, or a bounds table (the one
-    /// [`Levels::alpha_test`] reads first for the triangle's levels) and the filter behind it.
+    /// [`Levels::alpha_test`](super::sampling::Levels::alpha_test) reads first for the triangle's levels) and the filter behind it.
     /// `None` sends the triangle to the scalar loop.
     pub(super) fn triangle_lanes(&self, t: &Setup) -> Option<TriangleLanes<'_>> {
         let material = &self.scene.materials[t.material as usize];
@@ -593,21 +591,6 @@ impl BandBuffers {
     }
 }
 
-/// One triangle of a band, ready to walk ([`Raster::triangle_draw`]).
-struct TriangleDraw<'r> {
-    /// The triangle, with its mip levels in coverage renders.
-    t: Setup,
-    /// What its samples' alpha test and colour read.
-    surface: Surface<'r>,
-    /// Its eight-sample test, where the lanes decide as the scalar test does (coverage
-    /// renders on machines with AVX2).
-    lanes: Option<TriangleLanes<'r>>,
-    /// Its rows' bounds from its octagon, where it has them.
-    hull: Option<HullRows>,
-    /// What every row's span needs.
-    walk: RowWalk,
-}
-
 #[cfg(test)]
 mod tests {
     use glam::Mat4;
@@ -640,7 +623,7 @@ mod tests {
                     Raster::new(&scene, &textures, &bands, sw, ss as usize, Shortcuts::ALL);
                 for t in &bands.triangles {
                     if raster.hulls[t.material as usize].is_some() {
-                        hulled[match raster.triangle_hull(&raster.with_lod(t)) {
+                        hulled[match raster.triangle_hull(raster.with_lod(t)) {
                             TriangleHull::Unbounded => 0,
                             TriangleHull::Rows(_) => 1,
                             TriangleHull::Empty => 2,

@@ -343,7 +343,6 @@ pub(crate) fn affine_uv(uv: &[[f32; 2]; 3], b: [f32; 3]) -> [f32; 2] {
 /// The mip level of `levels` at `s`'s centroid: log2 of the longer of the texture
 /// coordinates' screen derivatives along x and y, in level-0 texels (as a GPU's trilinear
 /// filter), at least 0.
-#[inline]
 pub(super) fn centroid_lod(s: &Setup, levels: &Levels) -> f32 {
     let (w, h) = (levels.0[0].0 as f32, levels.0[0].1 as f32);
     let cx = (s.x[0] + s.x[1] + s.x[2]) / 3.0;

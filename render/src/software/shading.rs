@@ -35,7 +35,7 @@ impl Lighting {
     }
 }
 
-/// A triangle's shading attributes, beside its [`Setup`] in renders that shade (colour, or a
+/// A triangle's shading attributes, beside its [`Setup`](super::setup::Setup) in renders that shade (colour, or a
 /// bake's normals): a coverage render reads none of them, and leaving them out halves what it
 /// writes and reads back per triangle.
 #[derive(Clone, Copy, Debug, Default)]

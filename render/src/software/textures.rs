@@ -32,10 +32,10 @@ pub struct SoftwareTextures {
     /// Per texture and level of `bake_alpha`, each bilinear footprint's four alphas (top
     /// left, top right, bottom left, bottom right, a byte each from the lowest) at its top
     /// left texel, for the footprints within the level (0 on its last row and column): what
-    /// the eight-sample test gathers, one read a sample ([`LaneTest::Quads`]).
+    /// the eight-sample test gathers, one read a sample ([`LaneTest::Quads`](crate::sample_lanes::LaneTest::Quads)).
     pub(super) bake_quads: Vec<Vec<Vec<u32>>>,
     /// Per texture and level, when prepared for the bake, its colour decoded to linear light
-    /// on first use where the level holds at most [`MAX_LINEAR_TEXELS`] texels: what
+    /// on first use where the level holds at most [`MAX_LINEAR_TEXELS`](super::sampling::MAX_LINEAR_TEXELS) texels: what
     /// [`SoftwareTextures::bake_rgb`] filters; empty otherwise.
     pub(super) bake_linear: Vec<Vec<std::sync::OnceLock<Option<LinearLevel>>>>,
     /// Per texture, its linear box chain when a drawn material uses it as a normal map and
