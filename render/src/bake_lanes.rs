@@ -3,7 +3,7 @@
 //! and their bilinear footprints in the trilinear pair's levels, and the unit normal. Each
 //! lane does exactly the scalar resolve's operations in its order (a multiply, then an add:
 //! no fused multiply-add), so both give the same bits on every machine. The texels are then
-//! read lane by lane ([`crate::software::LinearLevel::bilinear_at`]): gathering them was no
+//! read lane by lane ([`crate::software::sampling::LinearLevel::bilinear_at`]): gathering them was no
 //! faster on an AMD EPYC than reading them, and the divisions and square root are what
 //! vectors save. A lane whose footprint would wrap is left to the scalar path.
 //!
@@ -26,7 +26,7 @@ pub(crate) struct ShadeLanes {
     /// Normals divided by `w` at the corners.
     pub(crate) nq: [[f32; 3]; 3],
     /// The texture coordinates at the corners of an affine triangle, summed without dividing
-    /// by `Σ b·q` (`crate::software`'s `affine_uv`).
+    /// by `Σ b·q` ([`crate::software::setup::affine_uv`]).
     pub(crate) affine: Option<[[f32; 2]; 3]>,
     /// The normal is the same at every sample (found once, elsewhere): not computed here.
     pub(crate) flat: bool,
@@ -176,7 +176,7 @@ impl ShadeLanes {
 
 /// The depth test of eight samples `x..x + 8` of a row in the lanes of `hits` (those whose
 /// alpha test passed), whose weights at the span's first sample are `start`, changing by
-/// `step` a sample, with `k0 = x − x0` ([`crate::software`]'s `RowSpan`): each lane whose
+/// `step` a sample, with `k0 = x − x0` ([`crate::software::spans::RowSpan`]): each lane whose
 /// depth, interpolated from the corners' `z`, is below `depth`'s there takes it and the
 /// triangle `ti` in `winner`. Every operation is the scalar test's, in its order: the same
 /// depths and winners. The other lanes are written back as read.

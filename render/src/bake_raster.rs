@@ -7,8 +7,8 @@
 //! then [`crate::Output::Normal`]): a billboard atlas is thousands of tiny orthographic views
 //! of a few triangles each, and a screen rasteriser draws it twice (colour, then normals),
 //! shades every fragment that passes the depth test, writes 8-bit samples and reads whole
-//! tiles back. On llvmpipe, the adapter most machines running frond have, that was a fifth
-//! of `frond lod`'s wall time on oak_dense. Here one pass tests each fragment's depth and
+//! tiles back. On llvmpipe, the adapter most machines running frond have, that was a large
+//! share of `frond lod`'s wall time. Here one pass tests each fragment's depth and
 //! alpha, keeps the winning triangle per sample, and shades only the winners once every
 //! triangle is drawn (deferred): one texture fetch per fragment for the alpha test (from the
 //! nearer mip level, as `LINEAR_MIPMAP_NEAREST`), and one trilinear colour fetch per covered
@@ -18,9 +18,8 @@
 //! coverage renders do: one gather of each footprint's four alphas), their depths too, and
 //! the arithmetic of eight samples won by one triangle is done at once
 //! ([`crate::bake_lanes`]); the colour is filtered from levels decoded to linear light
-//! beforehand. Each gives the same bits (on oak_dense's fixed per-bone configuration the bake
-//! went from 1.33 to 0.43–0.44 s with them and the regions below; docs/performance.md has
-//! each step). A [`BakeTarget`] holds a render's frame, materials and textures; its regions
+//! beforehand. Each gives the same bits (docs/performance.md has what each step and the
+//! regions below saved). A [`BakeTarget`] holds a render's frame, materials and textures; its regions
 //! are drawn one by one, each from its own meshes (set up as it is drawn) into buffers of its
 //! own size, and resolved alone: the billboard bake draws each atlas cell so, in parallel
 //! ([`render_bake`] draws bands of rows, each setting every mesh up). Regions are
@@ -46,10 +45,12 @@ use crate::bake_lanes::{self, LaneShading, ShadeLanes};
 use crate::error::RenderError;
 use crate::sample_lanes::{self, LaneTest, TriangleLanes};
 use crate::scene::{DrawMesh, DrawScene, validate_mesh};
-use crate::software::{
-    AlphaCutoff, BAND_PIXELS, LinearLevel, MAX_SIDE, SetUpMeshes, Setup, Shading, SoftwareTextures,
-    affine_uv, checked_target,
-};
+use crate::software::alpha::AlphaCutoff;
+use crate::software::bands::{BAND_PIXELS, MAX_SIDE, checked_target};
+use crate::software::sampling::LinearLevel;
+use crate::software::setup::{SetUpMeshes, Setup, affine_uv};
+use crate::software::shading::Shading;
+use crate::software::textures::SoftwareTextures;
 use crate::srgb::SRGB_LINEAR;
 use crate::uv_hull::{BAKE_MIN_AREA, HullLevels, TriangleHull, narrowed};
 
@@ -790,7 +791,7 @@ impl Region {
 mod tests {
     use super::*;
     use crate::scene::{DrawMaterial, DrawMesh, DrawTexture};
-    use crate::software::Bands;
+    use crate::software::bands::Bands;
 
     /// A triangle pair over NDC `[x0, x1] × [-1, 1]` at depth `z` with normal `n`, counter-
     /// clockwise (front) unless `flip`.

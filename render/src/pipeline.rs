@@ -326,8 +326,8 @@ pub fn mip_chain(width: u32, height: u32, rgba: &[u8]) -> Vec<(u32, u32, Vec<u8>
 }
 
 /// The alpha of every level of [`mip_chain`], computed from the image's alpha alone (one byte
-/// a texel): the same bytes as the chain's alpha channel, without its colour work (a
-/// 2048² leaf map's colour levels cost half a second).
+/// a texel): the same bytes as the chain's alpha channel, without its colour work (the colour levels of
+/// a large leaf map are slow to make, and a coverage render reads none of them).
 pub fn alpha_mip_chain(width: u32, height: u32, alpha: &[u8]) -> Vec<(u32, u32, Vec<u8>)> {
     chain(width, height, alpha, 1, downsample_alpha)
 }

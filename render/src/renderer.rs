@@ -47,7 +47,7 @@ pub enum Output {
 
 /// An offscreen renderer, reusable for many renders and shareable across threads.
 ///
-/// Creating one opens a device (a few seconds on CPU adapters); keep it around.
+/// Creating one opens a device (slow on CPU adapters); keep it around.
 pub struct Renderer {
     gpu: Gpu,
     pipelines: Pipelines,
@@ -135,8 +135,7 @@ impl Renderer {
     /// level so as many texels pass the alpha test as at full size) and filtered trilinearly,
     /// as engines draw them. The coverage metric uses it so that both the original's minified
     /// leaf textures and a billboard atlas are pre-filtered alike; point-sampling the
-    /// original's textures made the metric measure their aliasing (pine_medium at ε = 0:
-    /// 0.035 → 0.017). Not the default, so plain renders show exactly the file's texels.
+    /// original's textures made the metric measure their aliasing. Not the default, so plain renders show exactly the file's texels.
     pub fn render_mipmapped(
         &self,
         scene: &DrawScene,
@@ -295,7 +294,9 @@ impl Renderer {
         })
     }
 
-    /// Records and submits the render pass and the copies of both targets.
+    /// Records and submits the render pass and the copies of both targets: the targets made,
+    /// the globals, materials and batches uploaded, the batches drawn, and the targets copied
+    /// out for reading back.
     fn encode_and_submit(
         &self,
         scene: &DrawScene,
@@ -316,35 +317,37 @@ impl Renderer {
             Output::Color => (COLOR_FORMAT, &p.culled, &p.double_sided),
             Output::Normal => (NORMAL_FORMAT, &p.normal_culled, &p.normal_double_sided),
         };
-        let size = wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        };
-        let target = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
-        let attach = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
-        let color = target("frond-render color", color_format, attach);
-        let coverage = target("frond-render coverage", COVERAGE_FORMAT, attach);
-        let depth = target(
-            "frond-render depth",
-            DEPTH_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
-        let color_view = color.create_view(&Default::default());
-        let coverage_view = coverage.create_view(&Default::default());
-        let depth_view = depth.create_view(&Default::default());
+        let attachments = Attachments::new(device, width, height, color_format);
+        let globals_group = self.globals_group(view_proj);
+        let material_groups = self.material_groups(scene, batches, mipmaps);
+        let gpu_batches = upload_batches(device, batches);
 
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("frond-render"),
+        });
+        {
+            let mut pass = attachments.begin_pass(&mut encoder, background);
+            pass.set_bind_group(0, &globals_group, &[]);
+            draw_batches(
+                &mut pass,
+                scene,
+                &gpu_batches,
+                &material_groups,
+                [culled, double_sided],
+            );
+        }
+        let readbacks = [
+            Readback::record(device, &mut encoder, &attachments.color, 4),
+            Readback::record(device, &mut encoder, &attachments.coverage, 1),
+        ];
+        self.gpu.queue.submit([encoder.finish()]);
+        readbacks
+    }
+
+    /// The bind group of the render's globals: `view_proj` and the light's direction
+    /// ([`LIGHT_DIRECTION`]).
+    fn globals_group(&self, view_proj: glam::Mat4) -> wgpu::BindGroup {
+        let device = &self.gpu.device;
         let [lx, ly, lz] = LIGHT_DIRECTION;
         let globals = Globals {
             view_proj: view_proj.to_cols_array_2d(),
@@ -355,104 +358,16 @@ impl Renderer {
             contents: bytemuck::bytes_of(&globals),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let globals_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("frond-render globals"),
-            layout: &p.globals_layout,
+            layout: &self.pipelines.globals_layout,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
                 resource: globals_buffer.as_entire_binding(),
             }],
-        });
-        let material_groups = self.material_groups(scene, batches, mipmaps);
-
-        let gpu_batches: Vec<(wgpu::Buffer, wgpu::Buffer, &Batch)> = batches
-            .iter()
-            .map(|b| {
-                let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("frond-render vertices"),
-                    contents: bytemuck::cast_slice(&b.vertices),
-                    usage: wgpu::BufferUsages::VERTEX,
-                });
-                let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("frond-render indices"),
-                    contents: bytemuck::cast_slice(&b.indices),
-                    usage: wgpu::BufferUsages::INDEX,
-                });
-                (vertices, indices, b)
-            })
-            .collect();
-
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("frond-render"),
-        });
-        {
-            let [r, g, b, a] = background.map(f64::from);
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("frond-render pass"),
-                color_attachments: &[
-                    Some(wgpu::RenderPassColorAttachment {
-                        view: &color_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a }),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    }),
-                    Some(wgpu::RenderPassColorAttachment {
-                        view: &coverage_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    }),
-                ],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_bind_group(0, &globals_group, &[]);
-            for (vertices, indices, batch) in &gpu_batches {
-                pass.set_vertex_buffer(0, vertices.slice(..));
-                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                for draw in &batch.draws {
-                    let Some(group) = material_groups.get(&draw.material) else {
-                        continue;
-                    };
-                    pass.set_pipeline(if scene.materials[draw.material].double_sided {
-                        double_sided
-                    } else {
-                        culled
-                    });
-                    pass.set_bind_group(1, group, &[]);
-                    pass.draw_indexed(
-                        draw.first_index..draw.first_index + draw.index_count,
-                        0,
-                        0..1,
-                    );
-                }
-            }
-        }
-        let readbacks = [
-            Readback::record(device, &mut encoder, &color, 4),
-            Readback::record(device, &mut encoder, &coverage, 1),
-        ];
-        self.gpu.queue.submit([encoder.finish()]);
-        readbacks
+        })
     }
 
-    /// One bind group per material that some batch draws with; textures are uploaded
-    /// once each.
     /// The uploaded view of `tex`, from the cache when the same pixels were uploaded before.
     fn cached_texture(&self, tex: &crate::scene::DrawTexture, mipmaps: bool) -> wgpu::TextureView {
         use std::hash::{BuildHasher, Hash, Hasher};
@@ -483,6 +398,8 @@ impl Renderer {
         view
     }
 
+    /// One bind group per material that some batch draws with; textures are uploaded
+    /// once each.
     fn material_groups(
         &self,
         scene: &DrawScene,
@@ -538,6 +455,169 @@ impl Renderer {
             groups.insert(m, group);
         }
         groups
+    }
+}
+
+/// The targets one render draws into: colour (or normals), coverage and depth, with their
+/// views.
+struct Attachments {
+    /// The colour (or normal) image, copied out after the pass.
+    color: wgpu::Texture,
+    /// The coverage mask, copied out after the pass.
+    coverage: wgpu::Texture,
+    /// The depth buffer, held until the render is submitted.
+    _depth: wgpu::Texture,
+    /// View of `color`.
+    color_view: wgpu::TextureView,
+    /// View of `coverage`.
+    coverage_view: wgpu::TextureView,
+    /// View of the depth buffer (discarded after the pass).
+    depth_view: wgpu::TextureView,
+}
+
+impl Attachments {
+    /// The targets of a `width`×`height` render whose colour image has `color_format`.
+    fn new(
+        device: &wgpu::Device,
+        width: u32,
+        height: u32,
+        color_format: wgpu::TextureFormat,
+    ) -> Attachments {
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
+        let target = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let attach = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+        let color = target("frond-render color", color_format, attach);
+        let coverage = target("frond-render coverage", COVERAGE_FORMAT, attach);
+        let depth = target(
+            "frond-render depth",
+            DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let color_view = color.create_view(&Default::default());
+        let coverage_view = coverage.create_view(&Default::default());
+        let depth_view = depth.create_view(&Default::default());
+        Attachments {
+            color,
+            coverage,
+            _depth: depth,
+            color_view,
+            coverage_view,
+            depth_view,
+        }
+    }
+
+    /// The render pass over these targets, colour cleared to `background`, coverage to
+    /// transparent and depth to 1.
+    fn begin_pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        background: [f32; 4],
+    ) -> wgpu::RenderPass<'e> {
+        let [r, g, b, a] = background.map(f64::from);
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("frond-render pass"),
+            color_attachments: &[
+                Some(wgpu::RenderPassColorAttachment {
+                    view: &self.color_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                }),
+                Some(wgpu::RenderPassColorAttachment {
+                    view: &self.coverage_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                }),
+            ],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        })
+    }
+}
+
+/// Each batch's vertices and indices uploaded, beside the batch.
+fn upload_batches<'b>(
+    device: &wgpu::Device,
+    batches: &'b [Batch],
+) -> Vec<(wgpu::Buffer, wgpu::Buffer, &'b Batch)> {
+    batches
+        .iter()
+        .map(|b| {
+            let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("frond-render vertices"),
+                contents: bytemuck::cast_slice(&b.vertices),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+            let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("frond-render indices"),
+                contents: bytemuck::cast_slice(&b.indices),
+                usage: wgpu::BufferUsages::INDEX,
+            });
+            (vertices, indices, b)
+        })
+        .collect()
+}
+
+/// Every draw of the uploaded `batches` recorded into `pass`, each with its material's bind
+/// group (`material_groups`) and the pipeline of its sidedness (`[culled, double_sided]`);
+/// a draw whose material has no group is skipped.
+fn draw_batches(
+    pass: &mut wgpu::RenderPass<'_>,
+    scene: &DrawScene,
+    batches: &[(wgpu::Buffer, wgpu::Buffer, &Batch)],
+    material_groups: &BTreeMap<usize, wgpu::BindGroup>,
+    [culled, double_sided]: [&wgpu::RenderPipeline; 2],
+) {
+    for (vertices, indices, batch) in batches {
+        pass.set_vertex_buffer(0, vertices.slice(..));
+        pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+        for draw in &batch.draws {
+            let Some(group) = material_groups.get(&draw.material) else {
+                continue;
+            };
+            pass.set_pipeline(if scene.materials[draw.material].double_sided {
+                double_sided
+            } else {
+                culled
+            });
+            pass.set_bind_group(1, group, &[]);
+            pass.draw_indexed(
+                draw.first_index..draw.first_index + draw.index_count,
+                0,
+                0..1,
+            );
+        }
     }
 }
 

@@ -1,7 +1,7 @@
 //! A coverage render's per-sample work on eight samples of a row at once (AVX2): the inside
 //! test, the perspective-correct texture coordinates and the alpha test decided from a
-//! footprint bounds table ([`crate::software`]'s `AlphaBounds`), the three steps that were
-//! most of oak_dense's measure (issue 20). Each lane does exactly the scalar rasteriser's
+//! footprint bounds table ([`crate::software::alpha::AlphaBounds`]), the three steps that
+//! take most of a coverage render's time. Each lane does exactly the scalar rasteriser's
 //! operations in its order (a multiply, then an add: no fused multiply-add, which would round
 //! differently), so both paths give the same bits and the same masks on every machine. The
 //! samples the table leaves open are filtered here too (the trilinear filter and its edge
@@ -23,7 +23,7 @@ pub(crate) struct TriangleLanes<'a> {
     /// Texture coordinates divided by `w`.
     pub(crate) uq: [[f32; 2]; 3],
     /// The texture coordinates at the corners of an affine triangle, summed as they are
-    /// without dividing by `Σ b·q` (the bake's: `crate::software`'s `affine_uv`); `None`
+    /// without dividing by `Σ b·q` (the bake's: [`crate::software::setup::affine_uv`]); `None`
     /// divides.
     pub(crate) affine: Option<[[f32; 2]; 3]>,
     /// The test itself: an opaque material passes every inside sample.
@@ -48,7 +48,7 @@ pub(crate) enum LaneTest<'a> {
     },
     /// The bilinear alpha of `filter.a` (a single level: `filter.b` is not read) from one
     /// gather of a footprint's four texels, `quads` holding them for every footprint within
-    /// the level (`crate::software`'s `footprint_quads`); only the footprints on the level's
+    /// the level (`crate::software::alpha::footprint_quads`); only the footprints on the level's
     /// last row or column (which wrap) are left to `filter`. The same answers as `Table` of
     /// the same level and test, which decides from bounds only what this filter would.
     Quads {
@@ -134,7 +134,7 @@ fn lane_mask(bits: u32) -> std::arch::x86_64::__m256 {
     _mm256_castsi256_ps(_mm256_cmpeq_epi32(set, lane))
 }
 
-/// The weights of the samples `k0..k0 + 8` of a row span (`crate::software`'s `RowSpan`:
+/// The weights of the samples `k0..k0 + 8` of a row span ([`crate::software::spans::RowSpan`]:
 /// `start + step · k`, a multiply then an add, as `RowSpan::weights_at`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
@@ -357,7 +357,9 @@ unsafe fn quads_decide(
 
 impl TriangleLanes<'_> {
     /// Tests the samples `x..x + 8` of a row whose weights at sample `x0` are `start`, changing
-    /// by `step` a sample ([`crate::software`]'s `RowSpan`), with `k0 = x − x0`.
+    /// by `step` a sample ([`crate::software::spans::RowSpan`]), with `k0 = x − x0`: the inside
+    /// test, the texture coordinates where a texture is read, the decision by the triangle's
+    /// table or quads, and the filter of the lanes they leave open.
     ///
     /// # Safety
     /// The machine must have AVX2 ([`available`]). A `Quads` table must hold every footprint
@@ -370,51 +372,19 @@ impl TriangleLanes<'_> {
         use std::arch::x86_64::*;
         // The scalar `start + step · k`, then `Σ b·a` left to right: the same roundings.
         let b = span_weights(k0, start, step);
-        let dot = |a: [f32; 3]| weighted_sum(&b, a);
-        let zero = _mm256_setzero_ps();
-        // Not below zero (a NaN weight is inside, as the scalar `b < 0.0` test has it).
-        let inside = _mm256_and_ps(
-            _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_NLT_UQ>(b[0], zero),
-                _mm256_cmp_ps::<_CMP_NLT_UQ>(b[1], zero),
-            ),
-            _mm256_cmp_ps::<_CMP_NLT_UQ>(b[2], zero),
-        );
+        let inside = inside_lanes(&b);
         let inside_bits = _mm256_movemask_ps(inside) as u32;
         if inside_bits == 0 {
-            return LaneResult {
-                pass: 0,
-                open: 0,
-                u: [0.0; 8],
-                v: [0.0; 8],
-            };
+            return LaneResult::decided(0);
         }
-        // The texture coordinates, where a texture is read.
-        let uv = || match self.affine {
-            Some(c) => (dot(c.map(|t| t[0])), dot(c.map(|t| t[1]))),
-            None => {
-                let q = dot(self.q);
-                (
-                    _mm256_div_ps(dot(self.uq.map(|t| t[0])), q),
-                    _mm256_div_ps(dot(self.uq.map(|t| t[1])), q),
-                )
-            }
-        };
         let (mut r, filter, u, v) = match self.test {
-            LaneTest::Opaque => {
-                return LaneResult {
-                    pass: inside_bits,
-                    open: 0,
-                    u: [0.0; 8],
-                    v: [0.0; 8],
-                };
-            }
+            LaneTest::Opaque => return LaneResult::decided(inside_bits),
             LaneTest::Quads {
                 quads,
                 least_passing,
                 filter,
             } => {
-                let (u, v) = uv();
+                let (u, v) = self.texture_coordinates(&b);
                 // SAFETY: AVX2, as this function's; a `Quads` test's table holds every
                 // footprint within its level.
                 let r = unsafe { quads_decide(quads, least_passing, &filter, u, v, inside) };
@@ -426,89 +396,16 @@ impl TriangleLanes<'_> {
                 fail_below,
                 filter,
             } => {
-                let (u, v) = uv();
-                // The footprint's cell: `floor(u·w − 0.5)`, kept when on the level (a NaN is
-                // not, and goes to the filter, which places it as the scalar path does).
-                let (width, height) = (filter.a.width, filter.a.height);
-                let (wf, hf) = (_mm256_set1_ps(width as f32), _mm256_set1_ps(height as f32));
-                let half = _mm256_set1_ps(0.5);
-                let fx = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(u, wf), half));
-                let fy = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(v, hf), half));
-                let on = _mm256_and_ps(
-                    _mm256_and_ps(
-                        _mm256_cmp_ps::<_CMP_GE_OQ>(fx, zero),
-                        _mm256_cmp_ps::<_CMP_LT_OQ>(fx, wf),
-                    ),
-                    _mm256_and_ps(
-                        _mm256_cmp_ps::<_CMP_GE_OQ>(fy, zero),
-                        _mm256_cmp_ps::<_CMP_LT_OQ>(fy, hf),
-                    ),
-                );
-                let on = _mm256_and_ps(on, inside);
-                // Off-level lanes read entry 0 (masked off: the gather leaves them at zero).
-                let cell = _mm256_add_epi32(
-                    _mm256_mullo_epi32(
-                        _mm256_cvttps_epi32(_mm256_and_ps(fy, on)),
-                        _mm256_set1_epi32(width as i32),
-                    ),
-                    _mm256_cvttps_epi32(_mm256_and_ps(fx, on)),
-                );
-                // Entries are two bytes: a 4-byte read at twice the cell holds this entry in its
-                // low half (and the next one, or the padding, in its high half).
-                // SAFETY: every cell of an on-level lane is below `width · height`, and the table
-                // has one entry more, so the four bytes read are within it; off lanes are not
-                // read.
-                let entries = unsafe {
-                    _mm256_mask_i32gather_epi32::<1>(
-                        _mm256_setzero_si256(),
-                        table.as_ptr().cast::<i32>(),
-                        _mm256_add_epi32(cell, cell),
-                        _mm256_castps_si256(on),
-                    )
-                };
-                let byte = _mm256_set1_epi32(0xff);
-                let lo = _mm256_and_si256(entries, byte);
-                let hi = _mm256_and_si256(_mm256_srli_epi32::<8>(entries), byte);
-                let passes = _mm256_cmpgt_epi32(lo, _mm256_set1_epi32(i32::from(pass_from) - 1));
-                let fails = _mm256_cmpgt_epi32(_mm256_set1_epi32(i32::from(fail_below)), hi);
-                let on_bits = _mm256_movemask_ps(on) as u32;
-                let pass = on_bits & _mm256_movemask_ps(_mm256_castsi256_ps(passes)) as u32;
-                let fail = on_bits & _mm256_movemask_ps(_mm256_castsi256_ps(fails)) as u32;
-                let r = LaneResult {
-                    pass,
-                    open: inside_bits & !(pass | fail),
-                    u: [0.0; 8],
-                    v: [0.0; 8],
-                };
+                let (u, v) = self.texture_coordinates(&b);
+                let thresholds = [pass_from, fail_below];
+                // SAFETY: AVX2, as this function's; a `Table` test's table has
+                // `width · height + 1` entries.
+                let r = unsafe { table_decide(table, thresholds, &filter.a, (u, v), inside) };
                 (r, filter, u, v)
             }
         };
         if r.open != 0 {
-            let open = lane_mask(r.open);
-            // SAFETY: AVX2, as this function's.
-            let (alpha, on) = unsafe {
-                let (a, on_a) = bilinear(&filter.a, u, v, open);
-                match &filter.b {
-                    Some(level) => {
-                        let (b, on_b) = bilinear(level, u, v, open);
-                        let blend = _mm256_add_ps(
-                            a,
-                            _mm256_mul_ps(_mm256_sub_ps(b, a), _mm256_set1_ps(filter.f)),
-                        );
-                        (blend, _mm256_and_ps(on_a, on_b))
-                    }
-                    None => (a, on_a),
-                }
-            };
-            // `passes_cutoff`: kept unless below the cutoff (a NaN is kept).
-            let tested = _mm256_mul_ps(
-                _mm256_div_ps(alpha, _mm256_set1_ps(255.0)),
-                _mm256_set1_ps(filter.scale),
-            );
-            let passes = _mm256_cmp_ps::<_CMP_NLT_UQ>(tested, _mm256_set1_ps(filter.cutoff));
-            let on_bits = _mm256_movemask_ps(on) as u32 & r.open;
-            r.pass |= on_bits & _mm256_movemask_ps(passes) as u32;
-            r.open &= !on_bits;
+            filter_open(&mut r, &filter, u, v);
         }
         if r.open != 0 {
             // SAFETY: unaligned stores of eight floats into arrays of eight.
@@ -520,6 +417,29 @@ impl TriangleLanes<'_> {
         r
     }
 
+    /// The texture coordinates of the eight samples at weights `b`: summed as they are on an
+    /// affine triangle, divided by `Σ b·q` otherwise (the scalar `Setup::uv`'s operations).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn texture_coordinates(
+        &self,
+        b: &[std::arch::x86_64::__m256; 3],
+    ) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
+        use std::arch::x86_64::*;
+        let dot = |a: [f32; 3]| weighted_sum(b, a);
+        match self.affine {
+            Some(c) => (dot(c.map(|t| t[0])), dot(c.map(|t| t[1]))),
+            None => {
+                let q = dot(self.q);
+                (
+                    _mm256_div_ps(dot(self.uq.map(|t| t[0])), q),
+                    _mm256_div_ps(dot(self.uq.map(|t| t[1])), q),
+                )
+            }
+        }
+    }
+
     /// Never called: [`available`] is false off x86-64.
     ///
     /// # Safety
@@ -528,4 +448,148 @@ impl TriangleLanes<'_> {
     pub(crate) unsafe fn test(&self, _: i32, _: [f32; 3], _: [f32; 3]) -> LaneResult {
         unreachable!("eight-sample lanes are only used where available() is true")
     }
+}
+
+impl LaneResult {
+    /// Eight samples decided without the filter: the lanes of `pass` pass, none is open.
+    #[inline]
+    fn decided(pass: u32) -> LaneResult {
+        LaneResult {
+            pass,
+            open: 0,
+            u: [0.0; 8],
+            v: [0.0; 8],
+        }
+    }
+}
+
+/// The lanes whose weights `b` put the sample inside the triangle: none below zero (a NaN
+/// weight is inside, as the scalar `b < 0.0` test has it).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn inside_lanes(b: &[std::arch::x86_64::__m256; 3]) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::*;
+    let zero = _mm256_setzero_ps();
+    _mm256_and_ps(
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_NLT_UQ>(b[0], zero),
+            _mm256_cmp_ps::<_CMP_NLT_UQ>(b[1], zero),
+        ),
+        _mm256_cmp_ps::<_CMP_NLT_UQ>(b[2], zero),
+    )
+}
+
+/// [`LaneTest::Table`] of the samples at `(u, v)` in the lanes of `inside`: each on-level
+/// lane's footprint entry of `table` (of `level`, the filter's first) passes when its least
+/// alpha is at least `pass_from`, fails when its greatest is below `fail_below`; the other
+/// inside lanes are left open.
+///
+/// # Safety
+/// AVX2. `table` must hold `width · height + 1` entries of `level`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn table_decide(
+    table: &[[u8; 2]],
+    [pass_from, fail_below]: [u16; 2],
+    level: &LaneLevel,
+    (u, v): (std::arch::x86_64::__m256, std::arch::x86_64::__m256),
+    inside: std::arch::x86_64::__m256,
+) -> LaneResult {
+    use std::arch::x86_64::*;
+    let zero = _mm256_setzero_ps();
+    // The footprint's cell: `floor(u·w − 0.5)`, kept when on the level (a NaN is not, and
+    // goes to the filter, which places it as the scalar path does).
+    let (width, height) = (level.width, level.height);
+    let (wf, hf) = (_mm256_set1_ps(width as f32), _mm256_set1_ps(height as f32));
+    let half = _mm256_set1_ps(0.5);
+    let fx = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(u, wf), half));
+    let fy = _mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(v, hf), half));
+    let on = _mm256_and_ps(
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GE_OQ>(fx, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(fx, wf),
+        ),
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GE_OQ>(fy, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(fy, hf),
+        ),
+    );
+    let on = _mm256_and_ps(on, inside);
+    // Off-level lanes read entry 0 (masked off: the gather leaves them at zero).
+    let cell = _mm256_add_epi32(
+        _mm256_mullo_epi32(
+            _mm256_cvttps_epi32(_mm256_and_ps(fy, on)),
+            _mm256_set1_epi32(width as i32),
+        ),
+        _mm256_cvttps_epi32(_mm256_and_ps(fx, on)),
+    );
+    // Entries are two bytes: a 4-byte read at twice the cell holds this entry in its low half
+    // (and the next one, or the padding, in its high half).
+    // SAFETY: every cell of an on-level lane is below `width · height`, and the table has one
+    // entry more, so the four bytes read are within it; off lanes are not read.
+    let entries = unsafe {
+        _mm256_mask_i32gather_epi32::<1>(
+            _mm256_setzero_si256(),
+            table.as_ptr().cast::<i32>(),
+            _mm256_add_epi32(cell, cell),
+            _mm256_castps_si256(on),
+        )
+    };
+    let byte = _mm256_set1_epi32(0xff);
+    let lo = _mm256_and_si256(entries, byte);
+    let hi = _mm256_and_si256(_mm256_srli_epi32::<8>(entries), byte);
+    let passes = _mm256_cmpgt_epi32(lo, _mm256_set1_epi32(i32::from(pass_from) - 1));
+    let fails = _mm256_cmpgt_epi32(_mm256_set1_epi32(i32::from(fail_below)), hi);
+    let on_bits = _mm256_movemask_ps(on) as u32;
+    let pass = on_bits & _mm256_movemask_ps(_mm256_castsi256_ps(passes)) as u32;
+    let fail = on_bits & _mm256_movemask_ps(_mm256_castsi256_ps(fails)) as u32;
+    LaneResult {
+        pass,
+        open: _mm256_movemask_ps(inside) as u32 & !(pass | fail),
+        u: [0.0; 8],
+        v: [0.0; 8],
+    }
+}
+
+/// The open lanes of `r` (samples at `(u, v)`) filtered as the scalar test filters them
+/// (bilinear, blended trilinearly when `filter` has a second level, then
+/// `alpha / 255 · scale ≥ cutoff`): those whose footprints the lanes can read are passed or
+/// not and closed; the others stay open for the scalar path.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn filter_open(
+    r: &mut LaneResult,
+    filter: &LaneFilter,
+    u: std::arch::x86_64::__m256,
+    v: std::arch::x86_64::__m256,
+) {
+    use std::arch::x86_64::*;
+    let open = lane_mask(r.open);
+    // SAFETY: AVX2, as this function's.
+    let (alpha, on) = unsafe {
+        let (a, on_a) = bilinear(&filter.a, u, v, open);
+        match &filter.b {
+            Some(level) => {
+                let (b, on_b) = bilinear(level, u, v, open);
+                let blend = _mm256_add_ps(
+                    a,
+                    _mm256_mul_ps(_mm256_sub_ps(b, a), _mm256_set1_ps(filter.f)),
+                );
+                (blend, _mm256_and_ps(on_a, on_b))
+            }
+            None => (a, on_a),
+        }
+    };
+    // `passes_cutoff`: kept unless below the cutoff (a NaN is kept).
+    let tested = _mm256_mul_ps(
+        _mm256_div_ps(alpha, _mm256_set1_ps(255.0)),
+        _mm256_set1_ps(filter.scale),
+    );
+    let passes = _mm256_cmp_ps::<_CMP_NLT_UQ>(tested, _mm256_set1_ps(filter.cutoff));
+    let on_bits = _mm256_movemask_ps(on) as u32 & r.open;
+    r.pass |= on_bits & _mm256_movemask_ps(passes) as u32;
+    r.open &= !on_bits;
 }

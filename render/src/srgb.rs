@@ -58,8 +58,8 @@ const BUCKETS: usize = 4096;
 
 /// Linear light → the nearest sRGB byte (rounding in sRGB space; 0 at or below 0 and for a
 /// NaN, 255 from 1): the thresholds at or below `x` counted from its bucket's start, where
-/// one comparison settles it (a binary search over all 255 was a tenth of the bake's
-/// conversion of texels to bytes, and a loop's unpredictable exit a third of the rest).
+/// one comparison settles it (cheaper than a binary search over all 255 thresholds, or a
+/// loop whose exit the processor cannot predict).
 #[inline]
 pub fn linear_to_srgb(x: f32) -> u8 {
     // The least threshold is above 0: nothing is at or below 0, a negative value or NaN; the

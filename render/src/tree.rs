@@ -11,8 +11,11 @@ use crate::scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
 /// Which triangles of the tree to draw.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TreeParts {
+    /// Every triangle: wood and foliage.
     All,
+    /// The wood alone (trunk and branches), as the scene stage classifies it.
     Wood,
+    /// The foliage alone (leaves and other cards), as the scene stage classifies it.
     Foliage,
 }
 

@@ -1,36 +1,37 @@
 //! Where on a texture an alpha test can pass, as an octagon in texture coordinates, and the
-//! sample span of each row of a triangle that octagon leaves (issue 20).
+//! sample span of each row of a triangle that octagon leaves.
 //!
-//! A leaf card's texture is transparent over much of its square (oak_dense's: the margins
-//! either side of the branch, a third of its width, and the corners), and a coverage render
-//! alpha-tests every sample of every card that no other card has covered yet: on oak_dense
-//! a third of the eight-sample groups the measure tested lay wholly where no footprint of the
-//! triangle's mip levels holds a texel that can pass. Bounding the texture's possibly passing
-//! footprints by eight half-planes `d·uv ≤ s` (the axes and the diagonals) turns each into a
-//! linear function on the triangle's screen (perspective divides out: `s·q − d·(u·q, v·q)`
-//! is linear in the screen-space weights and has the sign of `s − d·uv`), so each sample row
-//! gets a narrower span in a few operations, and a triangle that lies wholly outside one is not
-//! drawn at all. The samples left out are ones whose test fails whatever the filter: a
-//! filtered alpha never exceeds its footprint's greatest texel, nor a trilinear blend the
-//! greater of its two levels' (every step a lerp between bytes). Spans are bounds: every
-//! sample left in is still tested exactly, so the image is the same bit for bit.
+//! A leaf card's texture is transparent over much of its square (the margins either side of
+//! the branch, and the corners), and a coverage render alpha-tests every sample of every card
+//! that no other card has covered yet: many of the eight-sample groups it tests lie wholly
+//! where no footprint of the triangle's mip levels holds a texel that can pass. Bounding the
+//! texture's possibly passing footprints by eight half-planes `d·uv ≤ s` (the axes and the
+//! diagonals) turns each into a linear function on the triangle's screen (perspective divides
+//! out: `s·q − d·(u·q, v·q)` is linear in the screen-space weights and has the sign of
+//! `s − d·uv`), so each sample row gets a narrower span in a few operations, and a triangle
+//! that lies wholly outside one is not drawn at all. The samples left out are ones whose test
+//! fails whatever the filter: a filtered alpha never exceeds its footprint's greatest texel,
+//! nor a trilinear blend the greater of its two levels' (every step a lerp between bytes).
+//! Spans are bounds: every sample left in is still tested exactly, so the image is the same
+//! bit for bit.
 //!
 //! The billboard bake ([`crate::render_bake`]) walks its triangles' rows the same way, with
 //! the octagon of the one level its alpha test reads.
 //!
 //! The octagon is the tightest polygon whose edges take these eight fixed directions: any
 //! convex polygon would do; fixed directions cost one pass over each level to fit, and a row
-//! evaluates each bound with a multiply and an add. On the coverage renders' benchmark
-//! (`cargo bench -p frond-metrics --bench coverage_renders`) the input's renders at 600 px
-//! took 12 % less CPU time with them, 3–5 % less at 200 and 60 px (where fewer triangles are
-//! large enough to be bounded, [`MIN_AREA`]).
+//! evaluates each bound with a multiply and an add. Small triangles are drawn without it
+//! ([`MIN_AREA`]): on them the bounds cost more than the samples they save.
 
 use std::sync::OnceLock;
 
 use frond_scene::Wrap;
 
 use crate::scene::DrawScene;
-use crate::software::{AlphaCutoff, Setup, SoftwareTextures, wrap_index};
+use crate::software::alpha::AlphaCutoff;
+use crate::software::sampling::wrap_index;
+use crate::software::setup::Setup;
+use crate::software::textures::SoftwareTextures;
 
 /// The half-planes' directions `d` in `(u, v)`, those that cut most first (a triangle keeps
 /// four of each kind of bound, see [`HullRows`]).
@@ -59,8 +60,8 @@ const ROW_SLACK: f32 = 0.25;
 /// ones the bounds cost more than the samples they save.
 const MIN_AREA: f32 = 256.0;
 
-/// [`MIN_AREA`] of the bake, whose alpha test costs more a sample (oak_dense's per-bone bake:
-/// 7 ms less with it, 44 % of its triangles being below 256 samples).
+/// [`MIN_AREA`] of the bake, whose alpha test costs more a sample: the bounds pay off on
+/// smaller triangles there.
 pub(crate) const BAKE_MIN_AREA: f32 = 64.0;
 
 /// How far off the target's origin, in samples, a bounded triangle's corners may lie (twice

@@ -1,0 +1,396 @@
+//! The coverage renders ([`render_coverage`], [`depth_complexity`] and both at once) and the
+//! image they resolve to: a render's triangles set up and binned ([`Bands`]), its bands drawn
+//! in parallel ([`Raster`]) and put together top to bottom.
+
+use glam::Mat4;
+use rayon::prelude::*;
+
+use super::bands::{Bands, checked_target};
+use super::raster::{Band, Raster, Shortcuts};
+use super::textures::SoftwareTextures;
+use crate::error::RenderError;
+use crate::scene::DrawScene;
+
+/// A coverage render resolved to pixels, top row first.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CoverageImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width · height` flags: at least half of the pixel's samples passed the alpha test.
+    pub covered: Vec<bool>,
+    /// `width · height` mean linear RGB of the pixel's covered samples (zero where none is);
+    /// empty unless colour was asked for ([`SoftwareTextures::new`]).
+    pub colour: Vec<[f32; 3]>,
+}
+
+/// Renders `scene` through `view_proj` (wgpu clip space, as [`crate::Renderer::render_view`])
+/// at `width`×`height` pixels of `supersample`² samples each, with `textures` prepared from
+/// `scene.textures`, and resolves the samples to pixels (see [`CoverageImage`]).
+pub fn render_coverage(
+    scene: &DrawScene,
+    textures: &SoftwareTextures,
+    view_proj: Mat4,
+    width: u32,
+    height: u32,
+    supersample: u32,
+) -> Result<CoverageImage, RenderError> {
+    rasterise(
+        scene,
+        textures,
+        view_proj,
+        [width, height, supersample],
+        Shortcuts::ALL,
+    )
+    .map(|r| r.0)
+}
+
+/// The depth complexity of `scene` seen through `view_proj` at `width`×`height` pixels of
+/// `supersample`² samples: fragments rasterised (every sample inside a drawn triangle, before
+/// the alpha test discards any: each one runs the fragment shader, since alpha-tested surfaces
+/// defeat early depth rejection) per covered sample; 0 when nothing is covered. The overdraw an
+/// engine pays for alpha-tested foliage, whatever the draw order. The fragments are counted as
+/// the drawn triangles' area in samples (after depth clipping and culling; a part outside the
+/// image's sides counts too), which the samples inside them match up to their edges: counting
+/// them one by one would mean testing every sample, covered or not.
+pub fn depth_complexity(
+    scene: &DrawScene,
+    textures: &SoftwareTextures,
+    view_proj: Mat4,
+    width: u32,
+    height: u32,
+    supersample: u32,
+) -> Result<f64, RenderError> {
+    render_coverage_with_depth(scene, textures, view_proj, width, height, supersample).map(|r| r.1)
+}
+
+/// [`render_coverage`] and [`depth_complexity`] of the same render at once: the same mask, and
+/// the same depth complexity (its pixels are not saturated, so the covered samples are
+/// counted exactly). The metric's first (view, frame) pair gives both, one render fewer.
+pub fn render_coverage_with_depth(
+    scene: &DrawScene,
+    textures: &SoftwareTextures,
+    view_proj: Mat4,
+    width: u32,
+    height: u32,
+    supersample: u32,
+) -> Result<(CoverageImage, f64), RenderError> {
+    let (image, fragments, covered) = rasterise(
+        scene,
+        textures,
+        view_proj,
+        [width, height, supersample],
+        Shortcuts {
+            saturate: false,
+            ..Shortcuts::ALL
+        },
+    )?;
+    let depth = if covered == 0 {
+        0.0
+    } else {
+        fragments / covered as f64
+    };
+    Ok((image, depth))
+}
+
+/// [`render_coverage`], the drawn triangles' area in samples, and the samples covered (all
+/// of a decided pixel's when `shortcuts.saturate`, see [`Raster::saturate`]).
+pub(super) fn rasterise(
+    scene: &DrawScene,
+    textures: &SoftwareTextures,
+    view_proj: Mat4,
+    [width, height, supersample]: [u32; 3],
+    shortcuts: Shortcuts,
+) -> Result<(CoverageImage, f64, u64), RenderError> {
+    let (sw, sh) = checked_target(scene, textures, view_proj, [width, height, supersample])?;
+    let ss = supersample.max(1);
+    let bands = Bands::new(scene, textures, view_proj, [sw, sh], ss as usize);
+    let raster = Raster::new(scene, textures, &bands, sw, ss as usize, shortcuts);
+    let band_rows = bands.rows;
+    let resolved: Vec<Band> = (bands.bins.par_iter())
+        .enumerate()
+        .map(|(b, bin)| raster.band(b * band_rows, ((b + 1) * band_rows).min(sh), bin))
+        .collect();
+    let mut image = CoverageImage {
+        width,
+        height,
+        covered: Vec::with_capacity(width as usize * height as usize),
+        colour: Vec::new(),
+    };
+    let mut covered_samples = 0;
+    for band in resolved {
+        image.covered.extend(band.mask);
+        image.colour.extend(band.colour);
+        covered_samples += band.covered_samples;
+    }
+    let area: f64 = (bands.triangles.iter())
+        .map(|t| 0.5 / f64::from(t.inv_area))
+        .sum();
+    Ok((image, area, covered_samples))
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::pipeline::LIGHT_DIRECTION;
+    use crate::scene::{DrawMaterial, DrawTexture};
+    use crate::software::shading::Lighting;
+    use crate::software::test_scenes::{count, leaf_alpha, quad};
+
+    fn render(scene: &DrawScene, colour: bool, ss: u32) -> CoverageImage {
+        let textures = SoftwareTextures::new(scene, colour).expect("textures");
+        render_coverage(scene, &textures, Mat4::IDENTITY, 40, 30, ss).expect("render")
+    }
+
+    #[test]
+    fn a_full_screen_quad_covers_every_pixel_and_a_half_one_half() {
+        let mut scene = DrawScene {
+            meshes: vec![quad(-1.0, 1.0, 0.5, false, 0)],
+            materials: vec![DrawMaterial::opaque([1.0, 0.0, 0.0, 1.0])],
+            textures: vec![],
+        };
+        let full = render(&scene, true, 2);
+        assert_eq!((full.width, full.height, count(&full)), (40, 30, 1200));
+        assert!(full.colour.iter().all(|c| *c == [1.0, 0.0, 0.0]));
+        scene.meshes = vec![quad(-1.0, 0.0, 0.5, false, 0)];
+        let half = render(&scene, false, 4);
+        assert_eq!(count(&half), 600);
+        assert!(half.colour.is_empty(), "no colour asked for");
+        // The left half, row by row.
+        assert!((0..30).all(|y| (0..40).all(|x| half.covered[y * 40 + x] == (x < 20))));
+    }
+
+    #[test]
+    fn a_normal_map_turns_the_shading_normal_in_the_tangent_frame() {
+        // A white quad facing +z (normal +z, tangent +x, bitangent +y), its map tilting the
+        // normal by 37° towards +y: shaded with the tilted normal, and with the tangent's w
+        // negative (bitangent −y) tilted the other way.
+        let tilted = Vec3::new(0.0, 0.6, 0.8);
+        let texel = [
+            128u8,
+            (255.0 * (0.6 + 1.0) / 2.0) as u8,
+            (255.0 * 1.8 / 2.0) as u8,
+            255,
+        ];
+        let light = Vec3::from(LIGHT_DIRECTION);
+        let shade_of = |sign: Option<f32>| {
+            let mut mesh = quad(-1.0, 1.0, 0.5, false, 0);
+            mesh.normals = Some(vec![[0.0, 0.0, 1.0]; 4]);
+            mesh.tangents = sign.map(|w| vec![[1.0, 0.0, 0.0, w]; 4]);
+            let scene = DrawScene {
+                meshes: vec![mesh],
+                materials: vec![DrawMaterial {
+                    normal_texture: Some(0),
+                    ..DrawMaterial::opaque([1.0; 4])
+                }],
+                textures: vec![DrawTexture {
+                    width: 4,
+                    height: 4,
+                    rgba: texel.repeat(16),
+                }],
+            };
+            render(&scene, true, 1).colour[600][0]
+        };
+        let expect = |n: Vec3| 0.6 + 0.4 * n.normalize().dot(light).abs();
+        let decoded = Vec3::new(
+            f32::from(texel[0]),
+            f32::from(texel[1]),
+            f32::from(texel[2]),
+        ) * (2.0 / 255.0)
+            - Vec3::ONE;
+        assert!((decoded - tilted).length() < 0.01);
+        assert!((shade_of(Some(1.0)) - expect(decoded)).abs() < 1e-4);
+        let mirrored = Vec3::new(decoded.x, -decoded.y, decoded.z);
+        assert!((shade_of(Some(-1.0)) - expect(mirrored)).abs() < 1e-4);
+        // Without tangents the map does not apply: the vertex normal's shade, visibly other.
+        assert!((shade_of(None) - expect(Vec3::Z)).abs() < 1e-4);
+        assert!((expect(decoded) - expect(Vec3::Z)).abs() > 0.1);
+    }
+
+    #[test]
+    fn lambert_lights_the_side_facing_the_viewer() {
+        // A double-sided quad: Lambert lights the normal of the side drawn (a back face's
+        // normal flipped, as GPUs do for double-sided materials), two-sided lighting ignores
+        // the normal's sign.
+        let light = Vec3::from(LIGHT_DIRECTION);
+        let shade = |flip: bool, normal: [f32; 3], lighting: Lighting| {
+            let mut mesh = quad(-1.0, 1.0, 0.5, flip, 0);
+            mesh.normals = Some(vec![normal; 4]);
+            let scene = DrawScene {
+                meshes: vec![mesh],
+                materials: vec![DrawMaterial {
+                    double_sided: true,
+                    ..DrawMaterial::opaque([1.0; 4])
+                }],
+                textures: vec![],
+            };
+            let textures = SoftwareTextures::new(&scene, true)
+                .expect("textures")
+                .with_lighting(lighting);
+            render_coverage(&scene, &textures, Mat4::IDENTITY, 40, 30, 1)
+                .expect("render")
+                .colour[600][0]
+        };
+        let lit = 0.3 + 0.7 * light.z.max(0.0);
+        // Front face with its normal towards the light's side, and a back face whose stored
+        // normal points away: both show the lit side.
+        assert!((shade(false, [0.0, 0.0, 1.0], Lighting::Lambert) - lit).abs() < 1e-4);
+        assert!((shade(true, [0.0, 0.0, -1.0], Lighting::Lambert) - lit).abs() < 1e-4);
+        // A front face whose normal points away from the viewer and the light: ambient only.
+        assert!((shade(false, [0.0, 0.0, -1.0], Lighting::Lambert) - 0.3).abs() < 1e-4);
+        let two_sided = 0.6 + 0.4 * light.z.abs();
+        assert!((shade(false, [0.0, 0.0, -1.0], Lighting::TwoSided) - two_sided).abs() < 1e-4);
+    }
+
+    #[test]
+    fn depth_complexity_counts_every_layer_drawn() {
+        // Three full-screen layers, and a half-screen fourth: 3.5 fragments per covered sample.
+        let scene = DrawScene {
+            meshes: vec![
+                quad(-1.0, 1.0, 0.2, false, 0),
+                quad(-1.0, 1.0, 0.4, false, 0),
+                quad(-1.0, 1.0, 0.6, false, 0),
+                quad(-1.0, 0.0, 0.8, false, 0),
+            ],
+            materials: vec![DrawMaterial::opaque([1.0; 4])],
+            textures: vec![],
+        };
+        let textures = SoftwareTextures::new(&scene, false).expect("textures");
+        let d = depth_complexity(&scene, &textures, Mat4::IDENTITY, 40, 30, 2).expect("count");
+        assert!((d - 3.5).abs() < 1e-6, "{d}");
+        let empty = DrawScene {
+            meshes: vec![],
+            ..scene.clone()
+        };
+        let d = depth_complexity(&empty, &textures, Mat4::IDENTITY, 40, 30, 2).expect("count");
+        assert_eq!(d, 0.0);
+    }
+
+    #[test]
+    fn back_faces_are_culled_unless_double_sided() {
+        let mut scene = DrawScene {
+            meshes: vec![quad(-1.0, 1.0, 0.5, true, 0)],
+            materials: vec![DrawMaterial::opaque([1.0; 4])],
+            textures: vec![],
+        };
+        assert_eq!(count(&render(&scene, false, 1)), 0);
+        scene.materials[0].double_sided = true;
+        assert_eq!(count(&render(&scene, false, 1)), 1200);
+    }
+
+    #[test]
+    fn the_alpha_test_keeps_the_opaque_texels_and_depth_picks_the_nearest_colour() {
+        // A 64×2 texture, opaque on its right half; mip-mapped, as the GPU path draws it.
+        let rgba: Vec<u8> = (0..2)
+            .flat_map(|_| (0..64).flat_map(|x| [0, 255, 0, if x >= 32 { 255 } else { 0 }]))
+            .collect();
+        let scene = DrawScene {
+            meshes: vec![
+                quad(-1.0, 1.0, 0.5, false, 0),
+                quad(-1.0, 1.0, 0.7, false, 1),
+            ],
+            materials: vec![
+                DrawMaterial {
+                    texture: Some(0),
+                    alpha_cutoff: Some(0.5),
+                    ..DrawMaterial::opaque([1.0; 4])
+                },
+                DrawMaterial::opaque([0.0, 0.0, 1.0, 1.0]),
+            ],
+            textures: vec![DrawTexture {
+                width: 64,
+                height: 2,
+                rgba,
+            }],
+        };
+        let leaf_only = DrawScene {
+            meshes: scene.meshes[..1].to_vec(),
+            ..scene.clone()
+        };
+        assert_eq!(count(&render(&leaf_only, false, 4)), 600);
+        // Behind the leaf, a blue wall: green where the leaf is opaque, blue elsewhere.
+        let both = render(&scene, true, 1);
+        assert_eq!(count(&both), 1200);
+        assert_eq!(both.colour[5], [0.0, 0.0, 1.0]);
+        assert_eq!(both.colour[35], [0.0, 1.0, 0.0]);
+    }
+
+    #[test]
+    fn geometry_behind_the_near_plane_is_clipped() {
+        // Half of the quad's depth range is in front of the near plane (z ≥ 0).
+        let mut mesh = quad(-1.0, 1.0, 0.5, false, 0);
+        mesh.positions = vec![
+            [-1.0, -1.0, -0.5],
+            [1.0, -1.0, -0.5],
+            [1.0, 1.0, 0.5],
+            [-1.0, 1.0, 0.5],
+        ];
+        let scene = DrawScene {
+            meshes: vec![mesh],
+            materials: vec![DrawMaterial::opaque([1.0; 4])],
+            textures: vec![],
+        };
+        // z crosses 0 at y = 0: the upper half stays.
+        let image = render(&scene, false, 2);
+        assert_eq!(count(&image), 600);
+        assert!(image.covered[0] && !image.covered[1199]);
+    }
+
+    #[test]
+    fn bad_sizes_and_unprepared_textures_are_errors() {
+        let scene = DrawScene {
+            meshes: vec![quad(-1.0, 1.0, 0.5, false, 0)],
+            materials: vec![DrawMaterial::opaque([1.0; 4])],
+            textures: vec![],
+        };
+        let textures = SoftwareTextures::new(&scene, false).expect("textures");
+        assert!(render_coverage(&scene, &textures, Mat4::IDENTITY, 0, 10, 1).is_err());
+        assert!(render_coverage(&scene, &textures, Mat4::IDENTITY, 40_000, 10, 1).is_err());
+        assert!(render_coverage(&scene, &textures, Mat4::NAN, 10, 10, 1).is_err());
+        let mut textured = scene.clone();
+        textured.textures.push(DrawTexture {
+            width: 1,
+            height: 1,
+            rgba: vec![255; 4],
+        });
+        assert!(render_coverage(&textured, &textures, Mat4::IDENTITY, 10, 10, 1).is_err());
+        textured.textures[0].rgba.pop();
+        assert!(SoftwareTextures::new(&textured, false).is_err());
+    }
+
+    /// Textures prepared for the bake (RGBA levels with their alpha's bounds) draw a colour
+    /// render exactly as the colour preparation does: the coverage renders' alpha-only bounds
+    /// never apply to RGBA levels.
+    #[test]
+    fn bake_prepared_textures_draw_colour_renders_unchanged() {
+        let (w, h, alpha) = leaf_alpha();
+        let scene = DrawScene {
+            meshes: vec![quad(-0.9, 0.8, 0.4, false, 0)],
+            materials: vec![DrawMaterial {
+                texture: Some(0),
+                alpha_cutoff: Some(0.5),
+                ..DrawMaterial::opaque([1.0; 4])
+            }],
+            textures: vec![DrawTexture {
+                width: w,
+                height: h,
+                rgba: alpha.iter().flat_map(|&a| [40, 180, 70, a]).collect(),
+            }],
+        };
+        let colour = SoftwareTextures::new(&scene, true).expect("textures");
+        let bake = SoftwareTextures::for_bake(&scene.textures).expect("textures");
+        let draw = |t: &SoftwareTextures| {
+            render_coverage(&scene, t, Mat4::IDENTITY, 60, 40, 2).expect("render")
+        };
+        let image = draw(&colour);
+        let covered = image.covered.iter().filter(|c| **c).count();
+        assert!(
+            covered > 100 && covered < 60 * 40,
+            "{covered} pixels covered"
+        );
+        assert_eq!(draw(&bake), image);
+    }
+}
