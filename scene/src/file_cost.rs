@@ -22,7 +22,8 @@ use serde::{Deserialize, Serialize};
 use crate::accessor::{component_size, type_width};
 use crate::error::{Result, SceneError};
 use crate::gltf_source::GltfSource;
-use crate::import::{read_nodes, triangulate};
+use crate::import::hierarchy::read_nodes;
+use crate::import::meshes::triangulate;
 use crate::input_file::{InputLimits, MAX_VERTICES_OPTION, resolve_uri};
 use crate::rig::world_matrices;
 
@@ -445,7 +446,7 @@ fn used_images(src: &GltfSource, used: impl Iterator<Item = usize>) -> Result<BT
             if t >= root.textures.len() {
                 return Err(src.invalid(format!("material {m}: texture {t} does not exist")));
             }
-            let img = crate::import::texture_image(src, t, true);
+            let img = crate::import::materials::texture_image(src, t, true);
             if img >= root.images.len() {
                 return Err(src.invalid(format!("texture {t}: image {img} does not exist")));
             }

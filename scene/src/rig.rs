@@ -63,7 +63,7 @@ pub struct Channel {
     pub property: Property,
     pub interpolation: Interpolation,
     /// Key times in seconds: finite, ≥ 0 and strictly increasing (the importer refuses or
-    /// repairs anything else, see `import::read_clips`), as glTF requires of what frond writes.
+    /// repairs anything else, see `import::animation::read_clips`), as glTF requires of what frond writes.
     pub times: Vec<f32>,
     /// Key values as Vec4 (xyz for T/S, xyzw for rotation); CUBICSPLINE stores
     /// in-tangent, value, out-tangent per key.
