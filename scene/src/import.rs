@@ -13,9 +13,10 @@
 //! (clips and their channels). This module runs them in order and assembles the [`Tree`].
 
 mod animation;
+mod attributes;
 mod buffers;
 pub(crate) mod hierarchy;
-// mod influences;
+mod influences;
 pub(crate) mod materials;
 pub(crate) mod meshes;
 mod skins;

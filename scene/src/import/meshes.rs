@@ -5,12 +5,16 @@ use std::collections::HashMap;
 
 use glam::{Vec2, Vec3};
 use gltf::json;
+use gltf::json::mesh::{Mode, Semantic};
 use gltf::json::validation::Checked;
 
+use crate::accessor::Decoded;
 use crate::classify::PrimitiveInfo;
 use crate::error::Result;
 use crate::gltf_source::GltfSource;
-use crate::import::materials::MaterialInfo;
+use crate::import::attributes::{PrimitiveAttributes, attribute};
+use crate::import::influences::Influences;
+use crate::import::materials::{BaseColorMap, MaterialInfo};
 use crate::input_file::MAX_VERTICES_OPTION;
 use crate::model::{Binding, Bone, Triangle, Vertices};
 use crate::rig::Node;
@@ -75,397 +79,413 @@ pub(super) fn read_meshes(
         .extensions_used
         .iter()
         .any(|e| e == "KHR_mesh_quantization");
-    let mut verts = Vertices::default();
-    let mut prims = Vec::new();
+    let mut reader = MeshReader {
+        src,
+        bones,
+        materials,
+        quantization,
+        verts: Vertices::default(),
+        prims: Vec::new(),
+        warnings,
+    };
     let mut node_binding: HashMap<usize, u32> = HashMap::new();
-    let skin_count = src.root.skins.len();
     for &ni in order {
-        let jn = &src.root.nodes[ni];
-        let Some(mesh_index) = jn.mesh.map(|m| m.value()) else {
+        let Some(instance) = mesh_instance(src, ni, bindings, &mut node_binding)? else {
             continue;
         };
-        let mesh = src.root.meshes.get(mesh_index).ok_or_else(|| {
-            src.invalid(format!(
-                "node {ni} references mesh {mesh_index}, which does not exist"
-            ))
-        })?;
-        let skin = jn.skin.map(|s| s.value());
-        if let Some(s) = skin
-            && s >= skin_count
-        {
-            return Err(src.invalid(format!(
-                "node {ni} references skin {s}, which does not exist"
-            )));
-        }
-        let binding = match skin {
-            Some(s) => s as u32,
-            None => *node_binding.entry(ni).or_insert_with(|| {
-                bindings.push(Binding::Node(ni));
-                (bindings.len() - 1) as u32
-            }),
-        };
-        let palette = match &bindings[binding as usize] {
-            Binding::Skin { joints, .. } => joints.len(),
-            Binding::Node(_) => 1,
-        };
-        let mesh_name = mesh
-            .name
-            .clone()
-            .unwrap_or_else(|| format!("mesh{mesh_index}"));
-        for (pi, p) in mesh.primitives.iter().enumerate() {
-            let what = format!("mesh '{mesh_name}' primitive {pi}");
-            let mode = match p.mode {
-                Checked::Valid(m) => m,
-                Checked::Invalid => return Err(src.invalid(format!("{what}: invalid mode"))),
-            };
-            use json::mesh::Mode;
-            if !matches!(
-                mode,
-                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-            ) {
-                warnings.push(format!(
-                    "{what}: {mode:?} primitives are not triangles; skipped"
-                ));
-                continue;
-            }
-            let attr = |sem: json::mesh::Semantic| {
-                p.attributes.get(&Checked::Valid(sem)).map(|a| a.value())
-            };
-            let pos_acc = attr(json::mesh::Semantic::Positions)
-                .ok_or_else(|| src.invalid(format!("{what}: has no POSITION attribute")))?;
-            // Checked from the declared count before anything is decoded: a mesh instanced
-            // on many nodes, or an accessor without a bufferView (zeros of any count), would
-            // otherwise let a tiny file take gigabytes.
-            let declared = src
-                .root
-                .accessors
-                .get(pos_acc)
-                .map_or(0, |a| a.count.0 as usize);
-            let limit = src.limits.max_vertices;
-            if verts.len().saturating_add(declared) as u64 > limit {
-                return Err(src.invalid(format!(
-                    "{what} (node {ni}) brings the meshes to {} vertices, over the vertex limit of {limit} (raise it with {MAX_VERTICES_OPTION})",
-                    verts.len().saturating_add(declared)
-                )));
-            }
-            let pos = src.read_floats(pos_acc, &format!("{what} POSITION"))?;
-            if pos.width != 3 {
-                return Err(src.invalid(format!("{what}: POSITION must be VEC3")));
-            }
-            if pos.values.iter().any(|v| !v.is_finite()) {
-                return Err(src.invalid(format!("{what}: POSITION contains NaN or Inf")));
-            }
-            if let Some(k) = pos.values.iter().position(|v| v.abs() > MAX_COORDINATE) {
-                return Err(src.invalid(format!(
-                    "{what}: POSITION of vertex {} is {:?}, beyond ±{MAX_COORDINATE:e} (absurd for a tree in any unit)",
-                    k / 3,
-                    pos.get::<3>(k / 3)
-                )));
-            }
-            if let Some(w) = integer_position_warning(src, pos_acc, quantization) {
-                warnings.push(format!("{what}: {w}"));
-            }
-            if let Some(targets) = p.targets.as_ref().filter(|t| !t.is_empty()) {
-                warnings.push(format!(
-                    "{what}: {} morph target{} ignored (frond reads the base shape only)",
-                    targets.len(),
-                    if targets.len() == 1 { "" } else { "s" }
-                ));
-            }
-            let n = pos.count();
-            let check_count = |d: &crate::accessor::Decoded, name: &str| -> Result<()> {
-                if d.count() != n {
-                    return Err(src.invalid(format!(
-                        "{what}: {name} has {} elements, POSITION has {n}",
-                        d.count()
-                    )));
-                }
-                Ok(())
-            };
-            let normals = match attr(json::mesh::Semantic::Normals) {
-                Some(a) => {
-                    let d = src.read_floats(a, &format!("{what} NORMAL"))?;
-                    check_count(&d, "NORMAL")?;
-                    Some(d)
-                }
-                None => None,
-            };
-            let tangents = match attr(json::mesh::Semantic::Tangents) {
-                Some(a) => {
-                    let d = src.read_floats(a, &format!("{what} TANGENT"))?;
-                    check_count(&d, "TANGENT")?;
-                    (d.width == 4).then_some(d)
-                }
-                None => None,
-            };
-            let material = p.material.map(|m| m.value());
-            if let Some(m) = material
-                && m >= materials.materials.len()
-            {
-                return Err(src.invalid(format!("{what}: material {m} does not exist")));
-            }
-            let tex = material.and_then(|m| materials.base[m]);
-            let uv_set = tex.map(|t| t.1).unwrap_or(0);
-            let read_set = |set: u32| -> Result<Option<crate::accessor::Decoded>> {
-                match attr(json::mesh::Semantic::TexCoords(set)) {
-                    Some(a) => {
-                        let d = src.read_floats(a, &format!("{what} TEXCOORD_{set}"))?;
-                        check_count(&d, &format!("TEXCOORD_{set}"))?;
-                        Ok(Some(d))
-                    }
-                    None => Ok(None),
-                }
-            };
-            let uvs = read_set(uv_set)?;
-            // The input's own sets, untransformed, for writing its materials back unchanged.
-            let raw_sets = (0..materials.texcoord_sets as u32)
-                .map(|set| {
-                    if set == uv_set {
-                        Ok(None)
-                    } else {
-                        read_set(set)
-                    }
-                })
-                .collect::<Result<Vec<_>>>()?;
-            if verts.texcoords.len() < materials.texcoord_sets {
-                verts.texcoords.resize(materials.texcoord_sets, Vec::new());
-            }
-            // Influence sets JOINTS_n/WEIGHTS_n for n = 0, 1, ... while both are present:
-            // (joint ids, weights), 4 per vertex each.
-            let mut influence_sets: Vec<(Vec<u32>, Vec<f32>)> = Vec::new();
-            if skin.is_some() {
-                use json::mesh::Semantic;
-                while let (Some(j), Some(w)) = (
-                    attr(Semantic::Joints(influence_sets.len() as u32)),
-                    attr(Semantic::Weights(influence_sets.len() as u32)),
-                ) {
-                    let set = influence_sets.len();
-                    let (jw, jv) = src.read_ints(j, &format!("{what} JOINTS_{set}"))?;
-                    let wd = src.read_floats(w, &format!("{what} WEIGHTS_{set}"))?;
-                    check_count(&wd, &format!("WEIGHTS_{set}"))?;
-                    if jw != 4 || wd.width != 4 || jv.len() != n * 4 {
-                        return Err(src.invalid(format!(
-                            "{what}: JOINTS_{set}/WEIGHTS_{set} must be VEC4 with one per vertex"
-                        )));
-                    }
-                    influence_sets.push((jv, wd.values));
-                }
-                if influence_sets.is_empty() {
-                    warnings.push(format!(
-                        "{what}: skinned node without JOINTS_0/WEIGHTS_0; bound to joint 0"
-                    ));
-                }
-                let mut unpaired: Vec<String> = p
-                    .attributes
-                    .keys()
-                    .filter_map(|k| match k {
-                        Checked::Valid(sem @ (Semantic::Joints(s) | Semantic::Weights(s)))
-                            if *s as usize >= influence_sets.len().max(1) =>
-                        {
-                            Some(sem.to_string())
-                        }
-                        _ => None,
-                    })
-                    .collect();
-                unpaired.sort();
-                if !unpaired.is_empty() {
-                    warnings.push(format!(
-                        "{what}: {} ignored (influence sets are read as JOINTS_n/WEIGHTS_n pairs numbered from 0)",
-                        unpaired.join(", ")
-                    ));
-                }
-            }
-            let mut influences: Vec<(usize, f32)> = Vec::new();
-            let (mut zero_weight, mut folded, mut max_dropped) = (0usize, 0usize, 0.0f32);
-            let base = verts.len() as u32;
-            if tangents.is_some() && verts.tangent.len() < verts.len() {
-                verts.tangent.resize(verts.len(), glam::Vec4::ZERO);
-            }
-            for i in 0..n {
-                if let Some(t) = &tangents {
-                    let t = glam::Vec4::from(t.get::<4>(i));
-                    let xyz = t.truncate().normalize_or_zero();
-                    verts.tangent.push(if t.is_finite() && xyz != Vec3::ZERO {
-                        xyz.extend(if t.w < 0.0 { -1.0 } else { 1.0 })
-                    } else {
-                        glam::Vec4::ZERO
-                    });
-                } else if !verts.tangent.is_empty() {
-                    verts.tangent.push(glam::Vec4::ZERO);
-                }
-                verts.position.push(Vec3::from(pos.get::<3>(i)));
-                verts.normal.push(
-                    normals
-                        .as_ref()
-                        .map(|d| Vec3::from(d.get::<3>(i)).normalize_or_zero())
-                        .unwrap_or(Vec3::ZERO),
-                );
-                let uv = uvs
-                    .as_ref()
-                    .map(|d| Vec2::from(d.get::<2>(i)))
-                    .unwrap_or(Vec2::ZERO);
-                verts
-                    .uv
-                    .push(tex.map(|t| t.2.transform_point2(uv)).unwrap_or(uv));
-                for (set, raw) in raw_sets.iter().enumerate() {
-                    let d = if set as u32 == uv_set {
-                        uvs.as_ref()
-                    } else {
-                        raw.as_ref()
-                    };
-                    verts.texcoords[set]
-                        .push(d.map(|d| Vec2::from(d.get::<2>(i))).unwrap_or(Vec2::ZERO));
-                }
-                verts.binding.push(binding);
-                let (joints, weights) = if influence_sets.is_empty() {
-                    ([0; 4], [1.0, 0.0, 0.0, 0.0])
-                } else {
-                    let check = |jj: usize, w: f32| -> Result<()> {
-                        if w != 0.0 && jj >= palette {
-                            return Err(src.invalid(format!(
-                                "{what}: vertex {i} names joint {jj}, but the skin has {palette} joints"
-                            )));
-                        }
-                        if !w.is_finite() || w < 0.0 {
-                            return Err(src.invalid(format!(
-                                "{what}: vertex {i} has a negative or non-finite weight"
-                            )));
-                        }
-                        Ok(())
-                    };
-                    let mut j = [0u16; 4];
-                    let mut w = [0.0f32; 4];
-                    if let [(jv, wv)] = influence_sets.as_slice() {
-                        // One set: slots kept as written (zero-weight slots name joint 0).
-                        for k in 0..4 {
-                            let (jj, wk) = (jv[i * 4 + k] as usize, wv[i * 4 + k]);
-                            check(jj, wk)?;
-                            j[k] = if wk == 0.0 { 0 } else { jj as u16 };
-                            w[k] = wk;
-                        }
-                    } else {
-                        // Several sets: merge per joint, keep the 4 largest.
-                        influences.clear();
-                        for (jv, wv) in &influence_sets {
-                            for k in i * 4..i * 4 + 4 {
-                                let (jj, wk) = (jv[k] as usize, wv[k]);
-                                check(jj, wk)?;
-                                if wk > 0.0 {
-                                    match influences.iter_mut().find(|e| e.0 == jj) {
-                                        Some(e) => e.1 += wk,
-                                        None => influences.push((jj, wk)),
-                                    }
-                                }
-                            }
-                        }
-                        if influences.len() > 4 {
-                            influences.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
-                            let total: f32 = influences.iter().map(|e| e.1).sum();
-                            let dropped: f32 = influences[4..].iter().map(|e| e.1).sum();
-                            folded += 1;
-                            max_dropped = max_dropped.max(dropped / total);
-                            influences.truncate(4);
-                        }
-                        for (k, &(jj, wk)) in influences.iter().enumerate() {
-                            j[k] = jj as u16;
-                            w[k] = wk;
-                        }
-                    }
-                    let sum: f32 = w.iter().sum();
-                    if !sum.is_finite() {
-                        // Each weight is finite, but e.g. 4 × 1e38 is not: normalising would
-                        // silently zero them all.
-                        return Err(src.invalid(format!(
-                            "{what}: vertex {i} has skin weights whose sum overflows ({:?})",
-                            w
-                        )));
-                    }
-                    if sum > 0.0 {
-                        for x in &mut w {
-                            *x /= sum;
-                        }
-                    } else {
-                        zero_weight += 1;
-                        j = [0; 4];
-                        w = [1.0, 0.0, 0.0, 0.0];
-                    }
-                    (j, w)
-                };
-                verts.joints.push(joints);
-                verts.weights.push(weights);
-            }
-            if zero_weight > 0
-                && let Binding::Skin { joints, .. } = &bindings[binding as usize]
-                && let Some(first) = joints.first().map(|&b| &bones[b])
-            {
-                warnings.push(format!(
-                    "{what}: {zero_weight} of {n} vertices {} all-zero skin weights; bound rigidly to the skin's first joint (joint 0, node {} '{}')",
-                    if zero_weight == 1 { "has" } else { "have" },
-                    first.node,
-                    first.name
-                ));
-            }
-            if influence_sets.len() > 1 {
-                let extra: Vec<String> = (1..influence_sets.len())
-                    .map(|s| format!("JOINTS_{s}/WEIGHTS_{s}"))
-                    .collect();
-                let outcome = if folded == 0 {
-                    "no vertex has more than 4, so nothing is lost".to_string()
-                } else {
-                    format!(
-                        "{folded} {} more than 4 and {} the 4 largest, renormalised (dropping at most {:.1}% of a vertex's weight)",
-                        if folded == 1 {
-                            "vertex has"
-                        } else {
-                            "vertices have"
-                        },
-                        if folded == 1 { "keeps" } else { "keep" },
-                        max_dropped * 100.0
-                    )
-                };
-                warnings.push(format!(
-                    "{what}: {} present; frond keeps 4 influences per vertex and merged the sets: {outcome}",
-                    extra.join(", ")
-                ));
-            }
-            let raw_indices: Vec<u32> = match p.indices {
-                Some(a) => {
-                    let (w, v) = src.read_ints(a.value(), &format!("{what} indices"))?;
-                    if w != 1 {
-                        return Err(src.invalid(format!("{what}: indices must be SCALAR")));
-                    }
-                    v
-                }
-                None => (0..n as u32).collect(),
-            };
-            if let Some(&bad) = raw_indices.iter().find(|&&i| i as usize >= n) {
-                return Err(src.invalid(format!(
-                    "{what}: index {bad} is out of range ({n} vertices)"
-                )));
-            }
-            let leftover = raw_indices.len() % 3;
-            if mode == json::mesh::Mode::Triangles && leftover != 0 {
-                let counted = if p.indices.is_some() {
-                    "indices"
-                } else {
-                    "vertices (no indices)"
-                };
-                warnings.push(format!(
-                    "{what}: {} {counted} is not a multiple of 3 for TRIANGLES; the last {leftover} dropped",
-                    raw_indices.len()
-                ));
-            }
-            let tris = triangulate(&raw_indices, mode);
-            prims.push(PrimitiveInfo {
-                mesh: mesh_name.clone(),
-                node: ni,
-                primitive: pi,
-                material,
-                triangles: tris.into_iter().map(|t| t.map(|i| i + base)).collect(),
-            });
+        for (pi, p) in instance.mesh.primitives.iter().enumerate() {
+            reader.read_primitive(&instance, &bindings[instance.binding as usize], pi, p)?;
         }
     }
-    Ok((verts, prims))
+    Ok((reader.verts, reader.prims))
+}
+
+/// A node that shows a mesh, with the binding its vertices take.
+struct MeshInstance<'a> {
+    /// The node's index.
+    node: usize,
+    /// The mesh it shows.
+    mesh: &'a json::Mesh,
+    /// The mesh's name, or `mesh<i>`.
+    mesh_name: String,
+    /// The node's skin, if it has one.
+    skin: Option<usize>,
+    /// Index into the bindings: the skin's, or the node's own rigid binding.
+    binding: u32,
+    /// Joints in that binding (1 for a rigid one): what joint ids may name.
+    palette: usize,
+}
+
+/// Node `ni`'s mesh instance, or None when it shows no mesh. An unskinned node gets its own
+/// [`Binding::Node`] (added to `bindings` the first time, remembered in `node_binding`).
+///
+/// Refused: a node naming a mesh or skin that does not exist.
+fn mesh_instance<'a>(
+    src: &'a GltfSource,
+    ni: usize,
+    bindings: &mut Vec<Binding>,
+    node_binding: &mut HashMap<usize, u32>,
+) -> Result<Option<MeshInstance<'a>>> {
+    let jn = &src.root.nodes[ni];
+    let Some(mesh_index) = jn.mesh.map(|m| m.value()) else {
+        return Ok(None);
+    };
+    let mesh = src.root.meshes.get(mesh_index).ok_or_else(|| {
+        src.invalid(format!(
+            "node {ni} references mesh {mesh_index}, which does not exist"
+        ))
+    })?;
+    let skin = jn.skin.map(|s| s.value());
+    if let Some(s) = skin
+        && s >= src.root.skins.len()
+    {
+        return Err(src.invalid(format!(
+            "node {ni} references skin {s}, which does not exist"
+        )));
+    }
+    let binding = match skin {
+        Some(s) => s as u32,
+        None => *node_binding.entry(ni).or_insert_with(|| {
+            bindings.push(Binding::Node(ni));
+            (bindings.len() - 1) as u32
+        }),
+    };
+    let palette = match &bindings[binding as usize] {
+        Binding::Skin { joints, .. } => joints.len(),
+        Binding::Node(_) => 1,
+    };
+    let mesh_name = mesh
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("mesh{mesh_index}"));
+    Ok(Some(MeshInstance {
+        node: ni,
+        mesh,
+        mesh_name,
+        skin,
+        binding,
+        palette,
+    }))
+}
+
+/// What the primitives are read into, and the file-wide facts reading each one needs.
+struct MeshReader<'a> {
+    /// The file.
+    src: &'a GltfSource,
+    /// The skins' bones (to name a skin's first joint in warnings).
+    bones: &'a [Bone],
+    /// The materials read (base colour maps and the texture coordinate sets they use).
+    materials: &'a MaterialInfo,
+    /// Whether the file declares `KHR_mesh_quantization` (integer POSITION allowed).
+    quantization: bool,
+    /// Every primitive's vertices so far, flattened.
+    verts: Vertices,
+    /// Every primitive read so far, its triangles indexing `verts`.
+    prims: Vec<PrimitiveInfo>,
+    /// Where warnings go.
+    warnings: &'a mut Vec<String>,
+}
+
+/// The per-vertex attributes of one primitive, read and checked, before they are appended.
+struct PrimitiveData {
+    /// POSITION (VEC3, finite, within ±[`MAX_COORDINATE`]).
+    positions: Decoded,
+    /// NORMAL, if present.
+    normals: Option<Decoded>,
+    /// TANGENT, if present as VEC4.
+    tangents: Option<Decoded>,
+    /// The base colour map's (input image, texcoord set, uv transform), if the material has one.
+    map: Option<BaseColorMap>,
+    /// The set that map samples (0 without one).
+    uv_set: u32,
+    /// That set's coordinates, if the primitive has them.
+    uvs: Option<Decoded>,
+    /// Per set the materials' maps use: its coordinates, except at `uv_set` (that one is
+    /// `uvs`), for writing the input's materials back unchanged.
+    raw_sets: Vec<Option<Decoded>>,
+}
+
+impl MeshReader<'_> {
+    /// Reads primitive `pi` (`p`) of a mesh instance whose vertices take `binding`: its
+    /// attributes into the vertex arrays, its triangles into a [`PrimitiveInfo`]. A primitive of
+    /// points or lines is skipped with a warning.
+    fn read_primitive(
+        &mut self,
+        instance: &MeshInstance,
+        binding: &Binding,
+        pi: usize,
+        p: &json::mesh::Primitive,
+    ) -> Result<()> {
+        let src = self.src;
+        let what = format!("mesh '{}' primitive {pi}", instance.mesh_name);
+        let Some(mode) = self.triangle_mode(p, &what)? else {
+            return Ok(());
+        };
+        let positions = self.read_positions(p, &what, instance.node)?;
+        let attrs = PrimitiveAttributes {
+            src,
+            primitive: p,
+            what: &what,
+            n: positions.count(),
+        };
+        let normals = attrs.optional(Semantic::Normals, "NORMAL")?;
+        let tangents = attrs
+            .optional(Semantic::Tangents, "TANGENT")?
+            .and_then(|d| (d.width == 4).then_some(d));
+        let material = p.material.map(|m| m.value());
+        if let Some(m) = material
+            && m >= self.materials.materials.len()
+        {
+            return Err(src.invalid(format!("{what}: material {m} does not exist")));
+        }
+        let data = self.read_texcoords(&attrs, material, positions, normals, tangents)?;
+        let mut influences = Influences::read(
+            &attrs,
+            instance.skin.is_some(),
+            instance.palette,
+            self.warnings,
+        )?;
+        let base = self.verts.len() as u32;
+        self.push_vertices(&attrs, instance.binding, &data, &mut influences)?;
+        influences.warn(&attrs, binding, self.bones, self.warnings);
+        let tris = triangles(&attrs, mode, self.warnings)?;
+        self.prims.push(PrimitiveInfo {
+            mesh: instance.mesh_name.clone(),
+            node: instance.node,
+            primitive: pi,
+            material,
+            triangles: tris.into_iter().map(|t| t.map(|i| i + base)).collect(),
+        });
+        Ok(())
+    }
+
+    /// The primitive's mode when it draws triangles; None (with a warning) for points and lines.
+    fn triangle_mode(&mut self, p: &json::mesh::Primitive, what: &str) -> Result<Option<Mode>> {
+        let mode = match p.mode {
+            Checked::Valid(m) => m,
+            Checked::Invalid => return Err(self.src.invalid(format!("{what}: invalid mode"))),
+        };
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            self.warnings.push(format!(
+                "{what}: {mode:?} primitives are not triangles; skipped"
+            ));
+            return Ok(None);
+        }
+        Ok(Some(mode))
+    }
+
+    /// Reads the POSITION of primitive `p` (on node `ni`), first checking from the accessor's
+    /// declared count that it keeps the meshes within
+    /// [`InputLimits::max_vertices`](crate::InputLimits::max_vertices).
+    ///
+    /// Refused: no POSITION, one past the vertex limit, not VEC3, NaN or Inf, or a coordinate
+    /// beyond ±[`MAX_COORDINATE`]. Warned: integer POSITION the glTF rules do not allow, and
+    /// morph targets (ignored).
+    fn read_positions(
+        &mut self,
+        p: &json::mesh::Primitive,
+        what: &str,
+        ni: usize,
+    ) -> Result<Decoded> {
+        let src = self.src;
+        let pos_acc = attribute(p, Semantic::Positions)
+            .ok_or_else(|| src.invalid(format!("{what}: has no POSITION attribute")))?;
+        // Checked from the declared count before anything is decoded: a mesh instanced
+        // on many nodes, or an accessor without a bufferView (zeros of any count), would
+        // otherwise let a tiny file take gigabytes.
+        let declared = src
+            .root
+            .accessors
+            .get(pos_acc)
+            .map_or(0, |a| a.count.0 as usize);
+        let limit = src.limits.max_vertices;
+        if self.verts.len().saturating_add(declared) as u64 > limit {
+            return Err(src.invalid(format!(
+                "{what} (node {ni}) brings the meshes to {} vertices, over the vertex limit of {limit} (raise it with {MAX_VERTICES_OPTION})",
+                self.verts.len().saturating_add(declared)
+            )));
+        }
+        let pos = src.read_floats(pos_acc, &format!("{what} POSITION"))?;
+        if pos.width != 3 {
+            return Err(src.invalid(format!("{what}: POSITION must be VEC3")));
+        }
+        if pos.values.iter().any(|v| !v.is_finite()) {
+            return Err(src.invalid(format!("{what}: POSITION contains NaN or Inf")));
+        }
+        if let Some(k) = pos.values.iter().position(|v| v.abs() > MAX_COORDINATE) {
+            return Err(src.invalid(format!(
+                "{what}: POSITION of vertex {} is {:?}, beyond ±{MAX_COORDINATE:e} (absurd for a tree in any unit)",
+                k / 3,
+                pos.get::<3>(k / 3)
+            )));
+        }
+        if let Some(w) = integer_position_warning(src, pos_acc, self.quantization) {
+            self.warnings.push(format!("{what}: {w}"));
+        }
+        if let Some(targets) = p.targets.as_ref().filter(|t| !t.is_empty()) {
+            self.warnings.push(format!(
+                "{what}: {} morph target{} ignored (frond reads the base shape only)",
+                targets.len(),
+                if targets.len() == 1 { "" } else { "s" }
+            ));
+        }
+        Ok(pos)
+    }
+
+    /// Reads the texture coordinates the primitive's vertices take (the set its `material`'s
+    /// base colour map samples, and the input's own sets) and gathers them with the other
+    /// attributes. The vertex arrays get a coordinate list per set the maps use.
+    fn read_texcoords(
+        &mut self,
+        attrs: &PrimitiveAttributes,
+        material: Option<usize>,
+        positions: Decoded,
+        normals: Option<Decoded>,
+        tangents: Option<Decoded>,
+    ) -> Result<PrimitiveData> {
+        let materials = self.materials;
+        let tex = material.and_then(|m| materials.base[m]);
+        let uv_set = tex.map(|t| t.1).unwrap_or(0);
+        let read_set =
+            |set: u32| attrs.optional(Semantic::TexCoords(set), &format!("TEXCOORD_{set}"));
+        let uvs = read_set(uv_set)?;
+        // The input's own sets, untransformed, for writing its materials back unchanged.
+        let raw_sets = (0..materials.texcoord_sets as u32)
+            .map(|set| {
+                if set == uv_set {
+                    Ok(None)
+                } else {
+                    read_set(set)
+                }
+            })
+            .collect::<Result<Vec<_>>>()?;
+        if self.verts.texcoords.len() < materials.texcoord_sets {
+            self.verts
+                .texcoords
+                .resize(materials.texcoord_sets, Vec::new());
+        }
+        Ok(PrimitiveData {
+            positions,
+            normals,
+            tangents,
+            map: tex,
+            uv_set,
+            uvs,
+            raw_sets,
+        })
+    }
+
+    /// Appends the primitive's vertices to the vertex arrays, all bound to `binding`: tangents
+    /// normalised (zero where the file gives none or a degenerate one), normals normalised,
+    /// the base colour map's coordinates transformed, the input's sets as they are, and each
+    /// vertex's joints and weights from `influences`.
+    fn push_vertices(
+        &mut self,
+        attrs: &PrimitiveAttributes,
+        binding: u32,
+        data: &PrimitiveData,
+        influences: &mut Influences,
+    ) -> Result<()> {
+        let verts = &mut self.verts;
+        let PrimitiveData {
+            positions: pos,
+            normals,
+            tangents,
+            map: tex,
+            uv_set,
+            uvs,
+            raw_sets,
+        } = data;
+        let (tex, uv_set) = (*tex, *uv_set);
+        if tangents.is_some() && verts.tangent.len() < verts.len() {
+            verts.tangent.resize(verts.len(), glam::Vec4::ZERO);
+        }
+        for i in 0..attrs.n {
+            if let Some(t) = &tangents {
+                let t = glam::Vec4::from(t.get::<4>(i));
+                let xyz = t.truncate().normalize_or_zero();
+                verts.tangent.push(if t.is_finite() && xyz != Vec3::ZERO {
+                    xyz.extend(if t.w < 0.0 { -1.0 } else { 1.0 })
+                } else {
+                    glam::Vec4::ZERO
+                });
+            } else if !verts.tangent.is_empty() {
+                verts.tangent.push(glam::Vec4::ZERO);
+            }
+            verts.position.push(Vec3::from(pos.get::<3>(i)));
+            verts.normal.push(
+                normals
+                    .as_ref()
+                    .map(|d| Vec3::from(d.get::<3>(i)).normalize_or_zero())
+                    .unwrap_or(Vec3::ZERO),
+            );
+            let uv = uvs
+                .as_ref()
+                .map(|d| Vec2::from(d.get::<2>(i)))
+                .unwrap_or(Vec2::ZERO);
+            verts
+                .uv
+                .push(tex.map(|t| t.2.transform_point2(uv)).unwrap_or(uv));
+            for (set, raw) in raw_sets.iter().enumerate() {
+                let d = if set as u32 == uv_set {
+                    uvs.as_ref()
+                } else {
+                    raw.as_ref()
+                };
+                verts.texcoords[set]
+                    .push(d.map(|d| Vec2::from(d.get::<2>(i))).unwrap_or(Vec2::ZERO));
+            }
+            verts.binding.push(binding);
+            let (joints, weights) = influences.vertex(attrs, i)?;
+            verts.joints.push(joints);
+            verts.weights.push(weights);
+        }
+        Ok(())
+    }
+}
+
+/// The primitive's triangles (vertex indices local to it) in drawing `mode`: its index
+/// accessor, or its vertices in order without one.
+///
+/// Refused: indices that are not SCALAR or name a vertex past the primitive's. Warned: a
+/// TRIANGLES count that is not a multiple of 3 (the leftover dropped).
+fn triangles(
+    attrs: &PrimitiveAttributes,
+    mode: Mode,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<[u32; 3]>> {
+    let (src, what, n, p) = (attrs.src, attrs.what, attrs.n, attrs.primitive);
+    let raw_indices: Vec<u32> = match p.indices {
+        Some(a) => {
+            let (w, v) = src.read_ints(a.value(), &format!("{what} indices"))?;
+            if w != 1 {
+                return Err(src.invalid(format!("{what}: indices must be SCALAR")));
+            }
+            v
+        }
+        None => (0..n as u32).collect(),
+    };
+    if let Some(&bad) = raw_indices.iter().find(|&&i| i as usize >= n) {
+        return Err(src.invalid(format!(
+            "{what}: index {bad} is out of range ({n} vertices)"
+        )));
+    }
+    let leftover = raw_indices.len() % 3;
+    if mode == Mode::Triangles && leftover != 0 {
+        let counted = if p.indices.is_some() {
+            "indices"
+        } else {
+            "vertices (no indices)"
+        };
+        warnings.push(format!(
+            "{what}: {} {counted} is not a multiple of 3 for TRIANGLES; the last {leftover} dropped",
+            raw_indices.len()
+        ));
+    }
+    Ok(triangulate(&raw_indices, mode))
 }
 
 /// Why an integer POSITION accessor breaks the glTF rules, if it does: core glTF allows only
