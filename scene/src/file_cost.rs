@@ -24,7 +24,7 @@ use crate::error::{Result, SceneError};
 use crate::gltf_source::GltfSource;
 use crate::import::hierarchy::read_nodes;
 use crate::import::meshes::triangulate;
-use crate::input_file::{InputLimits, MAX_VERTICES_OPTION, resolve_uri};
+use crate::input_file::{InputLimits, resolve_uri};
 use crate::rig::world_matrices;
 
 /// The cost of one file (see the module doc for what is drawn).
@@ -153,7 +153,7 @@ fn cost_of(src: &GltfSource, own_bytes: u64) -> Result<FileCost> {
     }
     if cost.vertices > src.limits.max_vertices {
         return Err(src.invalid(format!(
-            "its drawn meshes have {} vertices, over the vertex limit of {} (raise it with {MAX_VERTICES_OPTION})",
+            "its drawn meshes have {} vertices, over the vertex limit of {} (raise the vertex limit to read it)",
             cost.vertices, src.limits.max_vertices
         )));
     }

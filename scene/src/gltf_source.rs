@@ -8,9 +8,7 @@ use base64::Engine;
 use gltf::json;
 
 use crate::error::{Result, SceneError};
-use crate::input_file::{
-    InputLimits, MAX_INPUT_OPTION, ReadRefusal, human_bytes, read_regular_file, resolve_uri,
-};
+use crate::input_file::{InputLimits, ReadRefusal, human_bytes, read_regular_file, resolve_uri};
 
 /// Extensions whose presence in `extensionsRequired` we can honour.
 pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
@@ -171,7 +169,7 @@ impl GltfSource {
                 total = total.saturating_add(data.len() as u64);
                 if total > limits.max_input_bytes {
                     return Err(err(format!(
-                        "buffer {i}: the file and its external buffers add up to {}, over the input size limit of {} (raise it with {MAX_INPUT_OPTION})",
+                        "buffer {i}: the file and its external buffers add up to {}, over the input size limit of {} (raise the input size limit to read it)",
                         human_bytes(total),
                         human_bytes(limits.max_input_bytes)
                     )));

@@ -22,7 +22,7 @@ pub enum BoneDescriptionKind {
 }
 
 impl BoneDescriptionKind {
-    /// The name `--bone-description` takes.
+    /// The kind's name in command lines and reports (what [`Self::parse`] reads).
     pub fn name(self) -> &'static str {
         match self {
             BoneDescriptionKind::AxisAngle => "axis-angle",

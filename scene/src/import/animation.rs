@@ -7,7 +7,7 @@ use gltf::json::validation::Checked;
 
 use crate::error::Result;
 use crate::gltf_source::GltfSource;
-use crate::input_file::{MAX_ANIMATION_OPTION, MIN_CHANNEL_KEYS, MIN_CLIP_KEYS};
+use crate::input_file::{MIN_CHANNEL_KEYS, MIN_CLIP_KEYS};
 use crate::rig::{Channel, Clip, Interpolation, Property};
 
 /// Latest key time accepted in an animation, in seconds (one hour). Wind loops last seconds;
@@ -117,7 +117,7 @@ fn check_animation_budget(src: &GltfSource, kept: &[Vec<usize>]) -> Result<()> {
         .map(|a| clip_name(a, largest))
         .unwrap_or_default();
     Err(src.invalid(format!(
-        "its {} animations add up to {total} keys (largest: animation '{name}', {keys} keys in {channels} channels), over the animation limit of {limit} keys (raise it with {MAX_ANIMATION_OPTION})",
+        "its {} animations add up to {total} keys (largest: animation '{name}', {keys} keys in {channels} channels), over the animation limit of {limit} keys (raise the animation key limit to read it)",
         per_clip.len()
     )))
 }

@@ -15,7 +15,6 @@ use crate::gltf_source::GltfSource;
 use crate::import::attributes::{PrimitiveAttributes, attribute};
 use crate::import::influences::Influences;
 use crate::import::materials::{BaseColorMap, MaterialInfo};
-use crate::input_file::MAX_VERTICES_OPTION;
 use crate::model::{Binding, Bone, Triangle, Vertices};
 use crate::rig::Node;
 
@@ -304,7 +303,7 @@ impl MeshReader<'_> {
         let limit = src.limits.max_vertices;
         if self.verts.len().saturating_add(declared) as u64 > limit {
             return Err(src.invalid(format!(
-                "{what} (node {ni}) brings the meshes to {} vertices, over the vertex limit of {limit} (raise it with {MAX_VERTICES_OPTION})",
+                "{what} (node {ni}) brings the meshes to {} vertices, over the vertex limit of {limit} (raise the vertex limit to read it)",
                 self.verts.len().saturating_add(declared)
             )));
         }

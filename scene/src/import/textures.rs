@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use crate::error::Result;
 use crate::gltf_source::GltfSource;
 use crate::import::materials::{MaterialInfo, texture_image};
-use crate::input_file::{MAX_INPUT_OPTION, MAX_TEXTURE_OPTION, human_bytes};
+use crate::input_file::human_bytes;
 use crate::model::{SourceImage, SourceTexture, Texture, visit_texture_infos};
 
 /// The MIME type of KTX2 images (`KHR_texture_basisu`).
@@ -60,7 +60,7 @@ pub(super) fn read_source_textures(
             total = total.saturating_add(bytes.len() as u64);
             if total > src.limits.max_input_bytes {
                 return Err(src.invalid(format!(
-                    "image {img}: the file, its external buffers and images add up to {}, over the input size limit of {} (raise it with {MAX_INPUT_OPTION})",
+                    "image {img}: the file, its external buffers and images add up to {}, over the input size limit of {} (raise the input size limit to read it)",
                     human_bytes(total),
                     human_bytes(src.limits.max_input_bytes)
                 )));
@@ -165,7 +165,7 @@ pub(super) fn check_texture_budget(
             .max_by_key(|(_, s)| bytes(s))
             .unwrap_or((0, &(0, 0)));
         return Err(src.invalid(format!(
-            "its {} images decode to {} (largest: {}, {w}×{h} texels, {}), over the texture memory limit of {} (raise it with {MAX_TEXTURE_OPTION})",
+            "its {} images decode to {} (largest: {}, {w}×{h} texels, {}), over the texture memory limit of {} (raise the texture memory limit to read it)",
             images.len(),
             human_bytes(total),
             image_role(src, input_of_slot[slot]),
