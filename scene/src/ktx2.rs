@@ -11,11 +11,11 @@
 //! blocks for uncompressed targets (RGBA32), so decoding a UASTC level to texels writes past
 //! it; [`decode_levels`] passes a buffer of the right size and its row pitch in pixels.
 //!
-//! Why UASTC rather than ETC1S (measured on oak_dense's 1024² leaf map, mips included;
-//! docs/experiments.md §15): colour error over the alpha-passing texels 3.2 against 8.3 (RMS,
-//! 0–255), alpha-test decisions that flip 0.08 % against 0.17 % of texels; both transcode to
-//! the same GPU formats (BC7 / ASTC 4×4, one byte a texel), ETC1S's files are 3.5× smaller.
-//! For foliage drawn alpha-tested, the cut-out is the picture, so quality wins.
+//! Why UASTC rather than ETC1S (docs/experiments.md §15 has the measurements): on a leaf map,
+//! UASTC's colour error over the alpha-passing texels and its share of flipped alpha-test
+//! decisions are well below ETC1S's; both transcode to the same GPU formats (BC7 / ASTC 4×4,
+//! one byte a texel), and ETC1S's files are several times smaller. For foliage drawn
+//! alpha-tested, the cut-out is the picture, so quality wins.
 
 use basis_universal::sys;
 use basis_universal::{

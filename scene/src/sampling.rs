@@ -42,7 +42,7 @@ pub struct Sampled {
     pub vertices: usize,
     /// Sample-major skinned positions ([`Sampled::pose`]). This, `bone_world`, `centres` and
     /// `average` are empty for a loop sampled without its poses ([`sample_loop`],
-    /// [`Sampled::into_loop`]): on the 1M-triangle preset they are 2.4 GB, and card LODs, the
+    /// [`Sampled::into_loop`]): on the largest presets they take gigabytes, and card LODs, the
     /// files and the report need only the loop's clock and its motion facts.
     pub positions: Vec<Vec3>,
     pub bone_world: Vec<Mat4>,

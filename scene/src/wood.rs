@@ -37,8 +37,8 @@ const SKIN_DIMS: usize = 8;
 /// position error without normalising it by area (positions are scaled to a unit cube; attribute
 /// error is area × weight² × deviation²), so this weighs most where the wood is big (trunk,
 /// main limbs) and little on twigs; interpolated skin fields (weights blended across a joint)
-/// cost nothing while they stay linear. On the shared trees weights of 0 to 8 change the result
-/// by a few per cent; the distance checks, not this weight, bound the error.
+/// cost nothing while they stay linear. The result depends on this weight only a little; the
+/// distance checks, not this weight, bound the error.
 const SKIN_WEIGHT: f32 = 0.5;
 /// Simplifier weight of the (unit) normals: shading, secondary to position.
 const NORMAL_WEIGHT: f32 = 0.05;
@@ -46,8 +46,8 @@ const NORMAL_WEIGHT: f32 = 0.05;
 /// cheap; seams between charts are kept by meshoptimizer's wedge handling regardless).
 const UV_WEIGHT: f32 = 0.01;
 /// Vertices locked on every border loop (a branch tube's end rings): 3 keeps a thin branch a
-/// triangular prism, visible from every side (2 would allow flat ribbons, ~20 % fewer
-/// triangles on the shared trees, that vanish edge-on).
+/// triangular prism, visible from every side (2 would allow flat ribbons, with fewer
+/// triangles, that vanish edge-on).
 const LOOP_LOCKS: usize = 3;
 
 const ATTRS: usize = SKIN_DIMS + 3 + 2;
@@ -485,8 +485,8 @@ impl WoodMesh {
     /// (branches) keep their end rings and never collapse into lines.
     ///
     /// meshoptimizer's error is a quadric estimate (an area-weighted mean of squared plane
-    /// distances) that thin curved tubes fool: on the shared trees it reported 0.05 for pieces
-    /// whose vertices ended up 1.6 away. So every piece is then checked with true distances:
+    /// distances) that thin curved tubes fool: it can report a small error for a piece whose
+    /// vertices end up many times farther away. So every piece is then checked with true distances:
     /// each of its vertices, triangle centroids and edge midpoints must lie within `max_error`
     /// of the simplified piece, and points spread over each simplified triangle (edge midpoints
     /// and quarter points, centroid, three interior points) within `max_error` of the original

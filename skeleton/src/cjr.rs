@@ -5,8 +5,8 @@
 //!
 //! \[ENG\] merge order: the thesis merges the pair whose average descriptions deviate least.
 //! Description deviations are unitless and blind to lever arms: on glTF trees, whose siblings
-//! start at different points along their parent, the first such merge of oak_medium moved
-//! leaves 12 px at 600 px. Here the pair merged first is the one whose common rotation moves
+//! start at different points along their parent, such a merge can move leaves visibly on
+//! screen. Here the pair merged first is the one whose common rotation moves
 //! the foliage it affects least, in world units: each member's own foliage turns by the
 //! set's average about the set's pivot instead of by its own about its own pivot, and (without
 //! the average-bone improvement) its descendants' foliage turns by the average too. The

@@ -21,10 +21,10 @@ use crate::spectrum::Spectrum;
 #[derive(Clone, Debug)]
 pub enum Bins {
     /// Each comparison bins its two spectra together into this many bins, as §4.10 describes
-    /// (a small k-means over frequencies per pair: exact to the text, ~3 µs a comparison).
+    /// (a small k-means over frequencies per pair: exact to the text, but costly per comparison).
     PerPair(usize),
     /// One partition for every comparison, made once from all leaves' spectra (the tree's
-    /// inherent frequencies): the deviation becomes a fixed L1 distance over bins, ~100× faster
+    /// inherent frequencies): the deviation becomes a fixed L1 distance over bins, far faster
     /// and the same for every pair, which k-means over 100k leaves needs.
     Shared(Arc<FrequencyBins>),
 }
