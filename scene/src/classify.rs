@@ -14,10 +14,15 @@ pub const WOOD_WORDS: &[&str] = &["bark", "trunk", "branch", "wood", "stem", "tw
 
 /// One imported primitive before classification.
 pub struct PrimitiveInfo {
+    /// Name of its mesh (for reports and name heuristics).
     pub mesh: String,
+    /// The node that instances it.
     pub node: usize,
+    /// Index of the primitive in its mesh.
     pub primitive: usize,
+    /// Its material's index, if it has one.
     pub material: Option<usize>,
+    /// Its triangles, as indices into the tree's flattened vertices.
     pub triangles: Vec<[u32; 3]>,
 }
 
@@ -99,7 +104,9 @@ fn has_word(name: &str, words: &[&str]) -> Option<String> {
 /// every heuristic.
 #[derive(Clone, Copy, Debug)]
 pub struct MaterialOverrides<'a> {
+    /// Names of materials whose primitives are foliage.
     pub foliage: &'a [String],
+    /// Names of materials whose primitives are wood.
     pub wood: &'a [String],
 }
 

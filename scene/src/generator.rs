@@ -15,9 +15,13 @@ use crate::gltf_writer::*;
 /// Size presets: foliage triangles of about 2k, 20k, 200k and 1M.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Preset {
+    /// About 1,000 leaf quads on two branch levels.
     Small,
+    /// About 10,000 leaf quads on three branch levels.
     Medium,
+    /// About 100,000 leaf quads on three branch levels.
     Large,
+    /// About 500,000 leaf quads on four branch levels.
     Xlarge,
 }
 
@@ -60,9 +64,13 @@ pub const KEY_RATE: f32 = 30.0;
 /// One generated bone. Rest rotations are identity, so `head` offsets are world-aligned.
 #[derive(Clone, Debug)]
 pub struct GenBone {
+    /// Its node's name (`trunk_k`, or `branch<i>_L<level>_<k>`).
     pub name: String,
+    /// Index of its parent bone; None for the trunk's first.
     pub parent: Option<usize>,
+    /// Branch level: 0 for the trunk, 1 for its branches, and so on.
     pub level: usize,
+    /// Index of the branch it lies on.
     pub branch: usize,
     /// Rest head position in world space.
     pub head: Vec3,
@@ -72,14 +80,19 @@ pub struct GenBone {
 
 /// A generated tree: the GLB and the ground truth behind it.
 pub struct GeneratedTree {
+    /// The tree as a GLB file.
     pub glb: Vec<u8>,
+    /// Every bone with its rest head and keys (node order of the GLB's skin).
     pub bones: Vec<GenBone>,
+    /// Times of every bone's rotation keys, seconds, over one [`PERIOD`].
     pub key_times: Vec<f32>,
     /// Rest corners of every leaf quad (vertices 4q..4q+3 of mesh "leaves").
     pub leaf_corners: Vec<[Vec3; 4]>,
     /// Bone of every leaf quad.
     pub leaf_bones: Vec<usize>,
+    /// Triangles of the wood mesh.
     pub wood_triangles: usize,
+    /// Highest branch tip above the ground, world units.
     pub height: f32,
 }
 

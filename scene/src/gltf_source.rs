@@ -46,16 +46,22 @@ pub struct GltfSource {
 /// the document's arrays (a missing array is empty).
 #[derive(Clone, Debug, Default, serde::Deserialize)]
 pub struct RawParts {
+    /// The `materials` array.
     #[serde(default)]
     pub materials: Vec<serde_json::Value>,
+    /// The `textures` array.
     #[serde(default)]
     pub textures: Vec<serde_json::Value>,
+    /// The `samplers` array.
     #[serde(default)]
     pub samplers: Vec<serde_json::Value>,
+    /// The `images` array.
     #[serde(default)]
     pub images: Vec<serde_json::Value>,
+    /// The `buffers` array.
     #[serde(default)]
     pub buffers: Vec<serde_json::Value>,
+    /// The `bufferViews` array.
     #[serde(default, rename = "bufferViews")]
     pub buffer_views: Vec<serde_json::Value>,
 }

@@ -41,12 +41,18 @@ pub const BLOCK_BYTES: u64 = 16;
 /// What went wrong encoding or reading a KTX2 texture.
 #[derive(Debug, thiserror::Error)]
 pub enum Ktx2Error {
+    /// The bytes are not a KTX2 file of a kind this reader takes (the reason says why).
     #[error("not a KTX2 file this reader takes: {0}")]
     Format(String),
+    /// The UASTC encoder refused the image.
     #[error("UASTC encoding failed: {0}")]
     Encode(String),
+    /// A level's UASTC blocks could not be transcoded to RGBA8.
     #[error("UASTC level {level} does not transcode")]
-    Transcode { level: usize },
+    Transcode {
+        /// The level that failed (0 is the full-size image).
+        level: usize,
+    },
 }
 
 /// One mip level: width, height, RGBA8 texels.
@@ -55,8 +61,11 @@ pub type Level = (u32, u32, Vec<u8>);
 /// What a KTX2 file holds, from its header.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ktx2Info {
+    /// Width of level 0, texels.
     pub width: u32,
+    /// Height of level 0, texels.
     pub height: u32,
+    /// Mip levels stored (at least 1).
     pub levels: u32,
     /// sRGB transfer (colour), or linear (normals).
     pub srgb: bool,

@@ -95,6 +95,7 @@ pub struct WoodMesh {
     pub bones: Vec<[u32; 4]>,
     /// Skin weights, sum 1.
     pub weights: Vec<[f32; 4]>,
+    /// The triangles, one primitive per material.
     pub primitives: Vec<WoodPrimitive>,
 }
 
