@@ -23,6 +23,7 @@ pub struct SearchParams {
     pub epsilon: f32,
     /// Candidate planes per iteration (the thesis's S or N).
     pub candidates: usize,
+    /// Seed of the candidate draws: the same seed gives the same planes.
     pub seed: u64,
     /// View-penalty angle φ_v in radians (0 favours vertical billboards), or None for off.
     pub view_penalty: Option<f32>,
@@ -54,13 +55,16 @@ impl Default for SearchParams {
 /// One chosen plane and the triangles it simplifies.
 #[derive(Clone, Debug)]
 pub struct Cluster {
+    /// The plane, fitted or as drawn.
     pub plane: Plane,
+    /// Indices of its soup triangles, ascending.
     pub triangles: Vec<usize>,
 }
 
 /// The search result.
 #[derive(Clone, Debug)]
 pub struct PlaneSearch {
+    /// The chosen planes with their triangles, in the order they were chosen.
     pub clusters: Vec<Cluster>,
     /// Cluster of every soup triangle.
     pub assignment: Vec<u32>,
