@@ -28,6 +28,7 @@ use crate::model::{SkNode, SkeletonModel};
 pub struct Merge {
     /// Bone names of the two sets.
     pub a: Vec<String>,
+    /// Bone names of the second set (`a` holds the first's).
     pub b: Vec<String>,
     /// Deviation of the two sets' average descriptions.
     pub deviation: f32,
@@ -43,6 +44,7 @@ pub struct CommonRotationSets {
     /// Each set's common rotation: the delta rotations its average description applies to
     /// (empty for a single bone, which keeps its own).
     pub deltas: Vec<Vec<Quat>>,
+    /// Every merge made, in order.
     pub merges: Vec<Merge>,
 }
 
