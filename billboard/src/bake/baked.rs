@@ -14,7 +14,7 @@ pub struct Atlas {
     pub height: u32,
     /// `width * height * 4` bytes: sRGB colour with straight alpha. Alpha grows with the
     /// covered fraction of the texel and is >= 128 exactly when that fraction reaches
-    /// [`BakeParams::alpha_cutoff`]; uncovered texels have alpha 0 and the colour of the
+    /// [`BakeParams::alpha_cutoff`](crate::BakeParams::alpha_cutoff); uncovered texels have alpha 0 and the colour of the
     /// nearest covered texel of their quad (dilation, improved-billboard-cloud §4 item 6).
     pub color: Vec<u8>,
     /// `width * height * 4` bytes, linear: a tangent-space normal map in glTF's
@@ -39,13 +39,13 @@ pub struct Cell {
     pub height: u32,
 }
 
-/// The result of [`bake_cloud`]: atlases plus per-quad texture coordinates.
+/// The result of [`bake_cloud`](crate::bake_cloud): atlases plus per-quad texture coordinates.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BakedCloud {
     /// Colour and normal atlases.
     pub atlas: Atlas,
     /// Per quad: atlas UV (glTF convention, (0, 0) = top-left of the image) of its corners
-    /// in [`Quad::corners`] order. The image shows the quad seen from its front
+    /// in [`Quad::corners`](crate::Quad::corners) order. The image shows the quad seen from its front
     /// (`axis_u × axis_v` toward the viewer): corner 3 (-u, +v) is the cell's top-left.
     pub uv_rects: Vec<[Vec2; 4]>,
     /// Per quad: its texture's texel rectangle in the atlas.
@@ -61,7 +61,7 @@ pub struct BakedCloud {
 /// Why a cloud could not be baked.
 #[derive(Debug, Error)]
 pub enum BakeError {
-    /// A [`BakeParams`] value is out of range.
+    /// A [`BakeParams`](crate::BakeParams) value is out of range.
     #[error("invalid bake parameter: {0}")]
     InvalidParams(String),
     /// The soup, quads, members or materials are inconsistent or not finite.

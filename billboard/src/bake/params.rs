@@ -7,7 +7,7 @@ pub const MAX_ATLAS_SIDE: u32 = 16384;
 /// Largest supported supersampling factor per axis.
 pub const MAX_SUPERSAMPLE: u32 = 16;
 
-/// Settings of [`bake_cloud`].
+/// Settings of [`bake_cloud`](crate::bake_cloud).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BakeParams {
     /// Texels per world unit along both quad axes (uniform density, improved-billboard-cloud
@@ -46,7 +46,7 @@ pub enum BakeRasteriser {
     /// normals together; byte-identical output whatever the machine or thread count.
     #[default]
     Cpu,
-    /// [`Renderer::render_view`] in tiles, a colour then a normal pass: fast on a GPU, and
+    /// [`Renderer::render_view`](frond_render::Renderer::render_view) in tiles, a colour then a normal pass: fast on a GPU, and
     /// what the adapter's rasteriser makes of the samples.
     Wgpu,
 }
