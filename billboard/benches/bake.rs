@@ -1,4 +1,4 @@
-//! Bake speed (issue 20): oak_dense.glb's foliage (116,160 leaf triangles, average pose) cut
+//! Bake speed: oak_dense.glb's foliage (116,160 leaf triangles, average pose) cut
 //! into billboards at ε = 1 % and 5 % of the diagonal, then baked by the CPU bake rasteriser
 //! (the default) and by the wgpu renderer (on llvmpipe where there is no GPU), 4×4
 //! supersampled, at two texel densities: 1024 texels across the diagonal (as `frond cloud`)

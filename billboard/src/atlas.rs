@@ -115,7 +115,7 @@ pub fn pack(sizes: &[(u32, u32)], padding: u32, max_size: u32) -> Option<Packing
 }
 
 /// Above this many textures the shelf packer replaces `crunch`, whose free-rectangle
-/// bookkeeping grows quadratically (27k leaf billboards took minutes to pack, 2.7k a second).
+/// bookkeeping grows quadratically with the number of textures.
 const CRUNCH_MAX_ITEMS: usize = 1024;
 
 /// First-fit decreasing-height shelves for many textures: cells sorted by height (then width,

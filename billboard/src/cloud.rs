@@ -17,54 +17,75 @@ use crate::soup::TriangleSoup;
 /// Everything that shapes a cloud.
 #[derive(Clone, Debug, Default)]
 pub struct CloudParams {
+    /// How the billboard planes are found (spec §2.4).
     pub search: SearchParams,
     /// Bake every triangle valid for a plane, not only its own cluster (spec §2.4, §3.6.2).
     pub increased_density: bool,
+    /// How the planes' textures are baked into the atlas.
     pub bake: BakeParams,
 }
 
 /// Wall times of the stages, seconds.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct CloudTimings {
+    /// Seconds finding the planes.
     pub plane_search: f64,
+    /// Seconds fitting each plane's rectangle and gathering its members.
     pub rectangles: f64,
+    /// Seconds baking the atlas.
     pub bake: f64,
+    /// Seconds for the whole cloud.
     pub total: f64,
 }
 
 /// Size and error facts of a cloud.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct CloudStats {
+    /// Triangles of the soup.
     pub triangles: usize,
+    /// Billboards (quads) in the cloud.
     pub billboards: usize,
     /// Sum of quad areas (world units²): the thesis's cost measure next to the count.
     pub total_area: f64,
+    /// Uncompressed bytes of the colour and normal atlases.
     pub texture_bytes: usize,
+    /// Atlas width, texels.
     pub atlas_width: u32,
+    /// Atlas height, texels.
     pub atlas_height: u32,
+    /// Texel density used, texels per world unit.
     pub texels_per_unit: f32,
+    /// Whether that density is below the requested one (lowered to fit the atlas).
     pub density_reduced: bool,
     /// Largest vertex distance of a triangle from its billboard plane.
     pub max_distance: f32,
     /// Triangles joined to the nearest plane (plane budget or zero area), not placed by validity.
     pub joined: usize,
+    /// Candidate planes the search scored.
     pub candidates_scored: usize,
+    /// Wall times of the stages.
     pub timings_s: CloudTimings,
 }
 
 /// A finished cloud.
 pub struct BillboardCloud {
+    /// One billboard per plane, in the search's cluster order.
     pub quads: Vec<Quad>,
+    /// The plane search that chose them.
     pub search: PlaneSearch,
+    /// Their atlas and texture coordinates.
     pub baked: BakedCloud,
+    /// Size and error facts.
     pub stats: CloudStats,
 }
 
 /// Why a cloud could not be built.
 #[derive(Debug, thiserror::Error)]
 pub enum CloudError {
+    /// The soup has no triangles.
     #[error("no triangles to simplify")]
     Empty,
+    /// Baking the atlas failed.
     #[error(transparent)]
     Bake(#[from] BakeError),
 }
@@ -179,9 +200,13 @@ pub fn build_cloud(
 /// plane normal, atlas UVs, two triangles.
 #[derive(Clone, Debug, Default)]
 pub struct QuadMesh {
+    /// Corner positions, world units, 4 per quad.
     pub positions: Vec<[f32; 3]>,
+    /// The quad's plane normal at each corner.
     pub normals: Vec<[f32; 3]>,
+    /// Atlas UV of each corner (glTF convention, (0, 0) top-left).
     pub uvs: Vec<[f32; 2]>,
+    /// Two triangles per quad, counter-clockwise seen from its front.
     pub indices: Vec<u32>,
 }
 

@@ -5,7 +5,9 @@ use glam::Vec3;
 /// An oriented plane: the points x with `normal · x = offset`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plane {
+    /// Unit normal: the side the plane faces.
     pub normal: Vec3,
+    /// Signed distance of the plane from the origin along `normal`.
     pub offset: f32,
 }
 

@@ -23,6 +23,7 @@ pub struct SearchParams {
     pub epsilon: f32,
     /// Candidate planes per iteration (the thesis's S or N).
     pub candidates: usize,
+    /// Seed of the candidate draws: the same seed gives the same planes.
     pub seed: u64,
     /// View-penalty angle φ_v in radians (0 favours vertical billboards), or None for off.
     pub view_penalty: Option<f32>,
@@ -54,13 +55,16 @@ impl Default for SearchParams {
 /// One chosen plane and the triangles it simplifies.
 #[derive(Clone, Debug)]
 pub struct Cluster {
+    /// The plane, fitted or as drawn.
     pub plane: Plane,
+    /// Indices of its soup triangles, ascending.
     pub triangles: Vec<usize>,
 }
 
 /// The search result.
 #[derive(Clone, Debug)]
 pub struct PlaneSearch {
+    /// The chosen planes with their triangles, in the order they were chosen.
     pub clusters: Vec<Cluster>,
     /// Cluster of every soup triangle.
     pub assignment: Vec<u32>,
@@ -698,173 +702,27 @@ pub fn search_planes(soup: &TriangleSoup, params: &SearchParams, scale: f32) -> 
     let n = soup.len();
     let min_area = (scale * scale * 1e-12).max(f32::MIN_POSITIVE);
     let mut s = Search::new(soup, params, scale);
-    let eps = s.eps;
-
-    // Seeds: alive triangles with a usable area; zero-area ones never seed (they would stop the
-    // search early) and are joined to the nearest plane at the end.
-    // Seeds are drawn in soup order, so the hierarchy's layout never changes which are drawn.
-    let mut stored_of = vec![0u32; n];
-    for (pos, &id) in s.t.id.iter().enumerate() {
-        stored_of[id as usize] = pos as u32;
-    }
-    let mut seedable: Vec<u32> = (0..n as u32)
-        .map(|id| stored_of[id as usize])
-        .filter(|&i| s.t.area_normal[i as usize].length() > min_area)
-        .collect();
-    let mut seed_pos: Vec<u32> = vec![u32::MAX; n];
-    for (k, &i) in seedable.iter().enumerate() {
-        seed_pos[i as usize] = k as u32;
-    }
+    let mut seeds = Seeds::new(&s.t, min_area);
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
     let mut clusters: Vec<Cluster> = Vec::new();
     let mut assignment = vec![u32::MAX; n];
     let mut scored = 0usize;
     let budget = params.max_planes.unwrap_or(usize::MAX).max(1);
-    while !seedable.is_empty() && clusters.len() < budget {
+    while !seeds.seedable.is_empty() && clusters.len() < budget {
         // Draw every candidate first (sequential RNG), then score them in parallel.
-        let cands: Vec<(Vec3A, f32, u32)> = (0..params.candidates.max(1))
-            .filter_map(|_| {
-                let seed = seedable[rng.random_range(0..seedable.len())] as usize;
-                let v = s.t.v[seed];
-                let nt = s.t.area_normal[seed].normalize_or_zero();
-                let mut off = [0.0f32; 3];
-                for o in &mut off {
-                    *o = if eps > 0.0 {
-                        rng.random_range(-eps..=eps)
-                    } else {
-                        0.0
-                    };
-                }
-                let p = Plane::through(
-                    Vec3::from(v[0] + nt * off[0]),
-                    Vec3::from(v[1] + nt * off[1]),
-                    Vec3::from(v[2] + nt * off[2]),
-                )?;
-                Some((Vec3A::from(p.normal), p.offset, seed as u32))
-            })
-            .collect();
+        let cands = s.draw_candidates(&seeds.seedable, &mut rng);
         scored += cands.len();
-        let scores: Vec<f64> = if params.accelerated {
-            // One batched traversal per worker (bigger batches share more cache; measured best);
-            // the order of `scores` is the order of
-            // `cands`, whatever the thread count.
-            let batch = cands
-                .len()
-                .div_ceil(rayon::current_num_threads().max(1))
-                .max(1);
-            let planes: Vec<(Vec3A, f32)> = cands.iter().map(|c| (c.0, c.1)).collect();
-            planes
-                .par_chunks(batch)
-                .flat_map_iter(|chunk| {
-                    s.score_batch(chunk)
-                        .into_iter()
-                        .zip(chunk)
-                        .map(|(d, c)| d * s.penalty(c.0))
-                        .collect::<Vec<_>>()
-                })
-                .collect()
-        } else {
-            cands
-                .iter()
-                .map(|&(nn, rho, _)| s.score(nn, rho, None) * s.penalty(nn))
-                .collect()
-        };
-        // D_max starts at 0 once per iteration (the thesis reset it inside the loop: erratum).
-        let mut best: Option<usize> = None;
-        for (k, &d) in scores.iter().enumerate() {
-            if best.is_none_or(|b| d > scores[b]) {
-                best = Some(k);
-            }
-        }
-        let Some(b) = best else {
+        let scores = s.score_candidates(&cands);
+        let Some(b) = best_candidate(&scores) else {
             // Every candidate was degenerate: retire one seed so the loop always progresses.
-            let seed = seedable[rng.random_range(0..seedable.len())];
-            remove_seed(&mut seedable, &mut seed_pos, seed);
+            let seed = seeds.seedable[rng.random_range(0..seeds.seedable.len())];
+            seeds.remove(seed);
             continue;
         };
-        let (nn, rho, seed) = cands[b];
-        let mut members = Vec::new();
-        s.score(nn, rho, Some(&mut members));
-        if members.is_empty() {
-            members.push(seed as usize); // float noise at ε = 0: the seed always belongs
-        }
-        let mut plane = Plane {
-            normal: Vec3::from(nn),
-            offset: rho,
-        };
-        if params.refit
-            && let Some(fit) = fit_plane(members.iter().flat_map(|&i| s.t.v[i]))
-        {
-            let fa = Vec3A::from(fit.normal);
-            if members
-                .iter()
-                .all(|&i| valid_exact(&s.t.v[i], fa, fit.offset, eps))
-            {
-                plane = fit;
-            }
-        }
         let cluster = clusters.len() as u32;
-        let mut tris = Vec::with_capacity(members.len());
-        // Retire members in soup order, so the seed list (and every later draw) does not depend
-        // on the hierarchy's layout.
-        members.sort_unstable_by_key(|&i| s.t.id[i]);
-        for &i in &members {
-            let id = s.t.id[i];
-            assignment[id as usize] = cluster;
-            tris.push(id as usize);
-            s.bvh.kill(&mut s.t, i);
-            if seed_pos[i] != u32::MAX {
-                remove_seed(&mut seedable, &mut seed_pos, i as u32);
-            }
-        }
-        tris.sort_unstable();
-        clusters.push(Cluster {
-            plane,
-            triangles: tris,
-        });
+        clusters.push(s.take_cluster(cands[b], cluster, &mut assignment, &mut seeds));
     }
-
-    // Leftovers (plane budget reached, or zero-area triangles): join the nearest plane.
-    let mut joined = 0;
-    for i in 0..n {
-        if !s.t.alive[i] {
-            continue;
-        }
-        let id = s.t.id[i] as usize;
-        let v = s.t.v[i];
-        let nearest = clusters
-            .iter()
-            .enumerate()
-            .map(|(k, c)| {
-                let na = Vec3A::from(c.plane.normal);
-                (
-                    k,
-                    v.iter()
-                        .map(|p| (na.dot(*p) - c.plane.offset).abs())
-                        .fold(0.0, f32::max),
-                )
-            })
-            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
-        let k = match nearest {
-            Some((k, _)) => k,
-            None => {
-                let p = fit_plane(v.into_iter()).or_else(|| {
-                    Plane::through(Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]))
-                });
-                clusters.push(Cluster {
-                    plane: p.unwrap_or(Plane {
-                        normal: Vec3::Y,
-                        offset: v[0].y,
-                    }),
-                    triangles: Vec::new(),
-                });
-                clusters.len() - 1
-            }
-        };
-        clusters[k].triangles.push(id);
-        assignment[id] = k as u32;
-        joined += 1;
-    }
+    let joined = s.join_leftovers(&mut clusters, &mut assignment);
     for c in &mut clusters {
         c.triangles.sort_unstable();
     }
@@ -888,6 +746,219 @@ pub fn search_planes(soup: &TriangleSoup, params: &SearchParams, scale: f32) -> 
     }
 }
 
+/// A candidate plane: its unit normal, its offset, and the stored triangle that seeded it.
+type Candidate = (Vec3A, f32, u32);
+
+/// The triangles that may still seed a plane: stored indices, drawn from in soup order (so
+/// the hierarchy's layout never changes which are drawn), with each one's position in that
+/// list for removal.
+struct Seeds {
+    /// Stored indices of the seedable triangles.
+    seedable: Vec<u32>,
+    /// Per stored triangle, its position in `seedable` (`u32::MAX`: not seedable).
+    seed_pos: Vec<u32>,
+}
+
+impl Seeds {
+    /// The alive triangles with a usable area (more than `min_area`), in soup order.
+    /// Zero-area ones never seed (they would stop the search early) and are joined to the
+    /// nearest plane at the end.
+    fn new(t: &Tris, min_area: f32) -> Seeds {
+        let n = t.id.len();
+        let mut stored_of = vec![0u32; n];
+        for (pos, &id) in t.id.iter().enumerate() {
+            stored_of[id as usize] = pos as u32;
+        }
+        let seedable: Vec<u32> = (0..n as u32)
+            .map(|id| stored_of[id as usize])
+            .filter(|&i| t.area_normal[i as usize].length() > min_area)
+            .collect();
+        let mut seed_pos: Vec<u32> = vec![u32::MAX; n];
+        for (k, &i) in seedable.iter().enumerate() {
+            seed_pos[i as usize] = k as u32;
+        }
+        Seeds { seedable, seed_pos }
+    }
+
+    /// Removes stored triangle `i` from the seeds (see [`remove_seed`]).
+    fn remove(&mut self, i: u32) {
+        remove_seed(&mut self.seedable, &mut self.seed_pos, i);
+    }
+}
+
+/// The first candidate of the highest score, None when there are none. D_max starts at 0
+/// once per iteration (the thesis reset it inside the loop: erratum).
+fn best_candidate(scores: &[f64]) -> Option<usize> {
+    let mut best: Option<usize> = None;
+    for (k, &d) in scores.iter().enumerate() {
+        if best.is_none_or(|b| d > scores[b]) {
+            best = Some(k);
+        }
+    }
+    best
+}
+
+impl Search<'_> {
+    /// Draws one iteration's candidate planes from `rng`, in order: each through a random seed
+    /// triangle's vertices, each moved along its normal by up to ε (the thesis's jitter).
+    /// Degenerate draws are left out.
+    fn draw_candidates(&self, seedable: &[u32], rng: &mut ChaCha8Rng) -> Vec<Candidate> {
+        let eps = self.eps;
+        (0..self.params.candidates.max(1))
+            .filter_map(|_| {
+                let seed = seedable[rng.random_range(0..seedable.len())] as usize;
+                let v = self.t.v[seed];
+                let nt = self.t.area_normal[seed].normalize_or_zero();
+                let mut off = [0.0f32; 3];
+                for o in &mut off {
+                    *o = if eps > 0.0 {
+                        rng.random_range(-eps..=eps)
+                    } else {
+                        0.0
+                    };
+                }
+                let p = Plane::through(
+                    Vec3::from(v[0] + nt * off[0]),
+                    Vec3::from(v[1] + nt * off[1]),
+                    Vec3::from(v[2] + nt * off[2]),
+                )?;
+                Some((Vec3A::from(p.normal), p.offset, seed as u32))
+            })
+            .collect()
+    }
+
+    /// Each candidate's score (density times view penalty), in candidate order: in parallel
+    /// batches over the hierarchy when accelerated, else by the plain scan.
+    fn score_candidates(&self, cands: &[Candidate]) -> Vec<f64> {
+        if self.params.accelerated {
+            // One batched traversal per worker (bigger batches share more cache); the order
+            // of `scores` is the order of `cands`, whatever the thread count.
+            let batch = cands
+                .len()
+                .div_ceil(rayon::current_num_threads().max(1))
+                .max(1);
+            let planes: Vec<(Vec3A, f32)> = cands.iter().map(|c| (c.0, c.1)).collect();
+            planes
+                .par_chunks(batch)
+                .flat_map_iter(|chunk| {
+                    self.score_batch(chunk)
+                        .into_iter()
+                        .zip(chunk)
+                        .map(|(d, c)| d * self.penalty(c.0))
+                        .collect::<Vec<_>>()
+                })
+                .collect()
+        } else {
+            cands
+                .iter()
+                .map(|&(nn, rho, _)| self.score(nn, rho, None) * self.penalty(nn))
+                .collect()
+        }
+    }
+
+    /// Makes the chosen candidate cluster number `cluster`: its valid triangles (at least its
+    /// seed) with its plane, least-squares refitted when asked and the fit keeps them all
+    /// valid. The members are assigned to it, killed in the hierarchy and retired from the
+    /// seeds, in soup order.
+    fn take_cluster(
+        &mut self,
+        (nn, rho, seed): Candidate,
+        cluster: u32,
+        assignment: &mut [u32],
+        seeds: &mut Seeds,
+    ) -> Cluster {
+        let eps = self.eps;
+        let mut members = Vec::new();
+        self.score(nn, rho, Some(&mut members));
+        if members.is_empty() {
+            members.push(seed as usize); // float noise at ε = 0: the seed always belongs
+        }
+        let mut plane = Plane {
+            normal: Vec3::from(nn),
+            offset: rho,
+        };
+        if self.params.refit
+            && let Some(fit) = fit_plane(members.iter().flat_map(|&i| self.t.v[i]))
+        {
+            let fa = Vec3A::from(fit.normal);
+            if members
+                .iter()
+                .all(|&i| valid_exact(&self.t.v[i], fa, fit.offset, eps))
+            {
+                plane = fit;
+            }
+        }
+        let mut tris = Vec::with_capacity(members.len());
+        // Retire members in soup order, so the seed list (and every later draw) does not depend
+        // on the hierarchy's layout.
+        members.sort_unstable_by_key(|&i| self.t.id[i]);
+        for &i in &members {
+            let id = self.t.id[i];
+            assignment[id as usize] = cluster;
+            tris.push(id as usize);
+            self.bvh.kill(&mut self.t, i);
+            if seeds.seed_pos[i] != u32::MAX {
+                seeds.remove(i as u32);
+            }
+        }
+        tris.sort_unstable();
+        Cluster {
+            plane,
+            triangles: tris,
+        }
+    }
+
+    /// Joins every triangle still alive (plane budget reached, or zero area) to the nearest
+    /// plane (by its farthest vertex; a plane of its own when there is none yet). Returns how
+    /// many were joined.
+    fn join_leftovers(&self, clusters: &mut Vec<Cluster>, assignment: &mut [u32]) -> usize {
+        // Leftovers (plane budget reached, or zero-area triangles): join the nearest plane.
+        let mut joined = 0;
+        for i in 0..self.t.alive.len() {
+            if !self.t.alive[i] {
+                continue;
+            }
+            let id = self.t.id[i] as usize;
+            let v = self.t.v[i];
+            let nearest = clusters
+                .iter()
+                .enumerate()
+                .map(|(k, c)| {
+                    let na = Vec3A::from(c.plane.normal);
+                    (
+                        k,
+                        v.iter()
+                            .map(|p| (na.dot(*p) - c.plane.offset).abs())
+                            .fold(0.0, f32::max),
+                    )
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+            let k = match nearest {
+                Some((k, _)) => k,
+                None => {
+                    let p = fit_plane(v.into_iter()).or_else(|| {
+                        Plane::through(Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]))
+                    });
+                    clusters.push(Cluster {
+                        plane: p.unwrap_or(Plane {
+                            normal: Vec3::Y,
+                            offset: v[0].y,
+                        }),
+                        triangles: Vec::new(),
+                    });
+                    clusters.len() - 1
+                }
+            };
+            clusters[k].triangles.push(id);
+            assignment[id] = k as u32;
+            joined += 1;
+        }
+        joined
+    }
+}
+
+/// Removes stored triangle `i` from `seedable` in constant time (the last seed takes its
+/// place), keeping `seed_pos` up to date.
 fn remove_seed(seedable: &mut Vec<u32>, seed_pos: &mut [u32], i: u32) {
     let k = seed_pos[i as usize] as usize;
     let last = *seedable.last().unwrap_or(&i);

@@ -8,10 +8,15 @@ use crate::plane::Plane;
 /// `axis_u × axis_v = plane.normal`, so the corners run counter-clockwise seen from the front.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Quad {
+    /// The plane it lies in.
     pub plane: Plane,
+    /// Centre of the rectangle, world units.
     pub center: Vec3,
+    /// Unit direction of its first side (the texture's right).
     pub axis_u: Vec3,
+    /// Unit direction of its second side (the texture's up).
     pub axis_v: Vec3,
+    /// Half extents along `axis_u` and `axis_v`, world units.
     pub half_size: Vec2,
 }
 

@@ -5,7 +5,9 @@ use glam::{Vec2, Vec3};
 /// Triangles to simplify (one cluster), each with its own corners, UVs and material index.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleSoup {
+    /// Each triangle's corners, world units.
     pub positions: Vec<[Vec3; 3]>,
+    /// Each corner's texture coordinates in its material's base colour texture.
     pub uvs: Vec<[Vec2; 3]>,
     /// Index into the caller's material list (as in `frond_scene::Tree::materials`).
     pub material: Vec<u32>,

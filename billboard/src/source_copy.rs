@@ -1,8 +1,8 @@
 //! Billboards that need no bake: a quad that its own triangles, projected onto its plane, tile
 //! exactly under one material and one affine texture mapping shows what a bake of them would
 //! (a single leaf card, typically), so it can keep their texture coordinates on the input's own
-//! texture instead of a baked copy in the atlas (issue 17 item 6, the hybrid billboard cloud:
-//! only planes that merge several cards are baked). The copy is exact at every size: no
+//! texture instead of a baked copy in the atlas (the hybrid billboard cloud: only planes that
+//! merge several cards are baked). The copy is exact at every size: no
 //! resampling, no atlas texels, no bake time. A card within ε of a plane it does not lie on is
 //! projected onto it, as the bake would project it.
 
@@ -31,9 +31,9 @@ pub struct SourceCopy {
 
 /// Relative tolerance (of the quad's diagonal for lengths, of its area for areas, of the UV
 /// extent for texture coordinates) within which `members` count as tiling the quad: a card
-/// posed by a skin and averaged over the loop in f32 (the cloud's reference pose) strays by
-/// about 1e-4 of its size from its plane on the shared trees; a mapping that is not affine, or a
-/// triangle that leaves part of its quad bare, misses by far more.
+/// posed by a skin and averaged over the loop in f32 (the cloud's reference pose) strays from
+/// its plane by a small fraction of this; a mapping that is not affine, or a triangle that
+/// leaves part of its quad bare, misses by far more.
 const TOLERANCE: f32 = 1e-3;
 
 /// Float noise of positions relative to their distance from the origin (f32 has 24 bits; the

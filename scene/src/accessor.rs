@@ -14,7 +14,10 @@ const MAX_VIEWLESS_ELEMENTS: usize = 1 << 24;
 
 /// A decoded accessor: `count` elements of `width` components each, row-major.
 pub struct Decoded {
+    /// Components per element (1 for SCALAR up to 16 for MAT4).
     pub width: usize,
+    /// `count × width` values, integers converted (normalized ones scaled to [0, 1] or
+    /// [-1, 1]).
     pub values: Vec<f32>,
 }
 

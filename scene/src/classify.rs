@@ -14,10 +14,15 @@ pub const WOOD_WORDS: &[&str] = &["bark", "trunk", "branch", "wood", "stem", "tw
 
 /// One imported primitive before classification.
 pub struct PrimitiveInfo {
+    /// Name of its mesh (for reports and name heuristics).
     pub mesh: String,
+    /// The node that instances it.
     pub node: usize,
+    /// Index of the primitive in its mesh.
     pub primitive: usize,
+    /// Its material's index, if it has one.
     pub material: Option<usize>,
+    /// Its triangles, as indices into the tree's flattened vertices.
     pub triangles: Vec<[u32; 3]>,
 }
 
@@ -94,11 +99,14 @@ fn has_word(name: &str, words: &[&str]) -> Option<String> {
         .map(|w| w.to_string())
 }
 
-/// Materials the user named as foliage or as wood (`--foliage-material`, `--wood-material`):
-/// they win over every heuristic.
+/// Materials the user named as foliage or as wood ([`ImportOptions::foliage_materials`](crate::ImportOptions::foliage_materials),
+/// [`ImportOptions::wood_materials`](crate::ImportOptions::wood_materials)): they win over
+/// every heuristic.
 #[derive(Clone, Copy, Debug)]
 pub struct MaterialOverrides<'a> {
+    /// Names of materials whose primitives are foliage.
     pub foliage: &'a [String],
+    /// Names of materials whose primitives are wood.
     pub wood: &'a [String],
 }
 
@@ -126,9 +134,12 @@ pub fn classify_primitives(
             .unwrap_or_else(|| "(none)".into());
         let node_name = &tree.rig.nodes[p.node].name;
         let (part, reason) = if overrides.foliage.contains(&mat_name) {
-            (Part::Foliage, format!("--foliage-material {mat_name}"))
+            (
+                Part::Foliage,
+                format!("material '{mat_name}' named as foliage"),
+            )
         } else if overrides.wood.contains(&mat_name) {
-            (Part::Wood, format!("--wood-material {mat_name}"))
+            (Part::Wood, format!("material '{mat_name}' named as wood"))
         } else if let Some(w) = has_word(&mat_name, FOLIAGE_WORDS) {
             (Part::Foliage, format!("material name contains '{w}'"))
         } else if let Some(w) = has_word(&mat_name, WOOD_WORDS) {

@@ -8,18 +8,35 @@ pub enum SceneError {
     /// The file could not be read or written.
     #[error("{path}: {error}")]
     Io {
+        /// The file.
         path: PathBuf,
+        /// What the system said.
         error: std::io::Error,
     },
     /// The file is not glTF, or its content breaks the glTF rules we rely on.
     #[error("{path}: {problem}")]
-    Invalid { path: PathBuf, problem: String },
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the part of the file (node, mesh, accessor, ...).
+        problem: String,
+    },
     /// `extensionsRequired` names an extension frond cannot read.
     #[error("{path}: requires unsupported glTF extension {extension}")]
-    UnsupportedExtension { path: PathBuf, extension: String },
+    UnsupportedExtension {
+        /// The file.
+        path: PathBuf,
+        /// The extension's name.
+        extension: String,
+    },
     /// A request that does not fit the tree (unknown clip or material name, bad sample count).
     #[error("{path}: {problem}")]
-    Request { path: PathBuf, problem: String },
+    Request {
+        /// The tree's file.
+        path: PathBuf,
+        /// What does not fit.
+        problem: String,
+    },
 }
 
 impl SceneError {

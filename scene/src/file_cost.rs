@@ -22,8 +22,9 @@ use serde::{Deserialize, Serialize};
 use crate::accessor::{component_size, type_width};
 use crate::error::{Result, SceneError};
 use crate::gltf_source::GltfSource;
-use crate::import::{read_nodes, triangulate};
-use crate::input_file::{InputLimits, MAX_VERTICES_OPTION, resolve_uri};
+use crate::import::hierarchy::read_nodes;
+use crate::import::meshes::triangulate;
+use crate::input_file::{InputLimits, resolve_uri};
 use crate::rig::world_matrices;
 
 /// The cost of one file (see the module doc for what is drawn).
@@ -152,7 +153,7 @@ fn cost_of(src: &GltfSource, own_bytes: u64) -> Result<FileCost> {
     }
     if cost.vertices > src.limits.max_vertices {
         return Err(src.invalid(format!(
-            "its drawn meshes have {} vertices, over the vertex limit of {} (raise it with {MAX_VERTICES_OPTION})",
+            "its drawn meshes have {} vertices, over the vertex limit of {} (raise the vertex limit to read it)",
             cost.vertices, src.limits.max_vertices
         )));
     }
@@ -445,7 +446,7 @@ fn used_images(src: &GltfSource, used: impl Iterator<Item = usize>) -> Result<BT
             if t >= root.textures.len() {
                 return Err(src.invalid(format!("material {m}: texture {t} does not exist")));
             }
-            let img = crate::import::texture_image(src, t, true);
+            let img = crate::import::materials::texture_image(src, t, true);
             if img >= root.images.len() {
                 return Err(src.invalid(format!("texture {t}: image {img} does not exist")));
             }

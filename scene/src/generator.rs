@@ -15,9 +15,13 @@ use crate::gltf_writer::*;
 /// Size presets: foliage triangles of about 2k, 20k, 200k and 1M.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Preset {
+    /// About 1,000 leaf quads on two branch levels.
     Small,
+    /// About 10,000 leaf quads on three branch levels.
     Medium,
+    /// About 100,000 leaf quads on three branch levels.
     Large,
+    /// About 500,000 leaf quads on four branch levels.
     Xlarge,
 }
 
@@ -60,9 +64,13 @@ pub const KEY_RATE: f32 = 30.0;
 /// One generated bone. Rest rotations are identity, so `head` offsets are world-aligned.
 #[derive(Clone, Debug)]
 pub struct GenBone {
+    /// Its node's name (`trunk_k`, or `branch<i>_L<level>_<k>`).
     pub name: String,
+    /// Index of its parent bone; None for the trunk's first.
     pub parent: Option<usize>,
+    /// Branch level: 0 for the trunk, 1 for its branches, and so on.
     pub level: usize,
+    /// Index of the branch it lies on.
     pub branch: usize,
     /// Rest head position in world space.
     pub head: Vec3,
@@ -72,14 +80,19 @@ pub struct GenBone {
 
 /// A generated tree: the GLB and the ground truth behind it.
 pub struct GeneratedTree {
+    /// The tree as a GLB file.
     pub glb: Vec<u8>,
+    /// Every bone with its rest head and keys (node order of the GLB's skin).
     pub bones: Vec<GenBone>,
+    /// Times of every bone's rotation keys, seconds, over one [`PERIOD`].
     pub key_times: Vec<f32>,
     /// Rest corners of every leaf quad (vertices 4q..4q+3 of mesh "leaves").
     pub leaf_corners: Vec<[Vec3; 4]>,
     /// Bone of every leaf quad.
     pub leaf_bones: Vec<usize>,
+    /// Triangles of the wood mesh.
     pub wood_triangles: usize,
+    /// Highest branch tip above the ground, world units.
     pub height: f32,
 }
 
@@ -171,6 +184,40 @@ fn perpendicular(d: Vec3) -> Vec3 {
 pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::ImageError> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let branching = preset.branching();
+    let (branches, mut bones) = grow_branches(branching, &mut rng);
+    let key_times = wind_keys(&mut bones, &mut rng);
+    let wood = wood_tubes(&branches);
+    let leaves = leaf_cards(preset, branching, &branches, &bones, &mut rng);
+    let wood_triangles = wood.indices.len() / 3;
+    let glb = write_glb(
+        preset,
+        seed,
+        wood,
+        leaves.primitive,
+        &bones,
+        &key_times,
+        &mut rng,
+    )?;
+    let height = branches
+        .iter()
+        .map(|b| (b.start + b.dir * b.length).y)
+        .fold(0.0f32, f32::max);
+    Ok(GeneratedTree {
+        glb,
+        bones,
+        key_times,
+        leaf_corners: leaves.corners,
+        leaf_bones: leaves.bones,
+        wood_triangles,
+        height,
+    })
+}
+
+/// Grows the branches breadth first from the trunk, `branching[level]` children per branch of
+/// each level, and gives every branch its bones ([`bones_per_branch`], evenly spaced along it,
+/// each the child of the one before and the first the child of the parent branch's bone it
+/// hangs from). Returns the branches and the bones (without keys).
+fn grow_branches(branching: &[usize], rng: &mut ChaCha8Rng) -> (Vec<Branch>, Vec<GenBone>) {
     let trunk_len = 8.0f32;
     let mut branches = vec![Branch {
         level: 0,
@@ -255,11 +302,18 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
         i += 1;
     }
 
+    (branches, bones)
+}
+
+/// Gives every bone its wind rotation keys over one loop ([`PERIOD`] at [`KEY_RATE`]): per
+/// level inherent frequencies (integer cycles per period, so the loop is seamless) and a gust
+/// shared by all. Returns the key times.
+fn wind_keys(bones: &mut [GenBone], rng: &mut ChaCha8Rng) -> Vec<f32> {
     // Wind keys: per-level inherent frequencies (integer cycles per period), a shared gust.
     let nkeys = (PERIOD * KEY_RATE).round() as usize + 1;
     let key_times: Vec<f32> = (0..nkeys).map(|k| k as f32 / KEY_RATE).collect();
     let gust_phase = rng.random_range(0.0..TAU);
-    for b in &mut bones {
+    for b in bones.iter_mut() {
         let (freqs, amp_deg): (&[f32], f32) = match b.level {
             0 => (&[1.0, 2.0], 1.2),
             1 => (&[2.0, 3.0], 2.5),
@@ -283,6 +337,12 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
             .collect();
     }
 
+    key_times
+}
+
+/// The wood primitive: a tube per branch, tapering, with rings at bone heads (weighted half
+/// to each bone across the joint) and mid-bones (bound to that bone).
+fn wood_tubes(branches: &[Branch]) -> PrimitiveDesc {
     // Wood: a tube per branch, rings at bone heads (blended across the joint) and mid-bones.
     let radial = 6usize;
     let mut wood = PrimitiveDesc {
@@ -292,7 +352,7 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
         weights: Some(Vec::new()),
         ..Default::default()
     };
-    for br in &branches {
+    for br in branches {
         let nb = br.bones.len();
         let rings = 2 * nb + 1;
         let u = perpendicular(br.dir);
@@ -340,6 +400,28 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
         }
     }
 
+    wood
+}
+
+/// The leaf cards [`leaf_cards`] made.
+struct LeafCards {
+    /// The leaves primitive: 4 vertices and 2 triangles per card.
+    primitive: PrimitiveDesc,
+    /// Rest corners of every card.
+    corners: Vec<[Vec3; 4]>,
+    /// The bone every card is bound to.
+    bones: Vec<usize>,
+}
+
+/// Scatters the preset's leaf cards round the bones of the last branch level and the last bone
+/// of the level above, each card randomly placed, tilted and spun, bound rigidly to its bone.
+fn leaf_cards(
+    preset: Preset,
+    branching: &[usize],
+    branches: &[Branch],
+    bones: &[GenBone],
+    rng: &mut ChaCha8Rng,
+) -> LeafCards {
     // Leaves on the last level's bones and the last bone of the level above.
     let last = branching.len();
     let leaf_bones: Vec<usize> = branches
@@ -428,7 +510,25 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
         leaf_bone_of_quad.push(bone);
     }
 
-    // Document.
+    LeafCards {
+        primitive: leaves,
+        corners: leaf_corners,
+        bones: leaf_bone_of_quad,
+    }
+}
+
+/// Writes the GLB: the bark and leaf textures and materials, the two meshes skinned to a
+/// joint per bone (rest offsets from the parent's head, inverse binds undoing each head), and
+/// the "Wind" clip of the bones' rotation keys at `key_times`.
+fn write_glb(
+    preset: Preset,
+    seed: u64,
+    mut wood: PrimitiveDesc,
+    mut leaves: PrimitiveDesc,
+    bones: &[GenBone],
+    key_times: &[f32],
+    rng: &mut ChaCha8Rng,
+) -> Result<Vec<u8>, image::ImageError> {
     let mut doc = GltfBuilder::new(concat!(
         "frond ",
         env!("CARGO_PKG_VERSION"),
@@ -437,16 +537,15 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
     doc.set_extras(
         json!({ "frond": { "preset": format!("{preset:?}").to_lowercase(), "seed": seed } }),
     );
-    let bark = doc.add_texture("bark", &encode_png(64, 64, &bark_texture(&mut rng))?, false);
+    let bark = doc.add_texture("bark", &encode_png(64, 64, &bark_texture(rng))?, false);
     let leaf = doc.add_texture("leaf", &encode_png(128, 128, &leaf_texture())?, true);
     let (bark_mat, leaf_mat) = add_tree_materials(&mut doc, bark, leaf);
     wood.material = Some(bark_mat);
     leaves.material = Some(leaf_mat);
-    let wood_triangles = wood.indices.len() / 3;
     let branches_mesh = doc.add_mesh("branches", &[wood]);
     let leaves_mesh = doc.add_mesh("leaves", &[leaves]);
     let mut joint_nodes = Vec::with_capacity(bones.len());
-    for b in &bones {
+    for b in bones {
         let offset = match b.parent {
             Some(p) => b.head - bones[p].head,
             None => b.head,
@@ -483,25 +582,13 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
         .map(|(b, &node)| ChannelDesc {
             node,
             path: ChannelPath::Rotation,
-            times: key_times.clone(),
+            times: key_times.to_vec(),
             values: b.keys.iter().flat_map(|q| q.to_array()).collect(),
             interpolation: WriteInterpolation::Linear,
         })
         .collect();
     doc.add_animation("Wind", &channels);
-    let height = branches
-        .iter()
-        .map(|b| (b.start + b.dir * b.length).y)
-        .fold(0.0f32, f32::max);
-    Ok(GeneratedTree {
-        glb: doc.to_glb(),
-        bones,
-        key_times,
-        leaf_corners,
-        leaf_bones: leaf_bone_of_quad,
-        wood_triangles,
-        height,
-    })
+    Ok(doc.to_glb())
 }
 
 /// A leaf drawn procedurally: an ovate blade with a darker midrib and veins, alpha outside.

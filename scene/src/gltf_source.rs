@@ -8,9 +8,7 @@ use base64::Engine;
 use gltf::json;
 
 use crate::error::{Result, SceneError};
-use crate::input_file::{
-    InputLimits, MAX_INPUT_OPTION, ReadRefusal, human_bytes, read_regular_file, resolve_uri,
-};
+use crate::input_file::{InputLimits, ReadRefusal, human_bytes, read_regular_file, resolve_uri};
 
 /// Extensions whose presence in `extensionsRequired` we can honour.
 pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
@@ -48,16 +46,22 @@ pub struct GltfSource {
 /// the document's arrays (a missing array is empty).
 #[derive(Clone, Debug, Default, serde::Deserialize)]
 pub struct RawParts {
+    /// The `materials` array.
     #[serde(default)]
     pub materials: Vec<serde_json::Value>,
+    /// The `textures` array.
     #[serde(default)]
     pub textures: Vec<serde_json::Value>,
+    /// The `samplers` array.
     #[serde(default)]
     pub samplers: Vec<serde_json::Value>,
+    /// The `images` array.
     #[serde(default)]
     pub images: Vec<serde_json::Value>,
+    /// The `buffers` array.
     #[serde(default)]
     pub buffers: Vec<serde_json::Value>,
+    /// The `bufferViews` array.
     #[serde(default, rename = "bufferViews")]
     pub buffer_views: Vec<serde_json::Value>,
 }
@@ -171,7 +175,7 @@ impl GltfSource {
                 total = total.saturating_add(data.len() as u64);
                 if total > limits.max_input_bytes {
                     return Err(err(format!(
-                        "buffer {i}: the file and its external buffers add up to {}, over the input size limit of {} (raise it with {MAX_INPUT_OPTION})",
+                        "buffer {i}: the file and its external buffers add up to {}, over the input size limit of {} (raise the input size limit to read it)",
                         human_bytes(total),
                         human_bytes(limits.max_input_bytes)
                     )));

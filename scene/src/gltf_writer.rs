@@ -9,54 +9,77 @@ use serde_json::{Map, Value, json};
 /// A node to add.
 #[derive(Clone, Debug, Default)]
 pub struct NodeDesc {
+    /// The node's name.
     pub name: String,
+    /// Local translation; None writes none (zero).
     pub translation: Option<[f32; 3]>,
+    /// Local rotation quaternion (x, y, z, w); None writes none (identity).
     pub rotation: Option<[f32; 4]>,
+    /// Local scale; None writes none (one).
     pub scale: Option<[f32; 3]>,
+    /// Index returned by [`GltfBuilder::add_mesh`] of the mesh it shows.
     pub mesh: Option<usize>,
+    /// Index returned by [`GltfBuilder::add_skin`] of the skin that deforms its mesh.
     pub skin: Option<usize>,
+    /// JSON written as the node's `extras`.
     pub extras: Option<Value>,
 }
 
 /// glTF alpha mode of a written material.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum WriteAlpha {
+    /// Alpha ignored (`OPAQUE`).
     Opaque,
+    /// Alpha-tested at the given cutoff (`MASK` with `alphaCutoff`).
     Mask(f32),
+    /// Alpha-blended (`BLEND`).
     Blend,
 }
 
 /// A material to add.
 #[derive(Clone, Debug)]
 pub struct MaterialDesc {
+    /// The material's name.
     pub name: String,
+    /// Base colour factor, linear RGBA.
     pub base_color: [f32; 4],
     /// Index returned by [`GltfBuilder::add_texture`].
     pub base_color_texture: Option<usize>,
     /// A tangent-space normal map (`normalTexture`), its texture index.
     pub normal_texture: Option<usize>,
+    /// Alpha mode.
     pub alpha: WriteAlpha,
+    /// Whether back faces are drawn.
     pub double_sided: bool,
+    /// Metallic factor, 0..=1.
     pub metallic: f32,
+    /// Roughness factor, 0..=1.
     pub roughness: f32,
 }
 
 /// One triangle-list primitive. `joints`/`weights` must come together.
 #[derive(Clone, Debug, Default)]
 pub struct PrimitiveDesc {
+    /// `POSITION` per vertex.
     pub positions: Vec<[f32; 3]>,
+    /// `NORMAL` per vertex (unit), if written.
     pub normals: Option<Vec<[f32; 3]>>,
     /// `TANGENT` (xyz unit, w the bitangent's sign): what a normal map is read in.
     pub tangents: Option<Vec<[f32; 4]>>,
+    /// `TEXCOORD_0` per vertex, if written.
     pub uvs: Option<Vec<[f32; 2]>>,
     /// Further texture coordinate sets: TEXCOORD_1, TEXCOORD_2, ...
     pub extra_uvs: Vec<Vec<[f32; 2]>>,
+    /// `JOINTS_0` per vertex: indices into the skin's joints.
     pub joints: Option<Vec<[u16; 4]>>,
+    /// `WEIGHTS_0` per vertex, summing to 1.
     pub weights: Option<Vec<[f32; 4]>>,
     /// Write `weights` as normalized unsigned bytes (glTF core: 4 bytes a vertex instead of
     /// 16, every engine reads them) instead of floats; each vertex's four sum to exactly 255.
     pub byte_weights: bool,
+    /// Triangle list, 3 indices per triangle.
     pub indices: Vec<u32>,
+    /// Index returned by [`GltfBuilder::add_material`], if any.
     pub material: Option<usize>,
 }
 
@@ -85,16 +108,21 @@ pub fn byte_weights(w: [f32; 4]) -> [u8; 4] {
 /// Animated node property.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ChannelPath {
+    /// The node's `translation` (3 floats a key).
     Translation,
+    /// The node's `rotation` (4 floats a key, a quaternion).
     Rotation,
+    /// The node's `scale` (3 floats a key).
     Scale,
 }
 
 /// Key interpolation of a written channel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum WriteInterpolation {
+    /// Linear between keys (`LINEAR`, the default).
     #[default]
     Linear,
+    /// Each key held until the next (`STEP`).
     Step,
     /// `values` holds in-tangent, value, out-tangent per key.
     CubicSpline,
@@ -103,10 +131,15 @@ pub enum WriteInterpolation {
 /// One animation channel; `values` is 3 or 4 floats per key (three times that for cubic).
 #[derive(Clone, Debug)]
 pub struct ChannelDesc {
+    /// Index returned by [`GltfBuilder::add_node`] of the node it drives.
     pub node: usize,
+    /// The property it drives.
     pub path: ChannelPath,
+    /// Key times in seconds, strictly increasing.
     pub times: Vec<f32>,
+    /// Key values, flattened (see the struct's doc for the count).
     pub values: Vec<f32>,
+    /// How values between keys are found.
     pub interpolation: WriteInterpolation,
 }
 

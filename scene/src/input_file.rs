@@ -17,31 +17,32 @@
 use std::io::Read;
 use std::path::{Component, Path, PathBuf};
 
-/// How much reading one input may cost. Each limit has a command-line option to raise it.
+/// How much reading one input may cost. Each limit can be raised by the caller; the error that
+/// refuses an input names the limit it is over ("the input size limit", "the texture memory
+/// limit", "the vertex limit", "the animation key limit").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct InputLimits {
     /// Bytes of input files read for one tree: the file itself plus every external buffer and
-    /// every external image a material uses (all passed through, decoded or not). Default 1 GiB (`--max-input-size`): the
-    /// 1 M-foliage-triangle `xlarge` sample preset (131 MB) is an eighth of it, and a GLB cannot
+    /// every external image a material uses (all passed through, decoded or not). Default
+    /// 1 GiB: several times the 1 M-foliage-triangle `xlarge` sample preset, and a GLB cannot
     /// exceed 4 GiB anyway.
     pub max_input_bytes: u64,
     /// Decoded texture memory of one tree, counted as 4 bytes (RGBA8) per texel of every image
     /// a material map uses (any slot, any format: frond decodes base-colour and normal maps on
     /// import and may decode any map to write it smaller), each image once, summed from the
-    /// headers before any is decoded. Default 384 MiB (`--max-texture-memory`): six 4096²
+    /// headers before any is decoded. Default 384 MiB: six 4096²
     /// maps, such as colour, normal and occlusion-roughness-metal on bark and on leaves.
     pub max_texture_bytes: u64,
     /// Vertices of all mesh instances together (a mesh used by n nodes counts n times), checked
-    /// from the accessors' declared counts before decoding. Default 8 M
-    /// (`--max-vertices`): four times the `xlarge` sample's 2.1 M; the importer holds about
-    /// 60 bytes a vertex, so this keeps geometry under half a GB however the file amplifies it
-    /// (instancing, accessors without a bufferView).
+    /// from the accessors' declared counts before decoding. Default 8 M: a few times the
+    /// `xlarge` sample's vertices, and it keeps the importer's geometry under half a GB however
+    /// the file amplifies it (instancing, accessors without a bufferView).
     pub max_vertices: u64,
     /// Animation keys of all clips together, counted from the time accessors' declared counts
     /// before any is read: each channel counts its keys, and at least [`MIN_CHANNEL_KEYS`]
     /// (frond evaluates a channel at that many poses, and writes it into every LOD file however
     /// short it is); each clip at least [`MIN_CLIP_KEYS`] (each is evaluated and written on its
-    /// own). Default 2 Mi (`--max-animation-keys`): 28 clips of a 600-bone tree keyed at
+    /// own). Default 2 Mi: 28 clips of a 600-bone tree keyed at
     /// 30 fps for 4 s; the keys are held and written once per LOD file, so this keeps them to a
     /// few hundred MB however many clips or channels share one accessor.
     pub max_animation_keys: u64,
@@ -60,13 +61,17 @@ pub const DEFAULT_MAX_TEXTURE_BYTES: u64 = 384 << 20;
 pub const DEFAULT_MAX_VERTICES: u64 = 8_000_000;
 /// Default of [`InputLimits::max_animation_keys`].
 pub const DEFAULT_MAX_ANIMATION_KEYS: u64 = 1 << 21;
-/// The option that raises [`InputLimits::max_animation_keys`].
+/// The command-line spelling of the option that raises [`InputLimits::max_animation_keys`]
+/// (for the CLI: library messages name the limit, not the option).
 pub const MAX_ANIMATION_OPTION: &str = "--max-animation-keys";
-/// The option that raises [`InputLimits::max_vertices`].
+/// The command-line spelling of the option that raises [`InputLimits::max_vertices`] (for the
+/// CLI: library messages name the limit, not the option).
 pub const MAX_VERTICES_OPTION: &str = "--max-vertices";
-/// The option that raises [`InputLimits::max_input_bytes`].
+/// The command-line spelling of the option that raises [`InputLimits::max_input_bytes`] (for
+/// the CLI: library messages name the limit, not the option).
 pub const MAX_INPUT_OPTION: &str = "--max-input-size";
-/// The option that raises [`InputLimits::max_texture_bytes`].
+/// The command-line spelling of the option that raises [`InputLimits::max_texture_bytes`] (for
+/// the CLI: library messages name the limit, not the option).
 pub const MAX_TEXTURE_OPTION: &str = "--max-texture-memory";
 
 impl Default for InputLimits {
@@ -143,7 +148,7 @@ impl std::fmt::Display for ReadRefusal {
             }
             ReadRefusal::TooLarge { size, limit } => write!(
                 f,
-                "is {} ({size} bytes), over the input size limit of {} (raise it with {MAX_INPUT_OPTION})",
+                "is {} ({size} bytes), over the input size limit of {} (raise the input size limit to read it)",
                 human_bytes(*size),
                 human_bytes(*limit)
             ),
@@ -319,7 +324,7 @@ mod tests {
         assert_eq!(read_regular_file(&f, 100).unwrap().len(), 100);
         let err = read_regular_file(&f, 99).unwrap_err().to_string();
         assert!(
-            err.contains("100 bytes") && err.contains(MAX_INPUT_OPTION),
+            err.contains("100 bytes") && err.contains("raise the input size limit"),
             "{err}"
         );
         let err = read_regular_file(dir.path(), 1 << 20)

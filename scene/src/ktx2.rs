@@ -11,11 +11,11 @@
 //! blocks for uncompressed targets (RGBA32), so decoding a UASTC level to texels writes past
 //! it; [`decode_levels`] passes a buffer of the right size and its row pitch in pixels.
 //!
-//! Why UASTC rather than ETC1S (measured on oak_dense's 1024² leaf map, mips included;
-//! docs/experiments.md §15): colour error over the alpha-passing texels 3.2 against 8.3 (RMS,
-//! 0–255), alpha-test decisions that flip 0.08 % against 0.17 % of texels; both transcode to
-//! the same GPU formats (BC7 / ASTC 4×4, one byte a texel), ETC1S's files are 3.5× smaller.
-//! For foliage drawn alpha-tested, the cut-out is the picture, so quality wins.
+//! Why UASTC rather than ETC1S (docs/experiments.md §15 has the measurements): on a leaf map,
+//! UASTC's colour error over the alpha-passing texels and its share of flipped alpha-test
+//! decisions are well below ETC1S's; both transcode to the same GPU formats (BC7 / ASTC 4×4,
+//! one byte a texel), and ETC1S's files are several times smaller. For foliage drawn
+//! alpha-tested, the cut-out is the picture, so quality wins.
 
 use basis_universal::sys;
 use basis_universal::{
@@ -41,12 +41,18 @@ pub const BLOCK_BYTES: u64 = 16;
 /// What went wrong encoding or reading a KTX2 texture.
 #[derive(Debug, thiserror::Error)]
 pub enum Ktx2Error {
+    /// The bytes are not a KTX2 file of a kind this reader takes (the reason says why).
     #[error("not a KTX2 file this reader takes: {0}")]
     Format(String),
+    /// The UASTC encoder refused the image.
     #[error("UASTC encoding failed: {0}")]
     Encode(String),
+    /// A level's UASTC blocks could not be transcoded to RGBA8.
     #[error("UASTC level {level} does not transcode")]
-    Transcode { level: usize },
+    Transcode {
+        /// The level that failed (0 is the full-size image).
+        level: usize,
+    },
 }
 
 /// One mip level: width, height, RGBA8 texels.
@@ -55,8 +61,11 @@ pub type Level = (u32, u32, Vec<u8>);
 /// What a KTX2 file holds, from its header.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ktx2Info {
+    /// Width of level 0, texels.
     pub width: u32,
+    /// Height of level 0, texels.
     pub height: u32,
+    /// Mip levels stored (at least 1).
     pub levels: u32,
     /// sRGB transfer (colour), or linear (normals).
     pub srgb: bool,

@@ -6,7 +6,7 @@
 //! wrappers want a Rust type per vertex size, a view's stride is any multiple of 4 up to 256),
 //! so the rest of the importer reads the views as if they were stored plainly.
 //!
-//! Written too ([`encode_attributes`], [`encode_triangles`]), for `--compress`: the encoders'
+//! Written too ([`encode_attributes`], [`encode_triangles`]), for compressed output: the encoders'
 //! output in the formats the extension defines (vertex codec version 0, the only one
 //! `EXT_meshopt_compression` allows; index codec version 1).
 

@@ -11,7 +11,9 @@ use crate::rig::Rig;
 /// A bone: a node that is a joint of some skin.
 #[derive(Clone, Debug)]
 pub struct Bone {
+    /// The joint node's name (`node<i>` when the node has none).
     pub name: String,
+    /// Index of the joint node in [`Rig::nodes`](crate::Rig::nodes).
     pub node: usize,
     /// The nearest ancestor node that is also a bone.
     pub parent: Option<usize>,
@@ -26,7 +28,10 @@ pub struct Bone {
 pub enum Binding {
     /// Linear-blend skinned: palette entry k = world(joint_k) · inverse_bind_k.
     Skin {
+        /// Per palette entry, the bone (index into [`Tree::bones`]) of the skin's joint.
         joints: Vec<usize>,
+        /// Per palette entry, the joint's inverse bind matrix (identity when the skin gives
+        /// none).
         inverse_bind: Vec<Mat4>,
     },
     /// Rigidly attached to a node (unskinned mesh): palette entry 0 = world(node).
@@ -37,25 +42,36 @@ pub enum Binding {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Part {
+    /// Trunk and branches: simplified as a mesh (the wood LODs).
     Wood,
+    /// Leaves and leaf cards: what billboard clouds replace (spec §1.3).
     Foliage,
 }
 
 /// How the wood/foliage decision for one primitive was made.
 #[derive(Clone, Debug, Serialize)]
 pub struct Classification {
+    /// Name of the primitive's mesh (`mesh<i>` when unnamed).
     pub mesh: String,
+    /// Index of the primitive within its mesh.
     pub primitive: usize,
+    /// Name of the primitive's material (`(none)` without one).
     pub material: String,
+    /// Where its triangles went.
     pub part: Part,
+    /// Why, in words: the user's naming, a word in a name, the alpha mode or the card
+    /// shape that decided it.
     pub reason: String,
+    /// Triangles of the primitive.
     pub triangles: usize,
 }
 
 /// Per-vertex data, in the mesh space the binding expects.
 #[derive(Clone, Debug, Default)]
 pub struct Vertices {
+    /// Positions in the binding's mesh space (before skinning).
     pub position: Vec<Vec3>,
+    /// Unit normals in the same space (zero where the file gives none).
     pub normal: Vec<Vec3>,
     /// The input's `TANGENT` (xyz, w the bitangent's sign), for applying normal maps: empty
     /// when no primitive has one, else one per vertex (zero where a primitive lacks it). Code
@@ -91,8 +107,12 @@ impl Vertices {
 /// One triangle of the tree.
 #[derive(Clone, Copy, Debug)]
 pub struct Triangle {
+    /// Vertex indices into [`Tree::vertices`], in the input's winding.
     pub v: [u32; 3],
+    /// Index into [`Tree::materials`] (primitives without a material use the default one
+    /// appended after the imported ones).
     pub material: u32,
+    /// Wood or foliage (see [`Tree::classification`] for why).
     pub part: Part,
     /// Zero area at rest: counted but skipped by later stages.
     pub degenerate: bool,
@@ -104,8 +124,11 @@ pub struct Triangle {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "UPPERCASE")]
 pub enum AlphaMode {
+    /// Alpha ignored: the surface is fully opaque.
     Opaque,
+    /// Alpha-tested: texels under [`Material::alpha_cutoff`] are discarded (leaf cards).
     Mask,
+    /// Alpha-blended over what lies behind.
     Blend,
 }
 
@@ -115,9 +138,12 @@ pub enum AlphaMode {
 /// one shows its neighbour.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
 pub enum Wrap {
+    /// Tiles the texture (glTF `REPEAT`, the default).
     #[default]
     Repeat,
+    /// Repeats the edge texels (glTF `CLAMP_TO_EDGE`).
     ClampToEdge,
+    /// Tiles the texture, every other copy mirrored (glTF `MIRRORED_REPEAT`).
     MirroredRepeat,
 }
 
@@ -146,7 +172,9 @@ pub const MAX_TEXCOORD_SETS: usize = 2;
 /// material, the input's whole description ([`Material::source`]) so it is written back as is.
 #[derive(Clone, Debug)]
 pub struct Material {
+    /// The material's name (`material<i>` when the input gives none).
     pub name: String,
+    /// Base colour factor, linear RGBA, multiplied with the texture.
     pub base_color: [f32; 4],
     /// Index into `Tree::textures`.
     pub base_color_texture: Option<usize>,
@@ -156,8 +184,11 @@ pub struct Material {
     /// the base colour's coordinates and the file gives `TANGENT` (frond does not generate
     /// tangent frames), so that renders light the surface as an engine would.
     pub normal_texture: Option<usize>,
+    /// How alpha is used (glTF `alphaMode`).
     pub alpha_mode: AlphaMode,
+    /// Alpha below which a masked texel is discarded (glTF `alphaCutoff`, default 0.5).
     pub alpha_cutoff: f32,
+    /// Whether back faces are drawn (glTF `doubleSided`).
     pub double_sided: bool,
     /// The input's material, for writing it back unchanged (None: made by frond, such as the
     /// default material of primitives without one; written from the fields above).
@@ -248,9 +279,13 @@ impl SourceImage {
 /// A decoded RGBA8 texture (sRGB, straight alpha).
 #[derive(Clone, Debug)]
 pub struct Texture {
+    /// The image's name (`image<i>` when unnamed).
     pub name: String,
+    /// Width in texels.
     pub width: u32,
+    /// Height in texels.
     pub height: u32,
+    /// `width * height * 4` bytes, rows top to bottom.
     pub rgba: Vec<u8>,
     /// The encoded image it was decoded from (index into [`Tree::images`]), if imported.
     pub image: Option<usize>,
@@ -259,7 +294,9 @@ pub struct Texture {
 /// Axis-aligned bounds.
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 pub struct Bounds {
+    /// Smallest x, y, z.
     pub min: [f32; 3],
+    /// Largest x, y, z.
     pub max: [f32; 3],
 }
 
@@ -298,13 +335,20 @@ impl Bounds {
 /// A whole tree as imported.
 #[derive(Clone, Debug)]
 pub struct Tree {
+    /// The file it was read from (or the name given with its bytes).
     pub source: PathBuf,
     /// Every glTF node with its rest transform, and every clip.
     pub rig: Rig,
+    /// The skins' joints, each joint node once.
     pub bones: Vec<Bone>,
+    /// What deforms each vertex group: the skins first (binding i is skin i), then one
+    /// rigid binding per unskinned mesh node.
     pub bindings: Vec<Binding>,
+    /// Every mesh instance's vertices, flattened.
     pub vertices: Vertices,
+    /// Every triangle of every mesh instance, flattened.
     pub triangles: Vec<Triangle>,
+    /// The materials (plus a default one when some primitive has none).
     pub materials: Vec<Material>,
     /// Decoded base-colour textures (what baking, rendering and metrics sample).
     pub textures: Vec<Texture>,
@@ -312,6 +356,7 @@ pub struct Tree {
     pub source_textures: Vec<SourceTexture>,
     /// The encoded images of [`Tree::source_textures`], as in the input.
     pub images: Vec<SourceImage>,
+    /// Per primitive, how it was classified as wood or foliage.
     pub classification: Vec<Classification>,
     /// Foliage triangles whose vertices were not all rigidly bound to their chosen bone.
     pub foliage_reassigned: usize,

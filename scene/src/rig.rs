@@ -8,8 +8,11 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 /// A node's local transform as translation, rotation, scale.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Trs {
+    /// Translation, in the parent's units.
     pub translation: Vec3,
+    /// Rotation (unit quaternion).
     pub rotation: Quat,
+    /// Scale per axis.
     pub scale: Vec3,
 }
 
@@ -29,8 +32,11 @@ impl Trs {
 /// One node of the glTF hierarchy.
 #[derive(Clone, Debug)]
 pub struct Node {
+    /// The node's name (`node<i>` when the file gives none).
     pub name: String,
+    /// Index of the parent node; None for a root.
     pub parent: Option<usize>,
+    /// Indices of the child nodes, in the file's order.
     pub children: Vec<usize>,
     /// Rest (un-animated) local transform.
     pub rest: Trs,
@@ -43,27 +49,36 @@ pub struct Node {
 /// Which node property a channel drives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Property {
+    /// The node's translation (glTF `translation`).
     Translation,
+    /// The node's rotation (glTF `rotation`).
     Rotation,
+    /// The node's scale (glTF `scale`).
     Scale,
 }
 
 /// glTF sampler interpolation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Interpolation {
+    /// Linear between keys (shortest-path slerp for rotations).
     Linear,
+    /// Each key's value held until the next.
     Step,
+    /// Cubic Hermite through the keys with their in- and out-tangents.
     CubicSpline,
 }
 
 /// One animated property of one node.
 #[derive(Clone, Debug)]
 pub struct Channel {
+    /// Index of the node it drives.
     pub node: usize,
+    /// The property it drives.
     pub property: Property,
+    /// How values between keys are found.
     pub interpolation: Interpolation,
     /// Key times in seconds: finite, ≥ 0 and strictly increasing (the importer refuses or
-    /// repairs anything else, see `import::read_clips`), as glTF requires of what frond writes.
+    /// repairs anything else, see `import::animation::read_clips`), as glTF requires of what frond writes.
     pub times: Vec<f32>,
     /// Key values as Vec4 (xyz for T/S, xyzw for rotation); CUBICSPLINE stores
     /// in-tangent, value, out-tangent per key.
@@ -73,9 +88,13 @@ pub struct Channel {
 /// A named animation clip.
 #[derive(Clone, Debug)]
 pub struct Clip {
+    /// The animation's name (`animation<i>` when the file gives none).
     pub name: String,
+    /// Earliest key time over its channels, seconds (0 without keys).
     pub start: f32,
+    /// Latest key time over its channels, seconds (0 without keys).
     pub end: f32,
+    /// The animated properties.
     pub channels: Vec<Channel>,
 }
 

@@ -36,21 +36,28 @@ impl Default for SampleOptions {
 /// `bone_world[s * bones + b]`, `centres[k * samples + s]` for foliage triangle `k`.
 #[derive(Clone, Debug)]
 pub struct Sampled {
+    /// Name of the clip sampled; None for a tree without clips.
     pub clip: Option<String>,
+    /// Length of the loop, seconds (0 for a one-frame loop).
     pub period: f32,
+    /// Sample times, seconds: `start + period · s / samples`.
     pub times: Vec<f32>,
+    /// Vertices per pose (the tree's).
     pub vertices: usize,
     /// Sample-major skinned positions ([`Sampled::pose`]). This, `bone_world`, `centres` and
     /// `average` are empty for a loop sampled without its poses ([`sample_loop`],
-    /// [`Sampled::into_loop`]): on the 1M-triangle preset they are 2.4 GB, and card LODs, the
+    /// [`Sampled::into_loop`]): on the largest presets they take gigabytes, and card LODs, the
     /// files and the report need only the loop's clock and its motion facts.
     pub positions: Vec<Vec3>,
+    /// Sample-major world transforms of the bones.
     pub bone_world: Vec<Mat4>,
     /// Indices (into `Tree::triangles`) of the non-degenerate foliage triangles.
     pub foliage: Vec<usize>,
+    /// Per foliage triangle (in [`Sampled::foliage`] order), its centre at every sample.
     pub centres: Vec<Vec3>,
     /// Every vertex at its mean position over the loop.
     pub average: Vec<Vec3>,
+    /// Whether the clip loops and moves.
     pub motion: Motion,
 }
 
@@ -61,7 +68,9 @@ pub struct Motion {
     pub loop_gap: f32,
     /// Largest vertex distance from the first pose over the samples.
     pub max_displacement: f32,
+    /// Whether the first and last poses match within [`LOOP_TOLERANCE`] × tree height.
     pub loops: bool,
+    /// Whether any vertex moves more than [`MOTION_TOLERANCE`] × tree height.
     pub moves: bool,
 }
 

@@ -37,8 +37,8 @@ const SKIN_DIMS: usize = 8;
 /// position error without normalising it by area (positions are scaled to a unit cube; attribute
 /// error is area × weight² × deviation²), so this weighs most where the wood is big (trunk,
 /// main limbs) and little on twigs; interpolated skin fields (weights blended across a joint)
-/// cost nothing while they stay linear. On the shared trees weights of 0 to 8 change the result
-/// by a few per cent; the distance checks, not this weight, bound the error.
+/// cost nothing while they stay linear. The result depends on this weight only a little; the
+/// distance checks, not this weight, bound the error.
 const SKIN_WEIGHT: f32 = 0.5;
 /// Simplifier weight of the (unit) normals: shading, secondary to position.
 const NORMAL_WEIGHT: f32 = 0.05;
@@ -46,8 +46,8 @@ const NORMAL_WEIGHT: f32 = 0.05;
 /// cheap; seams between charts are kept by meshoptimizer's wedge handling regardless).
 const UV_WEIGHT: f32 = 0.01;
 /// Vertices locked on every border loop (a branch tube's end rings): 3 keeps a thin branch a
-/// triangular prism, visible from every side (2 would allow flat ribbons, ~20 % fewer
-/// triangles on the shared trees, that vanish edge-on).
+/// triangular prism, visible from every side (2 would allow flat ribbons, with fewer
+/// triangles, that vanish edge-on).
 const LOOP_LOCKS: usize = 3;
 
 const ATTRS: usize = SKIN_DIMS + 3 + 2;
@@ -95,6 +95,7 @@ pub struct WoodMesh {
     pub bones: Vec<[u32; 4]>,
     /// Skin weights, sum 1.
     pub weights: Vec<[f32; 4]>,
+    /// The triangles, one primitive per material.
     pub primitives: Vec<WoodPrimitive>,
 }
 
@@ -485,8 +486,8 @@ impl WoodMesh {
     /// (branches) keep their end rings and never collapse into lines.
     ///
     /// meshoptimizer's error is a quadric estimate (an area-weighted mean of squared plane
-    /// distances) that thin curved tubes fool: on the shared trees it reported 0.05 for pieces
-    /// whose vertices ended up 1.6 away. So every piece is then checked with true distances:
+    /// distances) that thin curved tubes fool: it can report a small error for a piece whose
+    /// vertices end up many times farther away. So every piece is then checked with true distances:
     /// each of its vertices, triangle centroids and edge midpoints must lie within `max_error`
     /// of the simplified piece, and points spread over each simplified triangle (edge midpoints
     /// and quarter points, centroid, three interior points) within `max_error` of the original
@@ -594,6 +595,9 @@ impl WoodMesh {
 
     /// Simplifies one connected piece (triangles over internal vertices), returning its
     /// triangles (internal vertices) and error; see [`WoodMesh::simplify`].
+    ///
+    /// First as far as the error bound allows, locking a few stray vertices and trying again
+    /// ([`LOCK_ROUNDS`] times at most); failing that, the fewest triangles that pass.
     fn simplify_piece(
         &self,
         internal: &[(usize, u32)],
@@ -601,6 +605,115 @@ impl WoodMesh {
         max_error: f32,
         limit: f32,
     ) -> (Vec<[u32; 3]>, f32) {
+        let problem = PieceProblem::new(self, internal, piece, max_error, limit);
+        let mut locks = border_locks(&problem.positions, &problem.indices);
+        let n = piece.len();
+        // As far as the error bound allows; a few stray vertices get locked and the piece is
+        // simplified again.
+        let (tris, error, mut stray) = problem.attempt(0, &locks);
+        if let Some(e) = error {
+            return (problem.back(tris), e);
+        }
+        for _ in 0..LOCK_ROUNDS {
+            if stray.len() > problem.global.len() / STRAY_FRACTION {
+                break;
+            }
+            stray.sort_unstable();
+            stray.dedup();
+            for &k in &stray {
+                locks[k as usize] = SimplifyVertex::Lock;
+            }
+            let (tris, error, s) = problem.attempt(0, &locks);
+            if let Some(e) = error {
+                return (problem.back(tris), e);
+            }
+            stray = s;
+        }
+        // Otherwise the fewest triangles that pass (binary search on meshoptimizer's triangle
+        // target; the whole piece always passes).
+        let locks = border_locks(&problem.positions, &problem.indices);
+        let (mut lo, mut hi) = (0usize, n);
+        let mut best: Option<(Vec<[u32; 3]>, f32)> = None;
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            match problem.attempt(mid, &locks) {
+                (tris, Some(e), _) => {
+                    hi = mid;
+                    best = Some((tris, e));
+                }
+                _ => lo = mid,
+            }
+        }
+        match best {
+            Some((tris, e)) => (problem.back(tris), e),
+            None => (piece.to_vec(), 0.0),
+        }
+    }
+
+    /// Replaces zero normals (no normal in the file, or a singular skin) by the area-weighted
+    /// normal of the vertex's triangles (+Y when that is zero too).
+    fn fill_missing_normals(&mut self) {
+        if self.normals.iter().all(|n| *n != Vec3::ZERO) {
+            return;
+        }
+        let mut acc = vec![Vec3::ZERO; self.positions.len()];
+        for p in &self.primitives {
+            for t in p.indices.chunks_exact(3) {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
+                let n = (b - a).cross(c - a);
+                for &i in t {
+                    acc[i as usize] += n;
+                }
+            }
+        }
+        for (n, a) in self.normals.iter_mut().zip(acc) {
+            if *n == Vec3::ZERO {
+                *n = a.try_normalize().unwrap_or(Vec3::Y);
+            }
+        }
+    }
+}
+
+/// One connected piece as meshoptimizer simplifies it (vertices numbered locally), with what
+/// every simplification of it is checked against (see [`WoodMesh::simplify`]).
+struct PieceProblem<'a> {
+    /// Per internal vertex: (primitive, mesh vertex).
+    internal: &'a [(usize, u32)],
+    /// The internal vertex of each local vertex, in order of first use.
+    global: Vec<u32>,
+    /// The piece's triangles over local vertices, 3 indices each.
+    indices: Vec<u32>,
+    /// Local vertices' positions.
+    positions: Vec<[f32; 3]>,
+    /// Local vertices' attributes, [`ATTRS`] each: skin embedding, normal, uv.
+    attributes: Vec<f32>,
+    /// Weight of each attribute in meshoptimizer's error.
+    attribute_weights: [f32; ATTRS],
+    /// The original piece's surface.
+    original_bvh: SurfaceBvh,
+    /// Points that must stay near the simplified piece: every vertex, and every triangle's
+    /// centroid and edge midpoints, each with the local vertices it belongs to (3, repeated as
+    /// needed), which are locked when it strays.
+    checks: Vec<(Vec3, [u32; 3])>,
+    /// The original triangles as sorted vertex sets: a simplified triangle among them lies on
+    /// the original surface.
+    original_sets: HashSet<[u32; 3]>,
+    /// The error bound meshoptimizer is given.
+    max_error: f32,
+    /// The largest distance a check point may lie from the simplified piece.
+    limit: f32,
+}
+
+impl<'a> PieceProblem<'a> {
+    /// Numbers the piece's vertices locally and gathers their positions and attributes from
+    /// `mesh`, then the check points and original triangle sets.
+    fn new(
+        mesh: &WoodMesh,
+        internal: &'a [(usize, u32)],
+        piece: &[[u32; 3]],
+        max_error: f32,
+        limit: f32,
+    ) -> Self {
         // Local numbering.
         let mut local: HashMap<u32, u32> = HashMap::new();
         let mut global: Vec<u32> = Vec::new();
@@ -614,14 +727,9 @@ impl WoodMesh {
                 })
             })
             .collect();
-        let back = |tris: Vec<[u32; 3]>| -> Vec<[u32; 3]> {
-            tris.into_iter()
-                .map(|t| t.map(|k| global[k as usize]))
-                .collect()
-        };
         let mesh_vertex = |k: u32| internal[global[k as usize] as usize].1 as usize;
         let positions: Vec<[f32; 3]> = (0..global.len() as u32)
-            .map(|k| self.positions[mesh_vertex(k)].to_array())
+            .map(|k| mesh.positions[mesh_vertex(k)].to_array())
             .collect();
         let point = |k: u32| Vec3::from(positions[k as usize]);
         let mut attributes: Vec<f32> = Vec::with_capacity(global.len() * ATTRS);
@@ -629,17 +737,17 @@ impl WoodMesh {
             let i = mesh_vertex(k);
             let mut skin = [0.0f32; SKIN_DIMS];
             for s in 0..4 {
-                let w = self.weights[i][s];
+                let w = mesh.weights[i][s];
                 if w > 0.0 {
-                    let e = bone_embedding(self.bones[i][s]);
+                    let e = bone_embedding(mesh.bones[i][s]);
                     for d in 0..SKIN_DIMS {
                         skin[d] += w * e[d];
                     }
                 }
             }
             attributes.extend_from_slice(&skin);
-            attributes.extend_from_slice(&self.normals[i].to_array());
-            attributes.extend_from_slice(&self.uvs[i].to_array());
+            attributes.extend_from_slice(&mesh.normals[i].to_array());
+            attributes.extend_from_slice(&mesh.uvs[i].to_array());
         }
         let mut attribute_weights = [0.0f32; ATTRS];
         attribute_weights[..SKIN_DIMS].fill(SKIN_WEIGHT);
@@ -672,144 +780,116 @@ impl WoodMesh {
             .chunks_exact(3)
             .map(|t| sorted3([t[0], t[1], t[2]]))
             .collect();
-        let mut locks = border_locks(&positions, &indices);
-        // One meshoptimizer run for a triangle target, then the distance checks: the surviving
-        // triangles, the error (estimate and measured) when they pass, and the stray vertices.
-        let attempt = |target_triangles: usize,
-                       locks: &[SimplifyVertex]|
-         -> (Vec<[u32; 3]>, Option<f32>, Vec<u32>) {
-            let mut estimate = 0.0f32;
-            let result = meshopt::simplify_with_attributes_and_locks_decoder(
-                &indices,
-                &positions,
-                &attributes,
-                &attribute_weights,
-                ATTRS * std::mem::size_of::<f32>(),
-                locks,
-                target_triangles * 3,
-                max_error,
-                SimplifyOptions::ErrorAbsolute,
-                Some(&mut estimate),
-            );
-            let tris: Vec<[u32; 3]> = result
-                .chunks_exact(3)
-                .filter_map(|t| {
-                    let t = [t[0], t[1], t[2]];
-                    if t.iter().any(|&k| k as usize >= global.len()) {
-                        return None;
-                    }
-                    let v = t.map(mesh_vertex);
-                    if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] {
-                        return None;
-                    }
-                    let [a, b, c] = t.map(point);
-                    ((b - a).cross(c - a).length_squared() > 0.0).then_some(t)
-                })
-                .collect();
-            let simplified: Vec<[Vec3; 3]> = tris.iter().map(|t| t.map(point)).collect();
-            let bvh = SurfaceBvh::new(simplified.clone());
-            let mut measured = estimate;
-            let mut stray: Vec<u32> = Vec::new();
-            // What the simplified piece keeps of the original: a check point on a kept vertex,
-            // edge or triangle lies on it (distance 0, or float noise), which changes neither
-            // the maximum nor the strays: it needs no query (at near LODs most are kept).
-            let kept = Kept::of(&tris, global.len());
-            // Each distance matters only over the running maximum (and the limit): the
-            // bounded query gives the same maximum and the same strays.
-            for (p, owners) in &checks {
-                if kept.holds(*owners) {
-                    continue;
-                }
-                let d = bvh.distance_beyond(*p, measured.min(limit));
-                if d > limit {
-                    stray.extend_from_slice(owners);
-                } else {
-                    measured = measured.max(d);
-                }
-            }
-            let mut inward = true;
-            'outer: for (s, t) in simplified.iter().zip(&tris) {
-                if original_sets.contains(&sorted3(*t)) {
-                    continue;
-                }
-                for (wa, wb, wc) in SURFACE_SAMPLES {
-                    let d = original_bvh
-                        .distance_beyond(s[0] * wa + s[1] * wb + s[2] * wc, measured.min(limit));
-                    if d > limit {
-                        inward = false;
-                        break 'outer;
-                    }
-                    measured = measured.max(d);
-                }
-            }
-            let pass = stray.is_empty() && inward;
-            (tris, pass.then_some(measured), stray)
-        };
-
-        let n = piece.len();
-        // As far as the error bound allows; a few stray vertices get locked and the piece is
-        // simplified again.
-        let (tris, error, mut stray) = attempt(0, &locks);
-        if let Some(e) = error {
-            return (back(tris), e);
-        }
-        for _ in 0..LOCK_ROUNDS {
-            if stray.len() > global.len() / STRAY_FRACTION {
-                break;
-            }
-            stray.sort_unstable();
-            stray.dedup();
-            for &k in &stray {
-                locks[k as usize] = SimplifyVertex::Lock;
-            }
-            let (tris, error, s) = attempt(0, &locks);
-            if let Some(e) = error {
-                return (back(tris), e);
-            }
-            stray = s;
-        }
-        // Otherwise the fewest triangles that pass (binary search on meshoptimizer's triangle
-        // target; the whole piece always passes).
-        let locks = border_locks(&positions, &indices);
-        let (mut lo, mut hi) = (0usize, n);
-        let mut best: Option<(Vec<[u32; 3]>, f32)> = None;
-        while hi - lo > 1 {
-            let mid = lo + (hi - lo) / 2;
-            match attempt(mid, &locks) {
-                (tris, Some(e), _) => {
-                    hi = mid;
-                    best = Some((tris, e));
-                }
-                _ => lo = mid,
-            }
-        }
-        match best {
-            Some((tris, e)) => (back(tris), e),
-            None => (piece.to_vec(), 0.0),
+        PieceProblem {
+            internal,
+            global,
+            indices,
+            positions,
+            attributes,
+            attribute_weights,
+            original_bvh,
+            checks,
+            original_sets,
+            max_error,
+            limit,
         }
     }
 
-    /// Replaces zero normals (no normal in the file, or a singular skin) by the area-weighted
-    /// normal of the vertex's triangles (+Y when that is zero too).
-    fn fill_missing_normals(&mut self) {
-        if self.normals.iter().all(|n| *n != Vec3::ZERO) {
-            return;
-        }
-        let mut acc = vec![Vec3::ZERO; self.positions.len()];
-        for p in &self.primitives {
-            for t in p.indices.chunks_exact(3) {
-                let [a, b, c] = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
-                let n = (b - a).cross(c - a);
-                for &i in t {
-                    acc[i as usize] += n;
+    /// The mesh vertex of local vertex `k`.
+    fn mesh_vertex(&self, k: u32) -> usize {
+        self.internal[self.global[k as usize] as usize].1 as usize
+    }
+
+    /// The position of local vertex `k`.
+    fn point(&self, k: u32) -> Vec3 {
+        Vec3::from(self.positions[k as usize])
+    }
+
+    /// Triangles over local vertices renumbered to internal vertices.
+    fn back(&self, tris: Vec<[u32; 3]>) -> Vec<[u32; 3]> {
+        tris.into_iter()
+            .map(|t| t.map(|k| self.global[k as usize]))
+            .collect()
+    }
+
+    /// One meshoptimizer run for a triangle target, then the distance checks: the surviving
+    /// triangles, the error (estimate and measured) when they pass, and the stray vertices.
+    fn attempt(
+        &self,
+        target_triangles: usize,
+        locks: &[SimplifyVertex],
+    ) -> (Vec<[u32; 3]>, Option<f32>, Vec<u32>) {
+        let mut estimate = 0.0f32;
+        let (max_error, limit) = (self.max_error, self.limit);
+        let global = &self.global;
+        let mesh_vertex = |k: u32| self.mesh_vertex(k);
+        let point = |k: u32| self.point(k);
+        let result = meshopt::simplify_with_attributes_and_locks_decoder(
+            &self.indices,
+            &self.positions,
+            &self.attributes,
+            &self.attribute_weights,
+            ATTRS * std::mem::size_of::<f32>(),
+            locks,
+            target_triangles * 3,
+            max_error,
+            SimplifyOptions::ErrorAbsolute,
+            Some(&mut estimate),
+        );
+        let tris: Vec<[u32; 3]> = result
+            .chunks_exact(3)
+            .filter_map(|t| {
+                let t = [t[0], t[1], t[2]];
+                if t.iter().any(|&k| k as usize >= global.len()) {
+                    return None;
                 }
+                let v = t.map(mesh_vertex);
+                if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] {
+                    return None;
+                }
+                let [a, b, c] = t.map(point);
+                ((b - a).cross(c - a).length_squared() > 0.0).then_some(t)
+            })
+            .collect();
+        let simplified: Vec<[Vec3; 3]> = tris.iter().map(|t| t.map(point)).collect();
+        let bvh = SurfaceBvh::new(simplified.clone());
+        let mut measured = estimate;
+        let mut stray: Vec<u32> = Vec::new();
+        // What the simplified piece keeps of the original: a check point on a kept vertex,
+        // edge or triangle lies on it (distance 0, or float noise), which changes neither
+        // the maximum nor the strays: it needs no query (at near LODs most are kept).
+        let kept = Kept::of(&tris, global.len());
+        // Each distance matters only over the running maximum (and the limit): the
+        // bounded query gives the same maximum and the same strays.
+        for (p, owners) in &self.checks {
+            if kept.holds(*owners) {
+                continue;
+            }
+            let d = bvh.distance_beyond(*p, measured.min(limit));
+            if d > limit {
+                stray.extend_from_slice(owners);
+            } else {
+                measured = measured.max(d);
             }
         }
-        for (n, a) in self.normals.iter_mut().zip(acc) {
-            if *n == Vec3::ZERO {
-                *n = a.try_normalize().unwrap_or(Vec3::Y);
+        let mut inward = true;
+        'outer: for (s, t) in simplified.iter().zip(&tris) {
+            if self.original_sets.contains(&sorted3(*t)) {
+                continue;
+            }
+            for (wa, wb, wc) in SURFACE_SAMPLES {
+                let d = self
+                    .original_bvh
+                    .distance_beyond(s[0] * wa + s[1] * wb + s[2] * wc, measured.min(limit));
+                if d > limit {
+                    inward = false;
+                    break 'outer;
+                }
+                measured = measured.max(d);
             }
         }
+        let pass = stray.is_empty() && inward;
+        (tris, pass.then_some(measured), stray)
     }
 }
 

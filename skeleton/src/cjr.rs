@@ -5,8 +5,8 @@
 //!
 //! \[ENG\] merge order: the thesis merges the pair whose average descriptions deviate least.
 //! Description deviations are unitless and blind to lever arms: on glTF trees, whose siblings
-//! start at different points along their parent, the first such merge of oak_medium moved
-//! leaves 12 px at 600 px. Here the pair merged first is the one whose common rotation moves
+//! start at different points along their parent, such a merge can move leaves visibly on
+//! screen. Here the pair merged first is the one whose common rotation moves
 //! the foliage it affects least, in world units: each member's own foliage turns by the
 //! set's average about the set's pivot instead of by its own about its own pivot, and (without
 //! the average-bone improvement) its descendants' foliage turns by the average too. The
@@ -28,6 +28,7 @@ use crate::model::{SkNode, SkeletonModel};
 pub struct Merge {
     /// Bone names of the two sets.
     pub a: Vec<String>,
+    /// Bone names of the second set (`a` holds the first's).
     pub b: Vec<String>,
     /// Deviation of the two sets' average descriptions.
     pub deviation: f32,
@@ -43,6 +44,7 @@ pub struct CommonRotationSets {
     /// Each set's common rotation: the delta rotations its average description applies to
     /// (empty for a single bone, which keeps its own).
     pub deltas: Vec<Vec<Quat>>,
+    /// Every merge made, in order.
     pub merges: Vec<Merge>,
 }
 

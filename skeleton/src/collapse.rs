@@ -27,7 +27,9 @@ use crate::model::{SkNode, SkeletonModel};
 /// One collapse, for the report.
 #[derive(Clone, Debug, Serialize)]
 pub struct CollapseRecord {
+    /// Name of the first of the two sibling bones collapsed.
     pub a: String,
+    /// Name of the second.
     pub b: String,
     /// The new bone's name.
     pub into: String,

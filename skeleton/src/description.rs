@@ -22,7 +22,7 @@ pub enum BoneDescriptionKind {
 }
 
 impl BoneDescriptionKind {
-    /// The name `--bone-description` takes.
+    /// The kind's name in command lines and reports (what [`Self::parse`] reads).
     pub fn name(self) -> &'static str {
         match self {
             BoneDescriptionKind::AxisAngle => "axis-angle",
@@ -41,6 +41,7 @@ impl BoneDescriptionKind {
 
 /// The interface of spec §4.1 for bone rotations.
 pub trait BoneDescriptionType: Sync {
+    /// One bone's description of a loop of rotations.
     type Desc: Clone + Send + Sync;
     /// The description of one loop of delta rotations (uniform samples).
     fn describe(&self, deltas: &[Quat]) -> Self::Desc;
@@ -73,10 +74,12 @@ fn axis_angle(q: Quat) -> (Vec3, f32) {
 #[derive(Clone, Debug, Default)]
 pub struct AxisAngle;
 
-/// Per sample: axis and signed angle.
+/// Per sample: unit axis and angle (the rotation taken with w ≥ 0).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AxisAngleDesc {
+    /// Per sample, the unit rotation axis (x for no rotation).
     pub axes: Vec<Vec3>,
+    /// Per sample, the rotation angle about that axis, radians in [0, π].
     pub angles: Vec<f32>,
 }
 
@@ -168,6 +171,7 @@ impl BoneDescriptionType for AxisAngle {
 /// bend) is kept apart and compared in radians.
 #[derive(Clone, Debug)]
 pub struct RotationSpectral {
+    /// The spectral type comparing and averaging the rotation vector's motion.
     pub motion: Naive,
 }
 
@@ -180,10 +184,12 @@ impl RotationSpectral {
     }
 }
 
-/// Mean rotation vector and the axis-phase description of its zero-mean motion.
+/// Mean rotation vector and the naive spectral description of its zero-mean motion.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RotationSpectralDesc {
+    /// The rotation vector's mean over the loop (a constant bend), radians.
     pub mean: Vec3,
+    /// The naive spectral description of the zero-mean motion around it.
     pub motion: NaiveDesc,
 }
 

@@ -14,6 +14,7 @@ use crate::model::SkeletonModel;
 /// The simplified skeleton as a glTF-shaped rig.
 #[derive(Clone, Debug)]
 pub struct MaterializedRig {
+    /// The simplified nodes, their rest transforms and the resampled clip.
     pub rig: Rig,
     /// Rig node of every model node (None for nodes the foliage no longer needs).
     pub map: Vec<Option<usize>>,

@@ -21,8 +21,11 @@ pub const REPRESENTATIVES: usize = 24;
 /// One node of the skeleton being simplified.
 #[derive(Clone, Debug)]
 pub struct SkNode {
+    /// The node's name, as in the input or made for a new (collapsed) node.
     pub name: String,
+    /// Index of its parent node; None for a root.
     pub parent: Option<usize>,
+    /// Indices of its child nodes.
     pub children: Vec<usize>,
     /// Rest local transform.
     pub rest: Trs,
@@ -89,6 +92,7 @@ impl SkNode {
 pub struct Representative {
     /// Index into `Sampled::foliage`.
     pub foliage: usize,
+    /// How many foliage triangles it stands for (its share of the node's foliage).
     pub weight: f32,
     /// World trajectory in the input's animation.
     pub trajectory: Vec<Vec3>,
@@ -101,6 +105,7 @@ pub struct Representative {
 /// The skeleton with its sampled animation and foliage.
 #[derive(Clone, Debug)]
 pub struct SkeletonModel {
+    /// The nodes: the input's hierarchy, later simplified.
     pub nodes: Vec<SkNode>,
     /// Loop samples of every track.
     pub samples: usize,
@@ -110,6 +115,7 @@ pub struct SkeletonModel {
     pub unbound: Vec<usize>,
     /// World matrices of the input's nodes at every sample, and at rest.
     pub input_world: Vec<Vec<Mat4>>,
+    /// World matrices of the input's nodes at rest.
     pub input_rest: Vec<Mat4>,
 }
 

@@ -22,6 +22,7 @@ use crate::model::SkeletonModel;
 /// What SBCS is asked for.
 #[derive(Clone, Debug)]
 pub struct SkeletonParams {
+    /// How bone rotations are described and compared.
     pub kind: BoneDescriptionKind,
     /// The budget BC: billboard clouds wanted. None: as few as merges that cannot be seen
     /// allow (see `attach_tolerance` and `displacement_tolerance`), with no collapse.
@@ -51,9 +52,11 @@ pub struct CloudSet {
 /// What SBCS did, for `report.json`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct SkeletonReport {
+    /// Name of the bone description type used.
     pub description: String,
     /// The budget BC (None: merges that cannot be seen, `displacement_tolerance`).
     pub budget: Option<usize>,
+    /// The displacement tolerance used (world units).
     pub displacement_tolerance: f32,
     /// Clouds made (common-rotation sets, plus one for unbound foliage).
     pub clouds: usize,
@@ -61,11 +64,13 @@ pub struct SkeletonReport {
     pub foliage_bones: usize,
     /// The fewest clouds CJR alone could reach on the input skeleton (one per sibling group).
     pub cjr_floor: usize,
+    /// Merges CJR made.
     pub merges: usize,
     /// Largest description deviation of a merge CJR made.
     pub max_merge_deviation: f32,
     /// Largest RMS foliage displacement (world units) of a merge CJR made.
     pub max_merge_displacement: f32,
+    /// Collapses made, in order.
     pub collapses: Vec<CollapseRecord>,
     /// Why the budget was not met, naming the skeleton level that stops it (§7.6.2); None
     /// when it was.
@@ -74,7 +79,9 @@ pub struct SkeletonReport {
     /// `attach_tolerance` to reach the budget: the wood follows the input's skeleton and the
     /// foliage its own.
     pub trunk_on_original_skeleton: bool,
+    /// The attachment tolerance used (world units).
     pub attach_tolerance: f32,
+    /// Whether the average-animation-bone improvement was on.
     pub average_bone: bool,
     /// Bones whose animation changed (plus new ones).
     pub bones_changed: usize,
@@ -82,10 +89,12 @@ pub struct SkeletonReport {
     /// and where the simplified skeleton carries it, over the loop (leaves carried rigidly by
     /// the node their cloud follows, as the billboards are).
     pub foliage_error_rms: f32,
+    /// The largest of those distances (world units).
     pub foliage_error_max: f32,
     /// Largest movement (world units) of a leaf relative to the bone whose wood it grew from,
     /// over the loop, in the LOD's rig: 0 when foliage stays attached to its branch.
     pub detachment_max: f32,
+    /// Weighted RMS of that movement (world units).
     pub detachment_rms: f32,
     /// Seconds.
     pub t_simplify: f64,
@@ -94,8 +103,11 @@ pub struct SkeletonReport {
 /// The simplified skeleton and the clouds to build on it.
 #[derive(Clone, Debug)]
 pub struct SimplifiedSkeleton {
+    /// The simplified skeleton as a rig.
     pub rig: MaterializedRig,
+    /// The billboard clouds to build: their foliage and the rig node each follows.
     pub sets: Vec<CloudSet>,
+    /// What SBCS did.
     pub report: SkeletonReport,
 }
 

@@ -21,10 +21,10 @@ use crate::spectrum::Spectrum;
 #[derive(Clone, Debug)]
 pub enum Bins {
     /// Each comparison bins its two spectra together into this many bins, as §4.10 describes
-    /// (a small k-means over frequencies per pair: exact to the text, ~3 µs a comparison).
+    /// (a small k-means over frequencies per pair: exact to the text, but costly per comparison).
     PerPair(usize),
     /// One partition for every comparison, made once from all leaves' spectra (the tree's
-    /// inherent frequencies): the deviation becomes a fixed L1 distance over bins, ~100× faster
+    /// inherent frequencies): the deviation becomes a fixed L1 distance over bins, far faster
     /// and the same for every pair, which k-means over 100k leaves needs.
     Shared(Arc<FrequencyBins>),
 }
@@ -89,7 +89,9 @@ fn axis_spectra(trajectory: &[Vec3]) -> [Spectrum; 3] {
 pub struct Components {
     /// Frequencies, cycles per loop (≥ 1).
     pub frequencies: Vec<usize>,
+    /// Amplitude of each frequency, world units (`frequencies[i]` has `amplitudes[i]`).
     pub amplitudes: Vec<f32>,
+    /// Phase of each frequency, radians (the spectrum's cosine convention).
     pub phases: Vec<f32>,
 }
 
@@ -255,7 +257,10 @@ pub struct Naive {
 /// A naive description: per axis the amplitude and phase of every frequency.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NaiveDesc {
+    /// Per axis (x, y, z), the amplitude of every frequency (index i is frequency i + 1
+    /// cycles per loop).
     pub amplitudes: [Vec<f32>; 3],
+    /// Per axis, the phase of every frequency, radians.
     pub phases: [Vec<f32>; 3],
     /// Samples of the loop the spectra came from.
     pub samples: usize,
@@ -343,6 +348,7 @@ impl DescriptionType for Naive {
 /// brute-force pair search still returns one (the first farthest pair), never NaN.
 #[derive(Clone, Debug)]
 pub struct DominatingAxisType {
+    /// Frequency bins of deviation and average.
     pub bins: Bins,
 }
 
@@ -351,9 +357,15 @@ pub struct DominatingAxisType {
 pub struct AxisDesc {
     /// Unit axis; zero for no motion.
     pub axis: Vec3,
+    /// Amplitude of the motion along the axis at every frequency (index i is frequency
+    /// i + 1 cycles per loop).
     pub amplitudes: Vec<f32>,
+    /// Phase of every frequency, radians.
     pub phases: Vec<f32>,
+    /// Samples of the loop the spectrum came from.
     pub samples: usize,
+    /// The average's binned components (None for a described trajectory, which applies
+    /// its own full spectrum).
     pub components: Option<Components>,
 }
 
@@ -521,12 +533,15 @@ impl DescriptionType for DominatingAxisType {
 /// phase offsets are not kept (the thesis's counterexample; see the tests).
 #[derive(Clone, Debug)]
 pub struct AxisPhase {
+    /// Frequency bins of deviation and average.
     pub bins: Bins,
 }
 
 /// An axis-phase description.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AxisPhaseDesc {
+    /// Per axis (x, y, z), the amplitude of every frequency (index i is frequency i + 1
+    /// cycles per loop).
     pub amplitudes: [Vec<f32>; 3],
     /// φ_x − φ_y per frequency.
     pub phase_xy: Vec<f32>,
@@ -534,6 +549,7 @@ pub struct AxisPhaseDesc {
     pub phase_xz: Vec<f32>,
     /// φ_x per frequency (used only by `apply`, never by deviation).
     pub phase_x: Vec<f32>,
+    /// Samples of the loop the spectra came from.
     pub samples: usize,
 }
 
@@ -650,8 +666,11 @@ impl DescriptionType for AxisPhase {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum SpectralKind {
+    /// [`Naive`]: per-axis amplitudes and phases.
     Naive,
+    /// [`DominatingAxisType`]: one axis and the spectrum along it.
     DominatingAxis,
+    /// [`AxisPhase`]: amplitudes and phase relationships between the axes.
     AxisPhase,
 }
 

@@ -1,5 +1,5 @@
 //! The description types' failure modes and known answers (spec animated-billboard-clouds §4.6–
-//! 4.10, issue 6): time offsets, opposite lines, the axis-phase counterexample, circular
+//! 4.10): time offsets, opposite lines, the axis-phase counterexample, circular
 //! motion, no motion, and frequency bins.
 
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_3, TAU};
