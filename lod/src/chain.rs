@@ -11,17 +11,19 @@ use frond_billboard::plane_search::SearchParams;
 use frond_render::Renderer;
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{Bounds, Length, Part, Rig, SampleOptions, Sampled, Tree, sample};
-use serde::Serialize;
 
 use crate::contract::{AnimatedBillboardCloud, LoopClock};
+use crate::cost_budget::{ATLAS_TEXELS_PER_SQUARED_PIXEL, TRIANGLES_PER_SQUARED_PIXEL};
+pub use crate::cost_budget::{LodBudget, MAX_JOINTS, joints_for_screen};
 use crate::error::LodError;
 use crate::joint_budget::{AnimationCount, BillboardAnimation, JointCap, count};
 use crate::method::{BuildContext, Foliage, Method, MethodReport};
-use crate::methods::cards::{is_card_foliage, triangle_area};
+use crate::methods::cards::is_card_foliage;
 use crate::motion_budget::{ScreenBudget, apply_budget};
+use crate::part_mesh::{part_mesh, triangle_area};
 use crate::report::{DroppedReport, LodEntry, LodTimings};
 use crate::screen_budget::{LodLevel, lod_levels};
-use crate::texture_budget::{ImageSizes, lod_image_sizes, parts_image_bytes};
+use crate::texture_budget::{ImageSizes, atlas_side, lod_image_sizes, parts_image_bytes};
 
 /// How the static clouds of every LOD are searched and baked (improved-billboard-cloud §2–4).
 #[derive(Clone, Debug, PartialEq)]
@@ -230,19 +232,7 @@ pub fn build_chain(
     })
 }
 
-/// Most skin joints of any LOD: 8-bit joint indices (Unreal) and three.js's WebGPU renderer
-/// and Bevy draw no more.
-pub const MAX_JOINTS: usize = 256;
-
-/// Joint budget of a LOD `screen_height` pixels high: one joint per two pixels of height
-/// (60 px: 30 joints, 200 px: 100), the constant chosen so that oak_dense's far LODs meet 32 and
-/// 128 joints (issue 17) while every motion that moves a leaf half a pixel still had a joint
-/// of its own at 600 px on the shared trees. A cap over the half-pixel rule, not a promise.
-pub fn joints_for_screen(screen_height: f32) -> usize {
-    (screen_height / 2.0).ceil().max(1.0) as usize
-}
-
-/// What the previous LOD cost: no later LOD may cost more (the monotone rule; issue 17).
+/// What the previous LOD cost: no later LOD may cost more (the monotone rule).
 #[derive(Clone, Copy, Debug)]
 struct Spent {
     /// LOD0's share of wood in its triangles: each LOD's triangle budget is split so.
@@ -253,50 +243,6 @@ struct Spent {
     /// Alpha-tested area (world units²): overdraw.
     alpha_tested_area: f64,
     animation: AnimationCount,
-}
-
-/// What one billboard LOD may spend, from the hard limits, the previous LOD and its screen
-/// height (in that order of precedence).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct LodBudget {
-    pub triangles: usize,
-    /// Wood triangles (LOD0's share of wood in its triangles).
-    pub wood_triangles: usize,
-    pub joints: usize,
-    pub channels: usize,
-    /// Decoded texture bytes (atlas and wood maps).
-    pub texture_bytes: usize,
-    /// Alpha-tested area (world units², cards or billboards; `null` when unbounded): the
-    /// previous LOD's, so that no LOD asks for more overdraw. Card LODs keep within it;
-    /// billboard methods do not yet control their quads' area, and `frond lod` warns when a
-    /// written LOD exceeds its predecessor's.
-    pub alpha_tested_area: f64,
-}
-
-/// Atlas texels per squared pixel of screen height: a tree `H` pixels high covers about
-/// `0.6·H²` pixels, and its billboards overlap (depth complexity 5 to 25 on the shared trees at
-/// 200 px), so 16 texels per `H²` is about one texel per pixel of every layer.
-pub const ATLAS_TEXELS_PER_SQUARED_PIXEL: f32 = 16.0;
-
-/// Triangles per squared pixel of screen height: a tree `H` pixels high covers about `0.6·H²`
-/// pixels, so 2·H² is three triangles per covered pixel. More only draws sub-pixel triangles,
-/// which GPUs shade in 2×2 quads (four times over) and which change nothing a viewer sees. It
-/// binds only far LODs of large trees: oak_dense's 60 px LOD (7,200 of 16,020 triangles; its
-/// file 1.9 MB before, the issue's target 1 MB).
-pub const TRIANGLES_PER_SQUARED_PIXEL: f32 = 2.0;
-
-impl LodBudget {
-    /// No budget but the hard limits (at most `joints` per skin).
-    fn hard_limits_only(joints: usize) -> LodBudget {
-        LodBudget {
-            triangles: usize::MAX,
-            wood_triangles: usize::MAX,
-            joints,
-            channels: usize::MAX,
-            texture_bytes: usize::MAX,
-            alpha_tested_area: f64::INFINITY,
-        }
-    }
 }
 
 impl Spent {
@@ -395,17 +341,6 @@ fn meshes_count(lod0: &ChainLod) -> AnimationCount {
         joints: joint.iter().filter(|&&j| j).count() + usize::from(static_joint),
         channels: rig.clips.iter().map(|c| c.channels.len()).sum(),
     }
-}
-
-/// The tree's wood or foliage with bones as rig node indices.
-pub(crate) fn part_mesh(tree: &Tree, part: Part) -> WoodMesh {
-    let mut m = WoodMesh::from_tree_part(tree, part);
-    for b in m.bones.iter_mut().flatten() {
-        if *b != NO_BONE {
-            *b = tree.bones[*b as usize].node as u32;
-        }
-    }
-    m
 }
 
 /// Re-maps node indices after a rig was pruned.
@@ -525,12 +460,6 @@ fn dropped_clip_reason(cloud: &AnimatedBillboardCloud, tree: &Tree, c: usize) ->
         "{}: {what} from clip '{from}' only",
         cloud.rig.clips[c].name
     )
-}
-
-/// The side of a square atlas of at most `texels` texels (a multiple of 4, at least 64).
-pub(crate) fn atlas_side(texels: usize) -> u32 {
-    let side = (texels as f64).sqrt().floor() as u32;
-    (side / 4 * 4).clamp(64, frond_billboard::bake::MAX_ATLAS_SIDE)
 }
 
 /// Atlas texels a billboard needs at least: an 8×8 texture with 2 texels of padding around

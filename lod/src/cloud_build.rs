@@ -17,13 +17,13 @@ use frond_billboard::{Plane, Quad, TriangleSoup, source_copy};
 use frond_scene::Rig;
 use frond_scene::rigid_fit::rigid_fit;
 
-use crate::chain::atlas_side;
 use crate::contract::{
     AnimatedBillboard, AnimatedBillboardCloud, BillboardTexture, LoopClock, RigidMotion,
     input_textured_mesh,
 };
 use crate::error::LodError;
 use crate::method::{BuildContext, Foliage, MethodName, MethodOutput};
+use crate::texture_budget::atlas_side;
 use crate::texture_budget::{lod_image_sizes, parts_image_bytes};
 
 /// How a cluster's billboards move.

@@ -7,11 +7,13 @@
 pub mod chain;
 pub mod cloud_build;
 pub mod contract;
+pub mod cost_budget;
 pub mod error;
 pub mod joint_budget;
 pub mod method;
 pub mod methods;
 pub mod motion_budget;
+mod part_mesh;
 pub mod report;
 pub mod screen_budget;
 pub mod switching;

@@ -43,7 +43,7 @@ pub struct LodEntry {
     /// asks for.
     pub alpha_tested_area_ratio: Option<f64>,
     /// What the LOD was allowed to spend (None for LOD0).
-    pub budget: Option<crate::chain::LodBudget>,
+    pub budget: Option<crate::cost_budget::LodBudget>,
     /// The LOD's coverage error at its own screen height, measured on the written file (None
     /// for LOD0, or when `frond lod --no-measure` skipped it).
     pub error: Option<MeasuredError>,

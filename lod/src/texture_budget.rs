@@ -188,6 +188,12 @@ pub fn parts_image_bytes(tree: &Tree, parts: &[WoodMesh], sizes: &ImageSizes) ->
         .sum()
 }
 
+/// The side of a square atlas of at most `texels` texels (a multiple of 4, at least 64).
+pub(crate) fn atlas_side(texels: usize) -> u32 {
+    let side = (texels as f64).sqrt().floor() as u32;
+    (side / 4 * 4).clamp(64, frond_billboard::bake::MAX_ATLAS_SIDE)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

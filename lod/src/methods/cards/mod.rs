@@ -1,11 +1,14 @@
 //! `cards`: the input's own leaf cards, thinned (issue 17 item 6, the *card LOD*; SpeedTree's
 //! leaf reduction and ez-tree's LODs do the same): the cards that add least to the tree's
 //! silhouette at the LOD's pixel size are dropped until the rest fit the LOD's triangle
-//! budget ([`crate::methods::card_coverage`]), and the survivors are grown about their centres
+//! budget ([`coverage`]), and the survivors are grown about their centres
 //! by the scale that brings their coverage closest to the input's. Cards are first trimmed to
-//! one triangle where their texture allows ([`crate::methods::card_trim`]): half the
+//! one triangle where their texture allows ([`trim`]): half the
 //! triangles, so twice the cards within a budget. The cards stay
 //! skinned as in the input and share its leaf material and texture: no bake, no atlas.
+
+pub mod coverage;
+pub mod trim;
 
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
@@ -15,11 +18,11 @@ use serde::Serialize;
 use frond_scene::wood::WoodMesh;
 use frond_scene::{Part, Rig, Tree};
 
-use crate::chain::part_mesh;
 use crate::error::LodError;
 use crate::method::{BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput};
-use crate::methods::card_coverage::{CardCoverage, card_centre, card_vertices};
-use crate::methods::card_trim::trim_cards;
+use crate::part_mesh::{part_mesh, triangle_area};
+use coverage::{CardCoverage, card_centre, card_vertices};
+use trim::trim_cards;
 
 /// The `cards` method; it has no options.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -40,7 +43,7 @@ pub struct CardFoliage {
 pub struct CardReport {
     /// Cards of the input (connected pieces of foliage triangles).
     pub cards: usize,
-    /// Cards drawn as one trimmed triangle ([`crate::methods::card_trim`]).
+    /// Cards drawn as one trimmed triangle ([`trim`]).
     pub trimmed: usize,
     /// Blended cards left as quads within the triangle budget: they bend when posed, which
     /// one triangle cannot follow.
@@ -104,13 +107,6 @@ pub fn is_card_foliage(tree: &Tree) -> bool {
     }
     let cards = pieces.iter().filter(|p| p.len() <= CARD_TRIANGLES).count();
     10 * cards >= 9 * pieces.len()
-}
-
-/// Area of triangle `t` of primitive `p`.
-pub(crate) fn triangle_area(mesh: &WoodMesh, p: usize, t: usize) -> f32 {
-    let i = &mesh.primitives[p].indices[3 * t..3 * t + 3];
-    let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[i[k] as usize]);
-    0.5 * (b - a).cross(c - a).length()
 }
 
 /// Scales tried for the kept cards, from 1 to `√(all cards' area / kept area)` (the scale that

@@ -22,7 +22,7 @@ use frond_scene::sampling::world_at;
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{AlphaMode, Tree};
 
-use crate::methods::card_coverage::card_vertices;
+use super::coverage::card_vertices;
 
 /// Directions of the triangle's sides searched: every 360/64 = 5.6°.
 const DIRECTIONS: usize = 64;
