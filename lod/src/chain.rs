@@ -12,16 +12,16 @@ use frond_render::Renderer;
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{Bounds, Length, Part, Rig, SampleOptions, Sampled, Tree, sample};
 
-use crate::contract::{AnimatedBillboardCloud, LoopClock};
+use crate::contract::{AnimatedBillboardCloud, CardFoliage, LoopClock};
 use crate::cost_budget::{ATLAS_TEXELS_PER_SQUARED_PIXEL, TRIANGLES_PER_SQUARED_PIXEL};
 pub use crate::cost_budget::{LodBudget, MAX_JOINTS, joints_for_screen};
 use crate::error::LodError;
 use crate::joint_budget::{AnimationCount, BillboardAnimation, JointCap, count};
-use crate::method::{BuildContext, Foliage, Method, MethodReport};
+use crate::method_api::{BuildContext, BuildTimings, Foliage, Method, MethodName, MethodSection};
 use crate::methods::cards::is_card_foliage;
 use crate::motion_budget::{ScreenBudget, apply_budget};
 use crate::part_mesh::{part_mesh, triangle_area};
-use crate::report::{DroppedReport, LodEntry, LodTimings};
+use crate::report::LodEntry;
 use crate::screen_budget::{LodLevel, lod_levels};
 use crate::texture_budget::{ImageSizes, atlas_side, lod_image_sizes, parts_image_bytes};
 
@@ -356,43 +356,6 @@ fn remap(m: &mut WoodMesh, map: &[Option<usize>]) {
     }
 }
 
-/// An empty report line for a LOD.
-pub(crate) fn entry(method: String, method_reason: String) -> LodEntry {
-    LodEntry {
-        file: String::new(),
-        mapping: None,
-        screen_height: None,
-        pixel: None,
-        epsilon: None,
-        method,
-        method_reason,
-        triangles: 0,
-        wood_triangles: 0,
-        billboards: 0,
-        input_textured_billboards: 0,
-        bones: 0,
-        texture_bytes: 0,
-        atlas: None,
-        texels_per_unit: None,
-        density_reduced: false,
-        cost: None,
-        switch: None,
-        alpha_tested_area_ratio: None,
-        error: None,
-        budget: None,
-        clips: Vec::new(),
-        dropped: DroppedReport::default(),
-        vat: None,
-        spectral_files: None,
-        animation_bytes: 0,
-        vat_equivalent_bytes: None,
-        spectral: None,
-        skeleton: None,
-        cards: None,
-        timings_s: LodTimings::default(),
-    }
-}
-
 /// LOD0: the input's wood (`wood`, bones as tree nodes) and foliage as one skinned mesh over its bones, every clip.
 fn lod0(tree: &Tree, wood: &WoodMesh) -> ChainLod {
     let mut rig = tree.rig.clone();
@@ -405,7 +368,7 @@ fn lod0(tree: &Tree, wood: &WoodMesh) -> ChainLod {
     let map = rig.retain(&keep);
     remap(&mut wood, &map);
     remap(&mut foliage, &map);
-    let mut e = entry("input".into(), "LOD0 is the input tree, rewritten".into());
+    let mut e = LodEntry::new(MethodName::INPUT, "LOD0 is the input tree, rewritten");
     e.triangles = wood.triangles() + foliage.triangles();
     e.wood_triangles = wood.triangles();
     let parts = vec![wood, foliage];
@@ -595,7 +558,7 @@ fn billboard_lod(
         level.wood_error / WOOD_REFINE_FLOOR,
         room,
     );
-    let mut e = entry(method.name().name().into(), reason.into());
+    let mut e = LodEntry::new(method.name(), reason);
     e.screen_height = Some(level.screen_height);
     e.pixel = Some(level.pixel);
     e.epsilon = Some(level.epsilon);
@@ -627,10 +590,17 @@ fn billboard_lod(
             wood_lod,
             budget,
             built.timings,
-            built.report,
+            built.section,
             e,
         )),
-        Foliage::Cards(cards) => Ok(card_lod(&shared, cards, wood_lod, &budget, e)),
+        Foliage::Cards(cards) => Ok(card_lod(
+            &shared,
+            cards,
+            wood_lod,
+            &budget,
+            built.section,
+            e,
+        )),
     }
 }
 
@@ -646,9 +616,10 @@ struct LodShared<'a> {
 /// A card LOD: the thinned cards and the wood in one skinned mesh, the joint budget applied.
 fn card_lod(
     shared: &LodShared,
-    mut cards: crate::methods::cards::CardFoliage,
+    mut cards: CardFoliage,
     wood_lod: WoodMesh,
     budget: &ScreenBudget,
+    section: Option<MethodSection>,
     mut e: LodEntry,
 ) -> ChainLod {
     let t0 = Instant::now();
@@ -692,7 +663,7 @@ fn card_lod(
         .map(|&c| cards.rig.clips[c].name.clone())
         .collect();
     e.dropped.budget = dropped;
-    e.cards = Some(cards.report.clone());
+    e.sections.extend(section);
     e.timings_s.budget = t0.elapsed().as_secs_f64();
     ChainLod {
         content: LodContent::Foliage(Foliage::Cards(cards)),
@@ -709,8 +680,8 @@ fn cloud_lod(
     mut cloud: AnimatedBillboardCloud,
     mut wood_lod: WoodMesh,
     mut budget: ScreenBudget,
-    timings: crate::cloud_build::BuildTimings,
-    report: MethodReport,
+    timings: BuildTimings,
+    section: Option<MethodSection>,
     mut e: LodEntry,
 ) -> ChainLod {
     let (tree, sampled) = (shared.tree, shared.sampled);
@@ -748,11 +719,7 @@ fn cloud_lod(
         .filter(|c| !clips.contains(c))
         .map(|c| dropped_clip_reason(&cloud, tree, c))
         .collect();
-    match report {
-        MethodReport::None => {}
-        MethodReport::Spectral(r) => e.spectral = Some(r),
-        MethodReport::Skeleton(r) => e.skeleton = Some(r),
-    }
+    e.sections.extend(section);
     e.timings_s.build = timings;
     e.timings_s.budget = (t3 - t2).as_secs_f64();
     ChainLod {

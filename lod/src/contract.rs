@@ -1,6 +1,6 @@
-//! The contract between clustering and export: an animated billboard cloud (spec
-//! animated-billboard-clouds §1.4). Every clustering method (per-bone, static, spectral,
-//! skeleton) produces one; `frond-export` writes it without knowing the method.
+//! The contract between clustering and export: a LOD's foliage, an animated billboard cloud
+//! (spec animated-billboard-clouds §1.4) or the input's own leaf cards thinned. Every method
+//! produces one of the two ([`Foliage`]); `frond-export` writes it without knowing the method.
 //!
 //! Motion of a billboard, in world space at loop time `t`:
 //! `corners(t) = W_b(t) · Rest_b⁻¹ · M(t) · quad.corners()` when it follows rig node `b`, or
@@ -13,6 +13,24 @@ use frond_scene::wood::{NO_BONE, WoodMesh, WoodPrimitive};
 use frond_scene::{Rig, Tree};
 use frond_spectral::description::Components;
 use glam::{Affine3A, Mat4, Vec2, Vec3};
+
+/// A LOD's foliage as a method built it: export writes whichever it gets.
+#[derive(Clone, Debug)]
+pub enum Foliage {
+    /// Billboards baked into one atlas, each moving rigidly (spec §1.4).
+    Cloud(AnimatedBillboardCloud),
+    /// The input's own leaf cards, thinned and skinned as in the input.
+    Cards(CardFoliage),
+}
+
+/// Thinned leaf cards, ready to be skinned like the input's.
+#[derive(Clone, Debug)]
+pub struct CardFoliage {
+    /// The kept cards, scaled, bones as rig node indices, the input's foliage materials.
+    pub mesh: WoodMesh,
+    /// The skeleton the cards follow: the tree's, until the chain's budget prunes it.
+    pub rig: Rig,
+}
 
 /// When a billboard's own motion is sampled: uniformly over one period of one clip.
 #[derive(Clone, Debug, PartialEq)]

@@ -25,7 +25,7 @@ use frond_scene::rigid_fit::rigid_fit;
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{Rig, Tree};
 use glam::{Affine3A, Mat4, Vec3};
-use serde::Serialize;
+use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::contract::{AnimatedBillboardCloud, RigidMotion};
 
@@ -51,7 +51,7 @@ pub enum BillboardAnimation {
 }
 
 /// What the joint budget merged.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct JointMerges {
     /// Rig nodes collapsed into an ancestor because their motion moved nothing half a pixel.
     pub nodes_collapsed_unseen: usize,
@@ -60,8 +60,15 @@ pub struct JointMerges {
     /// Own motions replaced by following a rig node (each group of billboards sharing one).
     pub motions_attached: usize,
     /// Largest error of a merge (world units): how far a carried point strays from where its
-    /// own motion put it.
+    /// own motion put it; infinite (written `null`) when the budget forced a merge no node
+    /// could carry.
+    #[serde(deserialize_with = "null_as_infinite")]
     pub max_error: f32,
+}
+
+/// Reads an error written `null` (JSON has no infinity) as infinite.
+fn null_as_infinite<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
+    Ok(Option::<f32>::deserialize(d)?.unwrap_or(f32::INFINITY))
 }
 
 /// The skin joints and animated channels a LOD would be written with.

@@ -11,11 +11,13 @@ pub mod cost_budget;
 pub mod error;
 pub mod joint_budget;
 pub mod method;
+pub mod method_api;
 pub mod methods;
 pub mod motion_budget;
 mod part_mesh;
 pub mod report;
 pub mod screen_budget;
+pub mod section_value;
 pub mod switching;
 pub mod texture_budget;
 
@@ -27,11 +29,14 @@ pub use contract::{
     AnimatedBillboard, AnimatedBillboardCloud, BillboardTexture, LoopClock, RigidMotion,
 };
 pub use error::LodError;
-pub use method::{
-    BuildContext, ClusteringMethod, Foliage, METHOD_NAMES, Method, MethodName, MethodOutput,
+pub use method::{auto_method, ignored_options};
+pub use method_api::{
+    BuildContext, ClusteringMethod, Foliage, IgnoredOptions, Method, MethodChoice, MethodError,
+    MethodName, MethodOptions, MethodOutput, MethodPlugin, MethodSection, Registry,
     SkeletonOptions, SpectralOptions,
 };
-pub use report::{DroppedReport, LodEntry, LodReport, LodTimings};
+pub use methods::{METHOD_NAMES, REGISTRY};
+pub use report::{DroppedReport, LodEntry, LodReport, LodTimings, ReportTimings};
 pub use screen_budget::{LodLevel, lod_levels, screen_height_at};
 
 /// The description type `--method spectral` uses.

@@ -176,7 +176,7 @@ impl LodArgs {
         let build = &self.build;
         Ok(LodRequest {
             chain: ChainRequest {
-                method: Method::new(name, spectral, skeleton),
+                method: Method::new(name, spectral, skeleton)?,
                 screen_heights,
                 pixel_error: self.pixel_error,
                 epsilon: self.epsilon,
@@ -344,7 +344,7 @@ impl LodArgs {
                 report.combined,
                 report.lods.len(),
                 frond_lod::report::report_name(&report.name),
-                report.timings_s["total"].as_f64().unwrap_or(0.0)
+                report.timings_s.total
             );
             if let Some(page) = report
                 .files
@@ -353,7 +353,7 @@ impl LodArgs {
             {
                 crate::say!(
                     "{page}: the preview ({:.2} s); its live view: frond view {}",
-                    report.timings_s["preview"].as_f64().unwrap_or(0.0),
+                    report.timings_s.preview.unwrap_or(0.0),
                     self.output.display()
                 );
             }

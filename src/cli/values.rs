@@ -335,7 +335,7 @@ mod tests {
             assert_eq!(MethodArg::parse(m.text()), Some(*m));
             assert_eq!(MethodName::parse(m.text()), Some(m.method()));
         }
-        assert_eq!(MethodArg::AUTO.method(), MethodName::Auto);
+        assert_eq!(MethodArg::AUTO.method(), MethodName::AUTO);
         for (_, m) in METHOD_NAMES {
             assert_eq!(MethodArg::named(*m).method(), *m);
             assert_eq!(MethodArg::named(*m).text(), m.name());

@@ -6,6 +6,7 @@
 //! one and carries only the motion relative to it.
 
 use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
 use std::time::Instant;
 
 use frond_scene::{Sampled, Tree};
@@ -16,20 +17,65 @@ use frond_spectral::kmeans::cluster_descriptions;
 use frond_spectral::zones::{animation_zones, mean_trajectory};
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use crate::cloud_build::{
-    BuildTimings, Driver, FoliageCluster, build_animated_cloud, sampled_worlds,
-};
+use crate::cloud_build::{Driver, FoliageCluster, build_animated_cloud, sampled_worlds};
 use crate::contract::{AnimatedBillboardCloud, RigidMotion, SpectralMotion};
 use crate::error::LodError;
-use crate::method::{
-    BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput, MethodReport,
-    SpectralOptions,
+use crate::method_api::{
+    BuildContext, BuildTimings, ClusteringMethod, Foliage, MethodError, MethodName, MethodOutput,
+    MethodPlugin, MethodSection, OptionUse, SpectralOptions,
 };
 use frond_billboard::Quad;
 use frond_billboard::cloud::CloudError;
 use frond_scene::rigid_fit::rigid_fit;
+
+/// The name of spectral clustering with description type `kind`.
+pub const fn name_of(kind: SpectralKind) -> MethodName {
+    match kind {
+        SpectralKind::Naive => MethodName::new("spectral-naive"),
+        SpectralKind::DominatingAxis => MethodName::new("spectral-dominating-axis"),
+        SpectralKind::AxisPhase => MethodName::new("spectral-axis-phase"),
+    }
+}
+
+/// The description types, as the names list them.
+const KINDS: [SpectralKind; 3] = [
+    SpectralKind::Naive,
+    SpectralKind::DominatingAxis,
+    SpectralKind::AxisPhase,
+];
+
+/// The key of the LOD report entry that [`SpectralReport`] is written under.
+pub const SECTION: &str = "spectral";
+
+/// Spectral clustering as the registry lists it: `spectral` alone names the default
+/// description type ([`crate::DEFAULT_SPECTRAL`]).
+pub const PLUGIN: MethodPlugin = MethodPlugin {
+    names: &[
+        ("spectral", name_of(crate::DEFAULT_SPECTRAL)),
+        ("spectral-naive", name_of(SpectralKind::Naive)),
+        (
+            "spectral-dominating-axis",
+            name_of(SpectralKind::DominatingAxis),
+        ),
+        ("spectral-axis-phase", name_of(SpectralKind::AxisPhase)),
+    ],
+    configure: |name, options, _| {
+        let kind = KINDS
+            .into_iter()
+            .find(|&k| name_of(k) == name)
+            .ok_or_else(|| MethodError::Unknown(name.to_string()))?;
+        Ok(Arc::new(SpectralOptions {
+            kind,
+            ..options.spectral.clone()
+        }))
+    },
+    uses: |_| OptionUse {
+        spectral: true,
+        skeleton: false,
+    },
+};
 
 /// What SCA is asked for.
 #[derive(Clone, Debug)]
@@ -49,8 +95,8 @@ pub struct SpectralParams {
     pub shared_bone: bool,
 }
 
-/// What SCA did, for `report.json`.
-#[derive(Clone, Debug, Default, Serialize)]
+/// What SCA did: the `spectral` section of a spectral LOD's report entry.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SpectralReport {
     pub kind: String,
     /// Clusters k after capping.
@@ -143,7 +189,7 @@ impl SpectralOptions {
 
 impl ClusteringMethod for SpectralOptions {
     fn name(&self) -> MethodName {
-        MethodName::Spectral(self.kind)
+        name_of(self.kind)
     }
 
     fn build(&self, ctx: &BuildContext) -> Result<MethodOutput, LodError> {
@@ -151,7 +197,7 @@ impl ClusteringMethod for SpectralOptions {
         Ok(MethodOutput {
             foliage: Foliage::Cloud(cloud),
             timings,
-            report: MethodReport::Spectral(report),
+            section: Some(MethodSection::new(SECTION, &report)?),
         })
     }
 }

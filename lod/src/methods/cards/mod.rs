@@ -10,36 +10,45 @@
 pub mod coverage;
 pub mod trim;
 
+use std::sync::Arc;
+
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use frond_scene::wood::WoodMesh;
 use frond_scene::{Part, Rig, Tree};
 
+pub use crate::contract::CardFoliage;
 use crate::error::LodError;
-use crate::method::{BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput};
+use crate::method_api::{
+    BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput, MethodPlugin, MethodSection,
+    uses_no_options,
+};
 use crate::part_mesh::{part_mesh, triangle_area};
 use coverage::{CardCoverage, card_centre, card_vertices};
 use trim::trim_cards;
+
+/// `cards`' name.
+pub const NAME: MethodName = MethodName::new("cards");
+
+/// The key of the LOD report entry that [`CardReport`] is written under.
+pub const SECTION: &str = "cards";
+
+/// `cards` as the registry lists it.
+pub const PLUGIN: MethodPlugin = MethodPlugin {
+    names: &[("cards", NAME)],
+    configure: |_, _, _| Ok(Arc::new(Cards)),
+    uses: uses_no_options,
+};
 
 /// The `cards` method; it has no options.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Cards;
 
-/// Thinned leaf cards, ready to be skinned like the input's.
-#[derive(Clone, Debug)]
-pub struct CardFoliage {
-    /// The kept cards, scaled, bones as rig node indices, the input's foliage materials.
-    pub mesh: WoodMesh,
-    /// The skeleton the cards follow: the tree's, until the chain's budget prunes it.
-    pub rig: Rig,
-    pub report: CardReport,
-}
-
-/// What thinning did.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+/// What thinning did: the `cards` section of a card LOD's report entry.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct CardReport {
     /// Cards of the input (connected pieces of foliage triangles).
     pub cards: usize,
@@ -48,6 +57,7 @@ pub struct CardReport {
     /// Blended cards left as quads within the triangle budget: they bend when posed, which
     /// one triangle cannot follow.
     pub kept_as_quads: usize,
+    /// Cards kept within the LOD's triangle budget.
     pub kept: usize,
     /// Linear scale of every kept card about its centre.
     pub scale: f32,
@@ -55,7 +65,7 @@ pub struct CardReport {
 
 impl ClusteringMethod for Cards {
     fn name(&self) -> MethodName {
-        MethodName::Cards
+        NAME
     }
 
     /// Cards keep the input's own skinning: nothing of the sampled loop is read.
@@ -73,12 +83,13 @@ impl ClusteringMethod for Cards {
             triangles: max_triangles,
             area: ctx.max_alpha_tested_area.unwrap_or(f64::INFINITY),
         };
-        let mut cards = thin_cards(ctx.tree, &foliage, &budget, ctx.level.pixel, ctx.seed);
+        let (mut cards, report) =
+            thin_cards(ctx.tree, &foliage, &budget, ctx.level.pixel, ctx.seed);
         cards.rig = ctx.tree.rig.clone();
         Ok(MethodOutput {
             foliage: Foliage::Cards(cards),
             timings: Default::default(),
-            report: Default::default(),
+            section: Some(MethodSection::new(SECTION, &report)?),
         })
     }
 }
@@ -118,14 +129,14 @@ const SCALE_STEPS: usize = 5;
 /// pixel, at most `max_triangles` triangles of them (at least one card; see
 /// [`CardCoverage::thin`]), each scaled about its centre by the scale whose coverage is
 /// closest to the input's ([`CardCoverage::best_scale`]). `seed` orders cards that are equally
-/// redundant.
+/// redundant. Returns the cards (over no rig yet) and what thinning did.
 pub fn thin_cards(
     tree: &Tree,
     foliage: &WoodMesh,
     budget: &CardBudget,
     pixel: f32,
     seed: u64,
-) -> CardFoliage {
+) -> (CardFoliage, CardReport) {
     let max_triangles = budget.triangles;
     let trimmed = trim_cards(tree, foliage, max_triangles);
     let foliage = &trimmed.mesh;
@@ -191,15 +202,16 @@ pub fn thin_cards(
         }
     }
     mesh.primitives.retain(|p| !p.indices.is_empty());
-    CardFoliage {
+    let foliage = CardFoliage {
         mesh: mesh.compacted(),
         rig: Rig::default(),
-        report: CardReport {
-            cards: cards.len(),
-            trimmed: trimmed.cards,
-            kept_as_quads: trimmed.kept_as_quads,
-            kept,
-            scale,
-        },
-    }
+    };
+    let report = CardReport {
+        cards: cards.len(),
+        trimmed: trimmed.cards,
+        kept_as_quads: trimmed.kept_as_quads,
+        kept,
+        scale,
+    };
+    (foliage, report)
 }
