@@ -47,6 +47,7 @@ pub struct CloudOptions {
 /// What a chain is built for.
 #[derive(Clone, Debug)]
 pub struct ChainRequest {
+    /// The method that builds each LOD's foliage (or the rule that picks one per LOD).
     pub method: Method,
     /// Screen heights (pixels) of LOD1, LOD2, ..., nearest first.
     pub screen_heights: Vec<f32>,
@@ -57,6 +58,7 @@ pub struct ChainRequest {
     /// How the files animate billboards (spectral coefficients: the auto rule picks spectral
     /// motion for farther LODs; own motions cost joints only as skin joints).
     pub animation: BillboardAnimation,
+    /// Seed of the plane searches and every random choice (each LOD adds its index).
     pub seed: u64,
     /// Most triangles a LOD keeps of the one before it (0.5: half).
     pub triangle_ratio: f32,
@@ -68,24 +70,24 @@ pub struct ChainRequest {
     pub samples: usize,
     /// Clip to sample (None: the first).
     pub clip: Option<String>,
+    /// How every LOD's static clouds are searched and baked.
     pub cloud: CloudOptions,
 }
 
 /// What a LOD draws: LOD0 the input's rig, a billboard LOD its foliage (whose rig the
 /// budget pruned).
 #[derive(Clone, Debug)]
-#[expect(
-    clippy::large_enum_variant,
-    reason = "one per LOD of a chain, a handful in all: boxing would only add indirection"
-)]
 pub enum LodContent {
+    /// LOD0: the input's own rig, every clip (its meshes are the LOD's parts).
     Input(Rig),
+    /// A built LOD's foliage, over the rig it carries.
     Foliage(Foliage),
 }
 
 /// One LOD of a chain, ready to write.
 #[derive(Clone, Debug)]
 pub struct ChainLod {
+    /// What the LOD draws besides its parts.
     pub content: LodContent,
     /// Skinned meshes with the tree's materials, bones as rig node indices: LOD0's wood and
     /// foliage, a billboard LOD's simplified wood.
@@ -120,9 +122,11 @@ impl ChainLod {
 pub struct Chain {
     /// The loop the chain was built from, without its poses ([`Sampled::into_loop`]).
     pub sampled: Sampled,
+    /// LOD0 (the input) first, then one LOD per screen height, nearest first.
     pub lods: Vec<ChainLod>,
-    /// Seconds spent sampling the loop and building the LODs.
+    /// Seconds spent sampling the loop.
     pub t_sample: f64,
+    /// Seconds spent building the LODs.
     pub t_build: f64,
 }
 
@@ -458,8 +462,7 @@ const WOOD_REFINE_STEPS: usize = 6;
 /// `wood` at the finest error between `floor` and `current`'s (mesh, error, thin pieces
 /// dropped) that fits in `max_triangles`, found by bisection of the error's logarithm; branches
 /// narrower than the error are re-admitted. A near LOD whose cards need fewer triangles than
-/// it may draw spends them on its branches (pine_medium at 600 px: coverage error 0.0052 with
-/// the wood at one pixel).
+/// it may draw spends them on its branches.
 fn refine_wood(
     wood: &WoodMesh,
     current: (WoodMesh, f32, usize),

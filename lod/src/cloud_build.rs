@@ -45,6 +45,7 @@ pub enum Driver {
 pub struct FoliageCluster {
     /// Indices into `Sampled::foliage` (and so into its trajectories).
     pub members: Vec<usize>,
+    /// How the cluster's billboards move.
     pub driver: Driver,
 }
 

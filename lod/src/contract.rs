@@ -37,6 +37,7 @@ pub struct CardFoliage {
 pub struct LoopClock {
     /// Index into [`Rig::clips`], or None for a tree without clips.
     pub clip: Option<usize>,
+    /// Time of the first sample, seconds into the clip.
     pub start: f32,
     /// Loop length in seconds (0 for a static tree).
     pub period: f32,
@@ -204,7 +205,9 @@ pub enum BillboardTexture {
     /// [`frond_billboard::source_copy()`]). `texcoords[n]` holds the corners' `TEXCOORD_n` as the
     /// input stores them (no transform applied; empty for a tree without texture coordinates).
     Input {
+        /// The input material whose texture the billboard samples.
         material: usize,
+        /// The corners' texture coordinates, one set per `TEXCOORD_n`.
         texcoords: Vec<[Vec2; 4]>,
     },
 }
@@ -235,10 +238,13 @@ pub struct AnimatedBillboardCloud {
     /// Plane tolerance its planes were searched with (world units): the LOD's ε, or wider
     /// when its billboard budget asked for fewer planes.
     pub epsilon: f32,
+    /// The billboards, each with its quad, texture and motion.
     pub billboards: Vec<AnimatedBillboard>,
     /// Colour (and normal) atlas all billboards sample.
     pub atlas: Atlas,
+    /// Atlas texels per world unit the billboards were baked at.
     pub texels_per_unit: f32,
+    /// The bake lowered the texel density to fit the atlas's largest side.
     pub density_reduced: bool,
     /// The LOD's skeleton: the tree's rig, pruned or rebuilt.
     pub rig: Rig,

@@ -74,7 +74,9 @@ fn null_as_infinite<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
 /// The skin joints and animated channels a LOD would be written with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct AnimationCount {
+    /// Skin joints: rig joints, motion joints and the static joint together.
     pub joints: usize,
+    /// Animated channels over every clip written.
     pub channels: usize,
 }
 
@@ -173,7 +175,9 @@ pub fn count(
 /// The rig's motion at the loop's samples: `carry(n, s)` takes rest-pose points following
 /// node `n` (None: the world) to sample `s`.
 pub struct RigFrames<'a> {
+    /// World matrix of every rig node at every sample (`worlds[s][n]`).
     pub worlds: &'a [Vec<Mat4>],
+    /// Inverse rest-pose world matrix of every rig node.
     pub rest_inv: &'a [Mat4],
 }
 

@@ -48,7 +48,7 @@ pub const DEFAULT_SPECTRAL: SpectralKind = SpectralKind::AxisPhase;
 pub const DEFAULT_SKELETON: BoneDescriptionKind = BoneDescriptionKind::AxisAngle;
 
 /// Default animation zone size as a fraction of the bounding-box diagonal (or the LOD's ε when
-/// larger): oak_dense's 116k triangles become ~4,400 zones, which k-means clusters in ~1 s.
+/// larger): a large tree's foliage becomes a few thousand zones, few enough for k-means.
 pub const DEFAULT_ZONE_FRACTION: f32 = 0.02;
 
 /// The spectral k rule: one animation cluster per 10 pixels of tree height (6 at 60 px, 20 at

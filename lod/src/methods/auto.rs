@@ -59,7 +59,7 @@ pub enum AutoPick {
 }
 
 impl AutoPick {
-    /// Every pick, in the order [`AutoRule`] keeps them.
+    /// Every pick, in the order the configured rule keeps their methods.
     pub const ALL: [AutoPick; 4] = [
         AutoPick::Cards,
         AutoPick::Skeleton,

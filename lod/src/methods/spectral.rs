@@ -80,6 +80,7 @@ pub const PLUGIN: MethodPlugin = MethodPlugin {
 /// What SCA is asked for.
 #[derive(Clone, Debug)]
 pub struct SpectralParams {
+    /// Description type (§4.4–4.8).
     pub kind: SpectralKind,
     /// Animation clusters k (capped at the number of zones).
     pub clusters: usize,
@@ -89,7 +90,9 @@ pub struct SpectralParams {
     pub bins: usize,
     /// k-means++ restarts beside the skeleton start (App. C.1).
     pub restarts: usize,
+    /// Seed of the k-means++ restarts.
     pub seed: u64,
+    /// Most k-means iterations of a run.
     pub max_iterations: usize,
     /// Bind billboards to their triangles' deepest shared bone (§4.12).
     pub shared_bone: bool,
@@ -98,11 +101,15 @@ pub struct SpectralParams {
 /// What SCA did: the `spectral` section of a spectral LOD's report entry.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SpectralReport {
+    /// Description type (`naive`, `dominating-axis`, `axis-phase`).
     pub kind: String,
     /// Clusters k after capping.
     pub clusters: usize,
+    /// Animation zones described.
     pub zones: usize,
+    /// Frequency bins shared by the descriptions.
     pub bins: usize,
+    /// k-means iterations of the kept run.
     pub iterations: usize,
     /// k-means error Σ w·deviation² of the kept run.
     pub error: f64,
@@ -121,8 +128,9 @@ pub struct SpectralReport {
     pub shared_bone_billboards: usize,
     /// Cosine terms over all billboards and axes, before the screen budget prunes them.
     pub terms: usize,
-    /// Seconds: zones + descriptions, k-means.
+    /// Seconds making the zones and their descriptions.
     pub t_describe: f64,
+    /// Seconds of the k-means.
     pub t_cluster: f64,
 }
 
@@ -217,13 +225,19 @@ pub fn build_spectral_cloud(
 
 /// Zones, their trajectories and descriptions, and the k-means over them.
 pub struct ZoneClustering<T: DescriptionType> {
+    /// The description type, with the frequency bins the zones share.
     pub ty: T,
+    /// The animation zones (§4.11, App. C.2).
     pub zones: Vec<frond_spectral::zones::Zone>,
+    /// Each zone's mean trajectory over the loop's samples.
     pub trajectories: Vec<Vec<Vec3>>,
+    /// Each zone's description.
     pub descriptions: Vec<T::Desc>,
+    /// Each zone's weight in the k-means: its triangle count.
     pub weights: Vec<f32>,
     /// Cluster of each zone.
     pub assignment: Vec<usize>,
+    /// What the clustering did so far (the build adds the billboards' part).
     pub report: SpectralReport,
 }
 

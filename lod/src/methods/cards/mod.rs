@@ -1,11 +1,10 @@
-//! `cards`: the input's own leaf cards, thinned (issue 17 item 6, the *card LOD*; SpeedTree's
-//! leaf reduction and ez-tree's LODs do the same): the cards that add least to the tree's
-//! silhouette at the LOD's pixel size are dropped until the rest fit the LOD's triangle
-//! budget ([`coverage`]), and the survivors are grown about their centres
-//! by the scale that brings their coverage closest to the input's. Cards are first trimmed to
-//! one triangle where their texture allows ([`trim`]): half the
-//! triangles, so twice the cards within a budget. The cards stay
-//! skinned as in the input and share its leaf material and texture: no bake, no atlas.
+//! `cards`: the input's own leaf cards, thinned (the *card LOD*; SpeedTree's leaf reduction
+//! and ez-tree's LODs do the same): the cards that add least to the tree's silhouette at the
+//! LOD's pixel size are dropped until the rest fit the LOD's triangle budget ([`coverage`]),
+//! and the survivors are grown about their centres by the scale that brings their coverage
+//! closest to the input's. Cards are first trimmed to one triangle where their texture allows
+//! ([`trim`]): half the triangles, so twice the cards within a budget. The cards stay skinned
+//! as in the input and share its leaf material and texture: no bake, no atlas.
 
 pub mod coverage;
 pub mod trim;

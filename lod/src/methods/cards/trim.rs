@@ -1,9 +1,8 @@
-//! Leaf cards trimmed to one triangle (issue 17 item 7: quads trimmed to what they show). A
-//! leaf card is a quad of two triangles whose texture is mostly transparent: a sprig drawn on
-//! a quarter of its texels. The smallest triangle that holds every texel the alpha test can
-//! pass, and whose part outside the card reads only transparent texels under the texture's
-//! wrap modes, draws exactly the card's pixels with one triangle instead of two and, on the
-//! X: half the triangles and less
+//! Leaf cards trimmed to one triangle: quads trimmed to what they show. A leaf card is a quad
+//! of two triangles whose texture is mostly transparent: a sprig drawn on a quarter of its
+//! texels. The smallest triangle that holds every texel the alpha test can pass, and whose
+//! part outside the card reads only transparent texels under the texture's wrap modes, draws
+//! exactly the card's pixels with one triangle instead of two: half the triangles and less
 //! overdraw at no coverage cost. A card LOD then keeps twice the cards per triangle.
 //!
 //! The triangle is searched in the card's texture frame (the parallelogram its corners span in
@@ -43,14 +42,16 @@ const GRID: usize = 384;
 
 /// The foliage with its cards trimmed, and what trimming did.
 pub struct Trimmed {
+    /// The foliage, each trimmed card one triangle.
     pub mesh: WoodMesh,
     /// Cards replaced by one triangle.
     pub cards: usize,
     /// Blended cards left as quads because they bend more than one triangle can follow and the
     /// budget had room for their second triangle.
     pub kept_as_quads: usize,
-    /// Total area of the cards trimmed, before and after (world units²).
+    /// Total area of the cards trimmed, before trimming (world units²).
     pub area_before: f64,
+    /// Total area of their triangles after trimming (world units²).
     pub area_after: f64,
 }
 
@@ -74,8 +75,7 @@ struct CardTrim {
 /// A blended card bends when posed (its corners follow different bones) and a flat triangle
 /// cannot: when the trimmed foliage leaves room within `max_triangles`, the cards whose fit
 /// misses most (miss × the card's size: the pixels it moves) stay quads, one more triangle
-/// each (oak_medium_blendedleaves at 600 px: 0.0042 with every card trimmed, 0.00025 with
-/// every card a quad).
+/// each.
 pub fn trim_cards(tree: &Tree, mesh: &WoodMesh, max_triangles: usize) -> Trimmed {
     let pieces = mesh.pieces();
     let motion = BoneMotion::of(tree);
@@ -456,10 +456,10 @@ type Skin = ([u32; 4], [f32; 4]);
 /// the bones the card's vertices use, that move the triangle's points closest to where the
 /// card's own skin moves them, over `motion`'s frames and at `region.samples` (the texels the
 /// leaf shows, so the fit spends nothing on the transparent part). A card blended over bones
-/// whose weights vary across it bends when posed (its two triangles no longer coplanar: 3 % of
-/// its size at the median on oak_medium_blendedleaves), which one flat triangle cannot follow;
-/// fitting all three vertices together over the leaf's texels leaves a third of the error that
-/// fitting each vertex to the card's plane extended does (docs/experiments.md §13). `None` when
+/// whose weights vary across it bends when posed (its two triangles no longer coplanar), which
+/// one flat triangle cannot follow; fitting all three vertices together over the leaf's texels
+/// leaves less error than fitting each vertex to the card's plane extended
+/// (docs/experiments.md §13). `None` when
 /// there is nothing to fit (one bone, no clip, no samples).
 ///
 /// The least-squares problem is solved by accelerated projected gradient (FISTA) on the
