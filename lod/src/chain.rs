@@ -13,8 +13,11 @@ use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{Bounds, Length, Part, Rig, SampleOptions, Sampled, Tree, sample};
 
 use crate::contract::{AnimatedBillboardCloud, CardFoliage, LoopClock};
-use crate::cost_budget::{ATLAS_TEXELS_PER_SQUARED_PIXEL, TRIANGLES_PER_SQUARED_PIXEL};
-pub use crate::cost_budget::{LodBudget, MAX_JOINTS, joints_for_screen};
+
+pub use crate::cost_budget::{
+    ATLAS_TEXELS_PER_SQUARED_PIXEL, LodBudget, MAX_JOINTS, TRIANGLES_PER_SQUARED_PIXEL,
+    joints_for_screen,
+};
 use crate::error::LodError;
 use crate::joint_budget::{AnimationCount, BillboardAnimation, JointCap, count};
 use crate::method_api::{BuildContext, BuildTimings, Foliage, Method, MethodName, MethodSection};
