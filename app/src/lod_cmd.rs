@@ -11,7 +11,7 @@ use frond_export::{AnimationMode, ChainFileOptions, chain_files, msft_coverages}
 use frond_lod::chain::chain_levels;
 use frond_lod::report::MeasuredError;
 use frond_lod::report::report_name;
-use frond_lod::{ChainRequest, LodReport, build_chain};
+use frond_lod::{ChainRequest, LodReport, ReportTimings, build_chain};
 use frond_metrics::{EvalContext, EvalRequest, image_for_screen_height};
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, Tree};
@@ -153,17 +153,18 @@ pub fn run_lod(
         combined: written.combined,
         files: written.files.iter().map(|(p, _)| p.clone()).collect(),
         warnings: tree.warnings.clone(),
-        timings_s: serde_json::json!({
-            "sample": chain.t_sample,
-            "build": chain.t_build,
+        timings_s: ReportTimings {
+            sample: chain.t_sample,
+            build: chain.t_build,
             // From the build's end and the input's renders' (the later), to the files.
-            "export": (t_written - t_joined).as_secs_f64(),
-            "total": total,
-        }),
+            export: (t_written - t_joined).as_secs_f64(),
+            total,
+            ..Default::default()
+        },
     };
     if measure.is_some() {
         // Seconds drawing the input's renders for the measure, alongside the build.
-        report.timings_s["measure_input"] = serde_json::json!(t_prepare);
+        report.timings_s.measure_input = Some(t_prepare);
     }
     report.files.push(report_name(&name));
     fill_switching(tree, req, &mut report);
@@ -212,7 +213,7 @@ pub fn run_lod(
                     _ => measure.insert(measure_context(renderer, tree, report.clip.clone())?),
                 };
                 measure_errors(ctx, &lods, &mut report, max_error)?;
-                report.timings_s["measure"] = serde_json::json!(t.elapsed().as_secs_f64());
+                report.timings_s.measure = Some(t.elapsed().as_secs_f64());
             }
             Ok(())
         },
@@ -231,10 +232,10 @@ pub fn run_lod(
             set.stage(rel, bytes)?;
             report.files.insert(report.files.len() - 1, rel.clone());
         }
-        report.timings_s["preview"] = serde_json::json!(preview.seconds);
+        report.timings_s.preview = Some(preview.seconds);
     }
     // Everything up to the report, measuring and the preview included.
-    report.timings_s["wall"] = serde_json::json!(t_start.elapsed().as_secs_f64());
+    report.timings_s.wall = t_start.elapsed().as_secs_f64();
     let json = serde_json::to_vec_pretty(&report).context("serialising the report")?;
     set.commit(&json)?;
     Ok(report)

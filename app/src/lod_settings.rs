@@ -530,7 +530,7 @@ impl LodSettings {
             tracing::warn!("{w}");
         }
         Ok(LodRequest {
-            chain: self.chain_request(name, spectral, skeleton, screen_heights),
+            chain: self.chain_request(name, spectral, skeleton, screen_heights)?,
             animation: self.animation.mode(),
             measure: self.measure.then_some(f64::from(self.max_error)),
             preview: self.preview,
@@ -554,10 +554,10 @@ impl LodSettings {
         spectral: SpectralOptions,
         skeleton: SkeletonOptions,
         screen_heights: Vec<f32>,
-    ) -> ChainRequest {
+    ) -> Result<ChainRequest> {
         let build = &self.build;
-        ChainRequest {
-            method: Method::new(name, spectral, skeleton),
+        Ok(ChainRequest {
+            method: Method::new(name, spectral, skeleton)?,
             screen_heights,
             pixel_error: self.pixel_error,
             epsilon: self.epsilon,
@@ -576,7 +576,7 @@ impl LodSettings {
                 padding: self.padding,
                 rasteriser: build.bake_rasteriser.rasteriser(),
             },
-        }
+        })
     }
 }
 

@@ -11,17 +11,22 @@ use frond_billboard::plane_search::SearchParams;
 use frond_render::Renderer;
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{Bounds, Length, Part, Rig, SampleOptions, Sampled, Tree, sample};
-use serde::Serialize;
 
-use crate::contract::{AnimatedBillboardCloud, LoopClock};
+use crate::contract::{AnimatedBillboardCloud, CardFoliage, LoopClock};
+
+pub use crate::cost_budget::{
+    ATLAS_TEXELS_PER_SQUARED_PIXEL, LodBudget, MAX_JOINTS, TRIANGLES_PER_SQUARED_PIXEL,
+    joints_for_screen,
+};
 use crate::error::LodError;
 use crate::joint_budget::{AnimationCount, BillboardAnimation, JointCap, count};
-use crate::method::{BuildContext, Foliage, Method, MethodReport};
-use crate::methods::cards::{is_card_foliage, triangle_area};
+use crate::method_api::{BuildContext, BuildTimings, Foliage, Method, MethodName, MethodSection};
+use crate::methods::cards::is_card_foliage;
 use crate::motion_budget::{ScreenBudget, apply_budget};
-use crate::report::{DroppedReport, LodEntry, LodTimings};
+use crate::part_mesh::{part_mesh, triangle_area};
+use crate::report::LodEntry;
 use crate::screen_budget::{LodLevel, lod_levels};
-use crate::texture_budget::{ImageSizes, lod_image_sizes, parts_image_bytes};
+use crate::texture_budget::{ImageSizes, atlas_side, lod_image_sizes, parts_image_bytes};
 
 /// How the static clouds of every LOD are searched and baked (improved-billboard-cloud §2–4).
 #[derive(Clone, Debug, PartialEq)]
@@ -45,6 +50,7 @@ pub struct CloudOptions {
 /// What a chain is built for.
 #[derive(Clone, Debug)]
 pub struct ChainRequest {
+    /// The method that builds each LOD's foliage (or the rule that picks one per LOD).
     pub method: Method,
     /// Screen heights (pixels) of LOD1, LOD2, ..., nearest first.
     pub screen_heights: Vec<f32>,
@@ -55,6 +61,7 @@ pub struct ChainRequest {
     /// How the files animate billboards (spectral coefficients: the auto rule picks spectral
     /// motion for farther LODs; own motions cost joints only as skin joints).
     pub animation: BillboardAnimation,
+    /// Seed of the plane searches and every random choice (each LOD adds its index).
     pub seed: u64,
     /// Most triangles a LOD keeps of the one before it (0.5: half).
     pub triangle_ratio: f32,
@@ -66,24 +73,24 @@ pub struct ChainRequest {
     pub samples: usize,
     /// Clip to sample (None: the first).
     pub clip: Option<String>,
+    /// How every LOD's static clouds are searched and baked.
     pub cloud: CloudOptions,
 }
 
 /// What a LOD draws: LOD0 the input's rig, a billboard LOD its foliage (whose rig the
 /// budget pruned).
 #[derive(Clone, Debug)]
-#[expect(
-    clippy::large_enum_variant,
-    reason = "one per LOD of a chain, a handful in all: boxing would only add indirection"
-)]
 pub enum LodContent {
+    /// LOD0: the input's own rig, every clip (its meshes are the LOD's parts).
     Input(Rig),
+    /// A built LOD's foliage, over the rig it carries.
     Foliage(Foliage),
 }
 
 /// One LOD of a chain, ready to write.
 #[derive(Clone, Debug)]
 pub struct ChainLod {
+    /// What the LOD draws besides its parts.
     pub content: LodContent,
     /// Skinned meshes with the tree's materials, bones as rig node indices: LOD0's wood and
     /// foliage, a billboard LOD's simplified wood.
@@ -118,9 +125,11 @@ impl ChainLod {
 pub struct Chain {
     /// The loop the chain was built from, without its poses ([`Sampled::into_loop`]).
     pub sampled: Sampled,
+    /// LOD0 (the input) first, then one LOD per screen height, nearest first.
     pub lods: Vec<ChainLod>,
-    /// Seconds spent sampling the loop and building the LODs.
+    /// Seconds spent sampling the loop.
     pub t_sample: f64,
+    /// Seconds spent building the LODs.
     pub t_build: f64,
 }
 
@@ -230,19 +239,7 @@ pub fn build_chain(
     })
 }
 
-/// Most skin joints of any LOD: 8-bit joint indices (Unreal) and three.js's WebGPU renderer
-/// and Bevy draw no more.
-pub const MAX_JOINTS: usize = 256;
-
-/// Joint budget of a LOD `screen_height` pixels high: one joint per two pixels of height
-/// (60 px: 30 joints, 200 px: 100), the constant chosen so that oak_dense's far LODs meet 32 and
-/// 128 joints (issue 17) while every motion that moves a leaf half a pixel still had a joint
-/// of its own at 600 px on the shared trees. A cap over the half-pixel rule, not a promise.
-pub fn joints_for_screen(screen_height: f32) -> usize {
-    (screen_height / 2.0).ceil().max(1.0) as usize
-}
-
-/// What the previous LOD cost: no later LOD may cost more (the monotone rule; issue 17).
+/// What the previous LOD cost: no later LOD may cost more (the monotone rule).
 #[derive(Clone, Copy, Debug)]
 struct Spent {
     /// LOD0's share of wood in its triangles: each LOD's triangle budget is split so.
@@ -253,50 +250,6 @@ struct Spent {
     /// Alpha-tested area (world units²): overdraw.
     alpha_tested_area: f64,
     animation: AnimationCount,
-}
-
-/// What one billboard LOD may spend, from the hard limits, the previous LOD and its screen
-/// height (in that order of precedence).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct LodBudget {
-    pub triangles: usize,
-    /// Wood triangles (LOD0's share of wood in its triangles).
-    pub wood_triangles: usize,
-    pub joints: usize,
-    pub channels: usize,
-    /// Decoded texture bytes (atlas and wood maps).
-    pub texture_bytes: usize,
-    /// Alpha-tested area (world units², cards or billboards; `null` when unbounded): the
-    /// previous LOD's, so that no LOD asks for more overdraw. Card LODs keep within it;
-    /// billboard methods do not yet control their quads' area, and `frond lod` warns when a
-    /// written LOD exceeds its predecessor's.
-    pub alpha_tested_area: f64,
-}
-
-/// Atlas texels per squared pixel of screen height: a tree `H` pixels high covers about
-/// `0.6·H²` pixels, and its billboards overlap (depth complexity 5 to 25 on the shared trees at
-/// 200 px), so 16 texels per `H²` is about one texel per pixel of every layer.
-pub const ATLAS_TEXELS_PER_SQUARED_PIXEL: f32 = 16.0;
-
-/// Triangles per squared pixel of screen height: a tree `H` pixels high covers about `0.6·H²`
-/// pixels, so 2·H² is three triangles per covered pixel. More only draws sub-pixel triangles,
-/// which GPUs shade in 2×2 quads (four times over) and which change nothing a viewer sees. It
-/// binds only far LODs of large trees: oak_dense's 60 px LOD (7,200 of 16,020 triangles; its
-/// file 1.9 MB before, the issue's target 1 MB).
-pub const TRIANGLES_PER_SQUARED_PIXEL: f32 = 2.0;
-
-impl LodBudget {
-    /// No budget but the hard limits (at most `joints` per skin).
-    fn hard_limits_only(joints: usize) -> LodBudget {
-        LodBudget {
-            triangles: usize::MAX,
-            wood_triangles: usize::MAX,
-            joints,
-            channels: usize::MAX,
-            texture_bytes: usize::MAX,
-            alpha_tested_area: f64::INFINITY,
-        }
-    }
 }
 
 impl Spent {
@@ -397,17 +350,6 @@ fn meshes_count(lod0: &ChainLod) -> AnimationCount {
     }
 }
 
-/// The tree's wood or foliage with bones as rig node indices.
-pub(crate) fn part_mesh(tree: &Tree, part: Part) -> WoodMesh {
-    let mut m = WoodMesh::from_tree_part(tree, part);
-    for b in m.bones.iter_mut().flatten() {
-        if *b != NO_BONE {
-            *b = tree.bones[*b as usize].node as u32;
-        }
-    }
-    m
-}
-
 /// Re-maps node indices after a rig was pruned.
 fn remap(m: &mut WoodMesh, map: &[Option<usize>]) {
     for b in m.bones.iter_mut().flatten() {
@@ -418,43 +360,6 @@ fn remap(m: &mut WoodMesh, map: &[Option<usize>]) {
                 .flatten()
                 .map_or(NO_BONE, |n| n as u32);
         }
-    }
-}
-
-/// An empty report line for a LOD.
-pub(crate) fn entry(method: String, method_reason: String) -> LodEntry {
-    LodEntry {
-        file: String::new(),
-        mapping: None,
-        screen_height: None,
-        pixel: None,
-        epsilon: None,
-        method,
-        method_reason,
-        triangles: 0,
-        wood_triangles: 0,
-        billboards: 0,
-        input_textured_billboards: 0,
-        bones: 0,
-        texture_bytes: 0,
-        atlas: None,
-        texels_per_unit: None,
-        density_reduced: false,
-        cost: None,
-        switch: None,
-        alpha_tested_area_ratio: None,
-        error: None,
-        budget: None,
-        clips: Vec::new(),
-        dropped: DroppedReport::default(),
-        vat: None,
-        spectral_files: None,
-        animation_bytes: 0,
-        vat_equivalent_bytes: None,
-        spectral: None,
-        skeleton: None,
-        cards: None,
-        timings_s: LodTimings::default(),
     }
 }
 
@@ -470,7 +375,7 @@ fn lod0(tree: &Tree, wood: &WoodMesh) -> ChainLod {
     let map = rig.retain(&keep);
     remap(&mut wood, &map);
     remap(&mut foliage, &map);
-    let mut e = entry("input".into(), "LOD0 is the input tree, rewritten".into());
+    let mut e = LodEntry::new(MethodName::INPUT, "LOD0 is the input tree, rewritten");
     e.triangles = wood.triangles() + foliage.triangles();
     e.wood_triangles = wood.triangles();
     let parts = vec![wood, foliage];
@@ -527,12 +432,6 @@ fn dropped_clip_reason(cloud: &AnimatedBillboardCloud, tree: &Tree, c: usize) ->
     )
 }
 
-/// The side of a square atlas of at most `texels` texels (a multiple of 4, at least 64).
-pub(crate) fn atlas_side(texels: usize) -> u32 {
-    let side = (texels as f64).sqrt().floor() as u32;
-    (side / 4 * 4).clamp(64, frond_billboard::bake::MAX_ATLAS_SIDE)
-}
-
 /// Atlas texels a billboard needs at least: an 8×8 texture with 2 texels of padding around
 /// it (144) less what packing shares (the rule keeps a far LOD's atlas from being nothing but
 /// padding).
@@ -566,8 +465,7 @@ const WOOD_REFINE_STEPS: usize = 6;
 /// `wood` at the finest error between `floor` and `current`'s (mesh, error, thin pieces
 /// dropped) that fits in `max_triangles`, found by bisection of the error's logarithm; branches
 /// narrower than the error are re-admitted. A near LOD whose cards need fewer triangles than
-/// it may draw spends them on its branches (pine_medium at 600 px: coverage error 0.0052 with
-/// the wood at one pixel).
+/// it may draw spends them on its branches.
 fn refine_wood(
     wood: &WoodMesh,
     current: (WoodMesh, f32, usize),
@@ -666,7 +564,7 @@ fn billboard_lod(
         level.wood_error / WOOD_REFINE_FLOOR,
         room,
     );
-    let mut e = entry(method.name().name().into(), reason.into());
+    let mut e = LodEntry::new(method.name(), reason);
     e.screen_height = Some(level.screen_height);
     e.pixel = Some(level.pixel);
     e.epsilon = Some(level.epsilon);
@@ -698,10 +596,17 @@ fn billboard_lod(
             wood_lod,
             budget,
             built.timings,
-            built.report,
+            built.section,
             e,
         )),
-        Foliage::Cards(cards) => Ok(card_lod(&shared, cards, wood_lod, &budget, e)),
+        Foliage::Cards(cards) => Ok(card_lod(
+            &shared,
+            cards,
+            wood_lod,
+            &budget,
+            built.section,
+            e,
+        )),
     }
 }
 
@@ -717,9 +622,10 @@ struct LodShared<'a> {
 /// A card LOD: the thinned cards and the wood in one skinned mesh, the joint budget applied.
 fn card_lod(
     shared: &LodShared,
-    mut cards: crate::methods::cards::CardFoliage,
+    mut cards: CardFoliage,
     wood_lod: WoodMesh,
     budget: &ScreenBudget,
+    section: Option<MethodSection>,
     mut e: LodEntry,
 ) -> ChainLod {
     let t0 = Instant::now();
@@ -763,7 +669,7 @@ fn card_lod(
         .map(|&c| cards.rig.clips[c].name.clone())
         .collect();
     e.dropped.budget = dropped;
-    e.cards = Some(cards.report.clone());
+    e.sections.extend(section);
     e.timings_s.budget = t0.elapsed().as_secs_f64();
     ChainLod {
         content: LodContent::Foliage(Foliage::Cards(cards)),
@@ -780,8 +686,8 @@ fn cloud_lod(
     mut cloud: AnimatedBillboardCloud,
     mut wood_lod: WoodMesh,
     mut budget: ScreenBudget,
-    timings: crate::cloud_build::BuildTimings,
-    report: MethodReport,
+    timings: BuildTimings,
+    section: Option<MethodSection>,
     mut e: LodEntry,
 ) -> ChainLod {
     let (tree, sampled) = (shared.tree, shared.sampled);
@@ -819,11 +725,7 @@ fn cloud_lod(
         .filter(|c| !clips.contains(c))
         .map(|c| dropped_clip_reason(&cloud, tree, c))
         .collect();
-    match report {
-        MethodReport::None => {}
-        MethodReport::Spectral(r) => e.spectral = Some(r),
-        MethodReport::Skeleton(r) => e.skeleton = Some(r),
-    }
+    e.sections.extend(section);
     e.timings_s.build = timings;
     e.timings_s.budget = (t3 - t2).as_secs_f64();
     ChainLod {

@@ -8,7 +8,6 @@ use std::time::Instant;
 use frond_render::materials_scene;
 use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
-use serde::Serialize;
 
 use frond_billboard::bake::{BakeError, MAX_ATLAS_SIDE, bake_cloud};
 use frond_billboard::cloud::{CloudError, fit_quad};
@@ -17,13 +16,14 @@ use frond_billboard::{Plane, Quad, TriangleSoup, source_copy};
 use frond_scene::Rig;
 use frond_scene::rigid_fit::rigid_fit;
 
-use crate::chain::atlas_side;
 use crate::contract::{
     AnimatedBillboard, AnimatedBillboardCloud, BillboardTexture, LoopClock, RigidMotion,
     input_textured_mesh,
 };
 use crate::error::LodError;
-use crate::method::{BuildContext, Foliage, MethodName, MethodOutput};
+pub use crate::method_api::BuildTimings;
+use crate::method_api::{BuildContext, Foliage, MethodName, MethodOutput};
+use crate::texture_budget::atlas_side;
 use crate::texture_budget::{lod_image_sizes, parts_image_bytes};
 
 /// How a cluster's billboards move.
@@ -45,20 +45,12 @@ pub enum Driver {
 pub struct FoliageCluster {
     /// Indices into `Sampled::foliage` (and so into its trajectories).
     pub members: Vec<usize>,
+    /// How the cluster's billboards move.
     pub driver: Driver,
 }
 
 /// One billboard of a cluster: its quad, the triangles it replaces and those drawn on it.
 type ClusterQuad = (Quad, Vec<usize>, Vec<usize>);
-
-/// Wall times of the build, seconds.
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct BuildTimings {
-    pub reference_pose: f64,
-    pub plane_search: f64,
-    pub bake: f64,
-    pub motion_fit: f64,
-}
 
 /// The rig's world matrices at every sample of `clock`.
 pub fn sampled_worlds(rig: &Rig, clock: &LoopClock) -> Vec<Vec<Mat4>> {
@@ -80,7 +72,7 @@ pub fn clustered_foliage(
     Ok(MethodOutput {
         foliage: Foliage::Cloud(cloud),
         timings,
-        report: Default::default(),
+        section: None,
     })
 }
 

@@ -1,6 +1,6 @@
-//! The contract between clustering and export: an animated billboard cloud (spec
-//! animated-billboard-clouds §1.4). Every clustering method (per-bone, static, spectral,
-//! skeleton) produces one; `frond-export` writes it without knowing the method.
+//! The contract between clustering and export: a LOD's foliage, an animated billboard cloud
+//! (spec animated-billboard-clouds §1.4) or the input's own leaf cards thinned. Every method
+//! produces one of the two ([`Foliage`]); `frond-export` writes it without knowing the method.
 //!
 //! Motion of a billboard, in world space at loop time `t`:
 //! `corners(t) = W_b(t) · Rest_b⁻¹ · M(t) · quad.corners()` when it follows rig node `b`, or
@@ -14,11 +14,30 @@ use frond_scene::{Rig, Tree};
 use frond_spectral::description::Components;
 use glam::{Affine3A, Mat4, Vec2, Vec3};
 
+/// A LOD's foliage as a method built it: export writes whichever it gets.
+#[derive(Clone, Debug)]
+pub enum Foliage {
+    /// Billboards baked into one atlas, each moving rigidly (spec §1.4).
+    Cloud(AnimatedBillboardCloud),
+    /// The input's own leaf cards, thinned and skinned as in the input.
+    Cards(CardFoliage),
+}
+
+/// Thinned leaf cards, ready to be skinned like the input's.
+#[derive(Clone, Debug)]
+pub struct CardFoliage {
+    /// The kept cards, scaled, bones as rig node indices, the input's foliage materials.
+    pub mesh: WoodMesh,
+    /// The skeleton the cards follow: the tree's, until the chain's budget prunes it.
+    pub rig: Rig,
+}
+
 /// When a billboard's own motion is sampled: uniformly over one period of one clip.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LoopClock {
     /// Index into [`Rig::clips`], or None for a tree without clips.
     pub clip: Option<usize>,
+    /// Time of the first sample, seconds into the clip.
     pub start: f32,
     /// Loop length in seconds (0 for a static tree).
     pub period: f32,
@@ -186,7 +205,9 @@ pub enum BillboardTexture {
     /// [`frond_billboard::source_copy()`]). `texcoords[n]` holds the corners' `TEXCOORD_n` as the
     /// input stores them (no transform applied; empty for a tree without texture coordinates).
     Input {
+        /// The input material whose texture the billboard samples.
         material: usize,
+        /// The corners' texture coordinates, one set per `TEXCOORD_n`.
         texcoords: Vec<[Vec2; 4]>,
     },
 }
@@ -217,10 +238,13 @@ pub struct AnimatedBillboardCloud {
     /// Plane tolerance its planes were searched with (world units): the LOD's ε, or wider
     /// when its billboard budget asked for fewer planes.
     pub epsilon: f32,
+    /// The billboards, each with its quad, texture and motion.
     pub billboards: Vec<AnimatedBillboard>,
     /// Colour (and normal) atlas all billboards sample.
     pub atlas: Atlas,
+    /// Atlas texels per world unit the billboards were baked at.
     pub texels_per_unit: f32,
+    /// The bake lowered the texel density to fit the atlas's largest side.
     pub density_reduced: bool,
     /// The LOD's skeleton: the tree's rig, pruned or rebuilt.
     pub rig: Rig,

@@ -4,6 +4,7 @@ use frond_billboard::cloud::CloudError;
 use frond_skeleton::SkeletonError;
 
 use crate::screen_budget::SizingError;
+use crate::section_value::SectionError;
 
 /// Why a LOD chain could not be built.
 #[derive(Debug, thiserror::Error)]
@@ -20,6 +21,9 @@ pub enum LodError {
     /// Sampling the loop failed.
     #[error(transparent)]
     Scene(#[from] frond_scene::SceneError),
+    /// A method's report section could not be kept.
+    #[error(transparent)]
+    Section(#[from] SectionError),
     /// The tree has nothing to turn into billboards.
     #[error("{0}: the tree has no foliage to turn into billboards")]
     NoFoliage(String),

@@ -25,7 +25,7 @@ use frond_scene::rigid_fit::rigid_fit;
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{Rig, Tree};
 use glam::{Affine3A, Mat4, Vec3};
-use serde::Serialize;
+use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::contract::{AnimatedBillboardCloud, RigidMotion};
 
@@ -51,7 +51,7 @@ pub enum BillboardAnimation {
 }
 
 /// What the joint budget merged.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct JointMerges {
     /// Rig nodes collapsed into an ancestor because their motion moved nothing half a pixel.
     pub nodes_collapsed_unseen: usize,
@@ -60,14 +60,23 @@ pub struct JointMerges {
     /// Own motions replaced by following a rig node (each group of billboards sharing one).
     pub motions_attached: usize,
     /// Largest error of a merge (world units): how far a carried point strays from where its
-    /// own motion put it.
+    /// own motion put it; infinite (written `null`) when the budget forced a merge no node
+    /// could carry.
+    #[serde(deserialize_with = "null_as_infinite")]
     pub max_error: f32,
+}
+
+/// Reads an error written `null` (JSON has no infinity) as infinite.
+fn null_as_infinite<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
+    Ok(Option::<f32>::deserialize(d)?.unwrap_or(f32::INFINITY))
 }
 
 /// The skin joints and animated channels a LOD would be written with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct AnimationCount {
+    /// Skin joints: rig joints, motion joints and the static joint together.
     pub joints: usize,
+    /// Animated channels over every clip written.
     pub channels: usize,
 }
 
@@ -166,7 +175,9 @@ pub fn count(
 /// The rig's motion at the loop's samples: `carry(n, s)` takes rest-pose points following
 /// node `n` (None: the world) to sample `s`.
 pub struct RigFrames<'a> {
+    /// World matrix of every rig node at every sample (`worlds[s][n]`).
     pub worlds: &'a [Vec<Mat4>],
+    /// Inverse rest-pose world matrix of every rig node.
     pub rest_inv: &'a [Mat4],
 }
 
@@ -411,56 +422,106 @@ pub fn apply_joint_budget(
     mode: BillboardAnimation,
 ) -> JointMerges {
     let n = cloud.rig.nodes.len();
-    let mut carried = vec![Box3::EMPTY; n];
-    let mut joint = vec![false; n];
-    let mut static_used = false;
-    let mut used = vec![false; wood.positions.len()];
-    for p in &wood.primitives {
-        for &i in &p.indices {
-            if let Some(u) = used.get_mut(i as usize) {
-                *u = true;
-            }
-        }
-    }
-    for (v, (bones, w)) in wood.bones.iter().zip(&wood.weights).enumerate() {
-        if !used.get(v).copied().unwrap_or(false) {
-            continue;
-        }
-        for (b, w) in bones.iter().zip(w) {
-            if *w <= 0.0 {
-                continue;
-            }
-            if *b != NO_BONE && (*b as usize) < n {
-                carried[*b as usize].add(wood.positions[v]);
-                joint[*b as usize] = true;
-            } else {
-                static_used = true;
-            }
-        }
-    }
-    let per_motion = mode == BillboardAnimation::Joints;
-    for b in &cloud.billboards {
-        if per_motion && b.motion.is_some() {
-            continue;
-        }
-        match b.follows {
-            Some(f) => {
-                for c in b.quad.corners() {
-                    carried[f].add(c);
-                }
-                joint[f] |= mode != BillboardAnimation::Vat;
-            }
-            None => static_used |= mode != BillboardAnimation::Vat,
-        }
-    }
-    let groups = if per_motion {
+    let mut carrying = Carrying::of_wood(wood, n);
+    carrying.add_billboards(cloud, mode);
+    let groups = if mode == BillboardAnimation::Joints {
         motion_groups(cloud)
     } else {
         Vec::new()
     };
-    let channels: Vec<Vec<usize>> = cloud
-        .rig
-        .clips
+    let channels = clip_channels(&cloud.rig, n);
+    // The merger reads the rig while the billboards change: its own copy.
+    let rig = cloud.rig.clone();
+    let mut merger = Merger {
+        rig: &rig,
+        frames,
+        tree,
+        target: (0..n).map(Some).collect(),
+        carried: carrying.carried,
+        joint: carrying.joint,
+        attached: vec![None; groups.len()],
+        groups,
+        static_used: carrying.static_used,
+        channels,
+    };
+    let merges = merger.merge_within(cloud, cap, half);
+    apply(&merger, cloud, wood);
+    merges
+}
+
+/// What each rig node carries before any merge, and which nodes are joints.
+struct Carrying {
+    /// Points each node carries.
+    carried: Vec<Box3>,
+    /// Whether each node is a joint (carries something directly).
+    joint: Vec<bool>,
+    /// Something follows the world (the static joint is written).
+    static_used: bool,
+}
+
+impl Carrying {
+    /// What the wood's drawn vertices put on the `n` rig nodes: every vertex weighted to a
+    /// node makes it a joint that carries the vertex; weights to no node use the static joint.
+    fn of_wood(wood: &WoodMesh, n: usize) -> Carrying {
+        let mut carried = vec![Box3::EMPTY; n];
+        let mut joint = vec![false; n];
+        let mut static_used = false;
+        let mut used = vec![false; wood.positions.len()];
+        for p in &wood.primitives {
+            for &i in &p.indices {
+                if let Some(u) = used.get_mut(i as usize) {
+                    *u = true;
+                }
+            }
+        }
+        for (v, (bones, w)) in wood.bones.iter().zip(&wood.weights).enumerate() {
+            if !used.get(v).copied().unwrap_or(false) {
+                continue;
+            }
+            for (b, w) in bones.iter().zip(w) {
+                if *w <= 0.0 {
+                    continue;
+                }
+                if *b != NO_BONE && (*b as usize) < n {
+                    carried[*b as usize].add(wood.positions[v]);
+                    joint[*b as usize] = true;
+                } else {
+                    static_used = true;
+                }
+            }
+        }
+        Carrying {
+            carried,
+            joint,
+            static_used,
+        }
+    }
+
+    /// Adds the billboards that follow a node (or the world) as `mode` writes them: a
+    /// billboard with its own motion written as a joint of its own carries nothing here, and
+    /// VAT billboards are off the skin (they carry points but need no joint).
+    fn add_billboards(&mut self, cloud: &AnimatedBillboardCloud, mode: BillboardAnimation) {
+        let per_motion = mode == BillboardAnimation::Joints;
+        for b in &cloud.billboards {
+            if per_motion && b.motion.is_some() {
+                continue;
+            }
+            match b.follows {
+                Some(f) => {
+                    for c in b.quad.corners() {
+                        self.carried[f].add(c);
+                    }
+                    self.joint[f] |= mode != BillboardAnimation::Vat;
+                }
+                None => self.static_used |= mode != BillboardAnimation::Vat,
+            }
+        }
+    }
+}
+
+/// Channels of each of the `n` rig nodes in each of `rig`'s clips.
+fn clip_channels(rig: &Rig, n: usize) -> Vec<Vec<usize>> {
+    rig.clips
         .iter()
         .map(|clip| {
             let mut per_node = vec![0; n];
@@ -471,117 +532,173 @@ pub fn apply_joint_budget(
             }
             per_node
         })
-        .collect();
-    // The merger reads the rig while the billboards change: its own copy.
-    let rig = cloud.rig.clone();
-    let mut merger = Merger {
-        rig: &rig,
-        frames,
-        tree,
-        target: (0..n).map(Some).collect(),
-        carried,
-        joint,
-        attached: vec![None; groups.len()],
-        groups,
-        static_used,
-        channels,
-    };
-    let mut merges = JointMerges::default();
-    let mut heap: BinaryHeap<Reverse<(u32, Merge)>> = BinaryHeap::new();
-    let key = |e: f32| {
-        if e.is_finite() {
-            e.max(0.0).to_bits()
-        } else {
-            f32::INFINITY.to_bits()
-        }
-    };
-    for i in 0..n {
-        if merger.joint[i] {
-            heap.push(Reverse((key(merger.collapse_error(i)), Merge::Collapse(i))));
-        }
+        .collect()
+}
+
+/// Merges by error (the key orders errors as their bits do: non-negative floats sort so).
+type MergeQueue = BinaryHeap<Reverse<(u32, Merge)>>;
+
+/// The queue key of an error: its bits, non-finite errors last.
+fn error_key(e: f32) -> u32 {
+    if e.is_finite() {
+        e.max(0.0).to_bits()
+    } else {
+        f32::INFINITY.to_bits()
     }
-    for g in 0..merger.groups.len() {
-        let (e, _, _) = merger.attach_choice(cloud, g);
-        heap.push(Reverse((key(e), Merge::Attach(g))));
-    }
-    let mut current = merger.count(cloud);
-    while let Some(Reverse((k, m))) = heap.pop() {
-        let over = current.joints > cap.joints || current.channels > cap.channels;
-        if !over && f32::from_bits(k) >= half {
-            break;
-        }
-        // Recompute: earlier merges may have grown this one's error.
-        let (e, choice) = match m {
-            Merge::Collapse(i) => {
-                if merger.target[i] != Some(i) || !merger.joint[i] {
-                    continue;
+}
+
+/// Where an attached motion group goes: the node it follows (None: the world) and its
+/// placement in that node's rest frame.
+type Attachment = (Option<usize>, Affine3A);
+
+impl Merger<'_> {
+    /// Applies merges smallest error first: every one under `half`, then more while the count
+    /// is over `cap`. Returns what was merged.
+    fn merge_within(
+        &mut self,
+        cloud: &AnimatedBillboardCloud,
+        cap: JointCap,
+        half: f32,
+    ) -> JointMerges {
+        let mut merges = JointMerges::default();
+        let mut heap = self.initial_queue(cloud);
+        let mut current = self.count(cloud);
+        while let Some(Reverse((k, m))) = heap.pop() {
+            let over = current.joints > cap.joints || current.channels > cap.channels;
+            if !over && f32::from_bits(k) >= half {
+                break;
+            }
+            // Recompute: earlier merges may have grown this one's error.
+            let Some((e, choice)) = self.current_error(cloud, m) else {
+                continue;
+            };
+            if error_key(e) > k {
+                heap.push(Reverse((error_key(e), m)));
+                continue;
+            }
+            if !over && e >= half {
+                break;
+            }
+            match (m, choice) {
+                (Merge::Collapse(i), _) => self.collapse(i, e < half, &mut heap, &mut merges),
+                (Merge::Attach(g), Some(to)) => {
+                    self.attach(cloud, g, to, &mut heap);
+                    merges.motions_attached += 1;
                 }
-                (merger.collapse_error(i), None)
+                (Merge::Attach(_), None) => continue,
+            }
+            merges.max_error = merges.max_error.max(e);
+            current = self.count(cloud);
+        }
+        merges
+    }
+
+    /// Every possible merge with its error: each joint's collapse, each motion group's
+    /// attachment.
+    fn initial_queue(&self, cloud: &AnimatedBillboardCloud) -> MergeQueue {
+        let mut heap = MergeQueue::new();
+        for i in 0..self.target.len() {
+            if self.joint[i] {
+                heap.push(Reverse((
+                    error_key(self.collapse_error(i)),
+                    Merge::Collapse(i),
+                )));
+            }
+        }
+        for g in 0..self.groups.len() {
+            let (e, _, _) = self.attach_choice(cloud, g);
+            heap.push(Reverse((error_key(e), Merge::Attach(g))));
+        }
+        heap
+    }
+
+    /// The error of merge `m` now, with where an attachment would go; None when the merge no
+    /// longer applies (its node was collapsed or is no joint, its group already attached).
+    fn current_error(
+        &self,
+        cloud: &AnimatedBillboardCloud,
+        m: Merge,
+    ) -> Option<(f32, Option<Attachment>)> {
+        match m {
+            Merge::Collapse(i) => {
+                if self.target[i] != Some(i) || !self.joint[i] {
+                    return None;
+                }
+                Some((self.collapse_error(i), None))
             }
             Merge::Attach(g) => {
-                if merger.attached[g].is_some() {
-                    continue;
+                if self.attached[g].is_some() {
+                    return None;
                 }
-                let (e, c, q) = merger.attach_choice(cloud, g);
-                (e, Some((c, q)))
+                let (e, c, q) = self.attach_choice(cloud, g);
+                Some((e, Some((c, q))))
             }
-        };
-        if key(e) > k {
-            heap.push(Reverse((key(e), m)));
-            continue;
         }
-        if !over && e >= half {
-            break;
-        }
-        match (m, choice) {
-            (Merge::Collapse(i), _) => {
-                let p = merger.surviving_parent(i);
-                merger.target[i] = p;
-                let b = merger.carried[i];
-                if p.is_none() && !b.is_empty() {
-                    merger.static_used = true;
-                }
-                if let Some(p) = p {
-                    merger.carried[p].union(&b);
-                    if !merger.joint[p] {
-                        merger.joint[p] = true;
-                        heap.push(Reverse((key(merger.collapse_error(p)), Merge::Collapse(p))));
-                    }
-                }
-                merger.joint[i] = false;
-                if e < half {
-                    merges.nodes_collapsed_unseen += 1;
-                } else {
-                    merges.nodes_collapsed_for_budget += 1;
-                }
-            }
-            (Merge::Attach(g), Some((c, q))) => {
-                merger.attached[g] = Some((c, q));
-                if c.is_none() {
-                    merger.static_used = true;
-                }
-                if let Some(c) = c {
-                    let mut b = Box3::EMPTY;
-                    for &i in &merger.groups[g] {
-                        for x in cloud.billboards[i].quad.corners() {
-                            b.add(q.transform_point3(x));
-                        }
-                    }
-                    merger.carried[c].union(&b);
-                    if !merger.joint[c] {
-                        merger.joint[c] = true;
-                        heap.push(Reverse((key(merger.collapse_error(c)), Merge::Collapse(c))));
-                    }
-                }
-                merges.motions_attached += 1;
-            }
-            (Merge::Attach(_), None) => continue,
-        }
-        merges.max_error = merges.max_error.max(e);
-        current = merger.count(cloud);
     }
-    apply(&merger, cloud, wood);
-    merges
+
+    /// Makes node `n` a joint if it was not, queueing its own collapse.
+    fn make_joint(&mut self, n: usize, heap: &mut MergeQueue) {
+        if !self.joint[n] {
+            self.joint[n] = true;
+            heap.push(Reverse((
+                error_key(self.collapse_error(n)),
+                Merge::Collapse(n),
+            )));
+        }
+    }
+
+    /// Collapses node `i` into its surviving parent (the world when none), which takes over
+    /// what it carried; `unseen` when the error is under half a pixel.
+    fn collapse(
+        &mut self,
+        i: usize,
+        unseen: bool,
+        heap: &mut MergeQueue,
+        merges: &mut JointMerges,
+    ) {
+        let p = self.surviving_parent(i);
+        self.target[i] = p;
+        let b = self.carried[i];
+        if p.is_none() && !b.is_empty() {
+            self.static_used = true;
+        }
+        if let Some(p) = p {
+            self.carried[p].union(&b);
+            self.make_joint(p, heap);
+        }
+        self.joint[i] = false;
+        if unseen {
+            merges.nodes_collapsed_unseen += 1;
+        } else {
+            merges.nodes_collapsed_for_budget += 1;
+        }
+    }
+
+    /// Attaches motion group `g` to the node (or the world) of `to`, which then carries the
+    /// group's corners at their new placement.
+    fn attach(
+        &mut self,
+        cloud: &AnimatedBillboardCloud,
+        g: usize,
+        to: Attachment,
+        heap: &mut MergeQueue,
+    ) {
+        let (c, q) = to;
+        self.attached[g] = Some((c, q));
+        if c.is_none() {
+            self.static_used = true;
+        }
+        if let Some(c) = c {
+            let mut b = Box3::EMPTY;
+            for &i in &self.groups[g] {
+                for x in cloud.billboards[i].quad.corners() {
+                    b.add(q.transform_point3(x));
+                }
+            }
+            self.carried[c].union(&b);
+            self.make_joint(c, heap);
+        }
+    }
 }
 
 /// Writes the merges into the billboards and the wood's skin.

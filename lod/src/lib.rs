@@ -7,13 +7,17 @@
 pub mod chain;
 pub mod cloud_build;
 pub mod contract;
+pub mod cost_budget;
 pub mod error;
 pub mod joint_budget;
 pub mod method;
+pub mod method_api;
 pub mod methods;
 pub mod motion_budget;
+mod part_mesh;
 pub mod report;
 pub mod screen_budget;
+pub mod section_value;
 pub mod switching;
 pub mod texture_budget;
 
@@ -25,11 +29,14 @@ pub use contract::{
     AnimatedBillboard, AnimatedBillboardCloud, BillboardTexture, LoopClock, RigidMotion,
 };
 pub use error::LodError;
-pub use method::{
-    BuildContext, ClusteringMethod, Foliage, METHOD_NAMES, Method, MethodName, MethodOutput,
+pub use method::{auto_method, ignored_options};
+pub use method_api::{
+    BuildContext, ClusteringMethod, Foliage, IgnoredOptions, Method, MethodChoice, MethodError,
+    MethodName, MethodOptions, MethodOutput, MethodPlugin, MethodSection, Registry,
     SkeletonOptions, SpectralOptions,
 };
-pub use report::{DroppedReport, LodEntry, LodReport, LodTimings};
+pub use methods::{METHOD_NAMES, REGISTRY};
+pub use report::{DroppedReport, LodEntry, LodReport, LodTimings, ReportTimings};
 pub use screen_budget::{LodLevel, lod_levels, screen_height_at};
 
 /// The description type `--method spectral` uses.
@@ -41,7 +48,7 @@ pub const DEFAULT_SPECTRAL: SpectralKind = SpectralKind::AxisPhase;
 pub const DEFAULT_SKELETON: BoneDescriptionKind = BoneDescriptionKind::AxisAngle;
 
 /// Default animation zone size as a fraction of the bounding-box diagonal (or the LOD's ε when
-/// larger): oak_dense's 116k triangles become ~4,400 zones, which k-means clusters in ~1 s.
+/// larger): a large tree's foliage becomes a few thousand zones, few enough for k-means.
 pub const DEFAULT_ZONE_FRACTION: f32 = 0.02;
 
 /// The spectral k rule: one animation cluster per 10 pixels of tree height (6 at 60 px, 20 at

@@ -7,7 +7,7 @@
 use frond_scene::{Sampled, Tree};
 use glam::{Affine3A, Mat4, Vec3};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::cloud_build::sampled_worlds;
 use crate::contract::{AnimatedBillboardCloud, BillboardTexture, RigidMotion};
@@ -29,7 +29,7 @@ pub struct ScreenBudget {
 }
 
 /// What was removed, and why (reported per LOD).
-#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
 pub struct Dropped {
     /// Billboards whose own motion never moves a corner half a pixel: made static.
     pub motion_under_half_pixel: usize,

@@ -5,10 +5,46 @@
 
 use serde::Serialize;
 
-/// Why the LODs cannot be sized: the message names the option to change.
-#[derive(Clone, Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct SizingError(pub String);
+/// Why the LODs cannot be sized; each variant names the value to change.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SizingError {
+    /// The tree is flat or empty: pixels per world unit cannot be derived.
+    #[error("the tree has no height to size LODs by")]
+    NoHeight,
+    /// The pixel-error budget is not a positive number.
+    #[error("the pixel error must be a positive number of pixels")]
+    PixelError,
+    /// The screen heights do not go from near (largest) to far (smallest).
+    #[error(
+        "screen heights {}: they go from the nearest LOD (largest) to the farthest \
+         (smallest), each smaller than the one before, but {before} is followed by {after} \
+         (did you mean {}?)",
+        list(.given),
+        list(.sorted)
+    )]
+    NotNearToFar {
+        /// The screen heights given, pixels.
+        given: Vec<f32>,
+        /// The first height not followed by a smaller one.
+        before: f32,
+        /// The height that follows it.
+        after: f32,
+        /// The given heights largest first, without repeats: what was likely meant.
+        sorted: Vec<f32>,
+    },
+    /// A screen height under one pixel.
+    #[error("LOD screen height {0} must be at least 1 pixel")]
+    TooSmall(f32),
+}
+
+/// Screen heights as a comma-separated list.
+fn list(heights: &[f32]) -> String {
+    heights
+        .iter()
+        .map(|h| h.to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
 
 /// What one LOD may spend.
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
@@ -42,12 +78,10 @@ pub fn lod_levels(
     epsilon: Option<f32>,
 ) -> Result<Vec<LodLevel>, SizingError> {
     if !(tree_height.is_finite() && tree_height > 0.0) {
-        return Err(SizingError("the tree has no height to size LODs by".into()));
+        return Err(SizingError::NoHeight);
     }
     if !(budget_px.is_finite() && budget_px > 0.0) {
-        return Err(SizingError(
-            "--pixel-error must be a positive number of pixels".into(),
-        ));
+        return Err(SizingError::PixelError);
     }
     // LOD1 is the nearest: each LOD must be built for a smaller screen size than the one before
     // it, or the chain would get coarser and then finer again.
@@ -58,29 +92,18 @@ pub fn lod_levels(
         let mut sorted: Vec<f32> = screen_heights.to_vec();
         sorted.sort_by(|a, b| b.total_cmp(a));
         sorted.dedup();
-        let list = |v: &[f32]| {
-            v.iter()
-                .map(|h| h.to_string())
-                .collect::<Vec<_>>()
-                .join(",")
-        };
-        return Err(SizingError(format!(
-            "--lods {}: screen heights go from the nearest LOD (largest) to the farthest \
-             (smallest), each smaller than the one before, but {} is followed by {} (did you \
-             mean --lods {}?)",
-            list(screen_heights),
-            w[0],
-            w[1],
-            list(&sorted)
-        )));
+        return Err(SizingError::NotNearToFar {
+            given: screen_heights.to_vec(),
+            before: w[0],
+            after: w[1],
+            sorted,
+        });
     }
     screen_heights
         .iter()
         .map(|&h| {
             if !(h.is_finite() && h >= 1.0) {
-                return Err(SizingError(format!(
-                    "LOD screen height {h} must be at least 1 pixel"
-                )));
+                return Err(SizingError::TooSmall(h));
             }
             let pixel = tree_height / h;
             let eps = epsilon.unwrap_or(budget_px * pixel);
@@ -104,11 +127,23 @@ mod tests {
         let err = lod_levels(30.0, &[60.0, 600.0], 1.0, None)
             .unwrap_err()
             .to_string();
-        assert!(err.contains("did you mean --lods 600,60"), "{err}");
-        let err = lod_levels(30.0, &[600.0, 600.0], 1.0, None)
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("followed by 600"), "{err}");
+        assert!(err.contains("did you mean 600,60?"), "{err}");
+        assert!(!err.contains("--"), "{err}");
+        let err = lod_levels(30.0, &[600.0, 600.0], 1.0, None).unwrap_err();
+        assert!(err.to_string().contains("followed by 600"), "{err}");
+        assert_eq!(
+            err,
+            SizingError::NotNearToFar {
+                given: vec![600.0, 600.0],
+                before: 600.0,
+                after: 600.0,
+                sorted: vec![600.0],
+            }
+        );
+        assert_eq!(
+            lod_levels(30.0, &[60.0], 0.0, None),
+            Err(SizingError::PixelError)
+        );
         assert_eq!(
             lod_levels(30.0, &[600.0, 200.0, 60.0], 1.0, None)
                 .unwrap()

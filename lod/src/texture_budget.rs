@@ -1,4 +1,4 @@
-//! Texture sizes of a LOD (issue 17 item 4): every image the LOD's meshes draw with (wood maps,
+//! Texture sizes of a LOD: every image the LOD's meshes draw with (wood maps,
 //! a card LOD's leaf texture) is written no larger than the LOD's texel density asks for: one
 //! texel per screen pixel at the LOD's screen height (spec view-dependent-hierarchies-gpu
 //! §2.4, Holst's texture budget), where the density a map has on the mesh is measured from the
@@ -16,13 +16,10 @@ pub type ImageSizes = BTreeMap<usize, [u32; 2]>;
 
 /// Texels per screen pixel an alpha-tested (`MASK`) material's maps keep: the alpha test turns
 /// the texture's outline into the leaf's, and at one texel per pixel filtering moves that
-/// outline by a pixel. Measured on pine_medium's card LODs (coverage error at 600/200/60 px,
-/// issue 17): 0.107/0.214/0.83 at 1 texel per pixel, 0.043/0.127/0.60 at 4; with trimmed
-/// cards and the wood refined, 0.0052/0.085/0.354 at 4, 0.0027/0.080/0.326 at 8 and
-/// 0.0016/0.078/0.317 at 16 — four texels per sample of the metric's 4× supersampled render,
-/// where the 600 px LOD first matches plain wood decimation (gltfpack `-si`, 0.0023) — for
-/// 266 KB of texture at most against the input's 20 MB; the sample's did not change (its leaf
-/// map is already small).
+/// outline by a pixel. Sixteen is four texels per sample of the coverage metric's 4×
+/// supersampled render: the density at which a near card LOD's coverage error stops falling
+/// (docs/experiments.md has the measurements), still a small fraction of the input's texture
+/// bytes.
 pub const ALPHA_TESTED_TEXELS_PER_PIXEL: f32 = 16.0;
 
 /// Smallest side a downscaled image keeps.
@@ -186,6 +183,12 @@ pub fn parts_image_bytes(tree: &Tree, parts: &[WoodMesh], sizes: &ImageSizes) ->
         .filter_map(|j| sizes.get(j).copied().or_else(|| image_dimensions(tree, *j)))
         .map(|[w, h]| 4 * w as usize * h as usize)
         .sum()
+}
+
+/// The side of a square atlas of at most `texels` texels (a multiple of 4, at least 64).
+pub(crate) fn atlas_side(texels: usize) -> u32 {
+    let side = (texels as f64).sqrt().floor() as u32;
+    (side / 4 * 4).clamp(64, frond_billboard::bake::MAX_ATLAS_SIDE)
 }
 
 #[cfg(test)]

@@ -1,5 +1,5 @@
 //! SCA (spec animated-billboard-clouds §4.11–4.14) on the bundled sapling: billboards that move
-//! like their leaves, the shared-bone binding, and the failure modes of issue 6 (one bone, a
+//! like their leaves, the shared-bone binding, and its failure modes (one bone, a
 //! clip that does not loop, no motion, k larger than the zones).
 
 use std::path::Path;

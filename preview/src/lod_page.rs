@@ -509,7 +509,7 @@ fn cost_table(report: &LodReport, pictures: &[LodPictures]) -> String {
     ));
     t.push_str(&text_row(
         "Method",
-        lods.iter().map(|e| cell(&esc(&e.method))),
+        lods.iter().map(|e| cell(&esc(e.method.name()))),
     ));
     for row in &rows {
         t.push_str(&format!("<tr><td>{}</td>", row.label));
@@ -651,11 +651,11 @@ fn lod_section(report: &LodReport, k: usize, e: &LodEntry, p: &LodPictures) -> S
          <a href=\"{}\"><code>{}</code></a>. <b>{}</b>: {}</p>\n",
         e.screen_height.map_or("the input".into(), |h| format!(
             "{h} px high · {}",
-            esc(&e.method)
+            esc(e.method.name())
         )),
         href(&e.file),
         esc(&e.file),
-        esc(&e.method),
+        esc(e.method.name()),
         esc(&e.method_reason),
     );
     if let Some(m) = &e.error {

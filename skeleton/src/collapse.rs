@@ -18,14 +18,14 @@ use frond_scene::Trs;
 use frond_scene::rigid_fit::pivot_rotation_fit;
 use glam::{DVec3, Mat3, Mat4, Quat, Vec3};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::description::BoneDescriptionType;
 use crate::end_joint::EndJointSums;
 use crate::model::{SkNode, SkeletonModel};
 
 /// One collapse, for the report.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CollapseRecord {
     /// Name of the first of the two sibling bones collapsed.
     pub a: String,

@@ -10,7 +10,7 @@ use std::time::Instant;
 use frond_scene::{Sampled, Tree};
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::cjr::{Merge, apply_common_rotations, common_rotation_sets};
 use crate::collapse::{CollapseRecord, EndJointCache, collapse_candidates, collapse_pair};
@@ -50,7 +50,7 @@ pub struct CloudSet {
 }
 
 /// What SBCS did, for `report.json`.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct SkeletonReport {
     /// Name of the bone description type used.
     pub description: String,

@@ -228,7 +228,7 @@ pub fn run_settings(settings: LodSettings, json: bool) -> Result<()> {
         report.combined,
         report.lods.len(),
         frond_lod::report::report_name(&report.name),
-        report.timings_s["total"].as_f64().unwrap_or(0.0)
+        report.timings_s.total
     );
     if let Some(page) = report
         .files
@@ -237,7 +237,7 @@ pub fn run_settings(settings: LodSettings, json: bool) -> Result<()> {
     {
         crate::say!(
             "{page}: the preview ({:.2} s); its live view: frond view {}",
-            report.timings_s["preview"].as_f64().unwrap_or(0.0),
+            report.timings_s.preview.unwrap_or(0.0),
             settings.output.display()
         );
     }

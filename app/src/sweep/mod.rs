@@ -311,7 +311,7 @@ fn lod_run(
     let given =
         MethodChoice::parse(method).with_context(|| format!("unknown method '{method}'"))?;
     let resolved = match given.method() {
-        MethodName::Auto => {
+        MethodName::AUTO => {
             let heights = distinct_heights(&req.grid.points());
             let rank = heights.iter().filter(|&&h| h > p.screen_height).count();
             let cards = frond_lod::methods::cards::is_card_foliage(ctx.original());

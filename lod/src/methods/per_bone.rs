@@ -3,11 +3,25 @@
 //! reduction); foliage without a bone gets one cloud whose billboards follow the rigid fit of
 //! their triangles' motion.
 
+use std::sync::Arc;
+
 use frond_scene::{Sampled, Tree};
 
 use crate::cloud_build::{Driver, FoliageCluster, clustered_foliage};
 use crate::error::LodError;
-use crate::method::{BuildContext, ClusteringMethod, MethodName, MethodOutput};
+use crate::method_api::{
+    BuildContext, ClusteringMethod, MethodName, MethodOutput, MethodPlugin, uses_no_options,
+};
+
+/// `per-bone`'s name.
+pub const NAME: MethodName = MethodName::new("per-bone");
+
+/// `per-bone` as the registry lists it.
+pub const PLUGIN: MethodPlugin = MethodPlugin {
+    names: &[("per-bone", NAME)],
+    configure: |_, _, _| Ok(Arc::new(PerBone)),
+    uses: uses_no_options,
+};
 
 /// The `per-bone` method; it has no options.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -15,7 +29,7 @@ pub struct PerBone;
 
 impl ClusteringMethod for PerBone {
     fn name(&self) -> MethodName {
-        MethodName::PerBone
+        NAME
     }
 
     fn build(&self, ctx: &BuildContext) -> Result<MethodOutput, LodError> {

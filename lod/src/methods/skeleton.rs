@@ -4,14 +4,63 @@
 //! built per common-rotation set in its bone's rest frame and skinned to that bone, exactly
 //! as `per-bone` does for single bones. No billboard has motion of its own: the rig carries it.
 
-use frond_skeleton::{SkeletonParams, SkeletonReport, simplify};
+use std::sync::Arc;
 
-use crate::cloud_build::{BuildTimings, Driver, FoliageCluster, build_animated_cloud};
+use frond_skeleton::{BoneDescriptionKind, SkeletonParams, SkeletonReport, simplify};
+
+use crate::cloud_build::{Driver, FoliageCluster, build_animated_cloud};
 use crate::contract::AnimatedBillboardCloud;
 use crate::error::LodError;
-use crate::method::{
-    BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput, MethodReport,
-    SkeletonOptions,
+use crate::method_api::{
+    BuildContext, BuildTimings, ClusteringMethod, Foliage, MethodError, MethodName, MethodOutput,
+    MethodPlugin, MethodSection, OptionUse, SkeletonOptions,
+};
+
+/// The name of skeleton simplification with bone description type `kind`.
+pub const fn name_of(kind: BoneDescriptionKind) -> MethodName {
+    match kind {
+        BoneDescriptionKind::AxisAngle => MethodName::new("skeleton-axis-angle"),
+        BoneDescriptionKind::RotationSpectral => MethodName::new("skeleton-rotation-spectral"),
+    }
+}
+
+/// The bone description types, as the names list them.
+const KINDS: [BoneDescriptionKind; 2] = [
+    BoneDescriptionKind::AxisAngle,
+    BoneDescriptionKind::RotationSpectral,
+];
+
+/// The key of the LOD report entry that [`SkeletonReport`] is written under.
+pub const SECTION: &str = "skeleton";
+
+/// Skeleton simplification as the registry lists it: `skeleton` alone names the default
+/// description type ([`crate::DEFAULT_SKELETON`]).
+pub const PLUGIN: MethodPlugin = MethodPlugin {
+    names: &[
+        ("skeleton", name_of(crate::DEFAULT_SKELETON)),
+        (
+            "skeleton-axis-angle",
+            name_of(BoneDescriptionKind::AxisAngle),
+        ),
+        (
+            "skeleton-rotation-spectral",
+            name_of(BoneDescriptionKind::RotationSpectral),
+        ),
+    ],
+    configure: |name, options, _| {
+        let kind = KINDS
+            .into_iter()
+            .find(|&k| name_of(k) == name)
+            .ok_or_else(|| MethodError::Unknown(name.to_string()))?;
+        Ok(Arc::new(SkeletonOptions {
+            kind,
+            ..options.skeleton.clone()
+        }))
+    },
+    uses: |_| OptionUse {
+        spectral: false,
+        skeleton: true,
+    },
 };
 
 impl SkeletonOptions {
@@ -32,7 +81,7 @@ impl SkeletonOptions {
 
 impl ClusteringMethod for SkeletonOptions {
     fn name(&self) -> MethodName {
-        MethodName::Skeleton(self.kind)
+        name_of(self.kind)
     }
 
     fn build(&self, ctx: &BuildContext) -> Result<MethodOutput, LodError> {
@@ -40,7 +89,7 @@ impl ClusteringMethod for SkeletonOptions {
         Ok(MethodOutput {
             foliage: Foliage::Cloud(cloud),
             timings,
-            report: MethodReport::Skeleton(report),
+            section: Some(MethodSection::new(SECTION, &report)?),
         })
     }
 }

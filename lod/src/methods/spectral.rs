@@ -6,6 +6,7 @@
 //! one and carries only the motion relative to it.
 
 use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
 use std::time::Instant;
 
 use frond_scene::{Sampled, Tree};
@@ -16,24 +17,70 @@ use frond_spectral::kmeans::cluster_descriptions;
 use frond_spectral::zones::{animation_zones, mean_trajectory};
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use crate::cloud_build::{
-    BuildTimings, Driver, FoliageCluster, build_animated_cloud, sampled_worlds,
-};
+use crate::cloud_build::{Driver, FoliageCluster, build_animated_cloud, sampled_worlds};
 use crate::contract::{AnimatedBillboardCloud, RigidMotion, SpectralMotion};
 use crate::error::LodError;
-use crate::method::{
-    BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput, MethodReport,
-    SpectralOptions,
+use crate::method_api::{
+    BuildContext, BuildTimings, ClusteringMethod, Foliage, MethodError, MethodName, MethodOutput,
+    MethodPlugin, MethodSection, OptionUse, SpectralOptions,
 };
 use frond_billboard::Quad;
 use frond_billboard::cloud::CloudError;
 use frond_scene::rigid_fit::rigid_fit;
 
+/// The name of spectral clustering with description type `kind`.
+pub const fn name_of(kind: SpectralKind) -> MethodName {
+    match kind {
+        SpectralKind::Naive => MethodName::new("spectral-naive"),
+        SpectralKind::DominatingAxis => MethodName::new("spectral-dominating-axis"),
+        SpectralKind::AxisPhase => MethodName::new("spectral-axis-phase"),
+    }
+}
+
+/// The description types, as the names list them.
+const KINDS: [SpectralKind; 3] = [
+    SpectralKind::Naive,
+    SpectralKind::DominatingAxis,
+    SpectralKind::AxisPhase,
+];
+
+/// The key of the LOD report entry that [`SpectralReport`] is written under.
+pub const SECTION: &str = "spectral";
+
+/// Spectral clustering as the registry lists it: `spectral` alone names the default
+/// description type ([`crate::DEFAULT_SPECTRAL`]).
+pub const PLUGIN: MethodPlugin = MethodPlugin {
+    names: &[
+        ("spectral", name_of(crate::DEFAULT_SPECTRAL)),
+        ("spectral-naive", name_of(SpectralKind::Naive)),
+        (
+            "spectral-dominating-axis",
+            name_of(SpectralKind::DominatingAxis),
+        ),
+        ("spectral-axis-phase", name_of(SpectralKind::AxisPhase)),
+    ],
+    configure: |name, options, _| {
+        let kind = KINDS
+            .into_iter()
+            .find(|&k| name_of(k) == name)
+            .ok_or_else(|| MethodError::Unknown(name.to_string()))?;
+        Ok(Arc::new(SpectralOptions {
+            kind,
+            ..options.spectral.clone()
+        }))
+    },
+    uses: |_| OptionUse {
+        spectral: true,
+        skeleton: false,
+    },
+};
+
 /// What SCA is asked for.
 #[derive(Clone, Debug)]
 pub struct SpectralParams {
+    /// Description type (§4.4–4.8).
     pub kind: SpectralKind,
     /// Animation clusters k (capped at the number of zones).
     pub clusters: usize,
@@ -43,20 +90,26 @@ pub struct SpectralParams {
     pub bins: usize,
     /// k-means++ restarts beside the skeleton start (App. C.1).
     pub restarts: usize,
+    /// Seed of the k-means++ restarts.
     pub seed: u64,
+    /// Most k-means iterations of a run.
     pub max_iterations: usize,
     /// Bind billboards to their triangles' deepest shared bone (§4.12).
     pub shared_bone: bool,
 }
 
-/// What SCA did, for `report.json`.
-#[derive(Clone, Debug, Default, Serialize)]
+/// What SCA did: the `spectral` section of a spectral LOD's report entry.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SpectralReport {
+    /// Description type (`naive`, `dominating-axis`, `axis-phase`).
     pub kind: String,
     /// Clusters k after capping.
     pub clusters: usize,
+    /// Animation zones described.
     pub zones: usize,
+    /// Frequency bins shared by the descriptions.
     pub bins: usize,
+    /// k-means iterations of the kept run.
     pub iterations: usize,
     /// k-means error Σ w·deviation² of the kept run.
     pub error: f64,
@@ -75,8 +128,9 @@ pub struct SpectralReport {
     pub shared_bone_billboards: usize,
     /// Cosine terms over all billboards and axes, before the screen budget prunes them.
     pub terms: usize,
-    /// Seconds: zones + descriptions, k-means.
+    /// Seconds making the zones and their descriptions.
     pub t_describe: f64,
+    /// Seconds of the k-means.
     pub t_cluster: f64,
 }
 
@@ -143,7 +197,7 @@ impl SpectralOptions {
 
 impl ClusteringMethod for SpectralOptions {
     fn name(&self) -> MethodName {
-        MethodName::Spectral(self.kind)
+        name_of(self.kind)
     }
 
     fn build(&self, ctx: &BuildContext) -> Result<MethodOutput, LodError> {
@@ -151,7 +205,7 @@ impl ClusteringMethod for SpectralOptions {
         Ok(MethodOutput {
             foliage: Foliage::Cloud(cloud),
             timings,
-            report: MethodReport::Spectral(report),
+            section: Some(MethodSection::new(SECTION, &report)?),
         })
     }
 }
@@ -171,13 +225,19 @@ pub fn build_spectral_cloud(
 
 /// Zones, their trajectories and descriptions, and the k-means over them.
 pub struct ZoneClustering<T: DescriptionType> {
+    /// The description type, with the frequency bins the zones share.
     pub ty: T,
+    /// The animation zones (§4.11, App. C.2).
     pub zones: Vec<frond_spectral::zones::Zone>,
+    /// Each zone's mean trajectory over the loop's samples.
     pub trajectories: Vec<Vec<Vec3>>,
+    /// Each zone's description.
     pub descriptions: Vec<T::Desc>,
+    /// Each zone's weight in the k-means: its triangle count.
     pub weights: Vec<f32>,
     /// Cluster of each zone.
     pub assignment: Vec<usize>,
+    /// What the clustering did so far (the build adds the billboards' part).
     pub report: SpectralReport,
 }
 

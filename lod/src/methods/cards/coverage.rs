@@ -1,6 +1,6 @@
-//! Which leaf cards a LOD can spare, judged by what they cover on screen (issue 17 item 6, the
-//! card LOD). Every card is rasterised, alpha-tested with its own texture, into a ring of
-//! orthographic views at the LOD's pixel size; a card whose pixels other cards also cover adds
+//! Which leaf cards a LOD can spare, judged by what they cover on screen (the card LOD).
+//! Every card is rasterised, alpha-tested with its own texture, into a ring of orthographic
+//! views at the LOD's pixel size; a card whose pixels other cards also cover adds
 //! nothing to the tree's silhouette, so thinning drops, one at a time, the card that covers the
 //! fewest pixels no other card covers ([`CardCoverage::thin`]). The survivors are then grown by
 //! the one scale that makes their coverage closest to the input's ([`CardCoverage::best_scale`]):
@@ -145,8 +145,8 @@ struct Card {
 }
 
 /// Largest side of the alpha maps the rasteriser samples: the renderer's mip levels from the
-/// first this small stay in cache (the full 1024² maps made thinning oak_dense three times
-/// slower, every lookup a cache miss), and a card is a few samples wide.
+/// first this small stay in cache (on full-size maps every lookup is a cache miss), and a card
+/// is a few samples wide.
 const ALPHA_MAP_SIDE: u32 = 256;
 
 /// A texture's alpha as the renderer samples it: its coverage-preserving mip levels
@@ -412,8 +412,7 @@ impl CardCoverage {
 
     /// Every card's cover of `view`, rasterised once: per sample how many cards cover it and
     /// the XOR of their indices (the one card, when one does), and each card's covered samples,
-    /// so that thinning replays a dropped card's instead of rasterising it again (oak_dense at
-    /// 200 px: 8.6 M samples, 34 MB, against 27,000 cards drawn twelve times over).
+    /// so that thinning replays a dropped card's instead of rasterising it again.
     fn cover(&self, view: &View) -> Cover {
         let n = self.cards.len();
         let mut count = vec![0u32; view.width * view.height];

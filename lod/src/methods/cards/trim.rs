@@ -1,9 +1,8 @@
-//! Leaf cards trimmed to one triangle (issue 17 item 7: quads trimmed to what they show). A
-//! leaf card is a quad of two triangles whose texture is mostly transparent: a sprig drawn on
-//! a quarter of its texels. The smallest triangle that holds every texel the alpha test can
-//! pass, and whose part outside the card reads only transparent texels under the texture's
-//! wrap modes, draws exactly the card's pixels with one triangle instead of two and, on the
-//! X: half the triangles and less
+//! Leaf cards trimmed to one triangle: quads trimmed to what they show. A leaf card is a quad
+//! of two triangles whose texture is mostly transparent: a sprig drawn on a quarter of its
+//! texels. The smallest triangle that holds every texel the alpha test can pass, and whose
+//! part outside the card reads only transparent texels under the texture's wrap modes, draws
+//! exactly the card's pixels with one triangle instead of two: half the triangles and less
 //! overdraw at no coverage cost. A card LOD then keeps twice the cards per triangle.
 //!
 //! The triangle is searched in the card's texture frame (the parallelogram its corners span in
@@ -22,7 +21,7 @@ use frond_scene::sampling::world_at;
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{AlphaMode, Tree};
 
-use crate::methods::card_coverage::card_vertices;
+use super::coverage::card_vertices;
 
 /// Directions of the triangle's sides searched: every 360/64 = 5.6°.
 const DIRECTIONS: usize = 64;
@@ -43,14 +42,16 @@ const GRID: usize = 384;
 
 /// The foliage with its cards trimmed, and what trimming did.
 pub struct Trimmed {
+    /// The foliage, each trimmed card one triangle.
     pub mesh: WoodMesh,
     /// Cards replaced by one triangle.
     pub cards: usize,
     /// Blended cards left as quads because they bend more than one triangle can follow and the
     /// budget had room for their second triangle.
     pub kept_as_quads: usize,
-    /// Total area of the cards trimmed, before and after (world units²).
+    /// Total area of the cards trimmed, before trimming (world units²).
     pub area_before: f64,
+    /// Total area of their triangles after trimming (world units²).
     pub area_after: f64,
 }
 
@@ -74,8 +75,7 @@ struct CardTrim {
 /// A blended card bends when posed (its corners follow different bones) and a flat triangle
 /// cannot: when the trimmed foliage leaves room within `max_triangles`, the cards whose fit
 /// misses most (miss × the card's size: the pixels it moves) stay quads, one more triangle
-/// each (oak_medium_blendedleaves at 600 px: 0.0042 with every card trimmed, 0.00025 with
-/// every card a quad).
+/// each.
 pub fn trim_cards(tree: &Tree, mesh: &WoodMesh, max_triangles: usize) -> Trimmed {
     let pieces = mesh.pieces();
     let motion = BoneMotion::of(tree);
@@ -456,10 +456,10 @@ type Skin = ([u32; 4], [f32; 4]);
 /// the bones the card's vertices use, that move the triangle's points closest to where the
 /// card's own skin moves them, over `motion`'s frames and at `region.samples` (the texels the
 /// leaf shows, so the fit spends nothing on the transparent part). A card blended over bones
-/// whose weights vary across it bends when posed (its two triangles no longer coplanar: 3 % of
-/// its size at the median on oak_medium_blendedleaves), which one flat triangle cannot follow;
-/// fitting all three vertices together over the leaf's texels leaves a third of the error that
-/// fitting each vertex to the card's plane extended does (docs/experiments.md §13). `None` when
+/// whose weights vary across it bends when posed (its two triangles no longer coplanar), which
+/// one flat triangle cannot follow; fitting all three vertices together over the leaf's texels
+/// leaves less error than fitting each vertex to the card's plane extended
+/// (docs/experiments.md §13). `None` when
 /// there is nothing to fit (one bone, no clip, no samples).
 ///
 /// The least-squares problem is solved by accelerated projected gradient (FISTA) on the
@@ -679,27 +679,65 @@ fn triangle_over(
     material: &frond_scene::Material,
     region: &[Vec2; 3],
 ) -> Option<[Vec2; 3]> {
-    let [o, e1, e2] = *region;
-    let size = Vec2::new(w as f32, h as f32);
-    // Texel space <-> the region's frame (s, t) in [0, 1]².
-    let to_frame = |x: Vec2| -> Vec2 {
-        let d = x / size - o;
-        let det = e1.perp_dot(e2);
-        Vec2::new(d.perp_dot(e2) / det, e1.perp_dot(d) / det)
-    };
-    let to_texel = |f: Vec2| -> Vec2 { (o + e1 * f.x + e2 * f.y) * size };
-    if e1.perp_dot(e2).abs() <= f32::MIN_POSITIVE {
+    let frame = RegionFrame::new(region, w, h);
+    if frame.e1.perp_dot(frame.e2).abs() <= f32::MIN_POSITIVE {
         return None;
     }
+    let points = hull_points(opaque, w, h, &frame);
+    if points.is_empty() {
+        return None;
+    }
+    let grid = BlockedGrid::new(opaque, w, h, material, &frame);
+    let [a, b, c] = hull_triangles(&points)
+        .into_iter()
+        .map(|(_, t)| t)
+        .find(|t| grid.clear_of_blocked(t))?;
+    Some([a, b, c].map(|f| frame.o + frame.e1 * f.x + frame.e2 * f.y))
+}
 
-    // The hull's support points: per texel row, the outermost passing texels whose centres
-    // lie in the region, each grown to the square bilinear filtering reaches (a texel
-    // either side of its centre), clipped to the region.
+/// A region of a texture (origin `o` and edges `e1`, `e2` in texture coordinates) as a frame
+/// `(s, t)` over `[0, 1]²`, and the texture's size in texels.
+struct RegionFrame {
+    o: Vec2,
+    e1: Vec2,
+    e2: Vec2,
+    size: Vec2,
+}
+
+impl RegionFrame {
+    /// The frame of `region` over a `w` × `h` texture.
+    fn new(region: &[Vec2; 3], w: usize, h: usize) -> RegionFrame {
+        let [o, e1, e2] = *region;
+        RegionFrame {
+            o,
+            e1,
+            e2,
+            size: Vec2::new(w as f32, h as f32),
+        }
+    }
+
+    /// Texel space to the region's frame.
+    fn to_frame(&self, x: Vec2) -> Vec2 {
+        let d = x / self.size - self.o;
+        let det = self.e1.perp_dot(self.e2);
+        Vec2::new(d.perp_dot(self.e2) / det, self.e1.perp_dot(d) / det)
+    }
+
+    /// The region's frame to texel space.
+    fn to_texel(&self, f: Vec2) -> Vec2 {
+        (self.o + self.e1 * f.x + self.e2 * f.y) * self.size
+    }
+}
+
+/// The hull's support points: per texel row, the outermost passing texels whose centres lie
+/// in the region, each grown to the square bilinear filtering reaches (a texel either side of
+/// its centre), clipped to the region; in the region's frame.
+fn hull_points(opaque: &[bool], w: usize, h: usize, frame: &RegionFrame) -> Vec<Vec2> {
     let mut points: Vec<Vec2> = Vec::new();
     for y in 0..h {
         let row = &opaque[y * w..(y + 1) * w];
         let inside = |x: usize| {
-            let f = to_frame(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+            let f = frame.to_frame(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
             (0.0..=1.0).contains(&f.x) && (0.0..=1.0).contains(&f.y)
         };
         let first = (0..w).find(|&x| row[x] && inside(x));
@@ -712,41 +750,77 @@ fn triangle_over(
                 Vec2::new(-1.0, 1.0),
                 Vec2::ONE,
             ] {
-                points.push(to_frame(c + d).clamp(Vec2::ZERO, Vec2::ONE));
+                points.push(frame.to_frame(c + d).clamp(Vec2::ZERO, Vec2::ONE));
             }
         }
     }
-    if points.is_empty() {
-        return None;
+    points
+}
+
+/// Where a point outside the region may not go: its wrapped texel is within `clear` texels of
+/// a passing one. Read on an `n` × `n` grid over `[-1, 2]²` of the frame, as per-row prefix
+/// counts of blocked grid points.
+struct BlockedGrid {
+    /// Grid points per side.
+    n: usize,
+    /// Grid spacing in the frame.
+    step: f32,
+    /// Per row `j`, `prefix[j·(n+1) + i]` blocked points before column `i`.
+    prefix: Vec<u32>,
+    /// Blocked grid points a candidate may cover: their cells' area within [`SPILL`] of the
+    /// card.
+    allowed: u32,
+}
+
+impl BlockedGrid {
+    /// The grid of `frame` over the passing texels `opaque` (`w` × `h`) of `material`'s
+    /// base-colour texture, wrapped as the material wraps it.
+    fn new(
+        opaque: &[bool],
+        w: usize,
+        h: usize,
+        material: &frond_scene::Material,
+        frame: &RegionFrame,
+    ) -> BlockedGrid {
+        let clear = (CLEAR_PER_128 * w.max(h) as f32 / 128.0).max(2.0).ceil() as usize;
+        let near = dilate(opaque, w, h, clear);
+        let side = (frame.to_texel(Vec2::X) - frame.to_texel(Vec2::ZERO))
+            .length()
+            .max((frame.to_texel(Vec2::Y) - frame.to_texel(Vec2::ZERO)).length());
+        let n = ((3.0 * side / clear as f32).ceil() as usize).clamp(16, GRID);
+        let step = 3.0 / n as f32;
+        let mut grid = BlockedGrid {
+            n,
+            step,
+            prefix: vec![0u32; n * (n + 1)],
+            allowed: (SPILL / (step * step)).floor() as u32,
+        };
+        for j in 0..n {
+            for i in 0..n {
+                let f = Vec2::new(grid.grid_point(i), grid.grid_point(j));
+                let outside = !((0.0..=1.0).contains(&f.x) && (0.0..=1.0).contains(&f.y));
+                let blocked = outside && {
+                    let t = frame.to_texel(f);
+                    let x = material.base_color_wrap[0].texel(t.x, w as u32) as usize;
+                    let y = material.base_color_wrap[1].texel(t.y, h as u32) as usize;
+                    near[y * w + x]
+                };
+                grid.prefix[j * (n + 1) + i + 1] =
+                    grid.prefix[j * (n + 1) + i] + u32::from(blocked);
+            }
+        }
+        grid
     }
 
-    // Where a point outside the region may not go: its wrapped texel is within `clear` texels
-    // of a passing one. Read on a grid over [-1, 2]² of the frame, as per-row prefix counts.
-    let clear = (CLEAR_PER_128 * w.max(h) as f32 / 128.0).max(2.0).ceil() as usize;
-    let near = dilate(opaque, w, h, clear);
-    let side = (to_texel(Vec2::X) - to_texel(Vec2::ZERO))
-        .length()
-        .max((to_texel(Vec2::Y) - to_texel(Vec2::ZERO)).length());
-    let n = ((3.0 * side / clear as f32).ceil() as usize).clamp(16, GRID);
-    let step = 3.0 / n as f32;
-    let grid_point = |i: usize| -1.0 + (i as f32 + 0.5) * step;
-    let mut prefix = vec![0u32; n * (n + 1)];
-    for j in 0..n {
-        for i in 0..n {
-            let f = Vec2::new(grid_point(i), grid_point(j));
-            let outside = !((0.0..=1.0).contains(&f.x) && (0.0..=1.0).contains(&f.y));
-            let blocked = outside && {
-                let t = to_texel(f);
-                let x = material.base_color_wrap[0].texel(t.x, w as u32) as usize;
-                let y = material.base_color_wrap[1].texel(t.y, h as u32) as usize;
-                near[y * w + x]
-            };
-            prefix[j * (n + 1) + i + 1] = prefix[j * (n + 1) + i] + u32::from(blocked);
-        }
+    /// The frame coordinate of grid line `i`.
+    fn grid_point(&self, i: usize) -> f32 {
+        -1.0 + (i as f32 + 0.5) * self.step
     }
-    // Blocked grid points a candidate may cover: their cells' area within [`SPILL`] of the card.
-    let allowed = (SPILL / (step * step)).floor() as u32;
-    let clear_of_blocked = |tri: &[Vec2; 3]| -> bool {
+
+    /// Whether triangle `tri` (in the frame) stays within the grid and covers no more blocked
+    /// points than allowed.
+    fn clear_of_blocked(&self, tri: &[Vec2; 3]) -> bool {
+        let (n, step) = (self.n, self.step);
         if tri
             .iter()
             .any(|v| v.min_element() < -1.0 || v.max_element() > 2.0)
@@ -759,7 +833,7 @@ fn triangle_over(
         let j0 = (((lo + 1.0) / step - 0.5).ceil().max(0.0)) as usize;
         let j1 = (((hi + 1.0) / step - 0.5).floor() as usize).min(n - 1);
         for j in j0..=j1 {
-            let y = grid_point(j);
+            let y = self.grid_point(j);
             // The triangle's span on this row.
             let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
             for k in 0..3 {
@@ -780,16 +854,19 @@ fn triangle_over(
             }
             let i1 = (i1 as usize).min(n - 1);
             if i0 <= i1 {
-                blocked += prefix[j * (n + 1) + i1 + 1] - prefix[j * (n + 1) + i0];
-                if blocked > allowed {
+                blocked += self.prefix[j * (n + 1) + i1 + 1] - self.prefix[j * (n + 1) + i0];
+                if blocked > self.allowed {
                     return false;
                 }
             }
         }
         true
-    };
+    }
+}
 
-    // Supporting lines of the points' hull, and the triangles three of them close.
+/// Triangles closed by three supporting lines of `points`' hull (of [`DIRECTIONS`] normals),
+/// smaller than the card itself, with their areas, smallest first.
+fn hull_triangles(points: &[Vec2]) -> Vec<(f32, [Vec2; 3])> {
     let normals: Vec<Vec2> = (0..DIRECTIONS)
         .map(|k| Vec2::from_angle(k as f32 * std::f32::consts::TAU / DIRECTIONS as f32))
         .collect();
@@ -833,11 +910,7 @@ fn triangle_over(
         }
     }
     candidates.sort_by(|p, q| p.0.total_cmp(&q.0));
-    let [a, b, c] = candidates
-        .into_iter()
-        .map(|(_, t)| t)
-        .find(|t| clear_of_blocked(t))?;
-    Some([a, b, c].map(|f| o + e1 * f.x + e2 * f.y))
+    candidates
 }
 
 /// Which texels of `material`'s base-colour texture its alpha test passes (alpha times the

@@ -1,50 +1,62 @@
-//! `cards`: the input's own leaf cards, thinned (issue 17 item 6, the *card LOD*; SpeedTree's
-//! leaf reduction and ez-tree's LODs do the same): the cards that add least to the tree's
-//! silhouette at the LOD's pixel size are dropped until the rest fit the LOD's triangle
-//! budget ([`crate::methods::card_coverage`]), and the survivors are grown about their centres
-//! by the scale that brings their coverage closest to the input's. Cards are first trimmed to
-//! one triangle where their texture allows ([`crate::methods::card_trim`]): half the
-//! triangles, so twice the cards within a budget. The cards stay
-//! skinned as in the input and share its leaf material and texture: no bake, no atlas.
+//! `cards`: the input's own leaf cards, thinned (the *card LOD*; SpeedTree's leaf reduction
+//! and ez-tree's LODs do the same): the cards that add least to the tree's silhouette at the
+//! LOD's pixel size are dropped until the rest fit the LOD's triangle budget ([`coverage`]),
+//! and the survivors are grown about their centres by the scale that brings their coverage
+//! closest to the input's. Cards are first trimmed to one triangle where their texture allows
+//! ([`trim`]): half the triangles, so twice the cards within a budget. The cards stay skinned
+//! as in the input and share its leaf material and texture: no bake, no atlas.
+
+pub mod coverage;
+pub mod trim;
+
+use std::sync::Arc;
 
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use frond_scene::wood::WoodMesh;
 use frond_scene::{Part, Rig, Tree};
 
-use crate::chain::part_mesh;
+pub use crate::contract::CardFoliage;
 use crate::error::LodError;
-use crate::method::{BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput};
-use crate::methods::card_coverage::{CardCoverage, card_centre, card_vertices};
-use crate::methods::card_trim::trim_cards;
+use crate::method_api::{
+    BuildContext, ClusteringMethod, Foliage, MethodName, MethodOutput, MethodPlugin, MethodSection,
+    uses_no_options,
+};
+use crate::part_mesh::{part_mesh, triangle_area};
+use coverage::{CardCoverage, card_centre, card_vertices};
+use trim::trim_cards;
+
+/// `cards`' name.
+pub const NAME: MethodName = MethodName::new("cards");
+
+/// The key of the LOD report entry that [`CardReport`] is written under.
+pub const SECTION: &str = "cards";
+
+/// `cards` as the registry lists it.
+pub const PLUGIN: MethodPlugin = MethodPlugin {
+    names: &[("cards", NAME)],
+    configure: |_, _, _| Ok(Arc::new(Cards)),
+    uses: uses_no_options,
+};
 
 /// The `cards` method; it has no options.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Cards;
 
-/// Thinned leaf cards, ready to be skinned like the input's.
-#[derive(Clone, Debug)]
-pub struct CardFoliage {
-    /// The kept cards, scaled, bones as rig node indices, the input's foliage materials.
-    pub mesh: WoodMesh,
-    /// The skeleton the cards follow: the tree's, until the chain's budget prunes it.
-    pub rig: Rig,
-    pub report: CardReport,
-}
-
-/// What thinning did.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+/// What thinning did: the `cards` section of a card LOD's report entry.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct CardReport {
     /// Cards of the input (connected pieces of foliage triangles).
     pub cards: usize,
-    /// Cards drawn as one trimmed triangle ([`crate::methods::card_trim`]).
+    /// Cards drawn as one trimmed triangle ([`trim`]).
     pub trimmed: usize,
     /// Blended cards left as quads within the triangle budget: they bend when posed, which
     /// one triangle cannot follow.
     pub kept_as_quads: usize,
+    /// Cards kept within the LOD's triangle budget.
     pub kept: usize,
     /// Linear scale of every kept card about its centre.
     pub scale: f32,
@@ -52,7 +64,7 @@ pub struct CardReport {
 
 impl ClusteringMethod for Cards {
     fn name(&self) -> MethodName {
-        MethodName::Cards
+        NAME
     }
 
     /// Cards keep the input's own skinning: nothing of the sampled loop is read.
@@ -70,12 +82,13 @@ impl ClusteringMethod for Cards {
             triangles: max_triangles,
             area: ctx.max_alpha_tested_area.unwrap_or(f64::INFINITY),
         };
-        let mut cards = thin_cards(ctx.tree, &foliage, &budget, ctx.level.pixel, ctx.seed);
+        let (mut cards, report) =
+            thin_cards(ctx.tree, &foliage, &budget, ctx.level.pixel, ctx.seed);
         cards.rig = ctx.tree.rig.clone();
         Ok(MethodOutput {
             foliage: Foliage::Cards(cards),
             timings: Default::default(),
-            report: Default::default(),
+            section: Some(MethodSection::new(SECTION, &report)?),
         })
     }
 }
@@ -106,13 +119,6 @@ pub fn is_card_foliage(tree: &Tree) -> bool {
     10 * cards >= 9 * pieces.len()
 }
 
-/// Area of triangle `t` of primitive `p`.
-pub(crate) fn triangle_area(mesh: &WoodMesh, p: usize, t: usize) -> f32 {
-    let i = &mesh.primitives[p].indices[3 * t..3 * t + 3];
-    let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[i[k] as usize]);
-    0.5 * (b - a).cross(c - a).length()
-}
-
 /// Scales tried for the kept cards, from 1 to `√(all cards' area / kept area)` (the scale that
 /// keeps the leaf area): where cards overlap, growing them by the full ratio covers pixels the
 /// input left open.
@@ -122,14 +128,14 @@ const SCALE_STEPS: usize = 5;
 /// pixel, at most `max_triangles` triangles of them (at least one card; see
 /// [`CardCoverage::thin`]), each scaled about its centre by the scale whose coverage is
 /// closest to the input's ([`CardCoverage::best_scale`]). `seed` orders cards that are equally
-/// redundant.
+/// redundant. Returns the cards (over no rig yet) and what thinning did.
 pub fn thin_cards(
     tree: &Tree,
     foliage: &WoodMesh,
     budget: &CardBudget,
     pixel: f32,
     seed: u64,
-) -> CardFoliage {
+) -> (CardFoliage, CardReport) {
     let max_triangles = budget.triangles;
     let trimmed = trim_cards(tree, foliage, max_triangles);
     let foliage = &trimmed.mesh;
@@ -195,15 +201,16 @@ pub fn thin_cards(
         }
     }
     mesh.primitives.retain(|p| !p.indices.is_empty());
-    CardFoliage {
+    let foliage = CardFoliage {
         mesh: mesh.compacted(),
         rig: Rig::default(),
-        report: CardReport {
-            cards: cards.len(),
-            trimmed: trimmed.cards,
-            kept_as_quads: trimmed.kept_as_quads,
-            kept,
-            scale,
-        },
-    }
+    };
+    let report = CardReport {
+        cards: cards.len(),
+        trimmed: trimmed.cards,
+        kept_as_quads: trimmed.kept_as_quads,
+        kept,
+        scale,
+    };
+    (foliage, report)
 }
