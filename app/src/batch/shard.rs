@@ -9,7 +9,9 @@ use sha2::{Digest, Sha256};
 /// Shard `index` of `count` (0-based).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Shard {
+    /// Which shard this is, below `count`.
     pub index: u64,
+    /// How many shards the batch is split into (at least 1).
     pub count: u64,
 }
 
@@ -67,9 +69,7 @@ impl Shard {
             )?;
             let min = num("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
             let index = id.checked_sub(min).with_context(|| {
-                format!(
-                    "shard auto: SLURM_ARRAY_TASK_ID {id} is below SLURM_ARRAY_TASK_MIN {min}"
-                )
+                format!("shard auto: SLURM_ARRAY_TASK_ID {id} is below SLURM_ARRAY_TASK_MIN {min}")
             })?;
             return Shard::new(index, count).context(
                 "shard auto (Slurm; use a contiguous --array range such as 0-7 so that ID − MIN \
