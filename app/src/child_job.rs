@@ -23,7 +23,9 @@ pub enum JobEnd {
 /// How a child ended, how long it ran and the most memory it held.
 #[derive(Clone, Debug)]
 pub struct ChildRun {
+    /// Whether it finished, failed or was killed at the limit.
     pub end: JobEnd,
+    /// Wall-clock time from the start to its end (or its kill at the limit).
     pub wall: Duration,
     /// Peak resident set size (Linux `VmHWM`, sampled while it ran; None elsewhere).
     pub peak_rss: Option<u64>,

@@ -22,33 +22,51 @@ use crate::output_set::OutputSet;
 pub struct CloudRequest {
     /// ε as given: "5%" of the rest-pose bounding-box diagonal, or an absolute length.
     pub epsilon: Length,
+    /// Plane search and bake settings; its ε is replaced by [`CloudRequest::epsilon`] resolved
+    /// against the tree's diagonal.
     pub params: CloudParams,
+    /// Uniform samples over the loop whose average pose the cloud is built from.
     pub samples: usize,
+    /// Clip to sample (None: the first).
     pub clip: Option<String>,
     /// Coverage views (0 skips the check).
     pub coverage_views: u32,
+    /// Width and height in pixels of each coverage view image.
     pub coverage_size: (u32, u32),
 }
 
 /// `<name>_cloud_stats.json`.
 #[derive(Debug, Serialize)]
 pub struct CloudReport {
+    /// The input tree's path.
     pub input: String,
     /// ε in world units, and as given.
     pub epsilon: f32,
+    /// ε as the request gave it (`5%` or a length), so the report can be rerun.
     pub epsilon_arg: String,
+    /// Rest-pose bounding-box diagonal (world units): what a percentage ε is of.
     pub diagonal: f32,
     /// Candidate planes per iteration.
     pub planes: usize,
+    /// Seed of the plane search's random candidate planes: same input and seed, same cloud.
     pub seed: u64,
+    /// Billboards (textured quads) of the cloud.
     pub billboards: usize,
+    /// Sum of the quads' areas (world units²): the cost measure beside the count.
     pub total_area: f64,
+    /// Bytes of the colour and normal atlases as RGBA8 texels (decoded size, not the
+    /// PNG files').
     pub texture_bytes: usize,
     /// Static coverage error of the cloud vs the original foliage (spec §5.4), or null if skipped.
     pub coverage_error: Option<f64>,
+    /// Each coverage view's score, in view order; empty when the check was skipped.
     pub coverage_per_view: Vec<f64>,
+    /// Wall time of each stage in seconds (`plane_search`, `rectangles`, `bake`, `total`):
+    /// timing, so it differs between otherwise identical runs.
     pub timings_s: serde_json::Value,
+    /// Every size and error fact of the built cloud.
     pub cloud: CloudStats,
+    /// The files written, relative to the output folder, this stats file last.
     pub files: Vec<String>,
 }
 

@@ -11,6 +11,8 @@ use serde::Serialize;
 /// One engine's conventions.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct EnginePreset {
+    /// The preset's name (`unity`, `unreal`, `godot`, `web`): what settings and summaries
+    /// record.
     pub name: &'static str,
     /// Largest atlas side written (`--max-atlas`).
     pub max_atlas: u32,

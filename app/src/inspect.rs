@@ -11,29 +11,46 @@ const MOTION_SAMPLES: usize = 16;
 /// The inspect report.
 #[derive(Debug, Serialize)]
 pub struct InspectReport {
+    /// The tree file's path as it was opened.
     pub file: String,
+    /// Triangles by part, as the file holds them (degenerate ones counted).
     pub triangles: TriangleCounts,
+    /// Vertices of all mesh instances after import.
     pub vertices: usize,
+    /// Bones (skin joints) of the rig.
     pub bones: usize,
+    /// Longest chain of bones from a root bone (1 for a root alone, 0 without bones).
     pub skeleton_depth: u32,
     /// Distinct bones that carry foliage.
     pub foliage_bones: usize,
+    /// Foliage triangles whose vertices were not all rigidly bound to the one bone chosen for
+    /// them (spec §1.3), so that following that bone alone departs from the input's skinning.
     pub foliage_reassigned: usize,
+    /// Each primitive's wood/foliage decision and the rule that made it, in file order.
     pub classification: Vec<Classification>,
+    /// The file's materials, in file order.
     pub materials: Vec<MaterialSummary>,
+    /// The decoded textures, in file order.
     pub textures: Vec<TextureSummary>,
+    /// Every animation clip with its loop and motion check.
     pub clips: Vec<ClipSummary>,
+    /// Rest-pose world bounds of all triangles (file units, metres in glTF).
     pub bounds: Bounds,
     /// The sampled loop of the chosen clip (`--clip`, `--samples`).
     pub sampling: SamplingSummary,
+    /// What the import accepted with a warning (static tree, unsupported channels, …).
     pub warnings: Vec<String>,
 }
 
 /// What sampling the chosen clip produced.
 #[derive(Debug, Serialize)]
 pub struct SamplingSummary {
+    /// The sampled clip's name; None for a tree without clips (its rest pose).
     pub clip: Option<String>,
+    /// Uniform samples over one period (1 for a static tree or a clip of zero length).
     pub samples: usize,
+    /// Loop period in seconds: the clip's duration; 0 for a tree without clips or a clip of
+    /// zero length.
     pub period_s: f32,
     /// Non-degenerate foliage triangles with a centre trajectory.
     pub trajectories: usize,
@@ -41,7 +58,10 @@ pub struct SamplingSummary {
     pub max_leaf_excursion: f32,
     /// Mean of that distance over foliage triangles.
     pub mean_leaf_excursion: f32,
+    /// Whether the clip's last pose matches its first within [`LOOP_TOLERANCE`](frond_scene::sampling::LOOP_TOLERANCE) × tree height,
+    /// so the loop plays without a jump.
     pub loops: bool,
+    /// Whether any vertex moves more than [`MOTION_TOLERANCE`](frond_scene::sampling::MOTION_TOLERANCE) × tree height over the clip.
     pub moves: bool,
     /// Wall time of the sampling (not part of the stable output).
     pub seconds: f64,
@@ -79,39 +99,61 @@ impl SamplingSummary {
 /// Triangle counts as the file holds them.
 #[derive(Debug, Serialize)]
 pub struct TriangleCounts {
+    /// All triangles of all primitives.
     pub total: usize,
+    /// Triangles classified as wood (trunk and branches).
     pub wood: usize,
+    /// Triangles classified as foliage (leaves and cards: what billboards stand for).
     pub foliage: usize,
+    /// Triangles of zero area at rest: counted above but skipped by later stages.
     pub degenerate: usize,
 }
 
 /// One material.
 #[derive(Debug, Serialize)]
 pub struct MaterialSummary {
+    /// The material's name in the file.
     pub name: String,
+    /// glTF alpha mode: opaque, mask (alpha-tested) or blend.
     pub alpha_mode: frond_scene::AlphaMode,
+    /// Alpha below which a masked material's texel is discarded (glTF `alphaCutoff`,
+    /// 0.5 when the file gives none).
     pub alpha_cutoff: f32,
+    /// Whether back faces are drawn too (glTF `doubleSided`).
     pub double_sided: bool,
+    /// Name of its base-colour texture ([`TextureSummary::name`]), if it has one.
     pub texture: Option<String>,
 }
 
 /// One decoded texture.
 #[derive(Debug, Serialize)]
 pub struct TextureSummary {
+    /// The source image's name in the file, or `image<N>` (its index) when it has none.
     pub name: String,
+    /// Width in texels, as decoded.
     pub width: u32,
+    /// Height in texels, as decoded.
     pub height: u32,
 }
 
 /// One animation clip.
 #[derive(Debug, Serialize)]
 pub struct ClipSummary {
+    /// The clip's name in the file.
     pub name: String,
+    /// Length in seconds from its first to its last key: the loop period.
     pub duration_s: f32,
+    /// Animation channels (one node property each) the clip drives.
     pub channels: usize,
+    /// Whether `loop_gap` is within [`LOOP_TOLERANCE`](frond_scene::sampling::LOOP_TOLERANCE) × tree height, so the clip loops
+    /// without a jump.
     pub loops: bool,
+    /// Whether `max_displacement` exceeds [`MOTION_TOLERANCE`](frond_scene::sampling::MOTION_TOLERANCE) × tree height.
     pub moves: bool,
+    /// Largest vertex distance between the clip's first and last pose (file units).
     pub loop_gap: f32,
+    /// Largest vertex distance from the first pose over poses evenly spaced through
+    /// the clip (file units).
     pub max_displacement: f32,
 }
 

@@ -8,15 +8,23 @@ use glam::Vec3;
 /// What to render.
 #[derive(Clone, Debug)]
 pub struct RenderRequest {
+    /// Clip to pose the tree with (None: the first clip; the rest pose without clips).
     pub clip: Option<String>,
+    /// Time in seconds on the clip's keys, at which the tree is posed.
     pub time: f32,
+    /// Camera azimuth in degrees around the vertical axis: 0 looks from +Z, 90 from +X.
     pub azimuth_deg: f32,
+    /// Camera elevation in degrees above the horizon (negative looks from below).
     pub elevation_deg: f32,
     /// Camera distance in multiples of the framing distance (1 = the tree fills the view).
     pub zoom: f32,
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Orthographic projection instead of the 40° vertical field of view perspective.
     pub orthographic: bool,
+    /// Which triangles to draw: all, wood only or foliage only.
     pub parts: TreeParts,
 }
 

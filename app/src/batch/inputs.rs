@@ -15,15 +15,23 @@ use crate::lod_settings::{Animation, MethodChoice, Named};
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Overrides {
+    /// `frond lod`'s LOD method by name (one of [`MethodChoice::list`]).
     pub method: Option<String>,
     /// Screen heights in pixels, nearest first.
     pub lods: Option<Vec<f32>>,
+    /// How billboards are animated, by name (one of [`Animation::list`]).
     pub animation: Option<String>,
+    /// Materials read as foliage whatever their names say.
     pub foliage_material: Option<Vec<String>>,
+    /// Materials read as wood whatever their names say.
     pub wood_material: Option<Vec<String>>,
+    /// Clip to sample (None: the first).
     pub clip: Option<String>,
+    /// Random seed of the build: same input, settings and seed, same files.
     pub seed: Option<u64>,
+    /// Uniform animation samples over the loop.
     pub samples: Option<usize>,
+    /// Screen-space error budget in pixels, from which each LOD's ε is derived.
     pub pixel_error: Option<f32>,
     /// Skeleton methods: billboard clouds per LOD.
     pub clouds: Option<u64>,
@@ -99,6 +107,8 @@ pub struct TreeInput {
     /// Its path relative to INPUT (the manifest's folder for a manifest), `/`-separated: the
     /// tree's name in summaries and the key of `--shard`.
     pub relative: String,
+    /// The tree file as it is opened: under INPUT, or the manifest entry's path resolved
+    /// against the manifest's folder.
     pub path: PathBuf,
     /// Output folder relative to OUTDIR: `relative` without its extension (or the manifest's
     /// `output`).

@@ -20,11 +20,12 @@ use summary::{BatchSummary, Counts, Status, TreeEntry};
 use tree_job::{TreeContext, process};
 
 /// Memory a `frond lod` child is assumed to need before any has been measured: a fixed part
-/// (renderer, buffers) plus a multiple of the input file's size. Measured peaks (default
-/// settings, `cargo bench --bench batch_throughput`): small generated trees (0.4 MB) 0.21–0.24
-/// GB, the shared trees (2–4 MB) 0.32–0.54 GB, medium generated trees (3.3 MB) 0.68–0.84 GB,
-/// oak_dense (16 MB) 1.19 GB: at most ~150 bytes above the base per input byte.
+/// (renderer, buffers), in bytes, plus [`MEMORY_PER_INPUT_BYTE`] for each byte of the input
+/// file. Both are set just above the peaks `cargo bench --bench batch_throughput` measures
+/// (docs/experiments.md, "How fast does frond batch process a library").
 pub const BASE_MEMORY: u64 = 256 << 20;
+/// Bytes a `frond lod` child is assumed to need per byte of its input file, on top
+/// of [`BASE_MEMORY`], until this run has measured more.
 pub const MEMORY_PER_INPUT_BYTE: u64 = 160;
 
 /// What `frond batch` was asked for.
@@ -32,12 +33,15 @@ pub const MEMORY_PER_INPUT_BYTE: u64 = 160;
 pub struct BatchRequest {
     /// A folder or a TOML manifest.
     pub input: PathBuf,
+    /// OUTDIR: each tree's output folder, the summaries and `index.html` go under it.
     pub out_dir: PathBuf,
     /// Trees at once (at most).
     pub jobs: usize,
+    /// The shard of the trees this process takes (None: every tree).
     pub shard: Option<Shard>,
     /// Memory the running trees may hold together (bytes); a tree larger than it runs alone.
     pub max_memory: u64,
+    /// What every tree's child processes share.
     pub context: TreeContext,
 }
 
@@ -45,7 +49,9 @@ pub struct BatchRequest {
 pub trait BatchProgress: Sync {
     /// The trees this run will look at (after sharding).
     fn total(&self, trees: usize);
+    /// A tree (its path relative to INPUT) was taken by a worker.
     fn started(&self, tree: &str);
+    /// A tree is done: built, up to date or failed, with its summary line.
     fn finished(&self, entry: &TreeEntry);
 }
 

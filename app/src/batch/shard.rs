@@ -9,7 +9,9 @@ use sha2::{Digest, Sha256};
 /// Shard `index` of `count` (0-based).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Shard {
+    /// Which shard this is, below `count`.
     pub index: u64,
+    /// How many shards the batch is split into (at least 1).
     pub count: u64,
 }
 

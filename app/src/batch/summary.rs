@@ -19,25 +19,35 @@ pub enum Status {
     Built,
     /// Its output matched the input hash and parameters already; left as it was.
     UpToDate,
+    /// Not built: the reason is in [`TreeEntry::reason`]; an older output, if any, is kept.
     Failed,
 }
 
 /// One output file and its size.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FileEntry {
+    /// File name, relative to the tree's output folder.
     pub name: String,
+    /// Size in bytes.
     pub bytes: u64,
 }
 
 /// One LOD of a tree, from its `report.json` (and `frond eval` with `--eval`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LodLine {
+    /// The LOD's GLB, relative to the tree's output folder.
     pub file: String,
+    /// Pixels the tree covers when this LOD is shown (None for LOD0, the input itself).
     pub screen_height: Option<f32>,
+    /// The method the LOD was built with (`auto` resolved).
     pub method: String,
+    /// Triangles drawn: the wood plus two per billboard.
     pub triangles: u64,
+    /// Billboards (textured quads) of the LOD.
     pub billboards: u64,
+    /// Joints of the LOD's skin.
     pub bones: u64,
+    /// Decoded bytes (RGBA8) of every image the LOD draws with.
     pub texture_bytes: u64,
     /// Mean of each `frond eval` metric (with `--eval`; not for LOD0, the input itself).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
@@ -51,6 +61,7 @@ pub struct TreeEntry {
     pub tree: String,
     /// Output folder relative to OUTDIR.
     pub output: String,
+    /// Built, up to date or failed.
     pub status: Status,
     /// Why it failed.
     pub reason: Option<String>,
@@ -60,10 +71,13 @@ pub struct TreeEntry {
     pub params_hash: String,
     /// The `frond lod` settings the tree was built with (None when they could not be made).
     pub settings: Option<crate::lod_settings::LodSettings>,
+    /// The engine preset's name the tree was built for (None: no preset).
     pub preset: Option<String>,
     /// The files written (`report.json`, whose size follows its timing fields, aside).
     pub files: Vec<FileEntry>,
+    /// Bytes of the files in `files` together.
     pub output_bytes: u64,
+    /// Each LOD's line, LOD0 (the input) first.
     pub lods: Vec<LodLine>,
     /// The engine preset's limits a written GLB breaks.
     pub warnings: Vec<String>,
@@ -71,6 +85,7 @@ pub struct TreeEntry {
     pub times_s: BTreeMap<String, f64>,
     /// Timing: wall time of the tree's processes, and their peak resident memory.
     pub wall_s: f64,
+    /// Largest resident memory of any of its processes, bytes (None where not measured).
     pub peak_rss_bytes: Option<u64>,
 }
 
@@ -110,13 +125,18 @@ impl TreeEntry {
 /// Trees by status.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Counts {
+    /// Trees in the summary.
     pub trees: usize,
+    /// Trees built by the run.
     pub built: usize,
+    /// Trees skipped because their output was already up to date.
     pub up_to_date: usize,
+    /// Trees that failed.
     pub failed: usize,
 }
 
 impl Counts {
+    /// Counts the entries by their status.
     pub fn of(trees: &[TreeEntry]) -> Counts {
         let n = |s| trees.iter().filter(|t| t.status == s).count();
         Counts {
@@ -139,19 +159,25 @@ impl Counts {
 /// `summary.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct BatchSummary {
+    /// Version of the `frond` that ran the batch.
     pub frond: String,
+    /// INPUT as given: the library folder or the manifest.
     pub input: String,
+    /// The engine preset's name (None: no preset).
     pub preset: Option<String>,
     /// The shard this run did (None: every tree).
     pub shard: Option<Shard>,
     /// Summaries `frond batch-merge` read.
     #[serde(default)]
     pub merged_from: Vec<String>,
+    /// Trees by status.
     pub counts: Counts,
     /// Sorted by `tree`.
     pub trees: Vec<TreeEntry>,
     /// Timing: the run's wall time and most trees at once.
     pub wall_s: f64,
+    /// Workers the run used: the trees-at-once limit it was given
+    /// ([`BatchRequest::jobs`](super::BatchRequest::jobs)), at most one per tree.
     pub jobs: usize,
 }
 

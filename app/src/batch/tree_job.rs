@@ -26,7 +26,6 @@ use frond_preview::VIEWER_DIR;
 
 /// Name of each tree's stamp, written last into its output folder.
 pub const STAMP: &str = "batch.json";
-/// `frond lod`'s report in each output folder.
 /// `frond lod`'s report of the tree read from `input` (`<name>_report.json`).
 pub fn report_file(input: &Path) -> String {
     frond_lod::report::report_name(&crate::lod_cmd::name_of(input))
@@ -48,10 +47,15 @@ pub struct TreeContext {
     /// Plane search and bake options passed to every `frond lod` (clouds and clusters come
     /// from each tree's settings).
     pub build: BuildSettings,
+    /// The engine preset every tree is built for, and whose limits each GLB is checked
+    /// against.
     pub preset: Option<EnginePreset>,
+    /// Run `frond eval` on each LOD and put its metrics' means in the LOD's summary line.
     pub eval: bool,
     /// Each tree's `frond lod` writes its preview page (`frond batch --no-preview` skips it).
     pub preview: bool,
+    /// How long one child (a tree's `frond lod`, or one LOD's `frond eval`) may run before
+    /// it is killed and the tree recorded as failed.
     pub timeout: Duration,
     /// `RAYON_NUM_THREADS` of each child.
     pub threads: usize,

@@ -9,10 +9,12 @@ use frond_scene::Length;
 pub enum Grid {
     /// One LOD per screen height (pixels); ε = pixel budget × tree height / height.
     ScreenHeights(Vec<f32>),
-    /// Fixed ε values (world units, with the text they came from), each built and evaluated at
-    /// `screen_height` (texture density and image size).
+    /// Fixed ε values (world units), each built and evaluated at `screen_height` (texture
+    /// density and image size).
     Epsilons {
+        /// The ε values, world units, in the order given.
         values: Vec<f32>,
+        /// Screen height in pixels every ε is built and evaluated at.
         screen_height: f32,
     },
 }

@@ -114,6 +114,7 @@ pub struct Row {
     pub epsilon: Option<f64>,
     /// ε as a percentage of the rest-pose bounding-box diagonal.
     pub epsilon_pct: Option<f64>,
+    /// The run's random seed (`frond lod`'s); None for an external candidate.
     pub seed: Option<u64>,
     /// Why the run failed (`timeout`, `error`, `empty output`, `error > 1`, `NaN`, with
     /// details); None when it did not.
@@ -288,12 +289,17 @@ fn opt(x: Option<f64>) -> String {
 /// One configuration (method and grid point) over its seeds.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Stability {
+    /// The configuration's method, as its rows name it.
     pub method: String,
+    /// Screen height in pixels the configuration was built and evaluated at.
     pub screen_height: f32,
     /// ε of the configuration (world units): the fixed one, or the rule's.
     pub epsilon: Option<f64>,
+    /// ε as a percentage of the rest-pose bounding-box diagonal, mean over its runs.
     pub epsilon_pct: Option<f64>,
+    /// Runs of the configuration (one per seed), failed ones included.
     pub runs: usize,
+    /// Those of its runs that failed.
     pub failed: usize,
     /// Spread of each [`stability_quantities`] quantity over the runs that have it.
     pub spread: BTreeMap<String, Spread>,
