@@ -113,7 +113,9 @@ fn check_file(file: &Path, fallback: bool) -> Vec<Checked> {
 /// The validator's only complaints about a KTX2 file are that it does not know the format
 /// (version 2.0.0-dev.3.10 predates KHR_texture_basisu): no errors, no other warning.
 fn assert_valid(file: &Path) {
-    let report = validate(file);
+    let Some(report) = validate(file) else {
+        return;
+    };
     assert_eq!(report["errors"], 0, "{}: {report}", file.display());
     for m in report["messages"].as_array().into_iter().flatten() {
         let m = m.as_str().unwrap_or_default();

@@ -7,11 +7,11 @@
 //! `target/test-artefacts/preview_browser/` (`anim_0.png`, `anim_1.png`, `lod_<k>.png`,
 //! `page.png`).
 //!
-//! Skips (one `skipped:` line) when Chromium or Node is not installed; `.ci/run` installs both.
+//! Skips (one `skipped:` line) when Chromium, Node or puppeteer-core (in `tools/node_modules`)
+//! is not installed; `.ci/run` installs them.
 
 mod common;
 
-use std::io::Write;
 use std::path::Path;
 use std::process::Command;
 
@@ -98,18 +98,16 @@ fn chromium_plays_oak_dense() {
 /// Chromium, leaving the screenshots in `target/test-artefacts/<artefacts>/`.
 fn check_in_chromium(input: &Path, artefacts: &str) {
     let Some(chromium) = chromium() else {
-        let _ = std::io::stderr().lock().write_all(
-            b"skipped: preview_browser: chromium not installed (apt-get install chromium, or set FROND_CHROMIUM)\n",
+        report_not_installed(
+            None,
+            "chromium",
+            "apt-get install chromium, as bash .ci/run does, or set FROND_CHROMIUM",
         );
         return;
     };
-    if !on_path("node") {
-        let _ = std::io::stderr()
-            .lock()
-            .write_all(b"skipped: preview_browser: node not installed\n");
+    let Some(tools) = node_tools() else {
         return;
-    }
-    let tools = node_tools();
+    };
     let tmp = tempfile::tempdir().expect("tmp");
     let out = tmp.path().join("out");
     let report = frond_lod_measured(input, &out, &["--no-measure"]);
