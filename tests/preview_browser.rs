@@ -84,12 +84,14 @@ fn chromium_plays_the_live_view_and_switches_lods() {
     check_in_chromium(&root().join("samples/sapling.glb"), "preview_browser");
 }
 
-/// The same on oak_dense, the benchmark tree (116k leaf triangles): the screenshots the issue's
-/// note describes, in `target/test-artefacts/preview_browser_oak_dense/`. Ignored (minutes in a
-/// debug build); run with `--ignored`.
+/// The same on oak_dense, the benchmark tree (116k leaf triangles), its screenshots in
+/// `target/test-artefacts/preview_browser_oak_dense/`. A heavy case, in `.ci/run`'s
+/// release-mode run.
 #[test]
-#[ignore = "the benchmark tree: run with --ignored for its screenshots"]
-fn chromium_plays_oak_dense() {
+fn heavy_chromium_plays_oak_dense() {
+    if !heavy() {
+        return;
+    }
     frond_testdata::require_tree!("oak_dense.glb");
     check_in_chromium(&shared_tree("oak_dense.glb"), "preview_browser_oak_dense");
 }

@@ -161,6 +161,28 @@ pub fn report_not_installed(step: Option<&str>, what: &str, how: &str) {
     let _ = std::io::stderr().lock().write_all(line.as_bytes());
 }
 
+/// The environment variable that lets the heavy cases run: the benchmark tree, long fuzz runs,
+/// timings. A plain `cargo test` (a debug build) leaves them out; `.ci/run` sets it for its
+/// release-mode run of just those cases (tests named `heavy_*`).
+pub const HEAVY: &str = "FROND_HEAVY_TESTS";
+
+/// True when [`HEAVY`] is set (to anything but empty or `0`); else prints one
+/// `skipped: <test>: heavy case (…)` line for the running test, which then returns.
+pub fn heavy() -> bool {
+    use std::io::Write;
+    if std::env::var_os(HEAVY).is_some_and(|v| !v.is_empty() && v != "0") {
+        return true;
+    }
+    let line = format!(
+        "skipped: {}: heavy case, left to the release-mode run (set {HEAVY}=1; bash .ci/run \
+         runs it)\n",
+        test_name()
+    );
+    // Nothing sensible to do when stderr is gone; the test still skips.
+    let _ = std::io::stderr().lock().write_all(line.as_bytes());
+    false
+}
+
 /// The Node packages the tests drive from `tools/` (tools/package.json): the Khronos glTF
 /// validator, gltfpack, three.js and puppeteer-core (which drives Debian's Chromium).
 const NODE_PACKAGES: [&str; 4] = ["gltf-validator", "gltfpack", "three", "puppeteer-core"];
@@ -343,6 +365,7 @@ const _: () = {
         frond_eval,
         test_name,
         report_not_installed,
+        heavy,
         node_tools,
         node_tools_for,
         validate,
