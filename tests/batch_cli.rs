@@ -491,7 +491,9 @@ fn manifest_overrides_preset_eval_and_staleness() {
         );
         let folder = out.join(t["output"].as_str().unwrap());
         for l in lods {
-            let report = validate(&folder.join(l["file"].as_str().unwrap()));
+            let Some(report) = validate(&folder.join(l["file"].as_str().unwrap())) else {
+                continue;
+            };
             assert_eq!(report["errors"], 0, "{report}");
             assert_eq!(report["warnings"], 0, "{report}");
             // The preset's influence limit, as the validator counts it.

@@ -31,12 +31,13 @@ fn lod1(dir: &Path, normals: &str) -> GltfSource {
     let file = out.join(report["lods"][1]["file"].as_str().expect("file"));
     // The normal map comes with the tangents it is read in (else the validator warns that
     // engines must generate them, not portably).
-    let v = validate(&file);
-    assert_eq!(
-        (v["errors"].as_u64(), v["warnings"].as_u64()),
-        (Some(0), Some(0)),
-        "{v}"
-    );
+    if let Some(v) = validate(&file) {
+        assert_eq!(
+            (v["errors"].as_u64(), v["warnings"].as_u64()),
+            (Some(0), Some(0)),
+            "{v}"
+        );
+    }
     GltfSource::open(&file, &InputLimits::default()).expect("reads")
 }
 

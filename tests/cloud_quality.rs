@@ -1,6 +1,9 @@
-//! Heavy quality checks of billboard clouds, run by hand in release (numbers go in the issue
-//! notes): `cargo test --release --test cloud_quality -- --ignored --nocapture`. They use the
-//! shared trees (`FROND_TEST_TREES`) and skip with one line where those are absent.
+//! Heavy quality checks of billboard clouds, in the release-mode run of the heavy cases that
+//! `.ci/run` makes (`FROND_HEAVY_TESTS=1 cargo test --release --test cloud_quality -- heavy_
+//! --nocapture` prints their figures); a plain `cargo test` skips them with one line each. They
+//! use the shared trees (`FROND_TEST_TREES`) and skip with one line where those are absent.
+
+mod common;
 
 use frond_app::cloud_cmd::{CloudRequest, make_cloud};
 use frond_billboard::cloud::CloudParams;
@@ -22,9 +25,12 @@ fn request(epsilon: &str, candidates: usize, seed: u64, texels_per_unit: f32) ->
     }
 }
 
+/// Bakes thousands of quads per tree: a heavy case.
 #[test]
-#[ignore = "bakes thousands of quads per tree; run by hand in release"]
-fn coverage_error_at_epsilon_zero_on_the_shared_trees() {
+fn heavy_coverage_error_at_epsilon_zero_on_the_shared_trees() {
+    if !common::heavy() {
+        return;
+    }
     let names = [
         "bush_1.glb",
         "oak_medium.glb",
@@ -53,9 +59,12 @@ fn coverage_error_at_epsilon_zero_on_the_shared_trees() {
     assert!(worst <= 0.02, "worst coverage error at ε = 0: {worst}");
 }
 
+/// 20 clouds with their coverage measured: a heavy case.
 #[test]
-#[ignore = "20 clouds with coverage; run by hand in release"]
-fn stable_over_twenty_seeds_at_two_percent_on_oak_medium() {
+fn heavy_stable_over_twenty_seeds_at_two_percent_on_oak_medium() {
+    if !common::heavy() {
+        return;
+    }
     let path = frond_testdata::require_tree!("oak_medium.glb");
     let renderer = Renderer::new().expect("adapter");
     let tree = import(&path, &ImportOptions::default()).expect("imports");

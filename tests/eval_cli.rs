@@ -140,7 +140,9 @@ fn a_per_bone_lod_stays_within_its_epsilon_and_a_foreign_copy_is_skipped_with_a_
 
 #[test]
 fn a_gltfpack_simplified_tree_is_evaluated_like_any_candidate() {
-    let tools = node_tools();
+    let Some(tools) = node_tools() else {
+        return;
+    };
     let dir = tempfile::tempdir().expect("tmp");
     let sapling = root().join("samples/sapling.glb");
     let packed = dir.path().join("sapling_si01.glb");

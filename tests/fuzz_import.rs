@@ -2,8 +2,9 @@
 //! real exporters' trees (the `tests/fixtures/` ez-tree bush and Blender round trip) are
 //! mutated in their JSON (numbers swapped for edge values, bytes flipped) and binary chunks,
 //! re-wrapped as valid GLB containers, or truncated. Every result must be
-//! `Ok` or a clean `Err`: never a panic. A short run is part of the tests; a long one is
-//! `FROND_FUZZ_RUNS=20000 cargo test --release --test fuzz_import -- --ignored`.
+//! `Ok` or a clean `Err`: never a panic. A short run is part of the tests; a long one is a heavy
+//! case in `.ci/run`'s release-mode run (`FROND_HEAVY_TESTS=1 FROND_FUZZ_RUNS=20000 cargo test
+//! --release --test fuzz_import -- heavy_` for a longer one by hand).
 
 mod common;
 
@@ -167,9 +168,13 @@ fn importer_survives_mutated_real_trees() {
     fuzz(120, 1);
 }
 
+/// A long fuzz run (`FROND_FUZZ_RUNS` sets the count): a heavy case, in `.ci/run`'s
+/// release-mode run.
 #[test]
-#[ignore = "long fuzz run; FROND_FUZZ_RUNS sets the count"]
-fn importer_survives_a_long_fuzz_run() {
+fn heavy_importer_survives_a_long_fuzz_run() {
+    if !common::heavy() {
+        return;
+    }
     let runs = std::env::var("FROND_FUZZ_RUNS")
         .ok()
         .and_then(|v| v.parse().ok())

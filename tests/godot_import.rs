@@ -39,7 +39,6 @@
 mod common;
 
 use std::collections::HashMap;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::Mutex;
@@ -54,9 +53,9 @@ const GODOT_NOISE: &[&str] = &["ERROR: free_static: Condition \"p_ptr == __null\
 /// racily.
 static GODOT: Mutex<()> = Mutex::new(());
 
-/// When Godot cannot run here: prints one `skipped:` line for `test` (straight to stderr, past
-/// libtest's capture, like `frond_testdata::report_skip`) and returns true.
-fn skip_without_godot(test: &str) -> bool {
+/// When Godot cannot run here: prints one `skipped:` line for the running test
+/// (`common::report_not_installed`) and returns true.
+fn skip_without_godot() -> bool {
     let missing: Vec<&str> = ["godot3", "xvfb-run", "bash"]
         .into_iter()
         .filter(|tool| !on_path(tool))
@@ -64,11 +63,11 @@ fn skip_without_godot(test: &str) -> bool {
     if missing.is_empty() {
         return false;
     }
-    let line = format!(
-        "skipped: godot_import::{test}: godot3 not installed ({} not on PATH; apt-get install godot3 xvfb)\n",
-        missing.join(", ")
+    report_not_installed(
+        None,
+        &missing.join(", "),
+        "apt-get install godot3 xvfb xauth, as bash .ci/run does",
     );
-    let _ = std::io::stderr().lock().write_all(line.as_bytes());
     true
 }
 
@@ -584,7 +583,7 @@ fn times(report: &Value) -> Vec<String> {
 /// atlases), plus the default chain's combined file.
 #[test]
 fn godot_imports_and_renders_the_sample_chains() {
-    if skip_without_godot("godot_imports_and_renders_the_sample_chains") {
+    if skip_without_godot() {
         return;
     }
     let dir = tempfile::tempdir().expect("temp dir");
@@ -640,7 +639,7 @@ fn check_chain<'a>(
 #[test]
 fn godot_imports_and_renders_the_pine_chain() {
     let tree = frond_testdata::require_tree!("pine_medium_blender.glb");
-    if skip_without_godot("godot_imports_and_renders_the_pine_chain") {
+    if skip_without_godot() {
         return;
     }
     let dir = tempfile::tempdir().expect("temp dir");
@@ -657,7 +656,7 @@ fn godot_imports_and_renders_the_pine_chain() {
 /// `texelFetch`/`textureSize` need), each with the uniforms the sidecars feed.
 #[test]
 fn godot_compiles_the_shipped_godot3_shaders() {
-    if skip_without_godot("godot_compiles_the_shipped_godot3_shaders") {
+    if skip_without_godot() {
         return;
     }
     let shaders: Vec<PathBuf> = frond_export::shaders::SHADERS
@@ -706,7 +705,7 @@ fn godot_compiles_the_shipped_godot3_shaders() {
 /// same cloud and motion: frond itself does not play VAT), so they move, and move right.
 #[test]
 fn godot_plays_a_vat_lod_where_frond_plays_it_skinned() {
-    if skip_without_godot("godot_plays_a_vat_lod_where_frond_plays_it_skinned") {
+    if skip_without_godot() {
         return;
     }
     let dir = tempfile::tempdir().expect("temp dir");

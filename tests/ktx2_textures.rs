@@ -113,7 +113,9 @@ fn check_file(file: &Path, fallback: bool) -> Vec<Checked> {
 /// The validator's only complaints about a KTX2 file are that it does not know the format
 /// (version 2.0.0-dev.3.10 predates KHR_texture_basisu): no errors, no other warning.
 fn assert_valid(file: &Path) {
-    let report = validate(file);
+    let Some(report) = validate(file) else {
+        return;
+    };
     assert_eq!(report["errors"], 0, "{}: {report}", file.display());
     for m in report["messages"].as_array().into_iter().flatten() {
         let m = m.as_str().unwrap_or_default();
@@ -211,13 +213,15 @@ fn ktx2_lods_measure_like_png_ones_and_external_files_are_ktx2() {
     assert!(files.iter().any(|f| f.ends_with(".ktx2")), "{files:?}");
 }
 
-/// Issue 18's target on the benchmark tree: its 60 px LOD takes ≤ 512 KiB of GPU texture
+/// The KTX2 target on the benchmark tree: its 60 px LOD takes ≤ 512 KiB of GPU texture
 /// memory (colour and normal maps, mips included, transcoded), and seen at a quarter of its
-/// size (mip level 2) its alpha-tested coverage stays within 5 % of full size.
-/// (`cargo test --release --test ktx2_textures -- --ignored`.)
+/// size (mip level 2) its alpha-tested coverage stays within 5 % of full size. A heavy case
+/// (oak_dense), in `.ci/run`'s release-mode run.
 #[test]
-#[ignore = "oak_dense, the benchmark tree: run by hand, numbers in the issue's note"]
-fn oak_dense_far_lod_fits_half_a_megabyte_on_the_gpu_and_keeps_coverage_at_a_quarter_size() {
+fn heavy_oak_dense_far_lod_fits_half_a_megabyte_on_the_gpu_and_keeps_coverage_at_a_quarter_size() {
+    if !heavy() {
+        return;
+    }
     let [tree] = frond_testdata::require_trees!(["oak_dense.glb"])
         .try_into()
         .expect("one tree");

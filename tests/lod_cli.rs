@@ -42,7 +42,9 @@ fn glbs(dir: &Path) -> Vec<PathBuf> {
 }
 
 fn assert_valid(file: &Path) {
-    let v = validate(file);
+    let Some(v) = validate(file) else {
+        return;
+    };
     assert_eq!(v["errors"], 0, "{}: {}", file.display(), v["messages"]);
     assert_eq!(v["warnings"], 0, "{}: {}", file.display(), v["messages"]);
 }
@@ -62,9 +64,11 @@ fn message_codes(v: &serde_json::Value) -> Vec<String> {
 /// No error, and no warning the input itself does not have: LOD files pass the input's
 /// materials through, so a warning about them (a normal map without tangents) is the input's.
 fn assert_valid_like(file: &Path, input: &Path) {
-    let v = validate(file);
+    let (Some(v), Some(of_input)) = (validate(file), validate(input)) else {
+        return;
+    };
     assert_eq!(v["errors"], 0, "{}: {}", file.display(), v["messages"]);
-    let inherited = message_codes(&validate(input));
+    let inherited = message_codes(&of_input);
     for code in message_codes(&v) {
         assert!(
             inherited.contains(&code),

@@ -7,11 +7,11 @@
 //! `target/test-artefacts/preview_browser/` (`anim_0.png`, `anim_1.png`, `lod_<k>.png`,
 //! `page.png`).
 //!
-//! Skips (one `skipped:` line) when Chromium or Node is not installed; `.ci/run` installs both.
+//! Skips (one `skipped:` line) when Chromium, Node or puppeteer-core (in `tools/node_modules`)
+//! is not installed; `.ci/run` installs them.
 
 mod common;
 
-use std::io::Write;
 use std::path::Path;
 use std::process::Command;
 
@@ -84,12 +84,14 @@ fn chromium_plays_the_live_view_and_switches_lods() {
     check_in_chromium(&root().join("samples/sapling.glb"), "preview_browser");
 }
 
-/// The same on oak_dense, the benchmark tree (116k leaf triangles): the screenshots the issue's
-/// note describes, in `target/test-artefacts/preview_browser_oak_dense/`. Ignored (minutes in a
-/// debug build); run with `--ignored`.
+/// The same on oak_dense, the benchmark tree (116k leaf triangles), its screenshots in
+/// `target/test-artefacts/preview_browser_oak_dense/`. A heavy case, in `.ci/run`'s
+/// release-mode run.
 #[test]
-#[ignore = "the benchmark tree: run with --ignored for its screenshots"]
-fn chromium_plays_oak_dense() {
+fn heavy_chromium_plays_oak_dense() {
+    if !heavy() {
+        return;
+    }
     frond_testdata::require_tree!("oak_dense.glb");
     check_in_chromium(&shared_tree("oak_dense.glb"), "preview_browser_oak_dense");
 }
@@ -98,18 +100,16 @@ fn chromium_plays_oak_dense() {
 /// Chromium, leaving the screenshots in `target/test-artefacts/<artefacts>/`.
 fn check_in_chromium(input: &Path, artefacts: &str) {
     let Some(chromium) = chromium() else {
-        let _ = std::io::stderr().lock().write_all(
-            b"skipped: preview_browser: chromium not installed (apt-get install chromium, or set FROND_CHROMIUM)\n",
+        report_not_installed(
+            None,
+            "chromium",
+            "apt-get install chromium, as bash .ci/run does, or set FROND_CHROMIUM",
         );
         return;
     };
-    if !on_path("node") {
-        let _ = std::io::stderr()
-            .lock()
-            .write_all(b"skipped: preview_browser: node not installed\n");
+    let Some(tools) = node_tools() else {
         return;
-    }
-    let tools = node_tools();
+    };
     let tmp = tempfile::tempdir().expect("tmp");
     let out = tmp.path().join("out");
     let report = frond_lod_measured(input, &out, &["--no-measure"]);

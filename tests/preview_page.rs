@@ -369,10 +369,12 @@ fn frond_view_serves_the_folder_and_nothing_outside_it() {
 }
 
 /// oak_dense, the benchmark tree: the page and what it adds stay under 5 MB and cost under a
-/// tenth of the run. Ignored (about a minute in a debug build); run with `--ignored`.
+/// tenth of the run. A heavy case, in `.ci/run`'s release-mode run.
 #[test]
-#[ignore = "the benchmark tree: run with --ignored and report the figures"]
-fn oak_dense_preview_stays_small_and_cheap() {
+fn heavy_oak_dense_preview_stays_small_and_cheap() {
+    if !heavy() {
+        return;
+    }
     frond_testdata::require_tree!("oak_dense.glb");
     let tmp = tempfile::tempdir().expect("tmp");
     let out = tmp.path().join("out");

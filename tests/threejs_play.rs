@@ -11,8 +11,10 @@
 //! lined up (a file frond reads differently) the comparison falls back to point sets: every
 //! three.js vertex against the nearest frond vertex of the same time (grid hash).
 //!
-//! Skips (with a message) only when `node` is not installed; `three` comes from tools/package.json
-//! like the validator and gltfpack (`common::node_tools` installs it).
+//! `three` comes from tools/package.json like the validator and gltfpack; when `node` or the
+//! packages in `tools/node_modules` are missing (`.ci/run` installs them), a test that only plays
+//! trees in three.js skips with one `skipped:` line (`common::node_tools`), and one that also
+//! checks frond's own output skips only its three.js (and validator) steps.
 //!
 //! The same check runs on every file `frond lod` writes (LOD0, the billboard-cloud LODs and the
 //! combined file): three.js plays our skins, billboards included, exactly where frond's importer
@@ -31,11 +33,15 @@ use glam::Vec3;
 /// One three.js mesh (one glTF primitive) as sampled by `three_sample.mjs`.
 #[derive(Debug, Clone)]
 pub struct ThreeMesh {
+    /// The three.js object's name (the glTF mesh's or node's, as GLTFLoader names it).
     pub name: String,
-    /// glTF node, mesh and primitive indices the object was made from.
+    /// glTF node index the object was made from (None when the script could not tell).
     pub node: Option<usize>,
+    /// glTF mesh index the object was made from.
     pub mesh: Option<usize>,
+    /// Index of the glTF primitive in its mesh that the object draws.
     pub primitive: Option<usize>,
+    /// A three.js SkinnedMesh (bound to a skeleton), not a plain Mesh.
     pub skinned: bool,
     /// World positions, one Vec per requested time.
     pub positions: Vec<Vec<Vec3>>,
@@ -46,27 +52,22 @@ pub struct ThreeMesh {
 pub struct ThreeClip {
     /// None for a file without animations (rest pose).
     pub name: Option<String>,
+    /// The clip's length in seconds as three.js counts it (its last key time).
     pub duration: f32,
+    /// The clip times sampled, seconds of the file's own time base.
     pub times: Vec<f32>,
+    /// Every mesh three.js made, in its scene traversal order.
     pub meshes: Vec<ThreeMesh>,
-}
-
-/// True when `node` runs. Local helper: tests/common has none.
-fn have_node() -> bool {
-    Command::new("node")
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success())
 }
 
 fn usize_of(v: &serde_json::Value) -> Option<usize> {
     v.as_u64().map(|n| n as usize)
 }
 
-/// Plays `glb` in three.js: clip `clip` (None: the first clip, or the rest pose when the file
-/// has none) at `times` seconds of the file's own time base; world positions per mesh and time.
-pub fn three_play(glb: &Path, clip: Option<&str>, times: &[f32]) -> ThreeClip {
-    let tools = common::node_tools();
+/// Plays `glb` in three.js (`tools`: the `tools/` folder with the Node clients installed, from
+/// `common::node_tools`): clip `clip` (None: the first clip, or the rest pose when the file has
+/// none) at `times` seconds of the file's own time base; world positions per mesh and time.
+pub fn three_play(tools: &Path, glb: &Path, clip: Option<&str>, times: &[f32]) -> ThreeClip {
     let times_arg = times
         .iter()
         .map(|t| format!("{t:?}"))
@@ -132,8 +133,13 @@ pub fn three_play(glb: &Path, clip: Option<&str>, times: &[f32]) -> ThreeClip {
 
 /// World positions three.js gives `glb` at `times` of clip `clip`: per time, every mesh's
 /// vertices in the script's (scene traversal) order, flattened.
-pub fn three_positions(glb: &Path, clip: Option<&str>, times: &[f32]) -> Vec<Vec<Vec3>> {
-    flatten(&three_play(glb, clip, times))
+pub fn three_positions(
+    tools: &Path,
+    glb: &Path,
+    clip: Option<&str>,
+    times: &[f32],
+) -> Vec<Vec<Vec3>> {
+    flatten(&three_play(tools, glb, clip, times))
 }
 
 fn flatten(play: &ThreeClip) -> Vec<Vec<Vec3>> {
@@ -227,6 +233,7 @@ pub struct Agreement {
     pub per_time: Vec<f32>,
     /// Compared one to one (else as point sets).
     pub one_to_one: bool,
+    /// Vertices three.js drew at the first time.
     pub vertices: usize,
     /// Largest displacement of a vertex from its time-0 position in three.js (proves the clip moves).
     pub max_motion: f32,
@@ -236,6 +243,7 @@ pub struct Agreement {
 /// after the clip's start and compares every vertex with frond's `pose_at` at the same time.
 /// Point-set fallback searches within `radius`.
 pub fn compare_with_frond(
+    tools: &Path,
     glb: &Path,
     tree: &Tree,
     clip: usize,
@@ -244,7 +252,7 @@ pub fn compare_with_frond(
 ) -> Agreement {
     let c = &tree.rig.clips[clip];
     let abs: Vec<f32> = rel_times.iter().map(|t| c.start + t).collect();
-    let play = three_play(glb, Some(&c.name), &abs);
+    let play = three_play(tools, glb, Some(&c.name), &abs);
     compare_play(glb, tree, clip, &play, radius)
 }
 
@@ -303,10 +311,9 @@ fn trees() -> Vec<PathBuf> {
 
 #[test]
 fn threejs_plays_trees_like_frond_samples_them() {
-    if !have_node() {
-        eprintln!("skipped: `node` is not installed (three.js playback check)");
+    let Some(tools) = common::node_tools() else {
         return;
-    }
+    };
     for path in trees() {
         let tree = import(&path, &ImportOptions::default()).expect("tree imports");
         assert!(!tree.rig.clips.is_empty(), "{path:?} has a clip");
@@ -324,7 +331,7 @@ fn threejs_plays_trees_like_frond_samples_them() {
             3.0 * period / 4.0,
             0.37 * period,
         ];
-        let a = compare_with_frond(&path, &tree, 0, &times, 10.0 * tolerance);
+        let a = compare_with_frond(&tools, &path, &tree, 0, &times, 10.0 * tolerance);
         eprintln!(
             "{}: {} vertices, {}, height {height:.3}, max distance {:.3e} ({:.3e} × height) per time {:?}, motion {:.3e}",
             path.file_name().unwrap_or_default().to_string_lossy(),
@@ -357,14 +364,14 @@ fn threejs_plays_trees_like_frond_samples_them() {
 
 #[test]
 fn point_set_fallback_agrees_with_the_one_to_one_match() {
-    if !have_node() {
-        eprintln!("skipped: `node` is not installed (three.js playback check)");
+    let Some(tools) = common::node_tools() else {
         return;
-    }
+    };
     let path = common::root().join("samples/sapling.glb");
     let tree = import(&path, &ImportOptions::default()).expect("sapling imports");
     let t = 0.3 * tree.rig.clips[0].duration();
     let three = three_positions(
+        &tools,
         &path,
         Some(&tree.rig.clips[0].name),
         &[tree.rig.clips[0].start + t],
@@ -390,10 +397,9 @@ fn max_displacement(mesh: &ThreeMesh) -> f32 {
 
 #[test]
 fn threejs_plays_every_lod_file_like_frond_samples_it() {
-    if !have_node() {
-        eprintln!("skipped: `node` is not installed (three.js playback check)");
-        return;
-    }
+    // Without the Node clients, frond's own reading of each file (its Wind clip in phase with the
+    // input's) is still checked.
+    let tools = common::node_tools_for(Some("three.js playback"));
     let input_path = common::root().join("samples/sapling.glb");
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("lods");
@@ -464,8 +470,11 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
             clip_in.start,
             clip_in.end
         );
+        let Some(tools) = &tools else {
+            continue;
+        };
         let abs: Vec<f32> = rel.iter().map(|t| c.start + t).collect();
-        let play = three_play(file, Some("Wind"), &abs);
+        let play = three_play(tools, file, Some("Wind"), &abs);
         // three.js's clip duration is its last key time.
         assert!(
             (play.duration - clip_in.end).abs() <= 1e-4,
@@ -543,7 +552,7 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
         }
     }
     // Both billboard LODs were seen moving, in their own files and in the combined one.
-    for k in 1..3 {
+    for k in (1..3).filter(|_| tools.is_some()) {
         let name = format!("sapling_LOD{k}");
         assert_eq!(
             moved.iter().filter(|n| **n == name).count(),
@@ -559,10 +568,9 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
 /// frond reads it back with the same triangles.
 #[test]
 fn compressed_chains_validate_and_play_in_threejs_like_plain_ones() {
-    if !have_node() {
-        eprintln!("skipped: `node` is not installed (three.js playback check)");
-        return;
-    }
+    // Without the Node clients, the files' extensions, sizes and frond's reading of them are
+    // still checked.
+    let tools = common::node_tools_for(Some("the glTF validator and three.js playback"));
     let input = common::root().join("samples/sapling.glb");
     let dir = tempfile::tempdir().expect("temp dir");
     let args = [
@@ -586,8 +594,9 @@ fn compressed_chains_validate_and_play_in_threejs_like_plain_ones() {
     let times = [0.0, 0.9, 2.3];
     for file in &files {
         let (a, b) = (plain.join(file), packed.join(file));
-        let v = common::validate(&b);
-        assert_eq!(v["errors"], 0, "{file}: {}", v["messages"]);
+        if let Some(v) = common::validate(&b) {
+            assert_eq!(v["errors"], 0, "{file}: {}", v["messages"]);
+        }
         let json = common::gltf_json(&b);
         for ext in ["EXT_meshopt_compression", "KHR_mesh_quantization"] {
             assert!(
@@ -603,22 +612,24 @@ fn compressed_chains_validate_and_play_in_threejs_like_plain_ones() {
         );
         eprintln!("{file}: {na} bytes plain, {nb} compressed");
         assert!(nb < na, "{file}: compressed {nb} ≥ plain {na}");
-        let (pa, pb) = (
-            three_positions(&a, None, &times),
-            three_positions(&b, None, &times),
-        );
-        assert_eq!(pa.len(), pb.len());
-        for (x, y) in pa.iter().zip(&pb) {
-            assert_eq!(x.len(), y.len(), "{file}: vertex count");
-            let worst = x
-                .iter()
-                .zip(y)
-                .map(|(p, q)| p.distance(*q))
-                .fold(0.0f32, f32::max);
-            // Positions stay floats, rotation keys become normalized shorts (3e-5 rad a key,
-            // adding up along the bone chains).
-            eprintln!("{file}: three.js poses differ by up to {worst}");
-            assert!(worst < 2e-3, "{file}: three.js poses differ by {worst}");
+        if let Some(tools) = &tools {
+            let (pa, pb) = (
+                three_positions(tools, &a, None, &times),
+                three_positions(tools, &b, None, &times),
+            );
+            assert_eq!(pa.len(), pb.len());
+            for (x, y) in pa.iter().zip(&pb) {
+                assert_eq!(x.len(), y.len(), "{file}: vertex count");
+                let worst = x
+                    .iter()
+                    .zip(y)
+                    .map(|(p, q)| p.distance(*q))
+                    .fold(0.0f32, f32::max);
+                // Positions stay floats, rotation keys become normalized shorts (3e-5 rad a key,
+                // adding up along the bone chains).
+                eprintln!("{file}: three.js poses differ by up to {worst}");
+                assert!(worst < 2e-3, "{file}: three.js poses differ by {worst}");
+            }
         }
         let (ta, tb) = (
             import(&a, &ImportOptions::default()).expect("plain imports"),

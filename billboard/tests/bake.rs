@@ -689,10 +689,13 @@ fn timing_cloud(quads: usize) -> (TriangleSoup, Vec<Quad>, Vec<Vec<usize>>) {
     (soup, qs, members)
 }
 
-/// Bake timings for ~200 and ~2000 quads with ~50k triangles (run with --ignored --nocapture).
+/// Bake timings for ~200 and ~2000 quads with ~50k triangles: a heavy case, in `.ci/run`'s
+/// release-mode run (`--nocapture` shows the figures).
 #[test]
-#[ignore = "timing; run explicitly"]
-fn timing_200_and_2000_quads() {
+fn heavy_timing_200_and_2000_quads() {
+    if !heavy() {
+        return;
+    }
     let r = renderer();
     eprintln!("adapter: {}", r.adapter_info());
     let material = DrawMaterial {
@@ -733,4 +736,25 @@ fn timing_200_and_2000_quads() {
             100.0 * covered as f64 / (cloud.atlas.width * cloud.atlas.height) as f64,
         );
     }
+}
+
+/// True when `FROND_HEAVY_TESTS` is set (to anything but empty or `0`): the heavy cases
+/// (timings, the benchmark tree) run in `.ci/run`'s release-mode run, not in a plain `cargo
+/// test`. Else prints one `skipped:` line for the running test (named after libtest's thread
+/// for it; straight to stderr, past libtest's capture, like the workspace's other skip lines),
+/// which then returns.
+fn heavy() -> bool {
+    use std::io::Write;
+    if std::env::var_os("FROND_HEAVY_TESTS").is_some_and(|v| !v.is_empty() && v != "0") {
+        return true;
+    }
+    let line = format!(
+        "skipped: {}::{}: heavy case, left to the release-mode run (set FROND_HEAVY_TESTS=1; \
+         bash .ci/run runs it)\n",
+        env!("CARGO_CRATE_NAME"),
+        std::thread::current().name().unwrap_or("main")
+    );
+    // Nothing sensible to do when stderr is gone; the test still skips.
+    let _ = std::io::stderr().lock().write_all(line.as_bytes());
+    false
 }

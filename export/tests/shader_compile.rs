@@ -5,7 +5,8 @@
 //! - naga (the version wgpu uses) validates the WGSL and, as GLSL 4.50, the GLSL snippets;
 //! - `glslangValidator` compiles the GLSL as 3.30 and ES 3.00 and the HLSL to SPIR-V, the Unity
 //!   and Unreal files inside stand-ins for what those engines declare around them; without it
-//!   those tests print "skipped: glslangValidator not installed" on stderr and pass;
+//!   those tests print one "skipped: <test>: glslangValidator not installed" line on stderr and
+//!   pass;
 //! - nothing here compiles Godot's shading language: the Godot materials are checked for their
 //!   dialect (hints, built-ins, features Godot 3 lacks) and, translated to GLSL ES 3.00 (hints
 //!   and defaults dropped, built-ins as globals), compiled by glslang.
@@ -354,8 +355,8 @@ fn glsl_validates_with_naga() {
 // ---------------------------------------------------------------------------------------------
 // glslang
 
-/// `glslangValidator` on `text` with `args`; None (after saying so on stderr) when the tool is
-/// not installed.
+/// `glslangValidator` on `text` with `args`; None when the tool is not installed, after one
+/// `skipped:` line for the running test ([`skip_without_glslang`]): the caller returns.
 fn glslang(label: &str, args: &[&str], text: &str) -> Option<()> {
     let stem: String = label
         .chars()
@@ -379,7 +380,7 @@ fn glslang(label: &str, args: &[&str], text: &str) -> Option<()> {
     let output = match run {
         Ok(o) => o,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            eprintln!("{label}: skipped: glslangValidator not installed");
+            skip_without_glslang();
             return None;
         }
         Err(e) => panic!("{label}: running glslangValidator: {e}"),
@@ -394,6 +395,22 @@ fn glslang(label: &str, args: &[&str], text: &str) -> Option<()> {
     );
     eprintln!("{label}: glslangValidator {} ok", args.join(" "));
     Some(())
+}
+
+/// Says that the running test skips for want of glslang, in the form of the workspace's other
+/// skip lines (`skipped: <test binary>::<test>: <tool> not installed (<how>)`; libtest names each
+/// test's thread after the test), straight to stderr past libtest's output capture so that a
+/// plain `cargo test` shows it.
+fn skip_without_glslang() {
+    use std::io::Write;
+    let line = format!(
+        "skipped: {}::{}: glslangValidator not installed (apt-get install glslang-tools, as bash \
+         .ci/run does)\n",
+        env!("CARGO_CRATE_NAME"),
+        std::thread::current().name().unwrap_or("main")
+    );
+    // Nothing sensible to do when stderr is gone; the test still skips.
+    let _ = std::io::stderr().lock().write_all(line.as_bytes());
 }
 
 /// `text` with line numbers, for compiler messages.

@@ -1,9 +1,14 @@
 //! Helpers shared by the end-to-end tests: paths to the shared trees, running the CLI, and the
-//! real glTF clients (Khronos validator, gltfpack) installed into `tools/node_modules`.
+//! real glTF clients (Khronos validator, gltfpack, three.js) that `.ci/run` installs into
+//! `tools/node_modules`.
 //!
 //! The large shared trees are found through `frond_testdata` (`FROND_TEST_TREES`); a test that
 //! needs one starts with `frond_testdata::require_tree!`, which skips it with one line when the
 //! tree is absent. Fixtures that travel with the repository: [`fixture`], `samples/`.
+//!
+//! Tools outside Rust (the Node clients, Godot, Chromium, glslang) are not needed either: a test
+//! that needs a missing one prints one `skipped: <test>: <tool> not installed (…)` line
+//! ([`report_not_installed`]) and skips what needs it; `.ci/run` installs them all.
 
 pub mod gltf_cases;
 pub mod hostile;
@@ -122,56 +127,136 @@ pub fn frond_eval(original: &Path, candidate: &Path, extra: &[&str]) -> serde_js
     serde_json::from_slice(&out.stdout).expect("JSON report")
 }
 
-/// Installs the Node tools once (npm install into tools/node_modules) and returns the folder:
-/// the validator, gltfpack, three.js and puppeteer-core (drives Debian's Chromium). Installs whenever one of them is missing (a
-/// tools/node_modules made before a package joined package.json lacks it).
-pub fn node_tools() -> PathBuf {
-    static READY: OnceLock<PathBuf> = OnceLock::new();
-    READY
-        .get_or_init(|| {
-            let tools = root().join("tools");
-            let packages = ["gltf-validator", "gltfpack", "three", "puppeteer-core"];
-            let missing = |tools: &Path| {
-                packages.iter().any(|p| {
-                    !tools
-                        .join("node_modules")
-                        .join(p)
-                        .join("package.json")
-                        .exists()
-                })
-            };
-            if missing(&tools) {
-                let status = Command::new("npm")
-                    .args(["install", "--no-audit", "--no-fund", "--prefix"])
-                    .arg(&tools)
-                    .status()
-                    .expect("npm is installed (needed for the glTF validator, gltfpack, three.js)");
-                assert!(status.success(), "npm install in tools/ failed");
-                assert!(
-                    !missing(&tools),
-                    "{packages:?} not all in tools/node_modules after npm install"
-                );
-            }
-            tools
-        })
-        .clone()
+/// The running test's name as the shared trees' skip lines give it, `<test binary>::<test>`
+/// (libtest runs each test on a thread named after its path in the binary).
+pub fn test_name() -> String {
+    let thread = std::thread::current();
+    format!(
+        "{}::{}",
+        env!("CARGO_CRATE_NAME"),
+        thread.name().unwrap_or("main")
+    )
 }
 
-/// Runs the Khronos glTF validator on `file`; returns its JSON summary.
-pub fn validate(file: &Path) -> serde_json::Value {
-    let tools = node_tools();
+/// Says on stderr that the running test skips for want of `what` (a tool, or files a tool
+/// needs), in the shared trees' form: `skipped: <test>: <what> not installed (<how>)`, or
+/// `skipped: <test> (<step> only): …` when the test skips one step and checks everything else.
+/// One line per test, however often it is called: a test whose every file would go through the
+/// missing tool says so once. Written to the process's stderr directly, past libtest's output
+/// capture (like `frond_testdata::report_skip`), so a plain `cargo test` shows it.
+pub fn report_not_installed(step: Option<&str>, what: &str, how: &str) {
+    use std::io::Write;
+    thread_local! {
+        static REPORTED: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+    if REPORTED.replace(true) {
+        return;
+    }
+    let step = step.map(|s| format!(" ({s} only)")).unwrap_or_default();
+    let line = format!(
+        "skipped: {}{step}: {what} not installed ({how})\n",
+        test_name()
+    );
+    // Nothing sensible to do when stderr is gone; the test still skips.
+    let _ = std::io::stderr().lock().write_all(line.as_bytes());
+}
+
+/// The environment variable that lets the heavy cases run: the benchmark tree, long fuzz runs,
+/// timings. A plain `cargo test` (a debug build) leaves them out; `.ci/run` sets it for its
+/// release-mode run of just those cases (tests named `heavy_*`).
+pub const HEAVY: &str = "FROND_HEAVY_TESTS";
+
+/// True when [`HEAVY`] is set (to anything but empty or `0`); else prints one
+/// `skipped: <test>: heavy case (…)` line for the running test, which then returns.
+pub fn heavy() -> bool {
+    use std::io::Write;
+    if std::env::var_os(HEAVY).is_some_and(|v| !v.is_empty() && v != "0") {
+        return true;
+    }
+    let line = format!(
+        "skipped: {}: heavy case, left to the release-mode run (set {HEAVY}=1; bash .ci/run \
+         runs it)\n",
+        test_name()
+    );
+    // Nothing sensible to do when stderr is gone; the test still skips.
+    let _ = std::io::stderr().lock().write_all(line.as_bytes());
+    false
+}
+
+/// The Node packages the tests drive from `tools/` (tools/package.json): the Khronos glTF
+/// validator, gltfpack, three.js and puppeteer-core (which drives Debian's Chromium).
+const NODE_PACKAGES: [&str; 4] = ["gltf-validator", "gltfpack", "three", "puppeteer-core"];
+
+/// `tools/`, when `node` is on `PATH` and every one of [`NODE_PACKAGES`] is installed in
+/// `tools/node_modules`; else what is missing and how to install it, for the skip line. The tests never install them
+/// (a fresh clone's `cargo test` needs no network beyond the crate registry): `.ci/run` runs
+/// `npm ci` in `tools/` before the tests.
+fn find_node_tools() -> Result<PathBuf, (String, &'static str)> {
+    let tools = root().join("tools");
+    if !on_path("node") {
+        return Err((
+            "node (Node.js, which runs the glTF clients in tools/)".to_string(),
+            "apt-get install nodejs npm, then npm ci in tools/; bash .ci/run does both",
+        ));
+    }
+    let missing: Vec<&str> = NODE_PACKAGES
+        .into_iter()
+        .filter(|p| {
+            !tools
+                .join("node_modules")
+                .join(p)
+                .join("package.json")
+                .is_file()
+        })
+        .collect();
+    if missing.is_empty() {
+        Ok(tools)
+    } else {
+        Err((
+            format!("{} in tools/node_modules", missing.join(", ")),
+            "npm ci in tools/, as bash .ci/run does",
+        ))
+    }
+}
+
+/// The `tools/` folder with the Node clients installed, or `None` after one `skipped:` line
+/// ([`report_not_installed`]) for the running test, which then returns: for a test that is
+/// all about a client (a missing client skips all of it).
+pub fn node_tools() -> Option<PathBuf> {
+    node_tools_for(None)
+}
+
+/// [`node_tools`] for one step of a test (`step`, e.g. "the Khronos glTF validator checks"):
+/// when the clients are missing the skip line names the step, and the test goes on checking
+/// frond's own behaviour without it.
+pub fn node_tools_for(step: Option<&str>) -> Option<PathBuf> {
+    static FOUND: OnceLock<Result<PathBuf, (String, &'static str)>> = OnceLock::new();
+    match FOUND.get_or_init(find_node_tools) {
+        Ok(tools) => Some(tools.clone()),
+        Err((missing, how)) => {
+            report_not_installed(step, missing, how);
+            None
+        }
+    }
+}
+
+/// Runs the Khronos glTF validator on `file`; returns its JSON summary, or `None` (one
+/// `skipped:` line for the test, naming the validator step) when the Node clients are not
+/// installed: the caller skips its validator assertions and checks the rest.
+pub fn validate(file: &Path) -> Option<serde_json::Value> {
+    let tools = node_tools_for(Some("the Khronos glTF validator checks"))?;
     let out = Command::new("node")
         .arg(tools.join("validate.mjs"))
         .arg(file)
         .output()
         .expect("node runs");
     let text = String::from_utf8_lossy(&out.stdout);
-    serde_json::from_str(text.trim()).unwrap_or_else(|e| {
+    Some(serde_json::from_str(text.trim()).unwrap_or_else(|e| {
         panic!(
             "validator output is not JSON ({e}): {text} {}",
             String::from_utf8_lossy(&out.stderr)
         )
-    })
+    }))
 }
 
 /// The JSON of a glTF file (`.gltf`, or a GLB's JSON chunk).
@@ -278,7 +363,11 @@ const _: () = {
         frond_lod_measured,
         per_bone_at_zero,
         frond_eval,
+        test_name,
+        report_not_installed,
+        heavy,
         node_tools,
+        node_tools_for,
         validate,
         gltf_json,
         on_path,
