@@ -13,7 +13,7 @@ use frond_render::{Renderer, TreeParts, scene_from_positions};
 use frond_scene::gltf_writer::*;
 use frond_scene::{Length, Part, Tree};
 use glam::Vec3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::output_set::OutputSet;
 
@@ -36,7 +36,7 @@ pub struct CloudRequest {
 }
 
 /// `<name>_cloud_stats.json`.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct CloudReport {
     /// The input tree's path.
     pub input: String,
@@ -63,7 +63,7 @@ pub struct CloudReport {
     pub coverage_per_view: Vec<f64>,
     /// Wall time of each stage in seconds (`plane_search`, `rectangles`, `bake`, `total`):
     /// timing, so it differs between otherwise identical runs.
-    pub timings_s: serde_json::Value,
+    pub timings_s: frond_billboard::cloud::CloudTimings,
     /// Every size and error fact of the built cloud.
     pub cloud: CloudStats,
     /// The files written, relative to the output folder, this stats file last.
@@ -116,7 +116,6 @@ pub fn make_cloud(
     } else {
         (None, Vec::new())
     };
-    let t = &cloud.stats.timings_s;
     let report = CloudReport {
         input: path,
         epsilon,
@@ -129,12 +128,7 @@ pub fn make_cloud(
         texture_bytes: cloud.stats.texture_bytes,
         coverage_error: coverage,
         coverage_per_view: per_view,
-        timings_s: serde_json::json!({
-            "plane_search": t.plane_search,
-            "rectangles": t.rectangles,
-            "bake": t.bake,
-            "total": t.total,
-        }),
+        timings_s: cloud.stats.timings_s.clone(),
         cloud: cloud.stats.clone(),
         files: Vec::new(),
     };

@@ -3,13 +3,13 @@
 
 use frond_scene::sampling::clip_motion;
 use frond_scene::{Bounds, Classification, Part, Sampled, Tree};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Number of poses checked per clip for motion.
 const MOTION_SAMPLES: usize = 16;
 
 /// The inspect report.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct InspectReport {
     /// The tree file's path as it was opened.
     pub file: String,
@@ -43,7 +43,7 @@ pub struct InspectReport {
 }
 
 /// What sampling the chosen clip produced.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct SamplingSummary {
     /// The sampled clip's name; None for a tree without clips (its rest pose).
     pub clip: Option<String>,
@@ -97,7 +97,7 @@ impl SamplingSummary {
 }
 
 /// Triangle counts as the file holds them.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct TriangleCounts {
     /// All triangles of all primitives.
     pub total: usize,
@@ -110,7 +110,7 @@ pub struct TriangleCounts {
 }
 
 /// One material.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct MaterialSummary {
     /// The material's name in the file.
     pub name: String,
@@ -126,7 +126,7 @@ pub struct MaterialSummary {
 }
 
 /// One decoded texture.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct TextureSummary {
     /// The source image's name in the file, or `image<N>` (its index) when it has none.
     pub name: String,
@@ -137,7 +137,7 @@ pub struct TextureSummary {
 }
 
 /// One animation clip.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct ClipSummary {
     /// The clip's name in the file.
     pub name: String,

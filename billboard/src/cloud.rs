@@ -6,7 +6,7 @@ use std::time::Instant;
 use frond_render::{DrawMaterial, DrawTexture, Renderer};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::bake::{BakeError, BakeParams, BakedCloud, bake_cloud};
 use crate::plane_search::{PlaneSearch, SearchParams, search_planes, valid_for_plane};
@@ -26,7 +26,7 @@ pub struct CloudParams {
 }
 
 /// Wall times of the stages, seconds.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct CloudTimings {
     /// Seconds finding the planes.
     pub plane_search: f64,
@@ -39,7 +39,7 @@ pub struct CloudTimings {
 }
 
 /// Size and error facts of a cloud.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct CloudStats {
     /// Triangles of the soup.
     pub triangles: usize,

@@ -39,7 +39,7 @@ pub enum Binding {
 }
 
 /// Whether a triangle belongs to the wood or the foliage.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Part {
     /// Trunk and branches: simplified as a mesh (the wood LODs).
@@ -49,7 +49,7 @@ pub enum Part {
 }
 
 /// How the wood/foliage decision for one primitive was made.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Classification {
     /// Name of the primitive's mesh (`mesh<i>` when unnamed).
     pub mesh: String,
@@ -121,7 +121,7 @@ pub struct Triangle {
 }
 
 /// glTF alpha mode.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "UPPERCASE")]
 pub enum AlphaMode {
     /// Alpha ignored: the surface is fully opaque.
@@ -292,7 +292,7 @@ pub struct Texture {
 }
 
 /// Axis-aligned bounds.
-#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Serialize, serde::Deserialize, PartialEq)]
 pub struct Bounds {
     /// Smallest x, y, z.
     pub min: [f32; 3],
