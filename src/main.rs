@@ -4,6 +4,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use frond::cli::Command;
+use frond::cli::flags::with_flags;
 use frond::cli::terminal::{SafeWriter, safe};
 
 #[derive(Parser)]
@@ -48,7 +49,7 @@ fn main() -> ExitCode {
     match cli.command.run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", safe(&format!("{e:#}")));
+            eprintln!("error: {}", safe(&with_flags(&format!("{e:#}"))));
             ExitCode::FAILURE
         }
     }

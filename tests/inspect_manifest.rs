@@ -125,5 +125,5 @@ fn material_overrides_change_the_split() {
     assert_eq!(r["triangles"]["foliage"], 13872);
     assert_eq!(r["triangles"]["wood"], 0);
     let reason = r["classification"][0]["reason"].as_str().unwrap_or("");
-    assert!(reason.contains("--foliage-material"), "{reason}");
+    assert!(reason.contains("named as foliage"), "{reason}");
 }

@@ -61,19 +61,6 @@ pub const DEFAULT_MAX_TEXTURE_BYTES: u64 = 384 << 20;
 pub const DEFAULT_MAX_VERTICES: u64 = 8_000_000;
 /// Default of [`InputLimits::max_animation_keys`].
 pub const DEFAULT_MAX_ANIMATION_KEYS: u64 = 1 << 21;
-/// The command-line spelling of the option that raises [`InputLimits::max_animation_keys`]
-/// (for the CLI: library messages name the limit, not the option).
-pub const MAX_ANIMATION_OPTION: &str = "--max-animation-keys";
-/// The command-line spelling of the option that raises [`InputLimits::max_vertices`] (for the
-/// CLI: library messages name the limit, not the option).
-pub const MAX_VERTICES_OPTION: &str = "--max-vertices";
-/// The command-line spelling of the option that raises [`InputLimits::max_input_bytes`] (for
-/// the CLI: library messages name the limit, not the option).
-pub const MAX_INPUT_OPTION: &str = "--max-input-size";
-/// The command-line spelling of the option that raises [`InputLimits::max_texture_bytes`] (for
-/// the CLI: library messages name the limit, not the option).
-pub const MAX_TEXTURE_OPTION: &str = "--max-texture-memory";
-
 impl Default for InputLimits {
     fn default() -> Self {
         InputLimits {

@@ -8,6 +8,7 @@ pub mod batch_merge;
 pub mod child;
 pub mod cloud;
 pub mod eval;
+pub mod flags;
 pub mod inspect;
 pub mod lod;
 pub mod progress;

@@ -9,7 +9,8 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result};
 use sha2::{Digest, Sha256};
 
-use frond_metrics::MetricId;
+use frond_lod::{LodReport, ReportTimings};
+use frond_metrics::{EvalReport, MetricId};
 use frond_scene::InputLimits;
 
 use super::inputs::{Overrides, TreeInput, hex, input_hash};
@@ -279,26 +280,21 @@ fn build_into(
 
     let report_name = report_file(&tree.path);
     let report_path = tmp.join(&report_name);
-    let report: serde_json::Value = serde_json::from_slice(
+    let report: LodReport = serde_json::from_slice(
         &std::fs::read(&report_path)
             .with_context(|| format!("{}: frond lod wrote no report", report_path.display()))?,
     )
-    .with_context(|| format!("frond lod's {report_name} is not JSON"))?;
-    for (k, v) in report["timings_s"].as_object().into_iter().flatten() {
-        if let Some(v) = v.as_f64() {
-            entry.times_s.insert(k.clone(), v);
-        }
-    }
-    let num = |v: &serde_json::Value| v.as_u64().unwrap_or(0);
-    for l in report["lods"].as_array().into_iter().flatten() {
+    .with_context(|| format!("frond lod's {report_name} is not a frond lod report"))?;
+    entry.times_s.extend(stage_times(&report.timings_s));
+    for l in &report.lods {
         entry.lods.push(LodLine {
-            file: l["file"].as_str().unwrap_or("").to_string(),
-            screen_height: l["screen_height"].as_f64().map(|h| h as f32),
-            method: l["method"].as_str().unwrap_or("").to_string(),
-            triangles: num(&l["triangles"]),
-            billboards: num(&l["billboards"]),
-            bones: num(&l["bones"]),
-            texture_bytes: num(&l["texture_bytes"]),
+            file: l.file.clone(),
+            screen_height: l.screen_height,
+            method: l.method.name().to_string(),
+            triangles: l.triangles as u64,
+            billboards: l.billboards as u64,
+            bones: l.bones as u64,
+            texture_bytes: l.texture_bytes as u64,
             metrics: BTreeMap::new(),
         });
     }
@@ -321,13 +317,12 @@ fn build_into(
             }
             check_end(run.end, &format!("eval of {}", l.file))?;
             let out = log_dir.join(format!("{tag}.stdout"));
-            let r: serde_json::Value = serde_json::from_slice(
+            let r: EvalReport = serde_json::from_slice(
                 &std::fs::read(&out).with_context(|| format!("{}: cannot read", out.display()))?,
             )
-            .with_context(|| format!("frond eval of {} printed no JSON", l.file))?;
+            .with_context(|| format!("frond eval of {} printed no report", l.file))?;
             for id in SUMMARY_METRICS {
-                let m = id.json_path().iter().fold(&r, |v, p| &v[p]);
-                l.metrics.insert(summary_key(id).into(), m["mean"].as_f64());
+                l.metrics.insert(summary_key(id).into(), r.metric(id).mean);
             }
         }
         entry
@@ -361,6 +356,23 @@ fn build_into(
         STAMP,
         &serde_json::to_vec_pretty(&stamp).context("serialising the stamp")?,
     )
+}
+
+/// The run's stage times by name, the stages that ran.
+fn stage_times(t: &ReportTimings) -> Vec<(String, f64)> {
+    [
+        ("build", Some(t.build)),
+        ("export", Some(t.export)),
+        ("measure", t.measure),
+        ("measure_input", t.measure_input),
+        ("preview", t.preview),
+        ("sample", Some(t.sample)),
+        ("total", Some(t.total)),
+        ("wall", Some(t.wall)),
+    ]
+    .into_iter()
+    .filter_map(|(k, v)| Some((k.to_string(), v?)))
+    .collect()
 }
 
 fn check_end(end: JobEnd, what: &str) -> Result<()> {
