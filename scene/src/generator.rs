@@ -156,17 +156,26 @@ impl GeneratedTree {
     }
 }
 
+/// One branch of the generated tree (the trunk is level 0): a straight tapering tube.
 struct Branch {
+    /// Branch level: 0 for the trunk.
     level: usize,
+    /// Where it starts (on its parent branch), world units.
     start: Vec3,
+    /// Unit direction it grows in.
     dir: Vec3,
+    /// Length, world units.
     length: f32,
+    /// Radius at its start (the tube tapers toward the tip).
     radius: f32,
     /// Bone of the parent branch this one hangs from.
     parent_bone: Option<usize>,
+    /// Its bones, base to tip.
     bones: Vec<usize>,
 }
 
+/// Bones along a branch of `level`: more on the trunk and main limbs, which bend in
+/// several places.
 fn bones_per_branch(level: usize) -> usize {
     match level {
         0 => 4,
@@ -175,6 +184,7 @@ fn bones_per_branch(level: usize) -> usize {
     }
 }
 
+/// A unit vector perpendicular to the unit vector `d`.
 fn perpendicular(d: Vec3) -> Vec3 {
     let a = if d.x.abs() < 0.9 { Vec3::X } else { Vec3::Z };
     d.cross(a).normalize()
