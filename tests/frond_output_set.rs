@@ -13,8 +13,11 @@
 mod common;
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use common::*;
 
@@ -123,6 +126,84 @@ fn ok(o: &Output) {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
+/// The two sets the kill test moves between, as `frond lod` writes them in an empty folder.
+struct Sets {
+    /// The old set's folder as its run left it (reports with their timings), to copy from.
+    raw_old: PathBuf,
+    /// The old set's files (reports without their timings).
+    old: BTreeMap<String, Vec<u8>>,
+    /// The old set plus the user's `notes.txt`.
+    old_n: BTreeMap<String, Vec<u8>>,
+    /// The new set plus the user's `notes.txt`.
+    new_n: BTreeMap<String, Vec<u8>>,
+}
+
+/// What a run of the new settings killed after its `k`-th file operation left.
+#[derive(Clone, Copy)]
+enum Kill {
+    /// `k` is past the last file operation: the run finished and left exactly the new set.
+    Finished,
+    /// Killed: whether a commit journal was left, and whether the report was gone (a committed
+    /// install under way).
+    Killed { journal: bool, no_report: bool },
+}
+
+/// In `work` holding the old set and the user's file, kills the new settings' run after its
+/// `k`-th file operation and checks what it left (the whole old or the whole new set, going by
+/// the report; no report only with a journal); then checks that the old settings' next run
+/// starts from a whole set and leaves exactly its own, nothing hidden.
+fn kill_at(k: usize, work: &Path, sets: &Sets) -> Kill {
+    reset(work, &sets.old, &sets.raw_old);
+    let run = lod(work, "150,40", "2", Some(&format!("abort-after:{k}")));
+    if run.status.success() {
+        // k is past the last file operation: the run finished.
+        assert_same(
+            &visible_files(work),
+            &sets.new_n,
+            &format!("k = {k}: complete run"),
+        );
+        assert!(hidden(work).is_empty(), "{:?}", hidden(work));
+        return Kill::Finished;
+    }
+    assert_eq!(run.status.code(), None, "k = {k}: killed by a signal");
+    let now = visible_files(work);
+    let journal = hidden(work)
+        .iter()
+        .any(|h| work.join(h).join("frond-commit.json").exists());
+    // The report is the set's mark for readers: the old report means exactly the old
+    // set, the new one exactly the new set; none only while a committed install is
+    // under way (its journal then says how to finish it).
+    let no_report = match now.get("sapling_report.json") {
+        None => {
+            assert!(journal, "k = {k}: no report and no journal");
+            true
+        }
+        Some(r) if Some(r) == sets.old.get("sapling_report.json") => {
+            assert_same(&now, &sets.old_n, &format!("k = {k}: the old report"));
+            false
+        }
+        Some(_) => {
+            assert_same(&now, &sets.new_n, &format!("k = {k}: the new report"));
+            false
+        }
+    };
+    // Whatever was left, the next run (here: the old settings again) starts from a whole
+    // set and leaves exactly its own set, nothing hidden.
+    ok(&lod(work, "150,60,30", "1", None));
+    assert_same(
+        &visible_files(work),
+        &sets.old_n,
+        &format!("k = {k}: rerun after the kill"),
+    );
+    assert!(hidden(work).is_empty(), "k = {k}: {:?}", hidden(work));
+    Kill::Killed { journal, no_report }
+}
+
+/// Kills the new settings' run after each of its file operations in turn (`kill_at` for k = 0,
+/// 1, … up to the first k whose run finishes). The k are independent (each in a folder of its
+/// own, made afresh), so they are spread over a few threads: each `frond lod` of the sample
+/// leaves most of a core idle, and this test would otherwise run alone for minutes at the end of
+/// the suite.
 #[test]
 fn a_kill_at_any_point_leaves_the_old_or_the_new_set() {
     let tmp = tempfile::tempdir().unwrap();
@@ -134,56 +215,57 @@ fn a_kill_at_any_point_leaves_the_old_or_the_new_set() {
     assert!(old.contains_key("sapling_LOD3.glb") && !new.contains_key("sapling_LOD3.glb"));
     assert!(old.contains_key("sapling_report.json"));
     assert_ne!(old["sapling_LOD1.glb"], new["sapling_LOD1.glb"]);
-    let (old_n, new_n) = (with_notes(&old), with_notes(&new));
+    let sets = Sets {
+        raw_old: ref_old,
+        old_n: with_notes(&old),
+        new_n: with_notes(&new),
+        old,
+    };
 
-    let work = tmp.path().join("work");
-    let mut k = 0;
+    // At most 100 file operations; `end` is the first k whose run finished.
+    const LIMIT: usize = 100;
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get().min(4));
+    let next = AtomicUsize::new(0);
+    let end = AtomicUsize::new(LIMIT);
+    let failed = AtomicBool::new(false);
+    let outcomes = Mutex::new(BTreeMap::new());
+    std::thread::scope(|scope| {
+        for w in 0..workers {
+            let work = tmp.path().join(format!("work{w}"));
+            let (sets, next, end, failed, outcomes) = (&sets, &next, &end, &failed, &outcomes);
+            scope.spawn(move || {
+                loop {
+                    let k = next.fetch_add(1, Ordering::SeqCst);
+                    if k >= end.load(Ordering::SeqCst) || failed.load(Ordering::SeqCst) {
+                        break;
+                    }
+                    // A failed check stops the other threads too (its panic fails the test
+                    // when the scope ends).
+                    let outcome = catch_unwind(AssertUnwindSafe(|| kill_at(k, &work, sets)))
+                        .unwrap_or_else(|panic| {
+                            failed.store(true, Ordering::SeqCst);
+                            resume_unwind(panic)
+                        });
+                    if matches!(outcome, Kill::Finished) {
+                        end.fetch_min(k, Ordering::SeqCst);
+                    }
+                    outcomes.lock().unwrap().insert(k, outcome);
+                }
+            });
+        }
+    });
+    let k = end.into_inner();
+    assert!(k < LIMIT, "the run never finished");
+    let outcomes = outcomes.into_inner().unwrap();
     let (mut committed_kills, mut kills_before_commit) = (0, 0);
-    loop {
-        reset(&work, &old, &ref_old);
-        let run = lod(&work, "150,40", "2", Some(&format!("abort-after:{k}")));
-        if run.status.success() {
-            // k is past the last file operation: the run finished.
-            assert_same(
-                &visible_files(&work),
-                &new_n,
-                &format!("k = {k}: complete run"),
-            );
-            assert!(hidden(&work).is_empty(), "{:?}", hidden(&work));
-            break;
-        }
-        assert_eq!(run.status.code(), None, "k = {k}: killed by a signal");
-        let now = visible_files(&work);
-        let journal = hidden(&work)
-            .iter()
-            .any(|h| work.join(h).join("frond-commit.json").exists());
-        // The report is the set's mark for readers: the old report means exactly the old
-        // set, the new one exactly the new set; none only while a committed install is
-        // under way (its journal then says how to finish it).
-        if !journal {
-            kills_before_commit += 1;
-        }
-        match now.get("sapling_report.json") {
-            None => {
-                assert!(journal, "k = {k}: no report and no journal");
-                committed_kills += 1;
+    for kk in 0..k {
+        match outcomes[&kk] {
+            Kill::Finished => unreachable!("k = {kk} finished before the first finished run"),
+            Kill::Killed { journal, no_report } => {
+                kills_before_commit += usize::from(!journal);
+                committed_kills += usize::from(no_report);
             }
-            Some(r) if Some(r) == old.get("sapling_report.json") => {
-                assert_same(&now, &old_n, &format!("k = {k}: the old report"));
-            }
-            Some(_) => assert_same(&now, &new_n, &format!("k = {k}: the new report")),
         }
-        // Whatever was left, the next run (here: the old settings again) starts from a whole
-        // set and leaves exactly its own set, nothing hidden.
-        ok(&lod(&work, "150,60,30", "1", None));
-        assert_same(
-            &visible_files(&work),
-            &old_n,
-            &format!("k = {k}: rerun after the kill"),
-        );
-        assert!(hidden(&work).is_empty(), "k = {k}: {:?}", hidden(&work));
-        k += 1;
-        assert!(k < 100, "the run never finished");
     }
     eprintln!(
         "{k} file operations: {kills_before_commit} kills before the commit, {committed_kills} during the install"
