@@ -18,7 +18,6 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
 
 use crate::child_job::{JobEnd, run_job};
 use crate::child_request::ChildRequest;
@@ -26,6 +25,7 @@ use crate::eval_cmd::{EvalContext, EvalRequest, image_for_screen_height, same_by
 use crate::lod_cmd::lod_name;
 use crate::lod_settings::{LodSettings, MethodChoice, Sampling};
 use crate::out_folder::{OutFolder, write_atomic};
+use frond_lod::LodReport;
 use frond_lod::method::{MethodName, auto_method};
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, Length, Tree};
@@ -281,9 +281,8 @@ fn evaluate_into(ctx: &mut EvalContext, row: &mut Row, candidate: &Path, dir: &P
     };
     let json = serde_json::to_vec_pretty(&report).context("serialising an eval report")?;
     write_atomic(&dir.join("eval.json"), &json)?;
-    let eval: Value = serde_json::to_value(&report).context("serialising an eval report")?;
-    results::add_eval_report(row, &eval);
-    row.failure = results::judge(row, &eval);
+    results::add_eval_report(row, &report);
+    row.failure = results::judge(row, &report);
     Ok(())
 }
 
@@ -346,7 +345,7 @@ fn lod_run(
     let report_path = dir
         .join("lod")
         .join(frond_lod::report::report_name(tree_name));
-    let report: Result<Value, String> = match end {
+    let report: Result<LodReport, String> = match end {
         JobEnd::Done => std::fs::read(&report_path)
             .ok()
             .and_then(|b| serde_json::from_slice(&b).ok())

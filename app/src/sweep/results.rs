@@ -4,10 +4,11 @@
 use std::collections::BTreeMap;
 
 use anyhow::{Context, Result};
+use frond_lod::LodReport;
+use frond_metrics::EvalReport;
 use frond_metrics::MetricId;
 use frond_metrics::statistics::Spread;
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
 
 use crate::csv_text::text_cell;
 
@@ -134,98 +135,90 @@ impl Row {
     }
 }
 
-fn num(v: &Value, path: &[&str]) -> Option<f64> {
-    let mut cur = v;
-    for p in path {
-        cur = cur.get(p)?;
-    }
-    cur.as_f64()
+/// A report's `f32` as the report file writes it (its shortest decimal) read as an `f64`, so a
+/// column holds the number the file shows rather than the `f32`'s binary expansion.
+fn as_written(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(f64::from(x))
 }
 
-/// Fills a row's cost and LOD timings from `frond lod`'s report.json (its LOD1 entry).
-pub fn add_lod_report(row: &mut Row, report: &Value) {
-    let lod = &report["lods"][1];
-    row.lod_method = lod["method"].as_str().map(String::from);
-    for (col, key) in [
-        ("billboards", "billboards"),
-        ("triangles", "triangles"),
-        ("wood_triangles", "wood_triangles"),
-        ("bones", "bones"),
-        ("texture_bytes", "texture_bytes"),
-    ] {
-        if let Some(x) = num(lod, &[key]) {
-            row.values.insert(col.into(), x);
+/// Fills a row's cost and LOD timings from `frond lod`'s report (its LOD1 entry).
+pub fn add_lod_report(row: &mut Row, report: &LodReport) {
+    if let Some(lod) = report.lods.get(1) {
+        row.lod_method = Some(lod.method.name().to_string());
+        for (col, value) in [
+            ("billboards", lod.billboards),
+            ("triangles", lod.triangles),
+            ("wood_triangles", lod.wood_triangles),
+            ("bones", lod.bones),
+            ("texture_bytes", lod.texture_bytes),
+        ] {
+            row.values.insert(col.into(), value as f64);
         }
-    }
-    row.epsilon = num(lod, &["epsilon"]);
-    for stage in [
-        "reference_pose",
-        "plane_search",
-        "bake",
-        "motion_fit",
-        "budget",
-        "wood",
-        "export",
-    ] {
-        if let Some(x) = num(lod, &["timings_s", stage]) {
-            row.values.insert(format!("t_{stage}"), x);
+        row.epsilon = lod.epsilon.map(as_written);
+        let t = &lod.timings_s;
+        for (stage, seconds) in [
+            ("reference_pose", t.build.reference_pose),
+            ("plane_search", t.build.plane_search),
+            ("bake", t.build.bake),
+            ("motion_fit", t.build.motion_fit),
+            ("budget", t.budget),
+            ("wood", t.wood),
+            ("export", t.export),
+        ] {
+            row.values.insert(format!("t_{stage}"), seconds);
         }
+    } else {
+        row.epsilon = None;
     }
-    if let Some(x) = num(report, &["timings_s", "sample"]) {
-        row.values.insert("t_sample".into(), x);
-    }
-    if let Some(x) = num(report, &["timings_s", "total"]) {
-        row.values.insert("t_lod".into(), x);
-    }
+    row.values
+        .insert("t_sample".into(), report.timings_s.sample);
+    row.values.insert("t_lod".into(), report.timings_s.total);
 }
 
-/// Fills a row's metrics (and, for candidates, cost) from `frond eval --json`: each metric's
-/// mean and max at its [`MetricId::json_path`] (absent when skipped).
-pub fn add_eval_report(row: &mut Row, eval: &Value) {
+/// Fills a row's metrics (and, for candidates, cost) from `frond eval`'s report: each metric's
+/// mean and max (absent when skipped).
+pub fn add_eval_report(row: &mut Row, eval: &EvalReport) {
     for id in MetricId::ALL {
-        let m = id.json_path().iter().fold(eval, |v, p| &v[p]);
-        if let Some(x) = m["mean"].as_f64() {
-            row.values.insert(id.column().into(), x);
-        }
-        if let Some(x) = m["max"].as_f64() {
-            row.values.insert(id.max_column().into(), x);
-        }
+        let m = eval.metric(id);
+        insert_finite(row, id.column(), m.mean);
+        insert_finite(row, id.max_column(), m.max);
     }
-    if let Some(x) = num(eval, &["coverage", DISCARDED_PAIRS]) {
-        row.values.insert(DISCARDED_PAIRS.into(), x);
-    }
-    let c = &eval["cost"]["candidate"];
-    for (col, key) in [
-        ("billboard_area", "billboard_area"),
-        ("draw_calls", "draw_calls"),
-        ("file_bytes", "file_bytes"),
+    row.values
+        .insert(DISCARDED_PAIRS.into(), eval.coverage.discarded_pairs as f64);
+    let c = &eval.cost.candidate;
+    for (col, value) in [
+        ("billboard_area", c.billboard_area),
+        ("draw_calls", c.file.draw_calls as f64),
+        ("file_bytes", c.file.file_bytes as f64),
     ] {
-        if let Some(x) = num(c, &[key]) {
-            row.values.insert(col.into(), x);
-        }
+        insert_finite(row, col, Some(value));
     }
     if row.is_candidate() {
         // The file's joints and decoded texture bytes fill the columns `frond lod` names
         // `bones` and `texture_bytes`.
-        for (col, key) in [
-            ("billboards", "billboards"),
-            ("triangles", "triangles"),
-            ("bones", "joints_total"),
-            ("texture_bytes", "texture_decoded_bytes"),
+        for (col, value) in [
+            ("billboards", c.billboards as f64),
+            ("triangles", c.file.triangles as f64),
+            ("bones", c.file.joints_total as f64),
+            ("texture_bytes", c.file.texture_decoded_bytes as f64),
         ] {
-            if let Some(x) = num(c, &[key]) {
-                row.values.insert(col.into(), x);
-            }
+            row.values.insert(col.into(), value);
         }
     }
-    if let Some(x) = num(eval, &["timings_s", "total"]) {
-        row.values.insert("t_eval".into(), x);
+    row.values.insert("t_eval".into(), eval.timings_s.total);
+}
+
+/// Sets `column` to `value` when it is a finite number: a metric that could not be computed
+/// stays absent (and reads as NaN), as the report file writes it (`null`).
+fn insert_finite(row: &mut Row, column: &str, value: Option<f64>) {
+    if let Some(x) = value.filter(|x| x.is_finite()) {
+        row.values.insert(column.into(), x);
     }
 }
 
 /// Why an evaluated run counts as failed (spec §5.4: a colour error above 1 means no fidelity),
 /// or None.
-pub fn judge(row: &Row, eval: &Value) -> Option<String> {
+pub fn judge(row: &Row, eval: &EvalReport) -> Option<String> {
     // Foliage is billboards, or the cards method's leaf cards (triangles beside the wood).
     // (A missing count is NaN: no card.)
     let has_cards = row.get("triangles") - row.get("wood_triangles") > 0.0;
@@ -234,7 +227,7 @@ pub fn judge(row: &Row, eval: &Value) -> Option<String> {
     }
     let discarded = row.get(DISCARDED_PAIRS);
     if discarded > 0.0 {
-        let pairs = num(eval, &["coverage", "pairs"]).unwrap_or(f64::NAN);
+        let pairs = eval.coverage.pairs;
         return Some(format!(
             "error > 1: the colour metric scored above 1 (or the original covered nothing) in \
              {discarded} of {pairs} (view, frame) pairs"
@@ -242,8 +235,11 @@ pub fn judge(row: &Row, eval: &Value) -> Option<String> {
     }
     for id in [MetricId::CoverageStatic, MetricId::CoverageAnimated] {
         if !row.get(id.column()).is_finite() {
-            let m = id.json_path().iter().fold(eval, |v, p| &v[p]);
-            let why = m["skipped_reason"].as_str().unwrap_or("no value");
+            let why = eval
+                .metric(id)
+                .skipped_reason
+                .as_deref()
+                .unwrap_or("no value");
             return Some(format!("NaN: {}: {why}", id.column()));
         }
     }
@@ -518,9 +514,32 @@ mod tests {
         );
     }
 
+    /// An eval report whose k-th metric ([`MetricId::ALL`] order) has `metric(k)` as its mean
+    /// and max, over `pairs` (view, frame) pairs, none discarded.
+    fn eval_report(
+        metric: impl Fn(usize) -> (Option<f64>, Option<f64>),
+        pairs: usize,
+    ) -> EvalReport {
+        let mut eval = serde_json::json!({
+            "original": "o.glb", "candidate": "c.glb", "clip": null, "samples": 8, "views": 5,
+            "frames": 5, "size": [800, 600], "tree_height": 1.0, "colour_shift": 0.0,
+            "matching": "", "coverage": {"discarded_pairs": 0, "pairs": pairs},
+        });
+        for (k, id) in MetricId::ALL.into_iter().enumerate() {
+            let (mean, max) = metric(k);
+            let v = serde_json::json!({
+                "mean": mean, "max": max, "skipped_reason": null, "definition": "",
+            });
+            let (last, parents) = id.json_path().split_last().unwrap();
+            let parent = parents.iter().fold(&mut eval, |v, p| &mut v[p]);
+            parent[*last] = v;
+        }
+        serde_json::from_value(eval).expect("an eval report")
+    }
+
     #[test]
     fn judging_runs() {
-        let ok = serde_json::json!({"coverage": {"pairs": 25}});
+        let ok = eval_report(|_| (None, None), 25);
         let mut r = row("static", 1, 10.0, 0.2);
         r.values.insert("coverage_static".into(), 0.2);
         assert_eq!(judge(&r, &ok), None);
@@ -599,13 +618,7 @@ mod tests {
 
     #[test]
     fn eval_reports_fill_every_metric_column() {
-        let mut eval = serde_json::json!({"coverage": {"discarded_pairs": 0}, "cost": {}});
-        for (k, id) in MetricId::ALL.into_iter().enumerate() {
-            let v = serde_json::json!({"mean": k as f64, "max": 10.0 + k as f64});
-            let (last, parents) = id.json_path().split_last().unwrap();
-            let parent = parents.iter().fold(&mut eval, |v, p| &mut v[p]);
-            parent[*last] = v;
-        }
+        let eval = eval_report(|k| (Some(k as f64), Some(10.0 + k as f64)), 25);
         let mut r = row("static", 1, 10.0, 0.2);
         add_eval_report(&mut r, &eval);
         for (k, id) in MetricId::ALL.into_iter().enumerate() {
