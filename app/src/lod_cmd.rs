@@ -21,7 +21,9 @@ use crate::output_set::OutputSet;
 /// What `frond lod` was asked for: the chain, and how to write it.
 #[derive(Clone, Debug)]
 pub struct LodRequest {
+    /// The chain to build: method, screen sizes, budgets, seed, sampling.
     pub chain: ChainRequest,
+    /// How billboards are animated in the files.
     pub animation: AnimationMode,
     /// Measure each LOD's coverage error on its written file against this target (None: skip).
     pub measure: Option<f64>,
@@ -29,7 +31,9 @@ pub struct LodRequest {
     pub msft_lod: bool,
     /// The view the report's switch values assume: image height and vertical field of view.
     pub resolution: f32,
+    /// Vertical field of view in degrees, for the switch values.
     pub fov: f32,
+    /// Textures as files beside the GLBs rather than embedded.
     pub external_textures: bool,
     /// How the textures frond makes are stored.
     pub textures: frond_export::TextureFormat,
@@ -113,29 +117,8 @@ pub fn run_lod(
     })?;
     prepared.with_context(|| format!("{path}: rendering the input to measure the LODs"))?;
     progress("writing files");
-    let written = chain_files(
-        tree,
-        &chain,
-        &ChainFileOptions {
-            name: name.clone(),
-            animation: req.animation,
-            external_textures: req.external_textures,
-            textures: req.textures,
-            loop_hint: req.loop_hint,
-            vat_space: req.vat_space,
-            compress: req.compress,
-            billboard_normals: req.billboard_normals,
-            msft_lod: req
-                .msft_lod
-                .then(|| msft_coverages(&req.chain.screen_heights, req.resolution)),
-            extras: serde_json::json!({
-                "generator": concat!("frond ", env!("CARGO_PKG_VERSION")),
-                "seed": req.chain.seed,
-                "source": tree.source.file_name().map(|f| f.to_string_lossy().into_owned()),
-            }),
-        },
-    )
-    .map_err(|(what, e)| anyhow::Error::new(e).context(format!("{path}: {what}")))?;
+    let written = chain_files(tree, &chain, &file_options(tree, req, &name))
+        .map_err(|(what, e)| anyhow::Error::new(e).context(format!("{path}: {what}")))?;
     let t_written = Instant::now();
     let total = (t_written - t_start).as_secs_f64();
     let mut report = LodReport {
@@ -202,32 +185,19 @@ pub fn run_lod(
         (None, true) => progress("rendering the preview page"),
         (None, false) => {}
     }
-    let input_path = tree.source.display().to_string();
-    let (measured, pictures) = rayon::join(
-        || -> Result<()> {
-            if let Some(max_error) = req.measure {
-                let t = Instant::now();
-                // Sampled with the request's clip: the chain's, unless it resolved otherwise.
-                let ctx = match measure.as_mut() {
-                    Some(ctx) if ctx.clip() == report.clip.as_deref() => ctx,
-                    _ => measure.insert(measure_context(renderer, tree, report.clip.clone())?),
-                };
-                measure_errors(ctx, &lods, &mut report, max_error)?;
-                report.timings_s.measure = Some(t.elapsed().as_secs_f64());
-            }
-            Ok(())
-        },
-        || {
-            snapshot.as_ref().map(|snapshot| {
-                frond_preview::lod_pictures(renderer, &preview_request(snapshot))
-                    .with_context(|| format!("{input_path}: rendering the preview page"))
-            })
-        },
-    );
-    measured?;
+    let pictures = measure_and_draw(
+        renderer,
+        tree,
+        req,
+        &mut measure,
+        &lods,
+        &mut report,
+        snapshot.as_ref(),
+        &preview_request,
+    )?;
     if let Some(pictures) = pictures {
         let preview = frond_preview::lod_page(&preview_request(&report), pictures?)
-            .with_context(|| format!("{input_path}: writing the preview page"))?;
+            .with_context(|| format!("{}: writing the preview page", tree.source.display()))?;
         for (rel, bytes) in &preview.files {
             set.stage(rel, bytes)?;
             report.files.insert(report.files.len() - 1, rel.clone());
@@ -239,6 +209,72 @@ pub fn run_lod(
     let json = serde_json::to_vec_pretty(&report).context("serialising the report")?;
     set.commit(&json)?;
     Ok(report)
+}
+
+/// How the chain's files are written, as the request asks.
+fn file_options(tree: &Tree, req: &LodRequest, name: &str) -> ChainFileOptions {
+    ChainFileOptions {
+        name: name.to_string(),
+        animation: req.animation,
+        external_textures: req.external_textures,
+        textures: req.textures,
+        loop_hint: req.loop_hint,
+        vat_space: req.vat_space,
+        compress: req.compress,
+        billboard_normals: req.billboard_normals,
+        msft_lod: req
+            .msft_lod
+            .then(|| msft_coverages(&req.chain.screen_heights, req.resolution)),
+        extras: serde_json::json!({
+            "generator": concat!("frond ", env!("CARGO_PKG_VERSION")),
+            "seed": req.chain.seed,
+            "source": tree.source.file_name().map(|f| f.to_string_lossy().into_owned()),
+        }),
+    }
+}
+
+/// Measures each LOD's error into `report` (when asked) while the preview's pictures are drawn
+/// from `snapshot`, the report as it stood (they do not depend on the errors): both at once,
+/// on the cores each leaves idle. Returns the pictures, when the preview was asked for.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the run's renderer, tree and request, the measure's context, the LODs read back, \
+              the report it fills and the preview's inputs"
+)]
+fn measure_and_draw<'a, 'r>(
+    renderer: &'r Renderer,
+    tree: &'r Tree,
+    req: &LodRequest,
+    measure: &mut Option<EvalContext<'r>>,
+    lods: &[&Tree],
+    report: &mut LodReport,
+    snapshot: Option<&'a LodReport>,
+    preview_request: &(dyn Fn(&'a LodReport) -> frond_preview::LodPreviewRequest<'a> + Sync),
+) -> Result<Option<Result<frond_preview::lod_page::LodPreviewPictures>>> {
+    let input_path = tree.source.display().to_string();
+    let (measured, pictures) = rayon::join(
+        || -> Result<()> {
+            if let Some(max_error) = req.measure {
+                let t = Instant::now();
+                // Sampled with the request's clip: the chain's, unless it resolved otherwise.
+                let ctx = match measure.as_mut() {
+                    Some(ctx) if ctx.clip() == report.clip.as_deref() => ctx,
+                    _ => measure.insert(measure_context(renderer, tree, report.clip.clone())?),
+                };
+                measure_errors(ctx, lods, report, max_error)?;
+                report.timings_s.measure = Some(t.elapsed().as_secs_f64());
+            }
+            Ok(())
+        },
+        || {
+            snapshot.map(|snapshot| {
+                frond_preview::lod_pictures(renderer, &preview_request(snapshot))
+                    .with_context(|| format!("{input_path}: rendering the preview page"))
+            })
+        },
+    );
+    measured?;
+    Ok(pictures)
 }
 
 /// Each LOD's switch values for the request's view ([`frond_lod::switching`]).

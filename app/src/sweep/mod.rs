@@ -42,7 +42,9 @@ pub struct SweepRequest {
     pub lod: LodSettings,
     /// Methods of `frond lod --method`.
     pub methods: Vec<String>,
+    /// The grid of screen heights, or of fixed ε at one screen height.
     pub grid: Grid,
+    /// Seeds each grid point is built with.
     pub seeds: Vec<u64>,
     /// External candidates (any glTF), evaluated at every grid point's screen height.
     pub candidates: Vec<PathBuf>,
@@ -60,18 +62,29 @@ pub struct SweepRequest {
 /// `summary.json`.
 #[derive(Debug, Serialize, Deserialize)]
 pub struct SweepSummary {
+    /// The input tree.
     pub input: String,
+    /// The methods swept.
     pub methods: Vec<String>,
+    /// The seeds each point was built with.
     pub seeds: Vec<u64>,
+    /// The grid points' labels (`600px`, `eps0.25`).
     pub grid: Vec<String>,
+    /// External candidates evaluated beside the runs.
     pub candidates: Vec<String>,
+    /// Rows: every run and candidate evaluation.
     pub runs: usize,
+    /// Rows that failed (with their reason in `rows`).
     pub failed: usize,
+    /// One row per run or candidate evaluation, as `results.csv` has them.
     pub rows: Vec<Row>,
+    /// Each configuration over its seeds, as `stability.csv` has them.
     pub stability: Vec<Stability>,
     /// Runs on the Pareto front of build time vs animated colour error.
     pub pareto_front: Vec<String>,
+    /// Every file written, this summary last.
     pub files: Vec<String>,
+    /// Wall times, seconds.
     pub timings_s: SweepTimings,
 }
 
