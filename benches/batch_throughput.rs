@@ -1,4 +1,4 @@
-//! `frond batch` throughput and memory on a 50-tree library (issue 8): the seven shared trees
+//! `frond batch` throughput and memory on a 50-tree library: the seven shared trees
 //! (oak_dense among them) plus 28 small and 15 medium generated trees, default `frond lod`
 //! settings, `--jobs` from `FROND_JOBS` (default 2). Prints trees per minute, the peak memory
 //! of all processes together (sampled every 50 ms) and of the largest single tree, then the

@@ -1,4 +1,4 @@
-//! SBCS on `oak_dense.glb` (264 bones, 116k foliage triangles, 64 samples; issue 7 target ≤ 1 s
+//! SBCS on `oak_dense.glb` (264 bones, 116k foliage triangles, 64 samples; target ≤ 1 s
 //! on 2 cores): the skeleton simplified to 20 billboard clouds with each bone description type,
 //! as `frond lod --method skeleton-* --clouds 20` runs it (collapses, CJR, the resampled rig,
 //! the error measures). Prints seconds, clouds, merges, collapses and the foliage error.

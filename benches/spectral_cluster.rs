@@ -1,4 +1,4 @@
-//! SCA step 1 on `oak_dense.glb` (116k foliage triangles, 64 samples; issue 6 target ≤ 2 s on
+//! SCA step 1 on `oak_dense.glb` (116k foliage triangles, 64 samples; target ≤ 2 s on
 //! 2 cores): animation zones, a description per zone, shared frequency bins and k-means, for
 //! each description type, as `frond lod --method spectral-*` runs them. Prints seconds, zone
 //! count and the RMS motion residual of the clustering.

@@ -28,7 +28,7 @@ $F sweep $T -o "$OUT/density_on" --method static --epsilon 3%,7.5%,15% --seeds 1
 $F sweep $T -o "$OUT/vs_epsilon" --method static --epsilon 0,1.5%,3%,4.5%,7.5%,11.25%,15%,18.75%,22.5% \
   --seeds 1 --frames 1 --view-penalty 0 --increased-density
 
-# Issue 5: both methods × 6 ε × 5 seeds on oak_medium (the ≤ 15 min target).
+# Sweep: both methods × 6 ε × 5 seeds on oak_medium (the ≤ 15 min target).
 $F sweep $T -o "$OUT/oak_medium_methods" --epsilon 1%..6% --steps 6 --seeds 5
 
 # Every shared tree: frond lod's default chain (auto) and gltfpack -si 0.1 -sa, each LOD scored
@@ -39,7 +39,7 @@ for t in bush_1 oak_medium oak_medium_blendedleaves oak_large pine_medium pine_m
     --candidate "$OUT/${t}_gltfpack.glb"
 done
 
-# Issue 6: spectral clustering against static and per-bone at a far LOD (150 px), read at
+# Spectral clustering against static and per-bone at a far LOD (150 px), read at
 # matched billboard counts.
 for t in oak_medium bush_1 pine_medium pine_medium_blender oak_large; do
   $F sweep $TREES/$t.glb -o "$OUT/spectral_$t" --screen-height 150 --seeds 1 \

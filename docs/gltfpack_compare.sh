@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 17's comparison with gltfpack, as defined there: for each LOD of frond's default chain
+# The comparison with gltfpack at matched triangles: for each LOD of frond's default chain
 # (T triangles at screen height H), gltfpack -noq -si R with R = T / (input triangles) (plain
 # -si at 600 px, -si R -sa at 200 and 60 px); both scored by
 # `frond eval TREE X --screen-height H --json` (coverage.animated.mean). Prints a markdown

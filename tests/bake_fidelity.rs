@@ -1,4 +1,4 @@
-//! Bake fidelity at the design size (issue 17 item 8): at ε = 0 every billboard holds one leaf
+//! Bake fidelity at the design size: at ε = 0 every billboard holds one leaf
 //! card, so the 600 px LOD must draw its leaves' outline as the input does: no speckle along
 //! leaf edges (the coverage-preserving re-threshold only touches cells whose plain alpha test
 //! would miss their coverage, `frond_billboard::bake`), and single-card billboards keep the

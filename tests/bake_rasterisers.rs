@@ -1,4 +1,4 @@
-//! The CPU bake rasteriser (the default) and the wgpu path bake the same atlas (issue 20): on
+//! The CPU bake rasteriser (the default) and the wgpu path bake the same atlas: on
 //! the same quads and members, every quad's coverage (its cell's summed alpha) agrees within
 //! 1 % of the cell, and its mean colour within 2 of 255 per channel. Measured on the bundled
 //! sample and two shared trees, each at a 5 % and a 1 % ε (large and small billboards).

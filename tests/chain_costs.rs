@@ -1,4 +1,4 @@
-//! Every LOD cheaper than the one before it (issue 17), judged as an engine programmer would:
+//! Every LOD cheaper than the one before it, judged as an engine programmer would:
 //! from the written files (`frond_scene::file_cost`), not from what the pipeline meant to do.
 //! The default chain of the sample, the committed fixtures and the smaller shared trees must
 //! have every requested LOD, the hard limits (joints per skin ≤ min(256, the input's), ≤ 4

@@ -1,4 +1,4 @@
-//! Each LOD's error at its own size (issue 17 item 5): `frond lod` measures it on the written
+//! Each LOD's error at its own size: `frond lod` measures it on the written
 //! files and reports the number `frond eval INPUT LOD --screen-height H` gives, warns about a
 //! LOD over `--max-error` and writes it all the same; the card LODs of the sample stay within
 //! the errors their coverage-driven thinning reached when it was written.

@@ -1,4 +1,4 @@
-//! `frond lod` writes the input's materials back unchanged (project issue 17, item 2): LOD0's
+//! `frond lod` writes the input's materials back unchanged: LOD0's
 //! materials, and the wood of the billboard LODs, carry every map, factor, extension and extra
 //! of the input's, their textures keep the input's samplers, and their images are the input's
 //! bytes with the input's MIME type (a JPEG stays the same JPEG), embedded or external alike.

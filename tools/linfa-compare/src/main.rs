@@ -1,5 +1,5 @@
 //! linfa's k-means where an exact Euclidean embedding exists, against frond's own k-means over
-//! the spectral description types (issue 6). None of the three types has one: their deviations
+//! the spectral description types. None of the three types has one: their deviations
 //! are NEP-normalised sums of binned amplitude distances, cyclic phase differences and
 //! `1 − |a·b|` axis terms, none a Euclidean distance. The motion itself has one: a zone's
 //! zero-mean sampled trajectory as a 3N-vector, whose squared Euclidean distance to a centroid
