@@ -130,7 +130,7 @@ fn the_smaller_shared_trees_chains_get_cheaper_at_every_step() {
 
 /// The benchmark tree's far LODs meet their cost targets: 60 px ≤ 32 joints, ≤ 1 MB decoded
 /// texture, ≤ 1 MB file, quad area ≤ 2× the input's leaf area; 200 px ≤ 128 joints. A heavy
-/// case (oak_dense), in `.ci/run`'s release-mode run.
+/// case (oak_dense), in `.ci/run`'s optimised run.
 #[test]
 fn heavy_oak_dense_far_lods_fit_their_targets() {
     if !heavy() {

@@ -3,7 +3,7 @@
 //! mutated in their JSON (numbers swapped for edge values, bytes flipped) and binary chunks,
 //! re-wrapped as valid GLB containers, or truncated. Every result must be
 //! `Ok` or a clean `Err`: never a panic. A short run is part of the tests; a long one is a heavy
-//! case in `.ci/run`'s release-mode run (`FROND_HEAVY_TESTS=1 FROND_FUZZ_RUNS=20000 cargo test
+//! case in `.ci/run`'s optimised run (`FROND_HEAVY_TESTS=1 FROND_FUZZ_RUNS=20000 cargo test
 //! --release --test fuzz_import -- heavy_` for a longer one by hand).
 
 mod common;
@@ -169,7 +169,7 @@ fn importer_survives_mutated_real_trees() {
 }
 
 /// A long fuzz run (`FROND_FUZZ_RUNS` sets the count): a heavy case, in `.ci/run`'s
-/// release-mode run.
+/// optimised run.
 #[test]
 fn heavy_importer_survives_a_long_fuzz_run() {
     if !common::heavy() {

@@ -216,7 +216,7 @@ fn ktx2_lods_measure_like_png_ones_and_external_files_are_ktx2() {
 /// The KTX2 target on the benchmark tree: its 60 px LOD takes ≤ 512 KiB of GPU texture
 /// memory (colour and normal maps, mips included, transcoded), and seen at a quarter of its
 /// size (mip level 2) its alpha-tested coverage stays within 5 % of full size. A heavy case
-/// (oak_dense), in `.ci/run`'s release-mode run.
+/// (oak_dense), in `.ci/run`'s optimised run.
 #[test]
 fn heavy_oak_dense_far_lod_fits_half_a_megabyte_on_the_gpu_and_keeps_coverage_at_a_quarter_size() {
     if !heavy() {

@@ -86,7 +86,7 @@ fn chromium_plays_the_live_view_and_switches_lods() {
 
 /// The same on oak_dense, the benchmark tree (116k leaf triangles), its screenshots in
 /// `target/test-artefacts/preview_browser_oak_dense/`. A heavy case, in `.ci/run`'s
-/// release-mode run.
+/// optimised run.
 #[test]
 fn heavy_chromium_plays_oak_dense() {
     if !heavy() {

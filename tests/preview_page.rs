@@ -369,7 +369,7 @@ fn frond_view_serves_the_folder_and_nothing_outside_it() {
 }
 
 /// oak_dense, the benchmark tree: the page and what it adds stay under 5 MB and cost under a
-/// tenth of the run. A heavy case, in `.ci/run`'s release-mode run.
+/// tenth of the run. A heavy case, in `.ci/run`'s optimised run.
 #[test]
 fn heavy_oak_dense_preview_stays_small_and_cheap() {
     if !heavy() {

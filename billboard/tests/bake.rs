@@ -690,7 +690,7 @@ fn timing_cloud(quads: usize) -> (TriangleSoup, Vec<Quad>, Vec<Vec<usize>>) {
 }
 
 /// Bake timings for ~200 and ~2000 quads with ~50k triangles: a heavy case, in `.ci/run`'s
-/// release-mode run (`--nocapture` shows the figures).
+/// optimised run (`--nocapture` shows the figures).
 #[test]
 fn heavy_timing_200_and_2000_quads() {
     if !heavy() {
@@ -739,7 +739,7 @@ fn heavy_timing_200_and_2000_quads() {
 }
 
 /// True when `FROND_HEAVY_TESTS` is set (to anything but empty or `0`): the heavy cases
-/// (timings, the benchmark tree) run in `.ci/run`'s release-mode run, not in a plain `cargo
+/// (timings, the benchmark tree) run in `.ci/run`'s optimised run, not in a plain `cargo
 /// test`. Else prints one `skipped:` line for the running test (named after libtest's thread
 /// for it; straight to stderr, past libtest's capture, like the workspace's other skip lines),
 /// which then returns.
@@ -749,7 +749,7 @@ fn heavy() -> bool {
         return true;
     }
     let line = format!(
-        "skipped: {}::{}: heavy case, left to the release-mode run (set FROND_HEAVY_TESTS=1; \
+        "skipped: {}::{}: heavy case, left to the optimised run (set FROND_HEAVY_TESTS=1; \
          bash .ci/run runs it)\n",
         env!("CARGO_CRATE_NAME"),
         std::thread::current().name().unwrap_or("main")

@@ -525,7 +525,7 @@ fn one_renderer_serves_several_threads() {
 }
 
 /// Rough timing of a 256x256 render of ~100k triangles: a heavy case, in `.ci/run`'s
-/// release-mode run (`--nocapture` shows the figures).
+/// optimised run (`--nocapture` shows the figures).
 #[test]
 fn heavy_timing_100k_triangles() {
     if !heavy() {
@@ -678,7 +678,7 @@ fn reposing_a_tree_equals_building_its_scene_at_that_time() {
 }
 
 /// True when `FROND_HEAVY_TESTS` is set (to anything but empty or `0`): the heavy cases
-/// (timings, the benchmark tree) run in `.ci/run`'s release-mode run, not in a plain `cargo
+/// (timings, the benchmark tree) run in `.ci/run`'s optimised run, not in a plain `cargo
 /// test`. Else prints one `skipped:` line for the running test (named after libtest's thread
 /// for it; straight to stderr, past libtest's capture, like the workspace's other skip lines),
 /// which then returns.
@@ -688,7 +688,7 @@ fn heavy() -> bool {
         return true;
     }
     let line = format!(
-        "skipped: {}::{}: heavy case, left to the release-mode run (set FROND_HEAVY_TESTS=1; \
+        "skipped: {}::{}: heavy case, left to the optimised run (set FROND_HEAVY_TESTS=1; \
          bash .ci/run runs it)\n",
         env!("CARGO_CRATE_NAME"),
         std::thread::current().name().unwrap_or("main")

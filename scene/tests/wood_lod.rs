@@ -512,7 +512,7 @@ fn simplify_keeps_materials_apart() {
 // ---------------------------------------------------------------- numbers for the report
 
 /// Prints triangle counts, errors, measured distances and timings: a heavy case, in `.ci/run`'s
-/// release-mode run (`--nocapture` shows the figures).
+/// optimised run (`--nocapture` shows the figures).
 #[test]
 fn heavy_report_numbers() {
     if !heavy() {
@@ -559,7 +559,7 @@ fn heavy_report_numbers() {
 }
 
 /// Release timing of the densest shared tree's wood: a heavy case, in `.ci/run`'s
-/// release-mode run.
+/// optimised run.
 #[test]
 fn heavy_time_oak_dense() {
     if !heavy() {
@@ -585,7 +585,7 @@ fn heavy_time_oak_dense() {
 }
 
 /// True when `FROND_HEAVY_TESTS` is set (to anything but empty or `0`): the heavy cases
-/// (timings, the benchmark tree) run in `.ci/run`'s release-mode run, not in a plain `cargo
+/// (timings, the benchmark tree) run in `.ci/run`'s optimised run, not in a plain `cargo
 /// test`. Else prints one `skipped:` line for the running test (named after libtest's thread
 /// for it; straight to stderr, past libtest's capture, like the workspace's other skip lines),
 /// which then returns.
@@ -595,7 +595,7 @@ fn heavy() -> bool {
         return true;
     }
     let line = format!(
-        "skipped: {}::{}: heavy case, left to the release-mode run (set FROND_HEAVY_TESTS=1; \
+        "skipped: {}::{}: heavy case, left to the optimised run (set FROND_HEAVY_TESTS=1; \
          bash .ci/run runs it)\n",
         env!("CARGO_CRATE_NAME"),
         std::thread::current().name().unwrap_or("main")

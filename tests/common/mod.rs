@@ -163,7 +163,7 @@ pub fn report_not_installed(step: Option<&str>, what: &str, how: &str) {
 
 /// The environment variable that lets the heavy cases run: the benchmark tree, long fuzz runs,
 /// timings. A plain `cargo test` (a debug build) leaves them out; `.ci/run` sets it for its
-/// release-mode run of just those cases (tests named `heavy_*`).
+/// optimised run of just those cases (tests named `heavy_*`).
 pub const HEAVY: &str = "FROND_HEAVY_TESTS";
 
 /// True when [`HEAVY`] is set (to anything but empty or `0`); else prints one
@@ -174,7 +174,7 @@ pub fn heavy() -> bool {
         return true;
     }
     let line = format!(
-        "skipped: {}: heavy case, left to the release-mode run (set {HEAVY}=1; bash .ci/run \
+        "skipped: {}: heavy case, left to the optimised run (set {HEAVY}=1; bash .ci/run \
          runs it)\n",
         test_name()
     );
