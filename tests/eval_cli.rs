@@ -44,7 +44,7 @@ fn a_file_against_itself_scores_zero_everywhere() {
         assert!(!m.definition.is_empty());
     }
     // Distances are in world units (float noise scales with the tree), the rest in [0, 1].
-    let h = f64::from(r.tree_height);
+    let h = written_f64(r.tree_height);
     for id in METRICS {
         let tol = if matches!(
             id,
@@ -119,7 +119,7 @@ fn a_per_bone_lod_stays_within_its_epsilon_and_a_foreign_copy_is_skipped_with_a_
     );
     let lod1 = out.join("sapling_LOD1.glb");
     let r = eval(&sapling, &lod1, &["--screen-height", "120"]);
-    let eps = f64::from(lods.lods[1].epsilon.expect("epsilon"));
+    let eps = written_f64(lods.lods[1].epsilon.expect("epsilon"));
     let plane_max = r.plane_distance.max.expect("plane max");
     assert!(plane_max <= eps * 1.001, "{plane_max} > ε {eps}");
     // Billboards follow their bones exactly: the images do not drift.

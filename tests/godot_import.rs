@@ -348,7 +348,7 @@ fn check_lod(file: &Path, result: &Value, report: &LodReport) -> Vec<Measured> {
     let players = result["animation_players"].as_array().expect("players");
     assert_eq!(players.len(), 1, "{what}: players {players:?}");
     let clip = report.clip.as_deref().expect("report clip");
-    let period = f64::from(report.period);
+    let period = written_f64(report.period);
     let anim = players[0]["animations"]
         .as_array()
         .expect("animations")
@@ -365,7 +365,7 @@ fn check_lod(file: &Path, result: &Value, report: &LodReport) -> Vec<Measured> {
         .iter()
         .find(|c| c.name == clip)
         .expect("the clip in the file");
-    let duration = f64::from(file_clip.duration_s);
+    let duration = written_f64(file_clip.duration_s);
     assert!(
         (length - duration).abs() < 1e-3,
         "{what}: length {length}, file {duration}"
@@ -566,7 +566,7 @@ fn print_measured(file: &Path, measured: &[Measured]) {
 /// The frames' clip times: 0 (a key) and 0.325 of the period (between keys), as passed to
 /// `frond render --time` and named in the files.
 fn times(report: &LodReport) -> Vec<String> {
-    let period = f64::from(report.period);
+    let period = written_f64(report.period);
     vec!["0".to_string(), format!("{:.2}", 0.325 * period)]
 }
 

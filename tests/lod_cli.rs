@@ -731,12 +731,12 @@ fn distances_give_screen_heights_by_holst_eq_3() {
         &out,
         &["--distances", "40", "--fov", "90", "--resolution", "1000"],
     );
-    let h = f64::from(report.tree_height);
+    let h = written_f64(report.tree_height);
     // 90° fov: pc = 500 pixels per unit of height/distance.
     let want = h / 40.0 * 500.0;
-    let got = f64::from(report.lods[1].screen_height.expect("screen height"));
+    let got = written_f64(report.lods[1].screen_height.expect("screen height"));
     assert!((got - want).abs() < 1e-3 * want, "{got} vs {want}");
-    let eps = f64::from(report.lods[1].epsilon.expect("eps"));
+    let eps = written_f64(report.lods[1].epsilon.expect("eps"));
     assert!((eps - h / want).abs() < 1e-4 * eps, "ε is one pixel");
 }
 
@@ -830,9 +830,9 @@ fn skeleton_lods_validate_and_report_what_they_did() {
         assert!(!sk.trunk_on_original_skeleton);
         assert!(sk.collapses.is_empty());
         // Attached: no leaf moves more than half a pixel off its branch.
-        let tol = f64::from(sk.attach_tolerance);
-        assert!(f64::from(sk.detachment_max) <= tol * 1.01 + 1e-5);
-        assert!(f64::from(sk.foliage_error_rms) <= f64::from(sk.displacement_tolerance) * 1.5);
+        let tol = written_f64(sk.attach_tolerance);
+        assert!(written_f64(sk.detachment_max) <= tol * 1.01 + 1e-5);
+        assert!(written_f64(sk.foliage_error_rms) <= written_f64(sk.displacement_tolerance) * 1.5);
     }
     let clouds = |k: usize| sk(k).clouds;
     assert!(clouds(2) < sk(2).foliage_bones);

@@ -101,7 +101,7 @@ fn lod_writes_a_preview_page_that_shows_every_lod_from_its_written_file() {
         let control = reader.info().animation_control.expect("an animated PNG");
         assert_eq!(control.num_frames, 12, "LOD{k}: the loop in 12 frames");
         assert_eq!(control.num_plays, 0, "loops forever");
-        let Some(h) = lod.screen_height.map(f64::from) else {
+        let Some(h) = lod.screen_height.map(written_f64) else {
             continue;
         };
         // The LOD, LOD0 and their difference at the LOD's own size (the image the coverage

@@ -147,6 +147,12 @@ pub fn parse_json<T: DeserializeOwned>(bytes: &[u8]) -> T {
     })
 }
 
+/// The number a JSON reader gets from `x` as frond writes it (the shortest decimal that reads
+/// back as `x`), for comparing a report's `f32` exactly with a number from another file.
+pub fn written_f64(x: f32) -> f64 {
+    x.to_string().parse().expect("a float's text reads back")
+}
+
 /// The `spectral` section of a LOD entry (a spectral method's), if it has one.
 pub fn spectral_section(entry: &LodEntry) -> Option<SpectralReport> {
     section(entry, "spectral")
@@ -423,6 +429,7 @@ const _: () = {
         lod_report,
         read_json::<serde_json::Value>,
         parse_json::<serde_json::Value>,
+        written_f64,
         spectral_section,
         skeleton_section,
         cards_section,
