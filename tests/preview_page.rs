@@ -40,7 +40,7 @@ fn view_config(html: &str) -> ViewConfig {
         .expect("the page carries its live view's config")
         + "id=\"frond-config\">".len();
     let end = start + html[start..].find("</script>").expect("config closes");
-    parse_json(html[start..end].as_bytes())
+    parse_json(&html.as_bytes()[start..end])
 }
 
 fn png_size(path: &Path) -> (u32, u32) {
