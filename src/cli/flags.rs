@@ -32,9 +32,9 @@ mod tests {
         let m = "t.glb: textures decode to 9 GB, over the texture memory limit of 384 MB \
                  (raise the texture memory limit to read it)";
         let shown = with_flags(m);
-        assert!(
-            shown.ends_with("(raise the texture memory limit (--max-texture-memory) to read it)")
-        );
+        assert!(shown.ends_with(
+            "(raise the texture memory limit (--max-texture-memory) to read it)"
+        ));
         assert_eq!(with_flags("nothing named"), "nothing named");
     }
 }
