@@ -7,7 +7,7 @@ use std::path::Path;
 
 use common::gltf_cases::*;
 use common::*;
-use serde_json::{Value, json};
+use serde_json::json;
 
 /// Runs inspect and render on a bad file and checks the error contract.
 fn expect_clean_error(path: &Path, needle: &str) {
@@ -43,10 +43,13 @@ fn the_valid_base_case_imports() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let r: Value = serde_json::from_slice(&out.stdout).expect("json");
-    assert_eq!(r["triangles"]["total"], 1);
-    assert_eq!(r["bones"], 0);
-    assert!(r["warnings"].to_string().contains("static tree"), "{r}");
+    let r: frond_app::inspect::InspectReport = parse_json(&out.stdout);
+    assert_eq!(r.triangles.total, 1);
+    assert_eq!(r.bones, 0);
+    assert!(
+        r.warnings.iter().any(|w| w.contains("static tree")),
+        "{r:?}"
+    );
 }
 
 #[test]

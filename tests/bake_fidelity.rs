@@ -27,28 +27,27 @@ fn billboards_at_epsilon_zero_draw_the_leaves_outline_at_their_size() {
         let tree = shared_tree(name);
         let out = tempfile::tempdir().expect("tempdir");
         let report = per_bone_at_zero(&tree, out.path());
-        let lods = report["lods"].as_array().expect("lods");
+        let lods = &report.lods;
         let lod = &lods[1];
-        assert_eq!(lod["method"], "per-bone", "{name}");
-        let billboards = lod["billboards"].as_u64().expect("billboards");
-        let own = lod["input_textured_billboards"]
-            .as_u64()
-            .expect("input-textured billboards");
+        assert_eq!(lod.method.name(), "per-bone", "{name}");
+        let billboards = lod.billboards;
+        let own = lod.input_textured_billboards;
         assert!(billboards > 1000, "{name}: {billboards} billboards");
         // Nearly every billboard holds one card on its own texels (99 % of both trees').
         assert!(
             own <= billboards && 10 * own >= 9 * billboards,
             "{name}: {own} of {billboards} billboards on the input's texels"
         );
-        let error = lod["error"]["coverage"].as_f64().expect("error");
+        let error = lod.error.as_ref().expect("error").coverage;
         let lod0 = frond_eval(
             &tree,
-            &out.path()
-                .join(lods[0]["file"].as_str().expect("LOD0 file")),
+            &out.path().join(&lods[0].file),
             &["--screen-height", "600"],
-        )["coverage"]["animated"]["mean"]
-            .as_f64()
-            .expect("LOD0 error");
+        )
+        .coverage
+        .animated
+        .mean
+        .expect("LOD0 error");
         assert!(lod0 < 1e-3, "{name}: LOD0 scores {lod0}");
         assert!(
             error <= BOUND,

@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use common::{fixture, frond, frond_ok, root, validate};
+use common::{fixture, frond, frond_ok, parse_json, read_json, root, validate};
+use frond_app::batch::summary::{BatchSummary, Status, TreeEntry};
+use frond_metrics::MetricId;
 
 /// Small, quick settings for every batch here.
 const FAST: &[&str] = &["--lods", "100,30", "--samples", "16", "--planes", "60"];
@@ -43,11 +45,18 @@ fn batch_cmd(input: &Path, out: &Path, extra: &[&str]) -> Command {
     c
 }
 
-fn summary(path: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(path).expect("summary")).expect("summary is JSON")
+fn summary(path: &Path) -> BatchSummary {
+    read_json(path)
 }
 
-/// Removes timing fields, recursively.
+/// `trees` without their timing fields (stage times, wall time, memory).
+fn untimed_trees(trees: &[TreeEntry]) -> Vec<TreeEntry> {
+    trees.iter().map(TreeEntry::without_timing).collect()
+}
+
+/// Removes timing fields, recursively: the written forms of two reports or stamps compared
+/// whole (the method sections included, whose `t_*` fields no struct names), not a read of
+/// either.
 fn untimed(mut v: serde_json::Value) -> serde_json::Value {
     match &mut v {
         serde_json::Value::Object(m) => {
@@ -120,15 +129,15 @@ fn complete_outputs(out: &Path, outputs: &[&str]) -> Vec<String> {
         if !dir.exists() {
             continue;
         }
-        let stamp: serde_json::Value = serde_json::from_slice(
+        let stamp: TreeEntry = serde_json::from_slice(
             &std::fs::read(dir.join("batch.json"))
                 .unwrap_or_else(|_| panic!("{o}: visible without its stamp (partial)")),
         )
         .unwrap_or_else(|_| panic!("{o}: stamp unreadable"));
-        for f in stamp["files"].as_array().unwrap() {
-            let m = std::fs::metadata(dir.join(f["name"].as_str().unwrap()))
-                .unwrap_or_else(|_| panic!("{o}: {} missing (partial)", f["name"]));
-            assert_eq!(m.len(), f["bytes"].as_u64().unwrap(), "{o}: size");
+        for f in &stamp.files {
+            let m = std::fs::metadata(dir.join(&f.name))
+                .unwrap_or_else(|_| panic!("{o}: {:?} missing (partial)", f.name));
+            assert_eq!(m.len(), f.bytes, "{o}: size");
         }
         done.push(o.to_string());
     }
@@ -166,7 +175,7 @@ fn shards_in_separate_processes_equal_one_run() {
         String::from_utf8_lossy(&out.stderr)
     );
     let one = summary(&single.join("summary.json"));
-    assert_eq!(one["counts"]["built"], 5);
+    assert_eq!(one.counts.built, 5);
 
     // Three shards at once into one shared folder; shard 1 finds itself from the Kubernetes
     // variables, as an Indexed Job's pod would.
@@ -203,32 +212,21 @@ fn shards_in_separate_processes_equal_one_run() {
     let mut seen: Vec<String> = Vec::new();
     for i in 0..3 {
         let part = summary(&shared.join(format!("summary.shard-{i:04}-of-0003.json")));
-        assert_eq!(part["shard"]["index"], i);
-        for t in part["trees"].as_array().unwrap() {
-            seen.push(t["tree"].as_str().unwrap().to_string());
+        assert_eq!(part.shard.expect("a shard's summary").index, i);
+        for t in &part.trees {
+            seen.push(t.tree.clone());
         }
     }
     seen.sort();
-    let all: Vec<String> = one["trees"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|t| t["tree"].as_str().unwrap().to_string())
-        .collect();
+    let all: Vec<String> = one.trees.iter().map(|t| t.tree.clone()).collect();
     assert_eq!(seen, all, "each tree in exactly one shard");
 
     let merged = frond_ok(&["batch-merge", s(&shared), "--json"]);
-    let merged: serde_json::Value = serde_json::from_slice(&merged.stdout).unwrap();
-    assert_eq!(merged["merged_from"].as_array().unwrap().len(), 3);
-    assert_eq!(
-        untimed(merged["trees"].clone()),
-        untimed(one["trees"].clone())
-    );
-    assert_eq!(merged["counts"], one["counts"]);
-    assert_eq!(
-        summary(&shared.join("summary.json"))["trees"],
-        merged["trees"]
-    );
+    let merged: BatchSummary = parse_json(&merged.stdout);
+    assert_eq!(merged.merged_from.len(), 3);
+    assert_eq!(untimed_trees(&merged.trees), untimed_trees(&one.trees));
+    assert_eq!(merged.counts, one.counts);
+    assert_eq!(summary(&shared.join("summary.json")).trees, merged.trees);
     assert_same_outputs(&single, &shared);
 }
 
@@ -293,14 +291,14 @@ fn a_killed_batch_shows_no_partial_tree_and_its_rerun_does_only_the_rest() {
     let after = watch(child, false);
     assert_eq!(after.len(), outputs.len());
     let sum = summary(&out.join("summary.json"));
-    for t in sum["trees"].as_array().unwrap() {
-        let o = t["output"].as_str().unwrap();
+    for t in &sum.trees {
+        let o = t.output.as_str();
         let expected = if before.iter().any(|b| b == o) {
-            "up-to-date"
+            Status::UpToDate
         } else {
-            "built"
+            Status::Built
         };
-        assert_eq!(t["status"], expected, "{o}");
+        assert_eq!(t.status, expected, "{o}");
     }
     for (o, m) in before.iter().zip(mtimes) {
         let now = std::fs::metadata(out.join(o).join("batch.json"))
@@ -368,12 +366,11 @@ fn broken_files_are_isolated_with_one_error_line_each() {
         2
     );
     let sum = summary(&out.join("summary.json"));
-    let failed: Vec<&str> = sum["trees"]
-        .as_array()
-        .unwrap()
+    let failed: Vec<&str> = sum
+        .trees
         .iter()
-        .filter(|t| t["status"] == "failed")
-        .map(|t| t["tree"].as_str().unwrap())
+        .filter(|t| t.status == Status::Failed)
+        .map(|t| t.tree.as_str())
         .collect();
     assert_eq!(failed, ["empty.gltf", "notes.glb", "truncated.glb"]);
     let csv = std::fs::read_to_string(out.join("summary.csv")).unwrap();
@@ -415,17 +412,15 @@ fn manifest_overrides_preset_eval_and_staleness() {
             "--json",
         ]);
         assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-        serde_json::from_slice::<serde_json::Value>(&r.stdout).unwrap()
+        parse_json::<BatchSummary>(&r.stdout)
     };
     let first = run();
-    let trees = first["trees"].as_array().unwrap();
-    assert_eq!(trees[0]["tree"], "lib/more/a.glb");
-    assert_eq!(trees[0]["output"], "custom/a");
-    assert_eq!(trees[1]["output"], "lib/sapling");
+    let trees = &first.trees;
+    assert_eq!(trees[0].tree, "lib/more/a.glb");
+    assert_eq!(trees[0].output, "custom/a");
+    assert_eq!(trees[1].output, "lib/sapling");
     // Each tree's settings: the manifest's, the batch's options and the preset's conventions.
-    let typed: frond_app::batch::summary::BatchSummary =
-        serde_json::from_value(first.clone()).unwrap();
-    let settings = |k: usize| typed.trees[k].settings.clone().unwrap();
+    let settings = |k: usize| trees[k].settings.clone().unwrap();
     let (a, b) = (settings(0), settings(1));
     assert_eq!(
         (a.method.text(), a.lods.as_slice()),
@@ -440,20 +435,19 @@ fn manifest_overrides_preset_eval_and_staleness() {
     );
     // The joint budget keeps every LOD within 256 joints (a static LOD of the sapling once had a
     // joint per moving billboard): nothing to warn about.
-    assert!(trees[1]["warnings"].as_array().unwrap().is_empty());
-    assert!(trees[0]["warnings"].as_array().unwrap().is_empty());
+    assert!(trees[1].warnings.is_empty());
+    assert!(trees[0].warnings.is_empty());
     for t in trees {
-        assert_eq!(t["status"], "built");
-        assert_eq!(t["preset"], "unreal");
+        assert_eq!(t.status, Status::Built);
+        assert_eq!(t.preset.as_deref(), Some("unreal"));
         // Every GLB is read back: each LOD whose skin has more than Unreal's 256 joints (the
         // static sapling LOD: a joint per moving billboard) is warned about, with the combined
         // file holding it, and nothing else.
-        let over: Vec<String> = t["lods"]
-            .as_array()
-            .unwrap()
+        let over: Vec<String> = t
+            .lods
             .iter()
-            .filter(|l| l["bones"].as_u64().unwrap() > 256)
-            .map(|l| l["file"].as_str().unwrap().to_string())
+            .filter(|l| l.bones > 256)
+            .map(|l| l.file.clone())
             .collect();
         let mut expected = over.clone();
         if !over.is_empty() {
@@ -462,36 +456,31 @@ fn manifest_overrides_preset_eval_and_staleness() {
                 over[0].split("_LOD").next().unwrap()
             ));
         }
-        let warned: Vec<String> = t["warnings"]
-            .as_array()
-            .unwrap()
+        let warned: Vec<String> = t
+            .warnings
             .iter()
             .map(|w| {
-                let w = w.as_str().unwrap();
                 assert!(w.contains("joints in one skin, over unreal's 256"), "{w}");
                 w.split(':').next().unwrap().to_string()
             })
             .collect();
         assert_eq!(warned, expected);
-        let lods = t["lods"].as_array().unwrap();
+        let lods = &t.lods;
         assert_eq!(lods.len(), 2);
-        // LOD1 evaluated at its size: coverage errors are fractions.
-        let cov = lods[1]["metrics"]["coverage"].as_f64().unwrap();
+        // LOD1 evaluated at its size: coverage errors are fractions (the summary's `coverage`
+        // is the static colour metric's mean).
+        let metric = |key: &str| lods[1].metrics.get(key).copied().flatten();
+        let cov = metric("coverage").unwrap();
         assert!((0.0..=1.0).contains(&cov), "{cov}");
-        assert!(lods[1]["metrics"]["dominating_axis"].is_number());
-        let files: Vec<&str> = t["files"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|f| f["name"].as_str().unwrap())
-            .collect();
+        assert!(metric(MetricId::DominatingAxis.column()).is_some());
+        let files: Vec<&str> = t.files.iter().map(|f| f.name.as_str()).collect();
         assert!(
             files.iter().any(|f| f.ends_with(".png")),
             "external textures: {files:?}"
         );
-        let folder = out.join(t["output"].as_str().unwrap());
+        let folder = out.join(&t.output);
         for l in lods {
-            let Some(report) = validate(&folder.join(l["file"].as_str().unwrap())) else {
+            let Some(report) = validate(&folder.join(&l.file)) else {
                 continue;
             };
             assert_eq!(report["errors"], 0, "{report}");
@@ -508,19 +497,16 @@ fn manifest_overrides_preset_eval_and_staleness() {
 
     // Nothing changed: nothing rebuilt.
     let again = run();
-    assert_eq!(again["counts"]["up_to_date"], 2);
-    assert_eq!(
-        untimed(again["trees"][0]["lods"].clone()),
-        untimed(trees[0]["lods"].clone())
-    );
+    assert_eq!(again.counts.up_to_date, 2);
+    assert_eq!(again.trees[0].lods, trees[0].lods);
     // A changed setting rebuilds that tree, a changed input file that one.
     write_manifest(2);
     std::fs::copy(fixture("bush_1.glb"), lib.join("sapling.glb")).unwrap();
     let third = run();
-    assert_eq!(third["counts"]["built"], 2);
-    assert_ne!(third["trees"][0]["params_hash"], trees[0]["params_hash"]);
-    assert_ne!(third["trees"][1]["input_hash"], trees[1]["input_hash"]);
-    assert_eq!(third["trees"][1]["params_hash"], trees[1]["params_hash"]);
+    assert_eq!(third.counts.built, 2);
+    assert_ne!(third.trees[0].params_hash, trees[0].params_hash);
+    assert_ne!(third.trees[1].input_hash, trees[1].input_hash);
+    assert_eq!(third.trees[1].params_hash, trees[1].params_hash);
 
     // A bad manifest is refused before any work, naming the file.
     std::fs::write(

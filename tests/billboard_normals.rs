@@ -28,7 +28,7 @@ fn lod1(dir: &Path, normals: &str) -> GltfSource {
             normals,
         ],
     );
-    let file = out.join(report["lods"][1]["file"].as_str().expect("file"));
+    let file = out.join(&report.lods[1].file);
     // The normal map comes with the tangents it is read in (else the validator warns that
     // engines must generate them, not portably).
     if let Some(v) = validate(&file) {

@@ -16,15 +16,14 @@ use frond_scene::{FileCost, InputLimits, file_cost};
 /// The files' costs of the default chain of `tree` written into `out`, LOD0 first.
 fn chain_costs(tree: &Path, out: &Path, extra: &[&str]) -> Vec<(String, FileCost)> {
     let report = frond_lod(tree, out, extra);
-    let lods = report["lods"].as_array().expect("lods");
+    let lods = &report.lods;
     assert_eq!(lods.len(), 4, "LOD0 and the three default LODs are written");
     lods.iter()
         .map(|l| {
-            let file = l["file"].as_str().expect("file").to_string();
+            let file = l.file.clone();
             let cost = file_cost(&out.join(&file), &InputLimits::default()).expect("file cost");
             // The report carries the same cost, read back from the same file.
-            let reported: FileCost =
-                serde_json::from_value(l["cost"].clone()).expect("the report's cost");
+            let reported: &FileCost = l.cost.as_ref().expect("the report's cost");
             assert_eq!(reported.triangles, cost.triangles, "{file}");
             assert_eq!(reported.file_bytes, cost.file_bytes, "{file}");
             (file, cost)

@@ -3,6 +3,7 @@
 mod common;
 
 use common::*;
+use frond_app::cloud_cmd::CloudReport;
 
 fn cloud(args: &[&str], out: &std::path::Path) -> std::process::Output {
     let mut all = vec![
@@ -41,41 +42,27 @@ fn cloud_writes_a_valid_glb_atlases_and_stats() {
     ] {
         assert!(out.join(f).exists(), "{f} written");
     }
-    let stats: serde_json::Value = serde_json::from_slice(
-        &std::fs::read(out.join("sapling_cloud_stats.json")).expect("stats"),
-    )
-    .expect("json");
-    for key in [
-        "epsilon",
-        "planes",
-        "seed",
-        "billboards",
-        "total_area",
-        "texture_bytes",
-        "coverage_error",
-    ] {
-        assert!(!stats[key].is_null(), "the stats have {key}");
-    }
-    for key in ["plane_search", "bake", "total"] {
-        assert!(
-            stats["timings_s"][key].as_f64().is_some(),
-            "timings_s.{key}"
-        );
-    }
-    assert_eq!(stats["planes"], 100);
-    assert_eq!(stats["seed"], 3);
-    let billboards = stats["billboards"].as_u64().expect("count");
+    // The typed read requires ε, the planes, the seed, the billboards, their area, the texture
+    // bytes and the plane search's, bake's and total timings.
+    let stats: CloudReport = read_json(&out.join("sapling_cloud_stats.json"));
+    assert!(
+        stats.coverage_error.is_some(),
+        "the stats have coverage_error"
+    );
+    assert_eq!(stats.planes, 100);
+    assert_eq!(stats.seed, 3);
+    let billboards = stats.billboards as u64;
     assert!(
         (2..200).contains(&billboards),
         "{billboards} billboards for 2000 leaf triangles at 5%"
     );
-    let cov = stats["coverage_error"].as_f64().expect("coverage");
+    let cov = stats.coverage_error.expect("coverage");
     assert!(cov > 0.0 && cov < 0.6, "coverage error {cov}");
     // ε = 5 % of the diagonal bounds every vertex's distance to its billboard.
-    let eps = stats["epsilon"].as_f64().expect("eps");
-    let diag = stats["diagonal"].as_f64().expect("diag");
+    let eps = written_f64(stats.epsilon);
+    let diag = written_f64(stats.diagonal);
     assert!((eps - 0.05 * diag).abs() < 1e-4 * diag);
-    assert!(stats["cloud"]["max_distance"].as_f64().expect("max") <= eps * (1.0 + 1e-5));
+    assert!(written_f64(stats.cloud.max_distance) <= eps * (1.0 + 1e-5));
     // Real clients accept the GLB: quads + wood, textured, no errors.
     if let Some(report) = validate(&out.join("sapling_cloud.glb")) {
         assert_eq!(report["errors"], 0, "{report}");

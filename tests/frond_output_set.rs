@@ -74,6 +74,9 @@ fn visible_files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     out
 }
 
+/// Removes the timing fields of a report, recursively: the written forms of two reports
+/// compared whole (the method sections included, whose `t_*` fields no struct names), not a
+/// read of either.
 fn strip_timings(v: &mut serde_json::Value) {
     match v {
         serde_json::Value::Object(m) => {
@@ -505,22 +508,20 @@ fn a_set_written_by_frond_0_1_is_adopted_and_replaced() {
     let work = tmp.path().join("work");
     ok(&lod(&work, "150,60,30", "1", None));
     // What frond 0.1 left: `report.json` listing the files as `<-o>/<file>`.
-    let mut report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(work.join("sapling_report.json")).unwrap()).unwrap();
-    let files: Vec<serde_json::Value> = report["files"]
-        .as_array()
-        .unwrap()
+    let mut report: frond_lod::LodReport = read_json(&work.join("sapling_report.json"));
+    report.files = report
+        .files
         .iter()
         .map(|f| {
-            let f = f
-                .as_str()
-                .unwrap()
-                .replace("sapling_report.json", "report.json");
-            serde_json::Value::from(work.join(f).display().to_string())
+            let f = f.replace("sapling_report.json", "report.json");
+            work.join(f).display().to_string()
         })
         .collect();
-    report["files"] = serde_json::Value::from(files);
-    std::fs::write(work.join("report.json"), report.to_string()).unwrap();
+    std::fs::write(
+        work.join("report.json"),
+        serde_json::to_string(&report).unwrap(),
+    )
+    .unwrap();
     std::fs::remove_file(work.join("sapling_report.json")).unwrap();
     ok(&lod(&work, "150", "1", None));
     // The shared shaders (the LOD cross-fade every chain ships) and the preview page with its
@@ -641,12 +642,8 @@ fn links_out_of_the_output_folder_are_never_followed() {
     // files are removed on the next run, that one is not.
     ok(&lod(&out, "60", "1", None));
     let report = out.join("sapling_report.json");
-    let mut v: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
-    v["files"]
-        .as_array_mut()
-        .unwrap()
-        .push(serde_json::json!("away/linked.glb"));
+    let mut v: frond_lod::LodReport = read_json(&report);
+    v.files.push("away/linked.glb".to_string());
     std::fs::write(&report, serde_json::to_vec(&v).unwrap()).unwrap();
     std::os::unix::fs::symlink(dir.path().join("victims"), out.join("away")).unwrap();
     ok(&lod(&out, "200", "1", None));

@@ -44,6 +44,9 @@ use std::process::Command;
 use std::sync::Mutex;
 
 use common::*;
+use frond_app::inspect::InspectReport;
+use frond_lod::LodReport;
+use frond_scene::Part;
 use serde_json::Value;
 
 /// Godot's own error lines that every animated glTF import prints (see the module docs).
@@ -318,7 +321,7 @@ struct Measured {
 
 /// Checks Godot's view of one LOD file (`result`, its JSON line) against the file itself, the
 /// chain's report (the input clip) and frond's render.
-fn check_lod(file: &Path, result: &Value, report: &Value) -> Vec<Measured> {
+fn check_lod(file: &Path, result: &Value, report: &LodReport) -> Vec<Measured> {
     let what = file.display().to_string();
     assert_eq!(result["imported"], true, "{what}: not imported: {result}");
     assert_eq!(result["loaded"], true, "{what}: not loaded: {result}");
@@ -326,10 +329,8 @@ fn check_lod(file: &Path, result: &Value, report: &Value) -> Vec<Measured> {
     assert!(errors.is_empty(), "{what}: Godot printed {errors:#?}");
 
     let (json, bin) = glb(file);
-    let inspect: Value = serde_json::from_slice(
-        &frond_ok(&["inspect", file.to_str().expect("utf-8"), "--json"]).stdout,
-    )
-    .expect("inspect JSON");
+    let inspect: InspectReport =
+        parse_json(&frond_ok(&["inspect", file.to_str().expect("utf-8"), "--json"]).stdout);
 
     // One skeleton, with at least the skin's joints: Godot 3.2 also makes a bone of every
     // animated node below the skeleton's root that is no joint (measured: sapling_LOD3's 30
@@ -346,8 +347,8 @@ fn check_lod(file: &Path, result: &Value, report: &Value) -> Vec<Measured> {
     // The clip, at the input clip's length (the report's period) and the file's own.
     let players = result["animation_players"].as_array().expect("players");
     assert_eq!(players.len(), 1, "{what}: players {players:?}");
-    let clip = report["clip"].as_str().expect("report clip");
-    let period = report["period"].as_f64().expect("report period");
+    let clip = report.clip.as_deref().expect("report clip");
+    let period = written_f64(report.period);
     let anim = players[0]["animations"]
         .as_array()
         .expect("animations")
@@ -359,18 +360,17 @@ fn check_lod(file: &Path, result: &Value, report: &Value) -> Vec<Measured> {
         (length - period).abs() < 1e-3,
         "{what}: length {length}, period {period}"
     );
-    let file_clip = inspect["clips"]
-        .as_array()
-        .expect("clips")
+    let file_clip = inspect
+        .clips
         .iter()
-        .find(|c| c["name"] == clip)
+        .find(|c| c.name == clip)
         .expect("the clip in the file");
-    let duration = file_clip["duration_s"].as_f64().expect("duration");
+    let duration = written_f64(file_clip.duration_s);
     assert!(
         (length - duration).abs() < 1e-3,
         "{what}: length {length}, file {duration}"
     );
-    let channels = file_clip["channels"].as_u64().expect("channels");
+    let channels = file_clip.channels as u64;
     let tracks = anim["tracks"].as_u64().expect("tracks");
     assert!(
         tracks > 0 && tracks <= channels,
@@ -389,12 +389,11 @@ fn check_lod(file: &Path, result: &Value, report: &Value) -> Vec<Measured> {
         .iter()
         .flat_map(|m| m["materials"].as_array().expect("materials"))
         .collect();
-    let foliage: Vec<&str> = inspect["classification"]
-        .as_array()
-        .expect("classification")
+    let foliage: Vec<&str> = inspect
+        .classification
         .iter()
-        .filter(|c| c["part"] == "foliage")
-        .map(|c| c["material"].as_str().expect("material name"))
+        .filter(|c| c.part == Part::Foliage)
+        .map(|c| c.material.as_str())
         .collect();
     assert!(!foliage.is_empty(), "{what}: no foliage");
     for material in gltf_materials(&json, &bin) {
@@ -537,22 +536,14 @@ fn describe_combined(file: &Path, result: &Value, lods: usize) {
 
 /// Writes the chain for `input` into `dir` (small test settings) and returns the report and the
 /// LOD files.
-fn chain(input: &Path, dir: &Path, extra: &[&str]) -> (Value, Vec<PathBuf>) {
+fn chain(input: &Path, dir: &Path, extra: &[&str]) -> (LodReport, Vec<PathBuf>) {
     let report = frond_lod(input, dir, extra);
-    let lods = report["lods"]
-        .as_array()
-        .expect("lods")
-        .iter()
-        .map(|l| dir.join(l["file"].as_str().expect("file")))
-        .collect();
+    let lods = report.lods.iter().map(|l| dir.join(&l.file)).collect();
     (report, lods)
 }
 
-fn combined(dir: &Path, report: &Value) -> PathBuf {
-    dir.join(format!(
-        "{}_lods.glb",
-        report["name"].as_str().expect("name")
-    ))
+fn combined(dir: &Path, report: &LodReport) -> PathBuf {
+    dir.join(format!("{}_lods.glb", report.name))
 }
 
 fn print_measured(file: &Path, measured: &[Measured]) {
@@ -574,8 +565,8 @@ fn print_measured(file: &Path, measured: &[Measured]) {
 
 /// The frames' clip times: 0 (a key) and 0.325 of the period (between keys), as passed to
 /// `frond render --time` and named in the files.
-fn times(report: &Value) -> Vec<String> {
-    let period = report["period"].as_f64().expect("period");
+fn times(report: &LodReport) -> Vec<String> {
+    let period = written_f64(report.period);
     vec!["0".to_string(), format!("{:.2}", 0.325 * period)]
 }
 
@@ -617,7 +608,7 @@ fn check_chain<'a>(
     lods: &[PathBuf],
     combined_file: &Path,
     results: &HashMap<String, Value>,
-    report_of: impl Fn(&PathBuf) -> &'a Value,
+    report_of: impl Fn(&PathBuf) -> &'a LodReport,
 ) {
     for file in lods {
         let measured = check_lod(
@@ -627,7 +618,7 @@ fn check_chain<'a>(
         );
         print_measured(file, &measured);
     }
-    let chain_len = report_of(&lods[0])["lods"].as_array().map_or(0, Vec::len);
+    let chain_len = report_of(&lods[0]).lods.len();
     describe_combined(
         combined_file,
         &results[combined_file.to_str().expect("utf-8")],
@@ -719,9 +710,9 @@ fn godot_plays_a_vat_lod_where_frond_plays_it_skinned() {
     let (_, skin_lods) = chain(&input, &dir.path().join("skin"), &args);
     let (vat, skin) = (&vat_lods[1], &skin_lods[1]);
     assert!(
-        report["lods"][1]["vat"].is_array(),
-        "LOD1 has VAT files: {}",
-        report["lods"][1]
+        report.lods[1].vat.is_some(),
+        "LOD1 has VAT files: {:?}",
+        report.lods[1]
     );
     let results = godot_run_with(
         &dir.path().join("godot"),

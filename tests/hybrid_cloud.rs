@@ -12,8 +12,10 @@ use common::*;
 
 /// `frond eval TREE LOD --screen-height 600`'s animated coverage error.
 fn error_at_600(tree: &Path, lod: &Path) -> f64 {
-    frond_eval(tree, lod, &["--screen-height", "600"])["coverage"]["animated"]["mean"]
-        .as_f64()
+    frond_eval(tree, lod, &["--screen-height", "600"])
+        .coverage
+        .animated
+        .mean
         .expect("coverage")
 }
 
@@ -30,19 +32,16 @@ const MAX_ERROR_AT_ZERO: f64 = 0.01;
 fn check(tree: &Path) {
     let out = tempfile::tempdir().expect("tempdir");
     let report = per_bone_at_zero(tree, out.path());
-    let lods = report["lods"].as_array().expect("lods");
-    let (lod0, lod1) = (&lods[0], &lods[1]);
-    let billboards = lod1["billboards"].as_u64().expect("billboards");
-    let copies = lod1["input_textured_billboards"]
-        .as_u64()
-        .expect("input_textured_billboards");
+    let (lod0, lod1) = (&report.lods[0], &report.lods[1]);
+    let billboards = lod1.billboards;
+    let copies = lod1.input_textured_billboards;
     assert!(
         billboards > 0 && copies * 100 >= billboards * 99,
         "{}: {copies} of {billboards} billboards copy their card",
         tree.display()
     );
-    let lod0_file = out.path().join(lod0["file"].as_str().expect("file"));
-    let lod1_file = out.path().join(lod1["file"].as_str().expect("file"));
+    let lod0_file = out.path().join(&lod0.file);
+    let lod1_file = out.path().join(&lod1.file);
     // The two `frond eval` runs are independent and each keeps about one core busy: run them
     // side by side.
     let (input_error, eval_error) = std::thread::scope(|scope| {
@@ -53,7 +52,7 @@ fn check(tree: &Path) {
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
         (lod0_eval, lod1_eval)
     });
-    let error = lod1["error"]["coverage"].as_f64().expect("measured");
+    let error = lod1.error.as_ref().expect("measured").coverage;
     assert!(
         (error - eval_error).abs() < 1e-9,
         "the report's error is frond eval's"
@@ -84,7 +83,7 @@ fn check(tree: &Path) {
         );
     }
     assert_eq!(
-        lod1["atlas"].is_null(),
+        lod1.atlas.is_none(),
         copies == billboards,
         "an atlas only for baked billboards"
     );

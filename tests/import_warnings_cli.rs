@@ -6,6 +6,7 @@ mod common;
 use std::path::Path;
 
 use common::*;
+use frond_app::inspect::InspectReport;
 use frond_scene::gltf_writer::glb_container;
 use serde_json::{Value, json};
 
@@ -53,13 +54,8 @@ fn inspect_json_lists_the_import_warnings() {
     let (doc, bin) = flawed();
     let path = write(dir.path(), "flawed.glb", &doc, &bin);
     let out = frond_ok(&["inspect", "--json", "--samples", "2", &path]);
-    let r: Value = serde_json::from_slice(&out.stdout).expect("json");
-    let warnings: Vec<&str> = r["warnings"]
-        .as_array()
-        .expect("warnings[]")
-        .iter()
-        .map(|w| w.as_str().expect("string"))
-        .collect();
+    let r: InspectReport = parse_json(&out.stdout);
+    let warnings: Vec<&str> = r.warnings.iter().map(String::as_str).collect();
     for want in [
         "\"scene\" is 3, but the file has 1 scenes; frond reads every node regardless",
         "bufferView 0: byteStride 0 is invalid (glTF allows 4 to 252); accessor 0 read it as tightly packed",
@@ -72,7 +68,7 @@ fn inspect_json_lists_the_import_warnings() {
         );
     }
     assert!(warnings.iter().all(|w| !w.contains('\n')), "{warnings:#?}");
-    assert_eq!(r["triangles"]["total"], 2);
+    assert_eq!(r.triangles.total, 2);
 }
 
 #[test]
@@ -130,11 +126,9 @@ fn lod_reports_the_import_warnings() {
     .expect("write");
     let out = dir.path().join("out");
     let report = frond_lod(&tree, &out, &["--lods", "60"]);
-    let warnings = report["warnings"].as_array().expect("warnings[]");
+    let warnings = &report.warnings;
     assert!(
-        warnings
-            .iter()
-            .any(|w| w.as_str().is_some_and(|w| w.contains("\"scene\" is 7"))),
+        warnings.iter().any(|w| w.contains("\"scene\" is 7")),
         "{warnings:?}"
     );
 }

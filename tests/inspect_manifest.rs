@@ -4,6 +4,7 @@
 mod common;
 
 use common::*;
+use frond_app::inspect::InspectReport;
 
 #[test]
 fn inspect_json_matches_manifest_for_every_shared_tree() {
@@ -21,59 +22,66 @@ fn inspect_json_matches_manifest_for_every_shared_tree() {
             "{name}: {}",
             String::from_utf8_lossy(&out.stderr)
         );
-        let r: serde_json::Value =
-            serde_json::from_slice(&out.stdout).expect("inspect prints JSON");
+        // Every stable key is present: the typed read requires `triangles.degenerate`,
+        // `foliage_reassigned`, `bones`, `skeleton_depth` (whole numbers) and three-number
+        // `bounds.min` and `bounds.max`.
+        let r: InspectReport = parse_json(&out.stdout);
+        // MANIFEST.json is the shared trees' own description (not frond's schema): read by key.
         let t = &entry["triangles"];
+        let count = |n: usize| Some(n as u64);
         assert_eq!(
-            r["triangles"]["total"], t["total"],
+            count(r.triangles.total),
+            t["total"].as_u64(),
             "{name}: total triangles"
         );
-        assert_eq!(r["triangles"]["wood"], t["wood"], "{name}: wood triangles");
         assert_eq!(
-            r["triangles"]["foliage"], t["foliage"],
+            count(r.triangles.wood),
+            t["wood"].as_u64(),
+            "{name}: wood triangles"
+        );
+        assert_eq!(
+            count(r.triangles.foliage),
+            t["foliage"].as_u64(),
             "{name}: foliage triangles"
         );
-        assert_eq!(r["bones"], entry["bones"], "{name}: bones");
+        assert_eq!(count(r.bones), entry["bones"].as_u64(), "{name}: bones");
         assert_eq!(
-            r["skeleton_depth"], entry["skeletonDepth"]["maxBoneChainDepth"],
+            Some(u64::from(r.skeleton_depth)),
+            entry["skeletonDepth"]["maxBoneChainDepth"].as_u64(),
             "{name}: skeleton depth"
         );
-        let clip = &r["clips"][0];
+        let clip = r.clips.first().expect("a clip");
         assert_eq!(
-            clip["name"], entry["animation"]["name"],
+            Some(clip.name.as_str()),
+            entry["animation"]["name"].as_str(),
             "{name}: clip name"
         );
         assert_eq!(
-            clip["duration_s"].as_f64(),
+            Some(written_f64(clip.duration_s)),
             entry["animation"]["durationS"].as_f64(),
             "{name}: period"
         );
-        assert_eq!(clip["loops"], entry["animation"]["loops"], "{name}: loops");
-        assert_eq!(clip["moves"], true, "{name}: the wind moves the tree");
-        // Every stable key is present.
-        assert!(
-            r["triangles"]["degenerate"].is_u64(),
-            "{name}: triangles.degenerate"
-        );
-        for key in ["foliage_reassigned", "bones", "skeleton_depth"] {
-            assert!(r[key].is_u64(), "{name}: {key}");
-        }
-        assert_eq!(r["bounds"]["min"].as_array().map(Vec::len), Some(3));
-        assert_eq!(r["bounds"]["max"].as_array().map(Vec::len), Some(3));
-        let sm = &r["sampling"];
-        assert_eq!(sm["samples"], 64, "{name}: default sample count");
         assert_eq!(
-            sm["clip"], entry["animation"]["name"],
+            Some(clip.loops),
+            entry["animation"]["loops"].as_bool(),
+            "{name}: loops"
+        );
+        assert!(clip.moves, "{name}: the wind moves the tree");
+        let sm = &r.sampling;
+        assert_eq!(sm.samples, 64, "{name}: default sample count");
+        assert_eq!(
+            sm.clip.as_deref(),
+            entry["animation"]["name"].as_str(),
             "{name}: first clip sampled"
         );
         assert_eq!(
-            sm["trajectories"], t["foliage"],
+            count(sm.trajectories),
+            t["foliage"].as_u64(),
             "{name}: one trajectory per foliage triangle"
         );
         // MANIFEST's Blender check saw leaves move by up to ~2.5 units between frames 0 and 1.
-        let max = sm["max_leaf_excursion"].as_f64().unwrap_or(0.0);
-        let height = r["bounds"]["max"][1].as_f64().unwrap_or(0.0)
-            - r["bounds"]["min"][1].as_f64().unwrap_or(0.0);
+        let max = written_f64(sm.max_leaf_excursion);
+        let height = written_f64(r.bounds.max[1]) - written_f64(r.bounds.min[1]);
         assert!(
             max > 1e-3 * height && max < 0.2 * height,
             "{name}: leaf excursion {max} of height {height}"
@@ -81,12 +89,13 @@ fn inspect_json_matches_manifest_for_every_shared_tree() {
         let rigid = entry["leafBinding"]["multiBonePieces"] == 0;
         if rigid {
             assert_eq!(
-                r["foliage_reassigned"], 0,
+                r.foliage_reassigned, 0,
                 "{name}: rigid leaves need no reassignment"
             );
         } else {
             assert_eq!(
-                r["foliage_reassigned"], t["foliage"],
+                count(r.foliage_reassigned),
+                t["foliage"].as_u64(),
                 "{name}: every blended leaf triangle was reassigned"
             );
         }
@@ -121,9 +130,9 @@ fn material_overrides_change_the_split() {
         path.to_str().expect("utf-8"),
     ]);
     assert!(out.status.success());
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
-    assert_eq!(r["triangles"]["foliage"], 13872);
-    assert_eq!(r["triangles"]["wood"], 0);
-    let reason = r["classification"][0]["reason"].as_str().unwrap_or("");
+    let r: InspectReport = parse_json(&out.stdout);
+    assert_eq!(r.triangles.foliage, 13872);
+    assert_eq!(r.triangles.wood, 0);
+    let reason = r.classification.first().map_or("", |c| c.reason.as_str());
     assert!(reason.contains("named as foliage"), "{reason}");
 }

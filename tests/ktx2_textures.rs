@@ -8,6 +8,7 @@ mod common;
 use std::path::Path;
 
 use common::*;
+use frond_lod::LodReport;
 use frond_scene::gltf_source::GltfSource;
 use frond_scene::input_file::InputLimits;
 use frond_scene::ktx2::{decode_levels, gpu_bytes, read_info};
@@ -135,10 +136,9 @@ fn ktx2_atlases_and_maps_transcode_with_full_chains_that_keep_alpha_coverage() {
         let out = dir.path().join(format!("{mode}-{method}"));
         let report = frond_lod(&input, &out, &["--textures", mode, "--method", method]);
         let fallback = mode == "ktx2-png";
-        let lods = report["lods"].as_array().expect("lods");
         let mut seen = 0;
-        for (k, lod) in lods.iter().enumerate() {
-            let file = out.join(lod["file"].as_str().expect("file"));
+        for (k, lod) in report.lods.iter().enumerate() {
+            let file = out.join(&lod.file);
             let checked = check_file(&file, fallback);
             if k == 0 {
                 // LOD0 is the input: its own images, untouched.
@@ -147,7 +147,7 @@ fn ktx2_atlases_and_maps_transcode_with_full_chains_that_keep_alpha_coverage() {
             }
             assert_valid(&file);
             // The report's costs are the files': GPU bytes of each KTX2 image are its blocks.
-            let images = lod["cost"]["images"].as_array().expect("images");
+            let images = &lod.cost.as_ref().expect("cost").images;
             for c in &checked {
                 assert!(
                     c.worst_coverage_drift <= 0.05,
@@ -157,15 +157,15 @@ fn ktx2_atlases_and_maps_transcode_with_full_chains_that_keep_alpha_coverage() {
                 let entry = images
                     .iter()
                     .find(|i| {
-                        i["mime_type"] == "image/ktx2"
-                            && i["width"] == c.width
-                            && i["height"] == c.height
+                        i.mime_type.as_deref() == Some("image/ktx2")
+                            && i.width == c.width
+                            && i.height == c.height
                     })
                     .expect("the report lists the image");
-                assert_eq!(entry["levels"], c.levels as u64);
+                assert_eq!(entry.levels, c.levels as u32);
                 assert_eq!(
-                    entry["gpu_bytes"],
-                    gpu_bytes(c.width, c.height, c.levels as u32)
+                    entry.gpu_bytes,
+                    gpu_bytes(c.width, c.height, c.levels as u32) as u64
                 );
             }
             seen += checked.len();
@@ -188,11 +188,7 @@ fn ktx2_lods_measure_like_png_ones_and_external_files_are_ktx2() {
     );
     // frond reads its own KTX2 files back (the measurement re-imports them): the error moves
     // by no more than the encoding's own.
-    let e = |r: &serde_json::Value| {
-        r["lods"][1]["error"]["coverage"]
-            .as_f64()
-            .expect("measured")
-    };
+    let e = |r: &LodReport| r.lods[1].error.as_ref().expect("measured").coverage;
     assert!(
         (e(&png) - e(&ktx2)).abs() < 0.01,
         "{} vs {}",
@@ -200,11 +196,7 @@ fn ktx2_lods_measure_like_png_ones_and_external_files_are_ktx2() {
         e(&ktx2)
     );
     // A KTX2 image costs a byte a texel on the GPU against RGBA8's four.
-    let gpu = |r: &serde_json::Value| {
-        r["lods"][1]["cost"]["texture_gpu_bytes"]
-            .as_u64()
-            .expect("gpu")
-    };
+    let gpu = |r: &LodReport| r.lods[1].cost.as_ref().expect("gpu").texture_gpu_bytes;
     assert!(gpu(&ktx2) < gpu(&png), "{} vs {}", gpu(&ktx2), gpu(&png));
     let files: Vec<String> = std::fs::read_dir(dir.path().join("ktx2"))
         .expect("out")
@@ -227,12 +219,10 @@ fn heavy_oak_dense_far_lod_fits_half_a_megabyte_on_the_gpu_and_keeps_coverage_at
         .expect("one tree");
     let dir = tempfile::tempdir().expect("temp dir");
     let report = frond_lod(&tree, dir.path(), &["--lods", "60", "--textures", "ktx2"]);
-    let lod = &report["lods"][1];
-    let gpu = lod["cost"]["texture_gpu_bytes"]
-        .as_u64()
-        .expect("gpu bytes");
+    let lod = &report.lods[1];
+    let gpu = lod.cost.as_ref().expect("gpu bytes").texture_gpu_bytes;
     assert!(gpu <= 512 * 1024, "{gpu} GPU bytes");
-    let file = dir.path().join(lod["file"].as_str().expect("file"));
+    let file = dir.path().join(&lod.file);
     let src = GltfSource::open(&file, &InputLimits::default()).expect("reads");
     for (k, img) in src.raw.images.iter().enumerate() {
         if img["mimeType"] != "image/ktx2" {

@@ -11,6 +11,8 @@ use common::*;
 use frond_billboard::cloud::CloudParams;
 use frond_export::LodInput;
 use frond_export::lod_file::{FileOptions, write_glb};
+use frond_export::mapping::Mapping;
+use frond_export::spectral::SpectralSidecar;
 use frond_export::vat::{VatFormat, VatSpace, decode_pivots, decode_rigid};
 use frond_lod::cloud_build::{build_animated_cloud, sampled_worlds};
 use frond_lod::joint_budget::{BillboardAnimation, JointCap};
@@ -112,33 +114,24 @@ fn skin_lods_are_valid_and_reported() {
             "--no-cost-budgets",
         ],
     );
-    let lods = report["lods"].as_array().expect("lods");
+    let lods = &report.lods;
     assert_eq!(lods.len(), 3, "LOD0 plus one per --lods entry");
+    // Triangles, billboards, bones, texture bytes, what was dropped and the method are
+    // required fields of `LodEntry`: the typed read of the report checks each LOD has them.
     for (k, l) in lods.iter().enumerate() {
-        assert_eq!(l["file"], format!("sapling_LOD{k}.glb"));
-        assert!(out.join(l["file"].as_str().expect("file")).exists());
-        for key in [
-            "triangles",
-            "billboards",
-            "bones",
-            "texture_bytes",
-            "dropped",
-            "method",
-        ] {
-            assert!(!l[key].is_null(), "LOD{k} reports {key}");
-        }
+        assert_eq!(l.file, format!("sapling_LOD{k}.glb"));
+        assert!(out.join(&l.file).exists());
         if k > 0 {
-            assert!(l["epsilon"].as_f64().expect("epsilon") > 0.0);
-            assert!(out.join(l["mapping"].as_str().expect("mapping")).exists());
-            assert!(l["billboards"].as_u64().expect("count") > 0);
+            assert!(l.epsilon.expect("epsilon") > 0.0);
+            assert!(out.join(l.mapping.as_deref().expect("mapping")).exists());
+            assert!(l.billboards > 0);
         }
     }
-    assert_eq!(lods[1]["method"], "skeleton-axis-angle");
-    assert_eq!(lods[2]["method"], "skeleton-axis-angle");
+    assert_eq!(lods[1].method.name(), "skeleton-axis-angle");
+    assert_eq!(lods[2].method.name(), "skeleton-axis-angle");
     // Nearer LODs cost more: ε grows and billboards shrink in number with distance.
-    let num = |k: usize, key: &str| lods[k][key].as_f64().expect(key);
-    assert!(num(2, "epsilon") > num(1, "epsilon"));
-    assert!(num(2, "triangles") < num(0, "triangles"));
+    assert!(lods[2].epsilon.expect("epsilon") > lods[1].epsilon.expect("epsilon"));
+    assert!(lods[2].triangles < lods[0].triangles);
     assert!(out.join("sapling_lods.glb").exists());
     for f in glbs(&out) {
         assert_valid(&f);
@@ -168,13 +161,10 @@ fn skin_lods_are_valid_and_reported() {
         );
     }
     // Mapping: every billboard's triangles are input foliage triangles, none twice.
-    let m: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("sapling_LOD1.mapping.json")).expect("m"))
-            .expect("json");
+    let m: Mapping = read_json(&out.join("sapling_LOD1.mapping.json"));
     let mut seen = std::collections::HashSet::new();
-    for b in m["billboards"].as_array().expect("billboards") {
-        for t in b["triangles"].as_array().expect("triangles") {
-            let t = t.as_u64().expect("index") as usize;
+    for b in &m.billboards {
+        for &t in &b.triangles {
             assert_eq!(input.triangles[t].part, frond_scene::Part::Foliage);
             assert!(seen.insert(t), "triangle {t} mapped twice");
         }
@@ -202,10 +192,10 @@ fn msft_lod_external_textures_and_vat_are_valid() {
     for f in glbs(&out) {
         assert_valid(&f);
     }
-    let l1 = &report["lods"][1];
-    let vat = l1["vat"].as_array().expect("vat files");
+    let l1 = &report.lods[1];
+    let vat = l1.vat.as_ref().expect("vat files");
     for f in vat {
-        assert!(out.join(f.as_str().expect("name")).exists(), "{f}");
+        assert!(out.join(f).exists(), "{f}");
     }
     assert!(out.join("shaders/frond_vat_rigid.wgsl").exists());
     let combined = std::fs::read(out.join("sapling_lods.glb")).expect("combined");
@@ -300,43 +290,35 @@ fn spectral_lods_validate_and_carry_their_coefficients() {
             "spectral",
         ],
     );
-    assert_eq!(report["animation"], "spectral");
-    let lods = report["lods"].as_array().expect("lods");
-    for (l, k) in lods[1..].iter().zip([15u64, 4]) {
-        assert_eq!(l["method"], "spectral-axis-phase");
-        let sp = &l["spectral"];
-        assert_eq!(sp["clusters"].as_u64(), Some(k), "the k rule: height / 10");
+    assert_eq!(report.animation, "spectral");
+    let lods = &report.lods;
+    for (l, k) in lods[1..].iter().zip([15usize, 4]) {
+        assert_eq!(l.method.name(), "spectral-axis-phase");
+        let sp = spectral_section(l).expect("spectral section");
+        assert_eq!(sp.clusters, k, "the k rule: height / 10");
+        assert!(sp.residual < sp.motion_rms);
+        let files = l.spectral_files.as_ref().expect("spectral files");
+        let sidecar: SpectralSidecar = read_json(&out.join(&files[1]));
+        assert_eq!(sidecar.billboards as usize, l.billboards);
+        assert_eq!(sidecar.clip.as_deref(), Some("Wind"));
+        let tex = std::fs::read(out.join(&files[0])).expect("texture");
+        assert_eq!(sidecar.bytes, tex.len());
+        assert_eq!(l.animation_bytes, tex.len());
         assert!(
-            sp["residual"].as_f64().expect("residual") < sp["motion_rms"].as_f64().expect("rms")
-        );
-        let files = l["spectral_files"].as_array().expect("spectral files");
-        let sidecar: serde_json::Value = serde_json::from_slice(
-            &std::fs::read(out.join(files[1].as_str().expect("json"))).expect("sidecar"),
-        )
-        .expect("sidecar JSON");
-        assert_eq!(sidecar["billboards"], l["billboards"]);
-        assert_eq!(sidecar["clip"], "Wind");
-        let tex = std::fs::read(out.join(files[0].as_str().expect("exr"))).expect("texture");
-        assert_eq!(sidecar["bytes"].as_u64(), Some(tex.len() as u64));
-        assert_eq!(l["animation_bytes"].as_u64(), Some(tex.len() as u64));
-        assert!(
-            l["vat_equivalent_bytes"]
-                .as_u64()
-                .expect("VAT size beside it")
-                > tex.len() as u64,
+            l.vat_equivalent_bytes.expect("VAT size beside it") > tex.len(),
             "the coefficients are smaller than VAT"
         );
         let img = image::load_from_memory_with_format(&tex, image::ImageFormat::OpenExr)
             .expect("EXR decodes");
         // Blocks of 2·terms texels per billboard, `per_row` to a row.
-        let n = l["billboards"].as_u64().expect("n");
-        let per_row = sidecar["per_row"].as_u64().expect("per_row");
-        let terms = sidecar["terms"].as_u64().expect("terms");
+        let n = l.billboards as u64;
+        let per_row = u64::from(sidecar.per_row);
+        let terms = u64::from(sidecar.terms);
         assert_eq!(u64::from(img.height()), n.div_ceil(per_row));
         assert_eq!(u64::from(img.width()), 2 * terms * per_row);
         // Billboards need no motion joints: the skin holds rig nodes only, never more than the
         // input's own joints (LOD0).
-        assert!(l["bones"].as_u64().expect("bones") <= lods[0]["bones"].as_u64().expect("LOD0"));
+        assert!(l.bones <= lods[0].bones);
     }
     assert!(out.join("shaders/frond_spectral.wgsl").exists());
     for f in glbs(&out) {
@@ -722,22 +704,14 @@ fn every_method_and_mode_validates(trees: &[PathBuf], first: usize) {
         {
             let out = dir.path().join(format!("{i}_{k}"));
             let report = frond_lod(input, &out, extra);
-            let lods = report["lods"].as_array().expect("lods");
+            let lods = &report.lods;
             // LOD0 is the input: every non-degenerate triangle, wood and foliage.
             let kept = tree.triangles.iter().filter(|t| !t.degenerate).count();
-            assert_eq!(
-                lods[0]["triangles"].as_u64(),
-                Some(kept as u64),
-                "{name} LOD0"
-            );
+            assert_eq!(lods[0].triangles, kept, "{name} LOD0");
             for l in &lods[1..] {
+                assert!(l.method.name() == "cards" || l.billboards > 0, "{name}");
                 assert!(
-                    l["method"] == "cards" || l["billboards"].as_u64().expect("billboards") > 0,
-                    "{name}"
-                );
-                assert!(
-                    l["triangles"].as_u64().expect("triangles")
-                        < lods[0]["triangles"].as_u64().expect("triangles"),
+                    l.triangles < lods[0].triangles,
                     "{name}: a LOD is smaller than the input"
                 );
             }
@@ -757,14 +731,12 @@ fn distances_give_screen_heights_by_holst_eq_3() {
         &out,
         &["--distances", "40", "--fov", "90", "--resolution", "1000"],
     );
-    let h = report["tree_height"].as_f64().expect("height");
+    let h = written_f64(report.tree_height);
     // 90° fov: pc = 500 pixels per unit of height/distance.
     let want = h / 40.0 * 500.0;
-    let got = report["lods"][1]["screen_height"]
-        .as_f64()
-        .expect("screen height");
+    let got = written_f64(report.lods[1].screen_height.expect("screen height"));
     assert!((got - want).abs() < 1e-3 * want, "{got} vs {want}");
-    let eps = report["lods"][1]["epsilon"].as_f64().expect("eps");
+    let eps = written_f64(report.lods[1].epsilon.expect("eps"));
     assert!((eps - h / want).abs() < 1e-4 * eps, "ε is one pixel");
 }
 
@@ -798,11 +770,7 @@ fn bone_bound_lods_keep_every_clip_and_rigid_fit_lods_say_what_they_drop() {
     // The default chain of a card tree: cards follow their bones, so every clip plays.
     let cards = frond_lod(&input, &dir.path().join("c"), &["--lods", "300,60"]);
     for k in 0..3 {
-        assert_eq!(
-            cards["lods"][k]["clips"],
-            serde_json::json!(["Wind", "Gust"]),
-            "LOD{k}"
-        );
+        assert_eq!(cards.lods[k].clips, ["Wind", "Gust"], "LOD{k}");
     }
     // Skeleton at 300 px merges nothing unseen on the sapling: per-bone clouds on the input's
     // bones, so every clip plays.
@@ -811,10 +779,7 @@ fn bone_bound_lods_keep_every_clip_and_rigid_fit_lods_say_what_they_drop() {
         &dir.path().join("s"),
         &["--lods", "300", "--method", "skeleton", "--no-cost-budgets"],
     );
-    assert_eq!(
-        skeleton["lods"][1]["clips"],
-        serde_json::json!(["Wind", "Gust"])
-    );
+    assert_eq!(skeleton.lods[1].clips, ["Wind", "Gust"]);
     let report = frond_lod(
         &input,
         &out,
@@ -826,25 +791,12 @@ fn bone_bound_lods_keep_every_clip_and_rigid_fit_lods_say_what_they_drop() {
             "--no-cost-budgets",
         ],
     );
-    let clips = |k: usize| -> Vec<String> {
-        report["lods"][k]["clips"]
-            .as_array()
-            .expect("clips")
-            .iter()
-            .map(|c| c.as_str().expect("name").to_string())
-            .collect()
-    };
+    let clips = |k: usize| -> &[String] { &report.lods[k].clips };
     assert_eq!(clips(0), ["Wind", "Gust"]);
     // Static billboards carry motion sampled from the first clip only.
     assert_eq!(clips(2), ["Wind"]);
-    let dropped = report["lods"][2]["dropped"]["clips"]
-        .as_array()
-        .expect("dropped");
-    assert!(
-        dropped
-            .iter()
-            .any(|d| d.as_str().is_some_and(|s| s.starts_with("Gust")))
-    );
+    let dropped = &report.lods[2].dropped.clips;
+    assert!(dropped.iter().any(|d| d.starts_with("Gust")));
     for f in glbs(&out) {
         assert_valid(&f);
     }
@@ -866,31 +818,24 @@ fn skeleton_lods_validate_and_report_what_they_did() {
     for f in glbs(&out) {
         assert_valid(&f);
     }
-    let lods = report["lods"].as_array().expect("lods");
-    for l in &lods[1..] {
-        let sk = &l["skeleton"];
-        assert_eq!(l["method"], "skeleton-axis-angle");
+    let lods = &report.lods;
+    let sk = |k: usize| skeleton_section(&lods[k]).expect("skeleton section");
+    for (k, l) in lods.iter().enumerate().skip(1) {
+        let sk = sk(k);
+        assert_eq!(l.method.name(), "skeleton-axis-angle");
         assert!(
-            sk["budget"].is_null(),
+            sk.budget.is_none(),
             "no --clouds: merges that cannot be seen"
         );
-        assert_eq!(sk["trunk_on_original_skeleton"], false);
-        assert!(sk["collapses"].as_array().expect("collapses").is_empty());
+        assert!(!sk.trunk_on_original_skeleton);
+        assert!(sk.collapses.is_empty());
         // Attached: no leaf moves more than half a pixel off its branch.
-        let tol = sk["attach_tolerance"].as_f64().expect("tol");
-        assert!(sk["detachment_max"].as_f64().expect("detach") <= tol * 1.01 + 1e-5);
-        assert!(
-            sk["foliage_error_rms"].as_f64().expect("rms")
-                <= sk["displacement_tolerance"].as_f64().expect("disp") * 1.5
-        );
+        let tol = written_f64(sk.attach_tolerance);
+        assert!(written_f64(sk.detachment_max) <= tol * 1.01 + 1e-5);
+        assert!(written_f64(sk.foliage_error_rms) <= written_f64(sk.displacement_tolerance) * 1.5);
     }
-    let clouds = |k: usize| lods[k]["skeleton"]["clouds"].as_u64().expect("clouds");
-    assert!(
-        clouds(2)
-            < lods[2]["skeleton"]["foliage_bones"]
-                .as_u64()
-                .expect("bones")
-    );
+    let clouds = |k: usize| sk(k).clouds;
+    assert!(clouds(2) < sk(2).foliage_bones);
     assert!(clouds(2) <= clouds(1), "farther LODs merge more");
     // A budget CJR alone cannot reach: collapses, the trunk on the input's skeleton.
     let out1 = dir.path().join("sk1");
@@ -909,14 +854,11 @@ fn skeleton_lods_validate_and_report_what_they_did() {
     for f in glbs(&out1) {
         assert_valid(&f);
     }
-    let sk = &report["lods"][1]["skeleton"];
-    assert_eq!(sk["trunk_on_original_skeleton"], true);
-    assert!(!sk["collapses"].as_array().expect("collapses").is_empty());
-    assert!(sk["clouds"].as_u64().expect("clouds") == 2 || !sk["stopped_by"].is_null());
-    assert_eq!(
-        report["lods"][1]["clips"].as_array().expect("clips").len(),
-        1
-    );
+    let sk = skeleton_section(&report.lods[1]).expect("skeleton section");
+    assert!(sk.trunk_on_original_skeleton);
+    assert!(!sk.collapses.is_empty());
+    assert!(sk.clouds == 2 || sk.stopped_by.is_some());
+    assert_eq!(report.lods[1].clips.len(), 1);
 }
 
 /// Skeleton clouds of the sapling at `screen` px with `clouds` (None: the default rule).

@@ -14,7 +14,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use common::*;
-use serde_json::Value;
+use frond_lod::LodReport;
+use frond_preview::viewer::ViewConfig;
 
 /// Every `src="…"` and `href="…"` of a page that is a relative file (not `#…`, not a URL).
 fn referenced_files(html: &str) -> BTreeSet<String> {
@@ -33,13 +34,13 @@ fn referenced_files(html: &str) -> BTreeSet<String> {
 }
 
 /// The live view's config of a page.
-fn view_config(html: &str) -> Value {
+fn view_config(html: &str) -> ViewConfig {
     let start = html
         .find("id=\"frond-config\">")
         .expect("the page carries its live view's config")
         + "id=\"frond-config\">".len();
     let end = start + html[start..].find("</script>").expect("config closes");
-    serde_json::from_str(&html[start..end]).expect("config is JSON")
+    parse_json(&html.as_bytes()[start..end])
 }
 
 fn png_size(path: &Path) -> (u32, u32) {
@@ -53,7 +54,7 @@ fn count_colour(path: &Path, colour: [u8; 4]) -> usize {
     img.pixels().filter(|p| p.0 == colour).count()
 }
 
-fn sample_run(out: &Path, extra: &[&str]) -> Value {
+fn sample_run(out: &Path, extra: &[&str]) -> LodReport {
     frond_lod_measured(&root().join("samples/sapling.glb"), out, extra)
 }
 
@@ -63,12 +64,7 @@ fn lod_writes_a_preview_page_that_shows_every_lod_from_its_written_file() {
     let out = tmp.path().join("out");
     let report = sample_run(&out, &[]);
     let page_name = "sapling_preview.html";
-    let files: Vec<&str> = report["files"]
-        .as_array()
-        .expect("files")
-        .iter()
-        .filter_map(Value::as_str)
-        .collect();
+    let files: Vec<&str> = report.files.iter().map(String::as_str).collect();
     assert!(
         files.contains(&page_name),
         "the report lists the page: {files:?}"
@@ -85,18 +81,16 @@ fn lod_writes_a_preview_page_that_shows_every_lod_from_its_written_file() {
             "{f}: not in the report's files"
         );
     }
-    let lods = report["lods"].as_array().expect("lods");
+    let lods = &report.lods;
     for (k, lod) in lods.iter().enumerate() {
-        let file = lod["file"].as_str().expect("file");
+        let file = lod.file.as_str();
         assert!(referenced.contains(file), "the page links {file}");
         assert!(
             html.contains(&format!("id=\"lod{k}\"")),
             "a section for LOD{k}"
         );
         assert!(
-            html.contains(&frond_preview::html::esc(
-                lod["method_reason"].as_str().expect("reason")
-            )),
+            html.contains(&frond_preview::html::esc(&lod.method_reason)),
             "LOD{k}'s method and why"
         );
         let flip = out.join(format!("sapling_preview/lod{k}_wind.png"));
@@ -107,7 +101,7 @@ fn lod_writes_a_preview_page_that_shows_every_lod_from_its_written_file() {
         let control = reader.info().animation_control.expect("an animated PNG");
         assert_eq!(control.num_frames, 12, "LOD{k}: the loop in 12 frames");
         assert_eq!(control.num_plays, 0, "loops forever");
-        let Some(h) = lod["screen_height"].as_f64() else {
+        let Some(h) = lod.screen_height.map(written_f64) else {
             continue;
         };
         // The LOD, LOD0 and their difference at the LOD's own size (the image the coverage
@@ -132,7 +126,7 @@ fn lod_writes_a_preview_page_that_shows_every_lod_from_its_written_file() {
         );
         assert!(html.contains(&counts), "LOD{k}: the table says {counts}");
         // The measured error is on the page, as the report has it.
-        let e = lod["error"]["coverage"].as_f64().expect("measured");
+        let e = lod.error.as_ref().expect("measured").coverage;
         assert!(
             html.contains(&frond_preview::units::significant(e)),
             "LOD{k}: its error {e}"
@@ -141,7 +135,7 @@ fn lod_writes_a_preview_page_that_shows_every_lod_from_its_written_file() {
 
     // The cost table reads the written files: each LOD's triangles as the report's cost.
     for lod in lods {
-        let t = lod["cost"]["triangles"].as_u64().expect("triangles");
+        let t = lod.cost.as_ref().expect("triangles").triangles;
         assert!(
             html.contains(&frond_preview::units::count(t)),
             "{t} triangles in the table"
@@ -150,8 +144,8 @@ fn lod_writes_a_preview_page_that_shows_every_lod_from_its_written_file() {
 
     // The live view plays the combined file: its config names the file's own root nodes.
     let config = view_config(&html);
-    assert_eq!(config["combined"], report["combined"]);
-    let combined = gltf_json(&out.join(report["combined"].as_str().expect("combined")));
+    assert_eq!(config.combined, report.combined);
+    let combined = gltf_json(&out.join(&report.combined));
     let roots: BTreeSet<String> = combined["scenes"][0]["nodes"]
         .as_array()
         .expect("roots")
@@ -163,16 +157,18 @@ fn lod_writes_a_preview_page_that_shows_every_lod_from_its_written_file() {
                 .to_string()
         })
         .collect();
-    let cfg_lods = config["lods"].as_array().expect("lods");
+    let cfg_lods = &config.lods;
     assert_eq!(cfg_lods.len(), lods.len());
     let mut named = BTreeSet::new();
     for (k, l) in cfg_lods.iter().enumerate() {
-        for n in l["nodes"].as_array().expect("nodes") {
-            let n = n.as_str().expect("name");
+        for n in &l.nodes {
             assert!(n.ends_with(&format!("_LOD{k}")) || n.ends_with(&format!("_LOD{k}_rig")));
-            named.insert(n.to_string());
+            named.insert(n.clone());
         }
-        assert_eq!(l["triangles"], lods[k]["cost"]["triangles"]);
+        assert_eq!(
+            l.triangles,
+            lods[k].cost.as_ref().expect("triangles").triangles
+        );
     }
     assert_eq!(
         named, roots,
@@ -255,7 +251,7 @@ fn no_preview_writes_no_page() {
     assert!(!out.join("sapling_preview.html").exists());
     assert!(!out.join("sapling_preview").exists());
     assert!(!out.join("viewer").exists());
-    let listed = report["files"].to_string();
+    let listed = format!("{:?}", report.files);
     assert!(
         !listed.contains("preview") && !listed.contains("viewer/"),
         "{listed}"
@@ -297,7 +293,7 @@ fn batch_writes_an_index_and_one_shared_viewer() {
     let page = std::fs::read_to_string(&page_path).expect("the tree's page");
     // The tree's page uses the batch's one copy of the viewer, two folders up.
     let config = view_config(&page);
-    assert_eq!(config["viewer"], "../../viewer");
+    assert_eq!(config.viewer, "../../viewer");
     assert!(page.contains("src=\"../../viewer/frond-three.js\""));
     assert!(out.join("viewer/frond-three.js").is_file());
     assert!(
@@ -379,19 +375,14 @@ fn heavy_oak_dense_preview_stays_small_and_cheap() {
     let tmp = tempfile::tempdir().expect("tmp");
     let out = tmp.path().join("out");
     let report = frond_lod_measured(&shared_tree("oak_dense.glb"), &out, &[]);
-    let added: u64 = report["files"]
-        .as_array()
-        .expect("files")
+    let added: u64 = report
+        .files
         .iter()
-        .filter_map(Value::as_str)
         .filter(|f| f.contains("_preview") || f.starts_with("viewer/"))
         .map(|f| std::fs::metadata(out.join(f)).expect("file").len())
         .sum();
-    let t = &report["timings_s"];
-    let (preview, wall) = (
-        t["preview"].as_f64().expect("preview"),
-        t["wall"].as_f64().expect("wall"),
-    );
+    let t = &report.timings_s;
+    let (preview, wall) = (t.preview.expect("preview"), t.wall);
     eprintln!("oak_dense preview: {added} bytes, {preview:.2} s of {wall:.2} s");
     assert!(added < 5 * 1024 * 1024, "{added} bytes");
     assert!(preview < 0.1 * wall, "{preview} s of {wall} s");

@@ -9,6 +9,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use common::*;
+use frond_app::sweep::SweepSummary;
 
 /// Small, fast evaluation settings for the tests.
 const FAST: [&str; 10] = [
@@ -40,12 +41,12 @@ fn grid_with_candidate(candidate: &Path) -> Vec<&str> {
     ]
 }
 
-fn sweep(out: &Path, extra: &[&str], threads: &str) -> serde_json::Value {
+fn sweep(out: &Path, extra: &[&str], threads: &str) -> SweepSummary {
     sweep_tree(&root().join("samples/sapling.glb"), out, extra, threads)
 }
 
 /// [`sweep`] of the tree `input` ([`FAST`] but for the options `extra` sets).
-fn sweep_tree(input: &Path, out: &Path, extra: &[&str], threads: &str) -> serde_json::Value {
+fn sweep_tree(input: &Path, out: &Path, extra: &[&str], threads: &str) -> SweepSummary {
     let mut args = vec![
         "sweep",
         input.to_str().expect("utf-8"),
@@ -71,7 +72,7 @@ fn sweep_tree(input: &Path, out: &Path, extra: &[&str], threads: &str) -> serde_
         "frond {args:?}: {}",
         String::from_utf8_lossy(&output.stderr)
     );
-    serde_json::from_slice(&output.stdout).expect("summary JSON")
+    parse_json(&output.stdout)
 }
 
 /// results.csv as a list of column → cell maps.
@@ -122,8 +123,8 @@ fn sweep_writes_rows_stability_and_charts() {
     let sapling = root().join("samples/sapling.glb");
     let summary = sweep(&out, &grid_with_candidate(&sapling), "2");
     // 2 methods × 2 ε × 2 seeds + the candidate at the one screen height.
-    assert_eq!(summary["runs"], 9);
-    assert_eq!(summary["failed"], 0, "{:#}", summary["rows"]);
+    assert_eq!(summary.runs, 9);
+    assert_eq!(summary.failed, 0, "{:#?}", summary.rows);
     let rows = csv_rows(&out.join("results.csv"));
     assert_eq!(rows.len(), 9);
     let runs: Vec<_> = rows
@@ -185,36 +186,31 @@ fn sweep_writes_rows_stability_and_charts() {
     assert!(num(cand, "plane_distance_max") < 1e-4);
 
     // Stability: 4 configurations of 2 seeds each, spreads consistent with the rows.
-    let st = summary["stability"].as_array().expect("stability");
+    let st = &summary.stability;
     assert_eq!(st.len(), 4);
     for s in st {
-        assert_eq!(s["runs"], 2);
-        let b = &s["spread"]["billboards"];
+        assert_eq!(s.runs, 2);
+        let b = s.spread.get("billboards").expect("billboards' spread");
         let vals: Vec<f64> = runs
             .iter()
             .filter(|r| {
-                r["method"] == s["method"].as_str().unwrap_or("")
-                    && (diag_pct(r) - s["epsilon_pct"].as_f64().unwrap_or(-1.0)).abs() < 1e-6
+                r["method"] == s.method
+                    && (diag_pct(r) - s.epsilon_pct.unwrap_or(-1.0)).abs() < 1e-6
             })
             .map(|r| num(r, "billboards"))
             .collect();
         assert_eq!(vals.len(), 2);
         let mean = (vals[0] + vals[1]) / 2.0;
-        assert!((b["mean"].as_f64().expect("mean") - mean).abs() < 1e-9);
-        assert!((b["avg_abs_dev"].as_f64().expect("aad") - (vals[0] - mean).abs()).abs() < 1e-9);
-        assert_eq!(b["min"].as_f64(), Some(vals[0].min(vals[1])));
+        assert!((b.mean - mean).abs() < 1e-9);
+        assert!((b.avg_abs_dev - (vals[0] - mean).abs()).abs() < 1e-9);
+        assert_eq!(b.min, vals[0].min(vals[1]));
     }
     let md = std::fs::read_to_string(out.join("stability.md")).expect("stability.md");
     assert!(md.contains("| per-bone |") && md.contains("| static |"));
     assert!(md.contains("No run failed."));
 
     // The Pareto front: no run is both faster and more accurate than one on it.
-    let front: Vec<&str> = summary["pareto_front"]
-        .as_array()
-        .expect("front")
-        .iter()
-        .filter_map(|v| v.as_str())
-        .collect();
+    let front: Vec<&str> = summary.pareto_front.iter().map(String::as_str).collect();
     assert!(!front.is_empty());
     for f in &front {
         let fr = runs.iter().find(|r| r["run"] == *f).expect("front run");
@@ -323,7 +319,7 @@ fn screen_height_grid_and_a_run_past_its_limit() {
     assert_eq!(num(near, "screen_height"), 120.0);
     assert!((num(far, "epsilon") / num(near, "epsilon") - 3.0).abs() < 1e-4);
     assert!(num(far, "billboards") < num(near, "billboards"));
-    assert_eq!(summary["failed"], 0);
+    assert_eq!(summary.failed, 0);
     // Several sizes: points labelled with their screen height, metrics charted against it.
     let svg = std::fs::read_to_string(out.join("accuracy_vs_billboards.svg")).expect("svg");
     let texts = svg_texts(&svg);
@@ -366,7 +362,7 @@ fn screen_height_grid_and_a_run_past_its_limit() {
         ],
         "2",
     );
-    assert_eq!(summary["failed"], 1);
+    assert_eq!(summary.failed, 1);
     let rows = csv_rows(&slow.join("results.csv"));
     assert_eq!(rows[0]["status"], "failed");
     assert!(
@@ -395,7 +391,7 @@ fn the_cards_method_is_swept_like_the_others() {
         &["--method", "cards", "--lods", "60", "--seeds", "1"],
         "2",
     );
-    assert_eq!(summary["failed"], 0, "{summary}");
+    assert_eq!(summary.failed, 0, "{summary:?}");
     let rows = csv_rows(&out.join("results.csv"));
     assert_eq!(rows.len(), 1);
     assert_eq!(rows[0]["status"], "ok");

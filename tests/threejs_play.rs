@@ -416,23 +416,14 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
             "--no-cost-budgets",
         ],
     );
-    let lods = report["lods"].as_array().expect("lods");
+    let lods = &report.lods;
     assert_eq!(lods.len(), 3, "LOD0, LOD1, LOD2");
-    let billboards: Vec<usize> = lods
-        .iter()
-        .map(|l| usize_of(&l["billboards"]).expect("billboard count"))
-        .collect();
+    let billboards: Vec<usize> = lods.iter().map(|l| l.billboards).collect();
     // Billboards that copy an input card (the hybrid cloud) are drawn by a primitive of their
     // own, after the baked ones'.
-    let copies: Vec<usize> = lods
-        .iter()
-        .map(|l| usize_of(&l["input_textured_billboards"]).expect("copied billboards"))
-        .collect();
-    let mut files: Vec<PathBuf> = lods
-        .iter()
-        .map(|l| out.join(l["file"].as_str().expect("file name")))
-        .collect();
-    files.push(out.join(report["combined"].as_str().expect("combined file name")));
+    let copies: Vec<usize> = lods.iter().map(|l| l.input_textured_billboards).collect();
+    let mut files: Vec<PathBuf> = lods.iter().map(|l| out.join(&l.file)).collect();
+    files.push(out.join(&report.combined));
 
     let input = import(&input_path, &ImportOptions::default()).expect("sapling imports");
     let wind = |tree: &Tree| tree.rig.clips.iter().position(|c| c.name == "Wind");
@@ -584,13 +575,8 @@ fn compressed_chains_validate_and_play_in_threejs_like_plain_ones() {
     let packed = dir.path().join("packed");
     let report = common::frond_lod(&input, &plain, &args);
     common::frond_lod(&input, &packed, &[&args[..], &["--compress"]].concat());
-    let mut files: Vec<String> = report["lods"]
-        .as_array()
-        .expect("lods")
-        .iter()
-        .map(|l| l["file"].as_str().expect("file").to_owned())
-        .collect();
-    files.push(report["combined"].as_str().expect("combined").to_owned());
+    let mut files: Vec<String> = report.lods.iter().map(|l| l.file.clone()).collect();
+    files.push(report.combined.clone());
     let times = [0.0, 0.9, 2.3];
     for file in &files {
         let (a, b) = (plain.join(file), packed.join(file));

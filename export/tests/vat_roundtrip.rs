@@ -234,6 +234,8 @@ fn sidecar_round_trips_through_json() {
         let json = serde_json::to_string_pretty(&sidecar).expect("serializes");
         let back: VatSidecar = serde_json::from_str(&json).expect("parses");
         assert_eq!(back, sidecar);
+        // The written form, not a read of the sidecar: the keys and spellings engines' importers
+        // read (`exr_half`, `png16`), which the typed round trip above cannot see.
         let value: serde_json::Value = serde_json::from_str(&json).expect("parses");
         assert_eq!(value["layout"], "houdini-vat3-rigid");
         assert_eq!(value["piece_uv_channel"], "TEXCOORD_1");

@@ -118,6 +118,8 @@ fn a_method_registered_by_one_line_is_parsed_built_and_reported() {
         warnings: Vec::new(),
         timings_s: ReportTimings::default(),
     };
+    // The written form, not a read of the report: the section's key in the entry, the other
+    // methods' sections written as null and LOD0 without one.
     let json: serde_json::Value = serde_json::to_value(&report).expect("json");
     let entry = &json["lods"][1];
     assert_eq!(entry["method"], "test-flat");

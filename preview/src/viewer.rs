@@ -38,7 +38,7 @@ pub fn viewer_files(ktx2: bool) -> Vec<(String, &'static [u8])> {
 }
 
 /// What the live view's script is told (`<script type="application/json" id="frond-config">`).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct ViewConfig {
     /// The combined file, relative to the page.
     pub combined: String,
@@ -53,7 +53,7 @@ pub struct ViewConfig {
 }
 
 /// One LOD of the combined file.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct ViewLod {
     /// The LOD's own file, relative to the page.
     pub file: String,

@@ -17,6 +17,13 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
 
+use frond_lod::methods::cards::CardReport;
+use frond_lod::methods::spectral::SpectralReport;
+use frond_lod::{LodEntry, LodReport};
+use frond_metrics::EvalReport;
+use frond_skeleton::sbcs::SkeletonReport;
+use serde::de::DeserializeOwned;
+
 /// The workspace root.
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -64,7 +71,7 @@ pub fn frond_ok(args: &[&str]) -> Output {
 /// error measurement: `tests/lod_error.rs` tests that; no preview page: `tests/preview_page.rs`
 /// does) plus `extra`, asserts it succeeded and
 /// returns its report (`<input stem>_report.json`).
-pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> LodReport {
     let mut args = vec!["--planes", "60", "--no-measure", "--no-preview"];
     args.extend_from_slice(extra);
     frond_lod_measured(input, out, &args)
@@ -75,7 +82,7 @@ pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value 
 /// billboard per card, more than half the input's triangles, and the budgets would widen ε
 /// (they come first); the LOD's texel density (4 texels per pixel for alpha-tested maps) still
 /// applies.
-pub fn per_bone_at_zero(tree: &Path, out: &Path) -> serde_json::Value {
+pub fn per_bone_at_zero(tree: &Path, out: &Path) -> LodReport {
     frond_lod_measured(
         tree,
         out,
@@ -93,7 +100,7 @@ pub fn per_bone_at_zero(tree: &Path, out: &Path) -> serde_json::Value {
 
 /// Runs `frond lod INPUT -o OUT --samples 16` plus `extra`, each LOD's error measured (unless
 /// `extra` says `--no-measure`), asserts it succeeded and returns its report.
-pub fn frond_lod_measured(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+pub fn frond_lod_measured(input: &Path, out: &Path, extra: &[&str]) -> LodReport {
     let mut args = vec![
         "lod",
         input.to_str().expect("utf-8 path"),
@@ -108,14 +115,70 @@ pub fn frond_lod_measured(input: &Path, out: &Path, extra: &[&str]) -> serde_jso
         .file_stem()
         .and_then(|s| s.to_str())
         .expect("utf-8 stem");
-    let report = out.join(format!("{stem}_report.json"));
-    serde_json::from_slice(&std::fs::read(&report).expect("the lod report"))
-        .expect("report is JSON")
+    lod_report(out, stem)
+}
+
+/// `<name>_report.json` in `dir`: the report `frond lod` wrote for a tree named `name`.
+pub fn lod_report(dir: &Path, name: &str) -> LodReport {
+    read_json(&dir.join(format!("{name}_report.json")))
+}
+
+/// The JSON file at `path` read as a `T` (a report or sidecar frond wrote), naming the file
+/// when it is missing or does not read as one.
+pub fn read_json<T: DeserializeOwned>(path: &Path) -> T {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_slice(&bytes).unwrap_or_else(|e| {
+        panic!(
+            "{} does not read as {}: {e}",
+            path.display(),
+            std::any::type_name::<T>()
+        )
+    })
+}
+
+/// JSON text (a command's `--json` output) read as a `T`.
+pub fn parse_json<T: DeserializeOwned>(bytes: &[u8]) -> T {
+    serde_json::from_slice(bytes).unwrap_or_else(|e| {
+        panic!(
+            "{} does not read as {}: {e}",
+            String::from_utf8_lossy(bytes),
+            std::any::type_name::<T>()
+        )
+    })
+}
+
+/// The number a JSON reader gets from `x` as frond writes it (the shortest decimal that reads
+/// back as `x`), for comparing a report's `f32` exactly with a number from another file.
+pub fn written_f64(x: f32) -> f64 {
+    x.to_string().parse().expect("a float's text reads back")
+}
+
+/// The `spectral` section of a LOD entry (a spectral method's), if it has one.
+pub fn spectral_section(entry: &LodEntry) -> Option<SpectralReport> {
+    section(entry, "spectral")
+}
+
+/// The `skeleton` section of a LOD entry (a skeleton method's), if it has one.
+pub fn skeleton_section(entry: &LodEntry) -> Option<SkeletonReport> {
+    section(entry, "skeleton")
+}
+
+/// The `cards` section of a LOD entry (the cards method's), if it has one.
+pub fn cards_section(entry: &LodEntry) -> Option<CardReport> {
+    section(entry, "cards")
+}
+
+/// The section `key` of a LOD entry read as a `T`, if the entry has one.
+pub fn section<T: DeserializeOwned>(entry: &LodEntry, key: &str) -> Option<T> {
+    entry
+        .sections
+        .typed::<T>(key)
+        .map(|r| r.unwrap_or_else(|e| panic!("the {key} section: {e}")))
 }
 
 /// Runs `frond eval ORIGINAL CANDIDATE --json` plus `extra`, asserts it succeeded and returns
 /// its JSON report.
-pub fn frond_eval(original: &Path, candidate: &Path, extra: &[&str]) -> serde_json::Value {
+pub fn frond_eval(original: &Path, candidate: &Path, extra: &[&str]) -> EvalReport {
     let mut args = vec![
         "eval",
         original.to_str().expect("utf-8"),
@@ -124,7 +187,7 @@ pub fn frond_eval(original: &Path, candidate: &Path, extra: &[&str]) -> serde_js
     ];
     args.extend_from_slice(extra);
     let out = frond_ok(&args);
-    serde_json::from_slice(&out.stdout).expect("JSON report")
+    parse_json(&out.stdout)
 }
 
 /// The running test's name as the shared trees' skip lines give it, `<test binary>::<test>`
@@ -363,6 +426,14 @@ const _: () = {
         frond_lod_measured,
         per_bone_at_zero,
         frond_eval,
+        lod_report,
+        read_json::<serde_json::Value>,
+        parse_json::<serde_json::Value>,
+        written_f64,
+        spectral_section,
+        skeleton_section,
+        cards_section,
+        section::<serde_json::Value>,
         test_name,
         report_not_installed,
         heavy,
