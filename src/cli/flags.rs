@@ -4,10 +4,10 @@
 
 /// Each phrase the libraries use for an option the command line sets, and that option's flag.
 const OPTION_FLAGS: &[(&str, &str)] = &[
-    ("the input size limit", "--max-input-size"),
-    ("the texture memory limit", "--max-texture-memory"),
-    ("the vertex limit", "--max-vertices"),
-    ("the animation key limit", "--max-animation-keys"),
+    ("raise the input size limit", "--max-input-size"),
+    ("raise the texture memory limit", "--max-texture-memory"),
+    ("raise the vertex limit", "--max-vertices"),
+    ("raise the animation key limit", "--max-animation-keys"),
     ("the pixel error", "--pixel-error"),
     ("the number of ε steps", "--steps"),
     ("the number of seeds", "--seeds"),
