@@ -365,7 +365,10 @@ fn frond_view_serves_the_folder_and_nothing_outside_it() {
 }
 
 /// oak_dense, the benchmark tree: the page and what it adds stay under 5 MB and cost under a
-/// tenth of the run. A heavy case, in `.ci/run`'s optimised run.
+/// tenth of the run. The cost is what the preview adds to the run's wall time (against the same
+/// run with `--no-preview`): its pictures are drawn beside the LODs' measure, so its own stage
+/// time overlaps the measure's and is not what it costs. A heavy case, in `.ci/run`'s optimised
+/// run.
 #[test]
 fn heavy_oak_dense_preview_stays_small_and_cheap() {
     if !heavy() {
@@ -381,9 +384,21 @@ fn heavy_oak_dense_preview_stays_small_and_cheap() {
         .filter(|f| f.contains("_preview") || f.starts_with("viewer/"))
         .map(|f| std::fs::metadata(out.join(f)).expect("file").len())
         .sum();
-    let t = &report.timings_s;
-    let (preview, wall) = (t.preview.expect("preview"), t.wall);
-    eprintln!("oak_dense preview: {added} bytes, {preview:.2} s of {wall:.2} s");
+    let without = frond_lod_measured(
+        &shared_tree("oak_dense.glb"),
+        &tmp.path().join("bare"),
+        &["--no-preview"],
+    );
+    let (wall, bare) = (report.timings_s.wall, without.timings_s.wall);
+    eprintln!(
+        "oak_dense preview: {added} bytes; the run {wall:.2} s, without the preview {bare:.2} s \
+         (its own stage {:.2} s, beside the measure)",
+        report.timings_s.preview.expect("preview")
+    );
     assert!(added < 5 * 1024 * 1024, "{added} bytes");
-    assert!(preview < 0.1 * wall, "{preview} s of {wall} s");
+    assert!(
+        wall - bare < 0.1 * bare,
+        "the preview adds {:.2} s to a {bare:.2} s run",
+        wall - bare
+    );
 }
