@@ -552,26 +552,12 @@ pub fn binary_ticks(lo: f64, hi: f64) -> Vec<f64> {
 /// A plain axis tick or point label: 4 significant digits, trailing zeros dropped (`0.25`,
 /// `600`, `3.200e7` outside 1e-4 to 1e6).
 pub fn tick(x: f64) -> String {
-    let s = four_significant(x);
+    let s = crate::units::four_significant(x);
     if s.contains('.') && !s.contains('e') {
         s.trim_end_matches('0').trim_end_matches('.').to_string()
     } else {
         s
     }
-}
-
-/// `x` with 4 significant digits, in scientific notation outside 1e-4 to 1e6 (the sweep's
-/// tables write numbers the same way).
-fn four_significant(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() {
-        return format!("{x}");
-    }
-    let mag = x.abs().log10().floor() as i32;
-    if !(-4..6).contains(&mag) {
-        return format!("{x:.3e}");
-    }
-    let decimals = (3 - mag).max(0) as usize;
-    format!("{x:.decimals$}")
 }
 
 /// The corner of the plot over `(x0, x1)` × `(y0, y1)` holding the fewest data points, for

@@ -43,6 +43,20 @@ pub fn count(n: u64) -> String {
     out
 }
 
+/// `x` with 4 significant digits, in scientific notation outside 1e-4 to 1e6: how the sweep's
+/// tables and chart ticks write a number.
+pub fn four_significant(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let mag = x.abs().log10().floor() as i32;
+    if !(-4..6).contains(&mag) {
+        return format!("{x:.3e}");
+    }
+    let decimals = (3 - mag).max(0) as usize;
+    format!("{x:.decimals$}")
+}
+
 /// `v` with three significant digits, no trailing zeros: 3.40 → `3.4`, 812.4 → `812`.
 pub fn significant(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {

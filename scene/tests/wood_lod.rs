@@ -584,23 +584,7 @@ fn heavy_time_oak_dense() {
     }
 }
 
-/// True when `FROND_HEAVY_TESTS` is set (to anything but empty or `0`): the heavy cases
-/// (timings, the benchmark tree) run in `.ci/run`'s optimised run, not in a plain `cargo
-/// test`. Else prints one `skipped:` line for the running test (named after libtest's thread
-/// for it; straight to stderr, past libtest's capture, like the workspace's other skip lines),
-/// which then returns.
+/// Whether the heavy cases run ([`frond_testdata::heavy`]); else one skip line.
 fn heavy() -> bool {
-    use std::io::Write;
-    if std::env::var_os("FROND_HEAVY_TESTS").is_some_and(|v| !v.is_empty() && v != "0") {
-        return true;
-    }
-    let line = format!(
-        "skipped: {}::{}: heavy case, left to the optimised run (set FROND_HEAVY_TESTS=1; \
-         bash .ci/run runs it)\n",
-        env!("CARGO_CRATE_NAME"),
-        std::thread::current().name().unwrap_or("main")
-    );
-    // Nothing sensible to do when stderr is gone; the test still skips.
-    let _ = std::io::stderr().lock().write_all(line.as_bytes());
-    false
+    frond_testdata::heavy(env!("CARGO_CRATE_NAME"))
 }

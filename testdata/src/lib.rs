@@ -80,6 +80,31 @@ pub fn sample() -> PathBuf {
     workspace_root().join("samples/sapling.glb")
 }
 
+/// The environment variable that lets the heavy cases run: the benchmark tree, long fuzz runs,
+/// timings. A plain `cargo test` (a debug build) leaves them out; `.ci/run` sets it for its
+/// optimised run of just those cases (tests named `heavy_*`).
+pub const HEAVY: &str = "FROND_HEAVY_TESTS";
+
+/// True when [`HEAVY`] is set (to anything but empty or `0`); else prints one
+/// `skipped: <crate>::<test>: heavy case (…)` line for the running test (named after libtest's
+/// thread for it, in the test binary `crate_name`; straight to stderr, past libtest's capture,
+/// like the other skip lines), which then returns.
+pub fn heavy(crate_name: &str) -> bool {
+    use std::io::Write;
+    if std::env::var_os(HEAVY).is_some_and(|v| !v.is_empty() && v != "0") {
+        return true;
+    }
+    let line = format!(
+        "skipped: {crate_name}::{}: heavy case, left to the optimised run (set {HEAVY}=1; \
+         bash .ci/run runs it)\n",
+        std::thread::current().name().unwrap_or("main")
+    );
+    // Nothing sensible to do when stderr is gone; the test still skips.
+    let _ = std::io::stderr().lock().write_all(line.as_bytes());
+    false
+}
+
+
 /// The line printed when `what` (a test or bench name) is skipped because the shared files
 /// `missing` are absent: `skipped: <what>: shared tree <names> not found in <dir> (set
 /// FROND_TEST_TREES)`.

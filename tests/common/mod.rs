@@ -224,26 +224,10 @@ pub fn report_not_installed(step: Option<&str>, what: &str, how: &str) {
     let _ = std::io::stderr().lock().write_all(line.as_bytes());
 }
 
-/// The environment variable that lets the heavy cases run: the benchmark tree, long fuzz runs,
-/// timings. A plain `cargo test` (a debug build) leaves them out; `.ci/run` sets it for its
-/// optimised run of just those cases (tests named `heavy_*`).
-pub const HEAVY: &str = "FROND_HEAVY_TESTS";
-
-/// True when [`HEAVY`] is set (to anything but empty or `0`); else prints one
-/// `skipped: <test>: heavy case (…)` line for the running test, which then returns.
+/// Whether the heavy cases run ([`frond_testdata::heavy`]); else one skip line for the
+/// running test.
 pub fn heavy() -> bool {
-    use std::io::Write;
-    if std::env::var_os(HEAVY).is_some_and(|v| !v.is_empty() && v != "0") {
-        return true;
-    }
-    let line = format!(
-        "skipped: {}: heavy case, left to the optimised run (set {HEAVY}=1; bash .ci/run \
-         runs it)\n",
-        test_name()
-    );
-    // Nothing sensible to do when stderr is gone; the test still skips.
-    let _ = std::io::stderr().lock().write_all(line.as_bytes());
-    false
+    frond_testdata::heavy(env!("CARGO_CRATE_NAME"))
 }
 
 /// The Node packages the tests drive from `tools/` (tools/package.json): the Khronos glTF

@@ -448,18 +448,9 @@ pub fn stability_markdown(table: &[Stability], rows: &[Row]) -> String {
     s
 }
 
-/// A number with 4 significant digits, without exponent for ordinary magnitudes.
-pub fn sig(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() {
-        return format!("{x}");
-    }
-    let mag = x.abs().log10().floor() as i32;
-    if !(-4..6).contains(&mag) {
-        return format!("{x:.3e}");
-    }
-    let decimals = (3 - mag).max(0) as usize;
-    format!("{x:.decimals$}")
-}
+/// A number with 4 significant digits, without exponent for ordinary magnitudes (the charts'
+/// ticks write numbers alike).
+pub use frond_preview::units::four_significant as sig;
 
 #[cfg(test)]
 mod tests {
