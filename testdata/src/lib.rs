@@ -104,7 +104,6 @@ pub fn heavy(crate_name: &str) -> bool {
     false
 }
 
-
 /// The line printed when `what` (a test or bench name) is skipped because the shared files
 /// `missing` are absent: `skipped: <what>: shared tree <names> not found in <dir> (set
 /// FROND_TEST_TREES)`.
