@@ -16,16 +16,8 @@ fn eval(original: &Path, candidate: &Path, extra: &[&str]) -> EvalReport {
     frond_eval(original, candidate, &args)
 }
 
-/// The metrics beside the coverage pair.
-const METRICS: [MetricId; 7] = [
-    MetricId::ColourDifference,
-    MetricId::PlaneDistance,
-    MetricId::ProjectedDistance,
-    MetricId::EuclideanDistance,
-    MetricId::Orientation,
-    MetricId::DominatingAxis,
-    MetricId::DominatingAxisSpectral,
-];
+/// The metrics beside the coverage pair: every metric after the first two.
+const METRICS: &[MetricId] = MetricId::ALL.split_at(2).1;
 
 /// The report's static and animated coverage metrics, with their keys.
 fn coverage(r: &EvalReport) -> [(&'static str, &Metric); 2] {
@@ -45,7 +37,7 @@ fn a_file_against_itself_scores_zero_everywhere() {
     }
     // Distances are in world units (float noise scales with the tree), the rest in [0, 1].
     let h = written_f64(r.tree_height);
-    for id in METRICS {
+    for &id in METRICS {
         let tol = if matches!(
             id,
             MetricId::PlaneDistance | MetricId::ProjectedDistance | MetricId::EuclideanDistance

@@ -374,8 +374,25 @@ fn draw_line<'a, DB: DrawingBackend + 'a>(
             })
         }))
         .map_err(plot_err)?;
+    draw_labels(
+        p,
+        chart,
+        c,
+        s.line.iter().map(|&(x, y, _)| (x, y)),
+        &s.labels,
+    )
+}
+
+/// Writes each label beside its point, in the series' colour.
+fn draw_labels<'a, DB: DrawingBackend + 'a>(
+    p: &Panel,
+    chart: &mut Plot<'a, DB>,
+    c: RGBColor,
+    points: impl Iterator<Item = (f64, f64)>,
+    labels: &[String],
+) -> Result<(), ChartError> {
     chart
-        .draw_series(s.line.iter().zip(&s.labels).map(|(&(x, y, _), label)| {
+        .draw_series(points.zip(labels).map(|((x, y), label)| {
             Text::new(
                 label.clone(),
                 (p.x_coord(x), y),
@@ -411,20 +428,7 @@ fn draw_points<'a, DB: DrawingBackend + 'a>(
             .legend(move |(x, y)| Circle::new((x + 9, y), 4, c.filled()));
     }
     if filled {
-        chart
-            .draw_series(
-                s.points
-                    .iter()
-                    .zip(&s.point_labels)
-                    .map(|(&(x, y), label)| {
-                        Text::new(
-                            label.clone(),
-                            (p.x_coord(x), y),
-                            ("sans-serif", 12).into_font().color(&c.mix(0.9)),
-                        )
-                    }),
-            )
-            .map_err(plot_err)?;
+        draw_labels(p, chart, c, s.points.iter().copied(), &s.point_labels)?;
     }
     Ok(())
 }
