@@ -11,8 +11,8 @@ fn cloud(args: &[&str], out: &std::path::Path) -> std::process::Output {
         "samples/sapling.glb",
         "--coverage-views",
         "3",
-        "--coverage-size",
-        "160x120",
+        "--coverage-height",
+        "120",
     ];
     all.extend_from_slice(args);
     all.extend_from_slice(&["-o", out.to_str().expect("utf-8")]);
@@ -160,7 +160,7 @@ fn increased_density_keeps_the_planes_and_fills_the_cloud() {
             samples: 16,
             clip: None,
             coverage_views: 3,
-            coverage_size: (160, 120),
+            coverage_height: 120.0,
         };
         make_cloud(&renderer, &tree, &req).expect("cloud").2
     };

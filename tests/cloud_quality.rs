@@ -21,7 +21,7 @@ fn request(epsilon: &str, candidates: usize, seed: u64, texels_per_unit: f32) ->
         samples: 64,
         clip: None,
         coverage_views: 5,
-        coverage_size: (800, 600),
+        coverage_height: 600.0,
     }
 }
 

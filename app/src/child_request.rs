@@ -61,7 +61,7 @@ mod tests {
         lod.lods = vec![300.0, 75.0];
         lod.measure = false;
         let mut eval = EvalSettings::defaults(Path::new("/trees/t.glb"), Path::new("t_LOD1.glb"));
-        eval.screen_height = Some(300);
+        eval.screen_height = 300.0;
         for req in [ChildRequest::Lod(lod), ChildRequest::Eval(eval)] {
             assert_eq!(ChildRequest::read(&req.to_bytes()[..]).unwrap(), req);
         }

@@ -31,8 +31,8 @@ pub struct CloudRequest {
     pub clip: Option<String>,
     /// Coverage views (0 skips the check).
     pub coverage_views: u32,
-    /// Width and height in pixels of each coverage view image.
-    pub coverage_size: (u32, u32),
+    /// Screen height of the coverage check, pixels ([`frond_metrics::framing`]).
+    pub coverage_height: f32,
 }
 
 /// `<name>_cloud_stats.json`.
@@ -99,8 +99,7 @@ pub fn make_cloud(
     let (coverage, per_view) = if req.coverage_views > 0 {
         let cp = CoverageParams {
             views: req.coverage_views,
-            width: req.coverage_size.0,
-            height: req.coverage_size.1,
+            screen_height: req.coverage_height,
             ..Default::default()
         };
         let r = coverage_error(

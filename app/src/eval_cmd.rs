@@ -7,9 +7,7 @@
 
 use std::path::Path;
 
-pub use frond_metrics::eval::{
-    EvalContext, EvalError, EvalRequest, evaluate, image_for_screen_height,
-};
+pub use frond_metrics::eval::{EvalContext, EvalError, EvalRequest, evaluate};
 pub use frond_metrics::report::{Costs, CoverageMetrics, EvalReport, Metric};
 
 /// Whether two files hold the same bytes (the candidate is the original itself): sizes first,
@@ -42,8 +40,8 @@ impl Lighting {
     }
 }
 
-/// The colour metric's image size when neither a size nor a screen height is asked.
-pub const DEFAULT_IMAGE: (u32, u32) = (800, 600);
+/// The screen height a candidate is judged at when none is asked, pixels.
+pub const DEFAULT_SCREEN_HEIGHT: f32 = 600.0;
 
 /// Everything one `frond eval` run is asked: the two files, how they are read, and the
 /// metrics' views, frames, image size, sampling and lighting. Serialisable: `frond batch`
@@ -60,11 +58,13 @@ pub struct EvalSettings {
     pub views: u32,
     /// Frames of the animated colour metric.
     pub frames: u32,
-    /// Image size of the colour metric (None: from `screen_height`, else [`DEFAULT_IMAGE`]).
-    pub size: Option<(u32, u32)>,
-    /// The screen height the tree covers, which sets the image size
-    /// ([`image_for_screen_height`]).
-    pub screen_height: Option<u32>,
+    /// The screen height the tree is judged at: its rest height spans this many pixels
+    /// ([`frond_metrics::framing`]).
+    pub screen_height: f32,
+    /// The screen's vertical field of view, degrees (as `frond lod --fov`).
+    pub fov: f32,
+    /// The screen's height, pixels (as `frond lod --resolution`).
+    pub resolution: f32,
     /// Samples over the loop for the trajectory metrics.
     pub samples: usize,
     /// Clip (None: the original's first).
@@ -84,8 +84,9 @@ impl EvalSettings {
             read: crate::lod_settings::ReadSettings::default(),
             views: 5,
             frames: 5,
-            size: None,
-            screen_height: None,
+            screen_height: DEFAULT_SCREEN_HEIGHT,
+            fov: frond_metrics::DEFAULT_FOV_DEG,
+            resolution: frond_metrics::DEFAULT_RESOLUTION,
             samples: 64,
             clip: None,
             white_albedo: false,
@@ -93,19 +94,18 @@ impl EvalSettings {
         }
     }
 
-    /// The metrics' image size.
-    pub fn image(&self) -> anyhow::Result<(u32, u32)> {
-        match (self.size, self.screen_height) {
-            (Some(s), _) => Ok(s),
-            (None, Some(h)) if h > 0 => Ok(image_for_screen_height(h)),
-            (None, Some(_)) => anyhow::bail!("the screen height must be at least 1 pixel"),
-            (None, None) => Ok(DEFAULT_IMAGE),
+    /// Checks the screen: a height of at least 1 pixel.
+    pub fn check(&self) -> anyhow::Result<()> {
+        if !(self.screen_height.is_finite() && self.screen_height >= 1.0) {
+            anyhow::bail!("the screen height must be at least 1 pixel");
         }
+        Ok(())
     }
 }
 
 /// Reads both files and evaluates the candidate; `progress` hears what is being done.
 pub fn run_eval(settings: &EvalSettings, progress: &dyn Fn(&str)) -> anyhow::Result<EvalReport> {
+    settings.check()?;
     let original = settings.read.load(&settings.input)?;
     let limits = settings.read.limits;
     let candidate = frond_scene::import(
@@ -120,7 +120,9 @@ pub fn run_eval(settings: &EvalSettings, progress: &dyn Fn(&str)) -> anyhow::Res
     let req = EvalRequest {
         views: settings.views,
         frames: settings.frames,
-        size: settings.image()?,
+        screen_height: settings.screen_height,
+        fov_deg: settings.fov,
+        resolution: settings.resolution,
         samples: settings.samples,
         clip: settings.clip.clone(),
         limits,

@@ -11,8 +11,10 @@ use frond_export::{AnimationMode, ChainFileOptions, chain_files, msft_coverages}
 use frond_lod::chain::chain_levels;
 use frond_lod::report::MeasuredError;
 use frond_lod::report::report_name;
-use frond_lod::{ChainRequest, LodReport, ReportTimings, build_chain};
-use frond_metrics::{EvalContext, EvalRequest, image_for_screen_height};
+use frond_lod::{ChainRequest, LOD_REPORT_SCHEMA_VERSION, LodReport, ReportTimings, build_chain};
+use frond_metrics::{
+    CoverageImages, DEFAULT_ELEVATIONS_DEG, EvalContext, EvalRequest, samples_per_side,
+};
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, Tree};
 
@@ -91,12 +93,9 @@ pub fn run_lod(
     // they are drawn while the LODs are built, on the cores the build leaves idle.
     let mut measure = req
         .measure
-        .map(|_| measure_context(renderer, tree, req.chain.clip.clone()))
+        .map(|_| measure_context(renderer, tree, req, req.chain.clip.clone()))
         .transpose()?;
-    let sizes: Vec<(u32, u32)> = levels
-        .iter()
-        .map(|l| measure_size(l.screen_height))
-        .collect();
+    let sizes: Vec<f32> = levels.iter().map(|l| l.screen_height).collect();
     let (chain, (prepared, t_prepare)) = rayon::join(
         || build_chain(renderer, tree, &req.chain, &levels, progress),
         || {
@@ -122,6 +121,7 @@ pub fn run_lod(
     let t_written = Instant::now();
     let total = (t_written - t_start).as_secs_f64();
     let mut report = LodReport {
+        schema_version: LOD_REPORT_SCHEMA_VERSION,
         input: path,
         name: name.clone(),
         clip: chain.sampled.clip.clone(),
@@ -259,7 +259,7 @@ fn measure_and_draw<'a, 'r>(
                 // Sampled with the request's clip: the chain's, unless it resolved otherwise.
                 let ctx = match measure.as_mut() {
                     Some(ctx) if ctx.clip() == report.clip.as_deref() => ctx,
-                    _ => measure.insert(measure_context(renderer, tree, report.clip.clone())?),
+                    _ => measure.insert(measure_context(renderer, tree, req, report.clip.clone())?),
                 };
                 measure_errors(ctx, lods, report, max_error)?;
                 report.timings_s.measure = Some(t.elapsed().as_secs_f64());
@@ -325,60 +325,94 @@ fn read_back_lods(set: &OutputSet, report: &LodReport) -> Result<Vec<Tree>> {
 /// Frames of each LOD's wind flip-book on the preview page.
 const PREVIEW_FLIP_FRAMES: u32 = 12;
 
-/// Fills each billboard or card LOD's `error` with its animated coverage error at its own
-/// screen height, on its written file read back (`lods`, the report's order), and warns (in
-/// the log and the report) about every LOD over `max_error`.
+/// Fills each billboard or card LOD's `error` with its coverage error at its own screen
+/// height, on its written file read back (`lods`, the report's order), and its switch pop
+/// against the LOD before it at that size; warns (in the log and the report) about every LOD
+/// over `max_error`.
 fn measure_errors(
     ctx: &mut EvalContext,
     lods: &[&Tree],
     report: &mut LodReport,
     max_error: f64,
 ) -> Result<()> {
-    for (entry, lod) in report.lods.iter_mut().zip(lods) {
+    let views = ctx.params(1.0, false).views;
+    for k in 1..report.lods.len().min(lods.len()) {
+        let entry = &report.lods[k];
         let Some(h) = entry.screen_height else {
             continue;
         };
-        let size = measure_size(h);
+        let file = entry.file.clone();
+        let lod = lods[k];
         // The depth complexities come from the metric's first renders of both.
-        let (coverage, depth, input_depth) = ctx
-            .coverage_with_depth(lod, size)
-            .with_context(|| format!("{}: measuring its error", entry.file))?;
+        let measured = ctx
+            .measure(lod, h)
+            .with_context(|| format!("{file}: measuring its error"))?;
+        let coverage = &measured.report;
+        let switch_pop = switch_pop(ctx, lods, k, &measured.images, h)
+            .with_context(|| format!("{file}: measuring its switch pop"))?;
         let within_target = coverage.mean <= max_error;
         if !within_target {
             let w = format!(
-                "{}: coverage error {:.3} at {h} px is over the target {} (--max-error): \
+                "{file}: coverage error {:.3} at {h} px is over the target {} (--max-error): \
                  written at its budget",
-                entry.file, coverage.mean, max_error as f32
+                coverage.mean, max_error as f32
             );
             tracing::warn!("{w}");
             report.warnings.push(w);
         }
-        entry.error = Some(MeasuredError {
+        let binary = coverage.binary.mean;
+        report.lods[k].error = Some(MeasuredError {
             coverage: coverage.mean,
+            coverage_ratio: coverage.ratio,
+            coverage_binary: (!binary.is_nan()).then_some(binary),
+            switch_pop,
             max_error,
             within_target,
-            image: [size.0, size.1],
-            views: MEASURE_VIEWS,
+            image: [measured.images.width, measured.images.height],
+            samples_per_side: samples_per_side(h),
+            views,
+            elevations_deg: DEFAULT_ELEVATIONS_DEG.to_vec(),
             frames: MEASURE_FRAMES,
-            depth_complexity: depth,
-            input_depth_complexity: input_depth,
+            depth_complexity: measured.depth_complexity,
+            input_depth_complexity: measured.original_depth_complexity,
         });
     }
     Ok(())
 }
 
+/// The coverage error of LOD `k` (its `images` at `screen_height`, its size) against LOD
+/// `k − 1` drawn alike: what changes on screen when the engine swaps them. LOD1's is against
+/// the input, whose images the measure has already.
+fn switch_pop(
+    ctx: &mut EvalContext,
+    lods: &[&Tree],
+    k: usize,
+    images: &CoverageImages,
+    screen_height: f32,
+) -> Result<f64> {
+    let previous: Option<CoverageImages> = match k {
+        0 | 1 => None,
+        _ => Some(ctx.images(lods[k - 1], screen_height)?),
+    };
+    let pop = ctx.compare(previous.as_ref(), images, screen_height, &lods[k].source)?;
+    Ok(pop.mean)
+}
+
 /// The context `frond lod` measures its LODs in: the input's loop sampled for `clip`, with the
-/// views and frames of [`MEASURE_VIEWS`] and [`MEASURE_FRAMES`].
+/// views and frames of [`MEASURE_VIEWS`] and [`MEASURE_FRAMES`], on the request's screen.
 fn measure_context<'a>(
     renderer: &'a Renderer,
     tree: &'a Tree,
+    req: &LodRequest,
     clip: Option<String>,
 ) -> Result<EvalContext<'a>> {
-    let req = EvalRequest {
+    let eval = EvalRequest {
         views: MEASURE_VIEWS,
         frames: MEASURE_FRAMES,
-        // Unused here: each LOD is measured at its own size (`EvalContext::coverage`).
-        size: (0, 0),
+        // Unused here: each LOD is measured at its own size (`EvalContext::measure`).
+        screen_height: 0.0,
+        fov_deg: req.fov,
+        resolution: req.resolution,
         // Only the loop's start and period are used: the frames' times.
         samples: 2,
         clip,
@@ -386,17 +420,12 @@ fn measure_context<'a>(
         white_albedo: false,
         lighting: Default::default(),
     };
-    EvalContext::new(renderer, tree, &req).with_context(|| {
+    EvalContext::new(renderer, tree, &eval).with_context(|| {
         format!(
             "{}: sampling the input to measure the LODs",
             tree.source.display()
         )
     })
-}
-
-/// The image size a LOD `screen_height` pixels high is measured at.
-fn measure_size(screen_height: f32) -> (u32, u32) {
-    image_for_screen_height(screen_height.round().max(1.0) as u32)
 }
 
 /// Limits for reading frond's own files: none is a safety matter (the input passed its own).

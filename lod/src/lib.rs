@@ -36,7 +36,9 @@ pub use method_api::{
     SkeletonOptions, SpectralOptions,
 };
 pub use methods::{METHOD_NAMES, REGISTRY};
-pub use report::{DroppedReport, LodEntry, LodReport, LodTimings, ReportTimings};
+pub use report::{
+    DroppedReport, LOD_REPORT_SCHEMA_VERSION, LodEntry, LodReport, LodTimings, ReportTimings,
+};
 pub use screen_budget::{LodLevel, lod_levels, screen_height_at};
 
 /// The description type `--method spectral` uses.

@@ -213,26 +213,47 @@ impl<'de> Visitor<'de> for SectionsVisitor {
 /// `coverage.animated.mean` (same views, frames and image size).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MeasuredError {
-    /// Mean over views and frames of (pixels covered by exactly one of the two) / (pixels
-    /// the input covers); 0 is perfect.
+    /// The coverage error at the LOD's own size: per view and frame, the covered area the
+    /// LOD misses or adds over the input's covered area (`Σ|α_input − α_LOD| / Σα_input`, α
+    /// the covered fraction of each pixel, wood and foliage), then the mean; 0 is perfect
+    /// (`frond eval`'s `coverage.animated`).
     pub coverage: f64,
+    /// Per view and frame the LOD's covered area over the input's, then the mean: below 1 the
+    /// LOD thins out, above 1 it bloats.
+    pub coverage_ratio: f64,
+    /// The thesis' binary error on the same renders (a pixel covered when at least half of
+    /// its samples are, pairs above 1 discarded); None when every pair was discarded.
+    pub coverage_binary: Option<f64>,
+    /// The switch pop: the coverage error of this LOD against the LOD before it, at this
+    /// LOD's size, where the engine swaps them: what a player sees change.
+    pub switch_pop: f64,
     /// The target it was measured against (`--max-error`).
     pub max_error: f64,
     /// Whether `coverage ≤ max_error`; a LOD over its target is still written, at its budget,
     /// with a warning: budgets take precedence over the error target.
     pub within_target: bool,
-    /// Image size of the metric: the screen height, 4:3.
+    /// Image size of the metric, pixels: the tree's rest height spans the LOD's screen height
+    /// in it, seen on the switch values' screen.
     pub image: [u32; 2],
-    /// Views of the metric (around the tree and from above).
+    /// Samples per pixel side of the metric's renders.
+    pub samples_per_side: u32,
+    /// Views of the metric per ring.
     pub views: u32,
+    /// The rings' elevations, degrees (around the tree, and from above).
+    pub elevations_deg: Vec<f32>,
     /// Frames of the loop measured per view.
     pub frames: u32,
-    /// The foliage's depth complexity at this size (the metric's first view and frame, 4×
-    /// supersampled): fragments rasterised per covered sample, each one a fragment-shader run
-    /// since alpha-tested surfaces defeat early depth rejection. Overdraw as the GPU pays it.
+    /// The foliage's depth complexity at this size (the metric's first view and frame):
+    /// fragments rasterised per covered sample, each one a fragment-shader run since
+    /// alpha-tested surfaces defeat early depth rejection. Overdraw as the GPU pays it.
     pub depth_complexity: f64,
     /// The input's, drawn alike.
     pub input_depth_complexity: f64,
+}
+
+/// The schema version of a report written before versions were.
+fn first_version() -> u32 {
+    1
 }
 
 /// What a LOD left out, and why.
@@ -290,9 +311,15 @@ pub struct ReportTimings {
     pub wall: f64,
 }
 
+/// The version of `<name>_report.json`'s layout: raised whenever a field changes meaning.
+pub const LOD_REPORT_SCHEMA_VERSION: u32 = 2;
+
 /// `<name>_report.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LodReport {
+    /// The layout's version ([`LOD_REPORT_SCHEMA_VERSION`]; 1 for reports written before it).
+    #[serde(default = "first_version")]
+    pub schema_version: u32,
     /// The input file.
     pub input: String,
     /// The name the files are prefixed with.
@@ -408,6 +435,7 @@ mod tests {
             ..Default::default()
         };
         let mut report = LodReport {
+            schema_version: LOD_REPORT_SCHEMA_VERSION,
             input: String::new(),
             name: "t".into(),
             clip: None,
@@ -454,10 +482,15 @@ mod tests {
         spectral.budget = Some(LodBudget::hard_limits_only(30));
         spectral.error = Some(MeasuredError {
             coverage: 0.123456789,
+            coverage_ratio: 0.97,
+            coverage_binary: None,
+            switch_pop: 0.0625,
             max_error: 0.25,
             within_target: true,
             image: [267, 200],
+            samples_per_side: 5,
             views: 8,
+            elevations_deg: vec![0.0, 30.0],
             frames: 4,
             depth_complexity: 3.5,
             input_depth_complexity: 7.25,
@@ -500,6 +533,7 @@ mod tests {
             .sections
             .push(MethodSection::new("flat", &[("planes", 1.5f32)]).unwrap());
         LodReport {
+            schema_version: LOD_REPORT_SCHEMA_VERSION,
             input: "t.glb".into(),
             name: "t".into(),
             clip: Some("sway".into()),

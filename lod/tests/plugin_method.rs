@@ -102,6 +102,7 @@ fn a_method_registered_by_one_line_is_parsed_built_and_reported() {
 
     // Its section is written into the LOD's entry, beside the sections it does not have.
     let report = LodReport {
+        schema_version: frond_lod::LOD_REPORT_SCHEMA_VERSION,
         input: String::new(),
         name: "sapling".into(),
         clip: None,

@@ -12,24 +12,32 @@ use crate::triangle_metrics::TriangleMetrics;
 /// One matched triangle's distance/orientation metrics (§5.2–5.3) and animation metrics (§5.5).
 pub type TriangleScores = (TriangleMetrics, AxisMetrics);
 
-/// A coverage metric (§5.4, `id` static or animated) from its colour report: the mean over the
-/// kept (view, frame) pairs and the worst kept pair; skipped when every pair was discarded.
+/// A coverage error (§5.4 filtered, `id` static, animated or foliage) from its report: the
+/// mean over the (view, frame) pairs and the worst pair.
 pub fn coverage_metric(id: MetricId, r: &CoverageReport) -> Metric {
-    let worst = r
-        .differing_pixels
-        .iter()
-        .zip(&r.original_pixels)
+    let worst = r.per_pair.iter().copied().fold(f64::NAN, f64::max);
+    Metric::value(id, r.mean, worst)
+}
+
+/// The thesis' binary coverage error ([`MetricId::CoverageBinary`]) of a report: the mean
+/// over the kept pairs and the worst kept pair; skipped when every pair was discarded.
+pub fn binary_coverage_metric(r: &CoverageReport) -> Metric {
+    let id = MetricId::CoverageBinary;
+    let b = &r.binary;
+    if b.mean.is_nan() {
+        return Metric::skipped(
+            id,
+            "every (view, frame) pair was discarded (no pixel at least half covered in the \
+             original, or error above 1)",
+        );
+    }
+    let worst = (b.differing_pixels.iter())
+        .zip(&b.original_pixels)
         .filter(|(_, o)| **o > 0)
         .map(|(d, o)| *d as f64 / *o as f64)
         .filter(|s| *s <= 1.0)
         .fold(f64::NAN, f64::max);
-    if r.mean.is_nan() {
-        return Metric::skipped(
-            id,
-            "every (view, frame) pair was discarded (no original foliage, or error above 1)",
-        );
-    }
-    Metric::value(id, r.mean, worst)
+    Metric::value(id, b.mean, worst)
 }
 
 /// The foreground colour difference ([`MetricId::ColourDifference`]) of the animated colour
@@ -37,7 +45,7 @@ pub fn coverage_metric(id: MetricId, r: &CoverageReport) -> Metric {
 pub fn colour_difference_metric(anim: &CoverageReport) -> Metric {
     let id = MetricId::ColourDifference;
     if anim.colour_difference.is_nan() {
-        return Metric::skipped(id, "the two renders share no foliage pixel");
+        return Metric::skipped(id, "the two renders share no covered pixel");
     }
     let worst = anim
         .colour_per_pair

@@ -1,86 +1,90 @@
-//! The coverage ("colour") metric (spec animated-billboard-clouds §5.4, §8.2, §11 item 7).
+//! The coverage error (spec animated-billboard-clouds §5.4, §8.2, §11 item 7; docs/metrics.md,
+//! "The coverage error"): how much of what a player sees of the tree a LOD misses or adds,
+//! at the LOD's own screen size.
 //!
-//! The original foliage and its simplification are rendered as binary coverage masks from `D`
-//! views on a ring around the tree and for `F` frames. Each (view, frame) pair scores
-//! `Σ_p |o_p − s_p| / P_f`, the number of pixels where exactly one of the two renders has
-//! foliage divided by the number of foliage pixels `P_f` of the original. Pairs scoring above 1
-//! (the simplification is judged to have no fidelity there) or with `P_f = 0` are discarded;
-//! the metric is the mean of the rest. The static metric is the case `F = 1`.
+//! The original and its simplification are rendered from the views of [`crate::framing`] for
+//! `F` frames, each pixel resolved to the fraction α of its `K × K` samples something drawn
+//! covers: what MSAA, alpha-to-coverage, TAA or a distant eye show of it. Each (view, frame)
+//! pair scores `Σ_p |α_o − α_s| / Σ_p α_o` over the image; the error is the mean over every
+//! pair (none is discarded: a LOD that bloats scores above 1). Beside it:
 //!
-//! # Camera rule
+//! - the **coverage ratio**, per pair `Σ α_s / Σ α_o`, then the mean: below 1 a LOD thins,
+//!   above 1 it bloats;
+//! - the **binary** error of §5.4 as the thesis defines it, on the same renders: a pixel is
+//!   covered when α ≥ ½, a pair scores (pixels covered by exactly one) / (pixels the original
+//!   covers), pairs above 1 or with no covered pixel are discarded;
+//! - the **colour difference** of the covered pixels (colour renders), each pixel weighted by
+//!   the coverage both share, `min(α_o, α_s)`.
 //!
-//! View `d` of `D` looks at the centre `c` of the caller's bounds from azimuth `360°·d/D`
-//! (the [`frond_render::Camera`] convention: azimuth 0 is on +Z, 90 on +X) and elevation
-//! [`CoverageParams::elevation_deg`], with a perspective projection of vertical field of view
-//! `φ` = [`CoverageParams::fov_y_deg`]. The distance is the smallest one that keeps all eight
-//! corners of the bounds inside the vertical field of view:
+//! # Why filtered
 //!
-//! ```text
-//! distance = max over corners k of ( |r_k · up| / tan(φ/2) + r_k · dir ),   r_k = corner_k − c
-//! ```
+//! A pixel under half covered is empty to the binary rule: a tree a few dozen pixels tall has
+//! almost no covered pixel at all, so the binary error measures the noise of that threshold,
+//! or nothing. The covered fraction is defined at every size, is 0 for identical renders, and
+//! weighs a missing leaf by the area it covers whatever its size on screen.
 //!
-//! where `up` is the camera's screen-up and `dir` its target-to-eye unit vector. The corner
-//! attaining the maximum lies exactly on the top or bottom image edge, so the bounds' projected
-//! vertical extent spans the image height (at elevation 0 the box is symmetric about the
-//! view's horizontal plane and touches both edges). The image width plays no part: bounds wider
-//! on screen than `width / height` times their projected height are cropped at the sides.
-//! (A guard keeps every corner at least 0.1% of the bounds' half-diagonal in front of the eye;
-//! it only acts for boxes that are almost flat as seen from the view.)
+//! # Textures
 //!
-//! Both renders of a pair use this one camera, computed from the bounds the caller passes (the
-//! whole tree's rest bounds), never from either scene.
+//! Alpha-tested textures are read through coverage-preserving mip chains
+//! ([`frond_render::alpha_mip_chain`]: each level's alpha rescaled so as many texels pass the
+//! test as at full size), the level chosen at the spacing of the samples (≥ 1,000 over the
+//! tree's height), so the covered area of a minified leaf stays that of its full-size texture.
 
 use frond_render::{
-    Camera, DrawScene, Lighting, Projection, RenderError, Renderer, SoftwareTextures,
-    render_coverage, render_coverage_with_depth,
+    Camera, DrawScene, Lighting, RenderError, Renderer, SoftwareTextures, render_coverage,
+    render_coverage_with_depth,
 };
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::framing::{Framing, framing, validate_camera_params};
+
 /// Background colour of the metric renders; coverage does not depend on it.
 const BACKGROUND: [f32; 4] = [0.0; 4];
 
-/// Settings of the coverage metric; the defaults are the thesis' experiment setup (spec
-/// animated-billboard-clouds §8.2): 5 views at ground level, 800×600 pixels, one frame.
+/// The elevations of the metric's rings by default: a player on the ground, and one looking
+/// down on the tree.
+pub const DEFAULT_ELEVATIONS_DEG: [f32; 2] = [0.0, 30.0];
+
+/// The vertical field of view the metric's sizes assume by default, degrees (the switch
+/// values' default).
+pub const DEFAULT_FOV_DEG: f32 = 60.0;
+
+/// The screen height the metric's sizes assume by default, pixels (the switch values'
+/// default).
+pub const DEFAULT_RESOLUTION: f32 = 1080.0;
+
+/// Settings of the coverage metric; the defaults are 5 views on each of two rings (0° and
+/// 30°), one frame, a tree 600 pixels tall on a 1080-pixel screen of 60° vertical field of view.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CoverageParams {
-    /// Number of views `D`, evenly spread over a full turn. Odd counts are recommended (§8.2):
+    /// Views `D` per ring, evenly spread over a full turn. Odd counts are recommended (§8.2):
     /// opposite views of an even ring are near mirror images and add little information.
     pub views: u32,
+    /// The elevation of each ring of views, degrees within [-90, 90].
+    pub elevations_deg: Vec<f32>,
     /// Number of frames `F`; the caller supplies one scene per frame for both models. 1 gives
-    /// the static metric (§5.4); the thesis used 5 for animated comparisons (§8.2).
+    /// the static metric (§5.4).
     pub frames: u32,
-    /// Image width in pixels (800 in §8.2).
-    pub width: u32,
-    /// Image height in pixels (600 in §8.2); the tree's bounds span exactly this height.
-    pub height: u32,
-    /// Elevation of the view ring in degrees, within [-90, 90]; 0 is the thesis' ground-level
-    /// viewer (§8.2).
-    pub elevation_deg: f32,
-    /// Vertical field of view of the perspective camera in degrees, within (0, 180).
+    /// The screen height `H` the tree is seen at, pixels: its rest height spans `H` pixels
+    /// ([`crate::framing`]).
+    pub screen_height: f32,
+    /// Vertical field of view of the screen, degrees within (0, 180).
     pub fov_y_deg: f32,
-    /// Each image is rendered at `supersample`× its size and a pixel counts as covered when at
-    /// least half of its samples are. Without it both masks carry the alpha-test aliasing of
-    /// minified leaf textures, which alone gives an error even to a LOD whose billboards lie
-    /// exactly on the leaves (ε = 0).
-    pub supersample: u32,
-    /// Which rasteriser draws the masks: the CPU one by default (fast, and the same numbers on
-    /// every machine), the wgpu one on request (a GPU's own filtering and rasterisation rules).
-    #[serde(default)]
+    /// Height of the screen in pixels.
+    pub resolution: f32,
+    /// Samples per pixel side, `K`; None: [`crate::framing::samples_per_side`].
+    pub samples_per_side: Option<u32>,
+    /// Which rasteriser draws the images: the CPU one by default (fast, and the same numbers
+    /// on every machine), the wgpu one on request (a GPU's own filtering and rasterisation).
     pub rasteriser: Rasteriser,
     /// Also compute the covered pixels' colour ([`CoverageReport::colour_difference`]); the
     /// coverage alone needs neither a depth test nor the textures' colour.
-    #[serde(default = "yes")]
     pub colour: bool,
     /// How the colour renders are lit (the CPU rasteriser's; the wgpu one is two-sided).
-    #[serde(default)]
     pub lighting: Lighting,
-}
-
-fn yes() -> bool {
-    true
 }
 
 /// The rasteriser of the metric's renders.
@@ -90,22 +94,20 @@ pub enum Rasteriser {
     /// [`frond_render::render_coverage`]: the CPU rasteriser built for coverage renders.
     #[default]
     Software,
-    /// [`Renderer::render_mipmapped`] on the renderer's adapter.
+    /// [`Renderer::render_mipmapped`] on the renderer's adapter, `K` times the image's size.
     Gpu,
 }
 
 impl Default for CoverageParams {
-    /// 5 views, 1 frame, 800×600, elevation 0°, 40° vertical field of view (spec §8.2; the
-    /// field of view is not given in the thesis).
     fn default() -> Self {
         Self {
             views: 5,
+            elevations_deg: DEFAULT_ELEVATIONS_DEG.to_vec(),
             frames: 1,
-            width: 800,
-            height: 600,
-            elevation_deg: 0.0,
-            fov_y_deg: 40.0,
-            supersample: 4,
+            screen_height: 600.0,
+            fov_y_deg: DEFAULT_FOV_DEG,
+            resolution: DEFAULT_RESOLUTION,
+            samples_per_side: None,
             rasteriser: Rasteriser::Software,
             colour: true,
             lighting: Lighting::TwoSided,
@@ -113,34 +115,51 @@ impl Default for CoverageParams {
     }
 }
 
-/// Result of [`coverage_error`] (spec animated-billboard-clouds §5.4). Per-pair vectors are
-/// view-major: the entry of view `d`, frame `f` is at index `d · frames + f`.
+/// The binary error of spec §5.4 as the thesis defines it, on the metric's renders: a pixel is
+/// covered when at least half of its samples are.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BinaryCoverage {
+    /// Mean over the kept pairs of (pixels covered by exactly one render) / (pixels the
+    /// original covers); NaN when every pair was discarded.
+    pub mean: f64,
+    /// Pairs discarded: scoring above 1 (no fidelity from that view, §5.4) or the original
+    /// covering no pixel.
+    pub discarded: usize,
+    /// Per (view, frame), the pixels the original covers, `P_f`.
+    pub original_pixels: Vec<u64>,
+    /// Per (view, frame), the pixels covered by exactly one of the two renders.
+    pub differing_pixels: Vec<u64>,
+}
+
+/// Result of comparing two models' coverage images ([`compare_images`]). Per-pair vectors
+/// are view-major (views ring by ring): the entry of view `d`, frame `f` is at index
+/// `d · frames + f`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CoverageReport {
-    /// For each view, the mean score of its kept frames; NaN when all its frames were
-    /// discarded.
-    pub per_view: Vec<f64>,
-    /// The metric: mean score over all kept (view, frame) pairs, 0 being perfect; NaN when
-    /// every pair was discarded.
+    /// The coverage error: the mean over every pair of `Σ|α_o − α_s| / Σα_o`; 0 is perfect.
     pub mean: f64,
-    /// Number of (view, frame) pairs discarded because they scored above 1 or the original
-    /// covered no pixel (`P_f = 0`).
-    pub discarded: usize,
-    /// `P_f` per (view, frame): the original's covered pixels.
-    pub original_pixels: Vec<u64>,
-    /// `Σ_p |o_p − s_p|` per (view, frame): pixels covered by exactly one of the two renders.
-    pub differing_pixels: Vec<u64>,
-    /// Foreground colour error (the thesis' metric ignores colour): over the pixels covered in
-    /// both renders, the mean absolute difference of linear RGB (mean of the three channels,
-    /// 0..1), averaged over the (view, frame) pairs that share any pixel; NaN when none do.
+    /// That score per pair.
+    pub per_pair: Vec<f64>,
+    /// Per view, the mean score of its frames.
+    pub per_view: Vec<f64>,
+    /// The coverage ratio: the mean over every pair of `Σα_s / Σα_o`.
+    pub ratio: f64,
+    /// That ratio per pair.
+    pub ratio_per_pair: Vec<f64>,
+    /// Per pair, `Σα_o`: the original's covered area, pixels.
+    pub original_coverage: Vec<f64>,
+    /// The thesis' binary error on the same renders.
+    pub binary: BinaryCoverage,
+    /// The covered pixels' colour difference: per pair, the mean absolute difference of
+    /// linear RGB (mean of the three channels, 0..1), each pixel weighted by `min(α_o, α_s)`;
+    /// averaged over the pairs sharing any coverage; NaN when none does or without colour.
     pub colour_difference: f64,
-    /// That difference per (view, frame) pair; NaN for a pair sharing no pixel.
+    /// That difference per pair; NaN for a pair sharing no coverage.
     pub colour_per_pair: Vec<f64>,
-    /// The shift of the mean colour over the same pixels: per pair `|mean(o − s)|` (signed
-    /// per pixel, mean of the three channels), averaged like `colour_difference`. What reads as
-    /// one LOD being lighter or darker than the other (the pop at a switch), without the
-    /// per-pixel differences that average out at a distance; NaN when no pair shares a pixel.
-    #[serde(default)]
+    /// The shift of the mean colour over the same pixels and weights: per pair
+    /// `|mean(o − s)|` (signed per pixel, mean of the three channels), averaged like
+    /// `colour_difference`. What reads as one model being lighter or darker than the other,
+    /// without the per-pixel differences that average out at a distance.
     pub colour_shift: f64,
 }
 
@@ -148,19 +167,11 @@ pub struct CoverageReport {
 #[derive(Debug, Error)]
 pub enum MetricError {
     /// [`CoverageParams::views`] is zero.
-    #[error("the coverage metric needs at least one view")]
+    #[error("the coverage metric needs at least one view on at least one ring")]
     NoViews,
     /// [`CoverageParams::frames`] is zero.
     #[error("the coverage metric needs at least one frame")]
     NoFrames,
-    /// The image width or height is zero.
-    #[error("invalid image size {width}x{height}: both sides must be at least 1 pixel")]
-    InvalidSize {
-        /// Requested width in pixels.
-        width: u32,
-        /// Requested height in pixels.
-        height: u32,
-    },
     /// The number of scenes given differs from [`CoverageParams::frames`].
     #[error(
         "expected {expected} frame scene(s) per model, got {original} original and {simplified} simplified"
@@ -176,8 +187,8 @@ pub enum MetricError {
     /// A camera setting is out of range.
     #[error("invalid camera parameter: {0}")]
     InvalidParams(String),
-    /// The bounds are not finite, inverted, or have no vertical extent from some view, so no
-    /// camera can make them fill the image height.
+    /// The bounds are not finite, inverted, or have no height, so no screen size can be given
+    /// to them.
     #[error("cannot frame bounds {min}..{max}: {reason}")]
     InvalidBounds {
         /// Minimum corner given.
@@ -190,8 +201,19 @@ pub enum MetricError {
     /// Rendering failed (bad scene data, no adapter, GPU error).
     #[error(transparent)]
     Render(#[from] RenderError),
-    /// The renderer returned a coverage mask of the wrong size.
-    #[error("coverage mask has {len} entries, expected {expected}")]
+    /// The original covers nothing from some view (an empty tree): there is nothing to
+    /// compare with.
+    #[error(
+        "the original covers no pixel from view {view}, frame {frame}: nothing to compare with"
+    )]
+    NothingCovered {
+        /// The view (ring by ring).
+        view: usize,
+        /// The frame.
+        frame: usize,
+    },
+    /// The renderer returned a coverage image of the wrong size.
+    #[error("coverage image has {len} entries, expected {expected}")]
     MaskSize {
         /// Entries received.
         len: usize,
@@ -200,86 +222,10 @@ pub enum MetricError {
     },
 }
 
-/// Azimuth in degrees of view `view` of a ring of `views`: `360 · view / views`, so view 0 is
-/// at azimuth 0 (spec §8.2: views evenly spread over a full rotation).
-pub fn ring_azimuth_deg(view: u32, views: u32) -> f32 {
-    if views == 0 {
-        return 0.0;
-    }
-    (360.0 * f64::from(view) / f64::from(views)) as f32
-}
-
-/// The camera of view `view` (see the module docs for the rule): on the ring at
-/// [`ring_azimuth_deg`], looking at the bounds' centre from the distance at which the bounds'
-/// vertical extent spans the image height exactly. Exposed so callers can render the very
-/// images the metric compares.
-pub fn view_camera(
-    bounds_min: Vec3,
-    bounds_max: Vec3,
-    view: u32,
-    params: &CoverageParams,
-) -> Result<Camera, MetricError> {
-    validate_camera_params(params)?;
-    let invalid = |reason: &str| MetricError::InvalidBounds {
-        min: bounds_min,
-        max: bounds_max,
-        reason: reason.to_string(),
-    };
-    if !bounds_min.is_finite() || !bounds_max.is_finite() {
-        return Err(invalid("not finite"));
-    }
-    if bounds_min.cmpgt(bounds_max).any() {
-        return Err(invalid("min exceeds max"));
-    }
-    let target = (bounds_min + bounds_max) * 0.5;
-    let mut camera = Camera {
-        target,
-        azimuth_deg: ring_azimuth_deg(view, params.views),
-        elevation_deg: params.elevation_deg,
-        // Placeholder; only the direction vectors are used until the distance is known.
-        distance: 1.0,
-        projection: Projection::Perspective {
-            fov_y_deg: params.fov_y_deg,
-        },
-    };
-    let (dir, up) = (camera.direction().as_dvec3(), camera.up().as_dvec3());
-    let half = (bounds_max.as_dvec3() - bounds_min.as_dvec3()) * 0.5;
-    let radius = half.length();
-    let tan_half = (f64::from(params.fov_y_deg) * 0.5).to_radians().tan();
-    let (mut fit, mut nearest, mut vertical) = (f64::NEG_INFINITY, f64::NEG_INFINITY, 0.0f64);
-    for k in 0..8 {
-        let r = DVec3::new(
-            if k & 1 == 0 { -half.x } else { half.x },
-            if k & 2 == 0 { -half.y } else { half.y },
-            if k & 4 == 0 { -half.z } else { half.z },
-        );
-        let (y, depth) = (r.dot(up).abs(), r.dot(dir));
-        fit = fit.max(y / tan_half + depth);
-        nearest = nearest.max(depth);
-        vertical = vertical.max(y);
-    }
-    // The bounds were checked finite above, so neither value is NaN.
-    if radius <= 0.0 || vertical <= 1e-6 * radius {
-        return Err(invalid("no vertical extent seen from this view"));
-    }
-    let distance = fit.max(nearest + 1e-3 * radius) as f32;
-    if !(distance.is_finite() && distance > 0.0) {
-        return Err(invalid("no finite camera distance frames them"));
-    }
-    camera.distance = distance;
-    Ok(camera)
-}
-
-/// The coverage metric of `simplified` against `original` (spec animated-billboard-clouds
-/// §5.4, §11 item 7): binary coverage masks from `params.views` ring views and
-/// `params.frames` frames, scored `Σ_p |o_p − s_p| / P_f` per (view, frame); pairs above 1 or
-/// with `P_f = 0` are discarded and counted, the rest averaged.
-///
-/// `original[f]` and `simplified[f]` are the posed scenes of frame `f`. `bounds_min` and
-/// `bounds_max` frame every view (see the module docs); pass the whole tree's rest bounds so
-/// the camera is the same for both models and all frames. Renders run one after another in a
-/// fixed order and pixel counts are integers, so the result is deterministic for a given
-/// adapter.
+/// The coverage error of `simplified` against `original` (see the module docs), from their
+/// posed scenes of each frame (`original[f]`, `simplified[f]`), framed by `bounds_min` and
+/// `bounds_max` (pass the whole tree's rest bounds, so both models and all frames share the
+/// cameras). Deterministic: every render is, and the sums are of integer sample counts.
 pub fn coverage_error(
     renderer: &Renderer,
     original: &[DrawScene],
@@ -289,25 +235,29 @@ pub fn coverage_error(
     params: &CoverageParams,
 ) -> Result<CoverageReport, MetricError> {
     validate(original.len(), simplified.len(), params)?;
-    let o = coverage_masks(renderer, original, bounds_min, bounds_max, params)?;
-    let s = coverage_masks(renderer, simplified, bounds_min, bounds_max, params)?;
+    let o = coverage_images(renderer, original, bounds_min, bounds_max, params)?;
+    let s = coverage_images(renderer, simplified, bounds_min, bounds_max, params)?;
     let frames: Vec<usize> = (0..original.len()).collect();
-    compare_masks(&o, &s, &frames)
+    compare_images(&o, &s, &frames)
 }
 
-/// One model's binary coverage masks and covered colours for every (view, frame) pair of the
-/// metric, so one model's renders can be compared with many others (a sweep renders the
-/// original once).
+/// One model's coverage images for every (view, frame) pair of the metric: per pixel, its
+/// covered samples and their mean colour. One model's renders can be compared with many
+/// others (a sweep renders the original once).
 #[derive(Clone, Debug)]
-pub struct CoverageMasks {
-    /// Pixels per mask.
-    pub pixels: usize,
-    /// Views of the ring.
+pub struct CoverageImages {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Views (every ring's).
     pub views: usize,
     /// Frames per view.
     pub frames: usize,
-    /// View-major (`d · frames + f`): whether each pixel is covered.
-    covered: Vec<Vec<bool>>,
+    /// Samples per pixel, `K²`.
+    pub samples_per_pixel: u32,
+    /// View-major (`d · frames + f`): each pixel's covered samples.
+    samples: Vec<Vec<u16>>,
     /// The same pairs: mean linear RGB of each pixel's covered samples (empty vectors when
     /// drawn without colour, [`CoverageParams::colour`]).
     colour: Vec<Vec<[f32; 3]>>,
@@ -316,221 +266,304 @@ pub struct CoverageMasks {
     pub first_depth_complexity: Option<f64>,
 }
 
-/// Renders the masks of `scenes` (one per frame) from every view of `params` (see
+impl CoverageImages {
+    /// Pair `pair`'s (view-major) covered fraction of each pixel, 0..1, row by row from the top.
+    pub fn fractions(&self, pair: usize) -> Vec<f32> {
+        let n = self.samples_per_pixel as f32;
+        self.samples[pair]
+            .iter()
+            .map(|&c| f32::from(c) / n)
+            .collect()
+    }
+}
+
+/// Renders the coverage images of `scenes` (one per frame) from every view of `params` (see
 /// [`coverage_error`]).
-pub fn coverage_masks(
+pub fn coverage_images(
     renderer: &Renderer,
     scenes: &[DrawScene],
     bounds_min: Vec3,
     bounds_max: Vec3,
     params: &CoverageParams,
-) -> Result<CoverageMasks, MetricError> {
+) -> Result<CoverageImages, MetricError> {
     validate(scenes.len(), scenes.len(), params)?;
     // Every camera is checked before the first (slow) render.
-    let cameras = (0..params.views)
-        .map(|d| view_camera(bounds_min, bounds_max, d, params))
-        .collect::<Result<Vec<_>, _>>()?;
-    let expected = params.width as usize * params.height as usize;
-    let mut first_depth_complexity = None;
-    let rendered: Vec<(Vec<bool>, Vec<[f32; 3]>)> = match params.rasteriser {
-        Rasteriser::Gpu => cameras
-            .iter()
-            .flat_map(|camera| scenes.iter().map(move |scene| (camera, scene)))
-            .map(|(camera, scene)| coverage_mask(renderer, scene, camera, params))
-            .collect::<Result<_, _>>()?,
-        Rasteriser::Software => {
-            // Mip chains prepared once for the frames that share them (a model's frames do),
-            // then every (view, frame) render at once: each is deterministic, and they are
-            // collected in order.
-            let mut prepared: Vec<SoftwareTextures> = Vec::new();
-            let mut of_frame: Vec<usize> = Vec::with_capacity(scenes.len());
-            for (f, scene) in scenes.iter().enumerate() {
-                match (0..f).find(|&g| same_textures(&scenes[g], scene)) {
-                    Some(g) => of_frame.push(of_frame[g]),
-                    None => {
-                        of_frame.push(prepared.len());
-                        prepared.push(
-                            SoftwareTextures::new(scene, params.colour)?
-                                .with_lighting(params.lighting),
-                        );
-                    }
-                }
-            }
-            let pairs: Vec<(usize, usize)> = (0..cameras.len())
-                .flat_map(|d| (0..scenes.len()).map(move |f| (d, f)))
-                .collect();
-            let masks: Vec<SoftwareMask> = pairs
-                .par_iter()
-                .map(|&(d, f)| {
-                    let first = (d, f) == (0, 0);
-                    software_mask(
-                        &scenes[f],
-                        &prepared[of_frame[f]],
-                        &cameras[d],
-                        params,
-                        first,
-                    )
-                })
-                .collect::<Result<_, _>>()?;
-            masks
-                .into_iter()
-                .map(|(m, rgb, depth)| {
-                    first_depth_complexity = first_depth_complexity.or(depth);
-                    (m, rgb)
-                })
-                .collect()
+    let framing = framing(bounds_min, bounds_max, params)?;
+    for camera in &framing.cameras {
+        camera.validate()?;
+    }
+    let expected = framing.width as usize * framing.height as usize;
+    let (rendered, first_depth_complexity) = match params.rasteriser {
+        Rasteriser::Gpu => {
+            let images = (framing.cameras.iter())
+                .flat_map(|camera| scenes.iter().map(move |scene| (camera, scene)))
+                .map(|(camera, scene)| gpu_image(renderer, scene, camera, &framing))
+                .collect::<Result<Vec<_>, _>>()?;
+            (images, None)
         }
+        Rasteriser::Software => software_images(scenes, &framing, params)?,
     };
-    let (mut covered, mut colour) = (Vec::new(), Vec::new());
-    for (m, rgb) in rendered {
-        if m.len() != expected {
+    let (mut samples, mut colour) = (Vec::new(), Vec::new());
+    for (counts, rgb) in rendered {
+        if counts.len() != expected {
             return Err(MetricError::MaskSize {
-                len: m.len(),
+                len: counts.len(),
                 expected,
             });
         }
-        covered.push(m);
+        samples.push(counts);
         colour.push(rgb);
     }
-    Ok(CoverageMasks {
-        pixels: expected,
-        views: cameras.len(),
+    Ok(CoverageImages {
+        width: framing.width,
+        height: framing.height,
+        views: framing.cameras.len(),
         frames: scenes.len(),
-        covered,
+        samples_per_pixel: framing.supersample * framing.supersample,
+        samples,
         colour,
         first_depth_complexity,
     })
 }
 
+/// One pair's image: each pixel's covered samples and their mean colour.
+type PairImage = (Vec<u16>, Vec<[f32; 3]>);
+
+/// Every (view, frame) image of `scenes` drawn by the CPU rasteriser, in parallel (each is
+/// deterministic, and they are collected in order), with the first pair's depth complexity.
+fn software_images(
+    scenes: &[DrawScene],
+    framing: &Framing,
+    params: &CoverageParams,
+) -> Result<(Vec<PairImage>, Option<f64>), MetricError> {
+    // Mip chains prepared once for the frames that share them (a model's frames do).
+    let mut prepared: Vec<SoftwareTextures> = Vec::new();
+    let mut of_frame: Vec<usize> = Vec::with_capacity(scenes.len());
+    for (f, scene) in scenes.iter().enumerate() {
+        match (0..f).find(|&g| same_textures(&scenes[g], scene)) {
+            Some(g) => of_frame.push(of_frame[g]),
+            None => {
+                of_frame.push(prepared.len());
+                prepared.push(
+                    SoftwareTextures::new(scene, params.colour)?.with_lighting(params.lighting),
+                );
+            }
+        }
+    }
+    let pairs: Vec<(usize, usize)> = (0..framing.cameras.len())
+        .flat_map(|d| (0..scenes.len()).map(move |f| (d, f)))
+        .collect();
+    let images: Vec<(PairImage, Option<f64>)> = pairs
+        .par_iter()
+        .map(|&(d, f)| {
+            let first = (d, f) == (0, 0);
+            let scene = &scenes[f];
+            let view_proj = projection(scene, &framing.cameras[d], framing)?;
+            let (w, h, k) = (framing.width, framing.height, framing.supersample);
+            let textures = &prepared[of_frame[f]];
+            let (image, depth) = if first {
+                let (image, depth) =
+                    render_coverage_with_depth(scene, textures, view_proj, w, h, k)?;
+                (image, Some(depth))
+            } else {
+                (render_coverage(scene, textures, view_proj, w, h, k)?, None)
+            };
+            Ok(((image.samples, image.colour), depth))
+        })
+        .collect::<Result<_, MetricError>>()?;
+    let first_depth = images.first().and_then(|(_, d)| *d);
+    Ok((images.into_iter().map(|(i, _)| i).collect(), first_depth))
+}
+
 /// Scores `simplified` against `original` over the frames `frames` of each view (all of them
 /// for the animated metric, `[0]` for the static one); the report's per-pair vectors hold
 /// `views · frames.len()` entries, view-major.
-pub fn compare_masks(
-    original: &CoverageMasks,
-    simplified: &CoverageMasks,
+pub fn compare_images(
+    original: &CoverageImages,
+    simplified: &CoverageImages,
     frames: &[usize],
 ) -> Result<CoverageReport, MetricError> {
-    if (original.views, original.frames, original.pixels)
-        != (simplified.views, simplified.frames, simplified.pixels)
-        || frames.iter().any(|&f| f >= original.frames)
-    {
+    let shape = |m: &CoverageImages| (m.views, m.frames, m.width, m.height, m.samples_per_pixel);
+    if shape(original) != shape(simplified) || frames.iter().any(|&f| f >= original.frames) {
         return Err(MetricError::FrameCountMismatch {
             expected: original.frames as u32,
             original: original.frames,
             simplified: simplified.frames,
         });
     }
-    let pairs = original.views * frames.len();
-    let mut original_pixels = Vec::with_capacity(pairs);
-    let mut differing_pixels = Vec::with_capacity(pairs);
-    let mut per_view = Vec::with_capacity(original.views);
-    let (mut total, mut kept_total, mut discarded) = (0.0f64, 0usize, 0usize);
-    let (mut colour_sum, mut colour_pairs, mut shift_sum) = (0.0f64, 0usize, 0.0f64);
-    let mut colour_per_pair = Vec::with_capacity(pairs);
+    let mut pairs = Vec::with_capacity(original.views * frames.len());
     for d in 0..original.views {
-        let (mut view_sum, mut view_kept) = (0.0f64, 0usize);
         for &f in frames {
             let i = d * original.frames + f;
-            let (o, s) = (&original.covered[i], &simplified.covered[i]);
-            let (o_rgb, s_rgb) = (&original.colour[i], &simplified.colour[i]);
-            let (mut diff, mut signed, mut shared) = (0.0f64, 0.0f64, 0usize);
-            // Masks drawn without colour have none to compare.
-            let with_colour = o_rgb.len() == o.len() && s_rgb.len() == s.len();
-            for p in (0..o.len().min(s.len())).filter(|_| with_colour) {
-                if o[p] && s[p] {
-                    let d: f32 = (0..3).map(|c| (o_rgb[p][c] - s_rgb[p][c]).abs()).sum();
-                    diff += f64::from(d) / 3.0;
-                    let sd: f32 = (0..3).map(|c| o_rgb[p][c] - s_rgb[p][c]).sum();
-                    signed += f64::from(sd) / 3.0;
-                    shared += 1;
-                }
+            let pair = compare_pair(original, simplified, i);
+            if pair.original == 0 {
+                return Err(MetricError::NothingCovered { view: d, frame: f });
             }
-            if shared > 0 {
-                colour_sum += diff / shared as f64;
-                shift_sum += (signed / shared as f64).abs();
-                colour_pairs += 1;
-                colour_per_pair.push(diff / shared as f64);
-            } else {
-                colour_per_pair.push(f64::NAN);
-            }
-            let covered = o.iter().filter(|&&c| c).count() as u64;
-            let differing = o.iter().zip(s).filter(|(a, b)| a != b).count() as u64;
-            original_pixels.push(covered);
-            differing_pixels.push(differing);
-            match pair_score(differing, covered) {
-                Some(score) => {
-                    view_sum += score;
-                    view_kept += 1;
-                    total += score;
-                    kept_total += 1;
-                }
-                None => discarded += 1,
-            }
+            pairs.push(pair);
         }
-        per_view.push(mean_or_nan(view_sum, view_kept));
     }
-    Ok(CoverageReport {
+    Ok(report_of(
+        &pairs,
+        original.views,
+        frames.len(),
+        original.samples_per_pixel,
+    ))
+}
+
+/// The sums of one (view, frame) pair, in samples (exact integers) and weighted colour.
+#[derive(Clone, Copy, Debug, Default)]
+struct PairSums {
+    /// `Σ n_o`: the original's covered samples.
+    original: u64,
+    /// `Σ n_s`.
+    simplified: u64,
+    /// `Σ |n_o − n_s|`.
+    differing: u64,
+    /// Pixels the original covers (at least half of their samples).
+    original_pixels: u64,
+    /// Pixels covered by exactly one of the two, by that rule.
+    differing_pixels: u64,
+    /// `Σ min(n_o, n_s)` over the pixels whose colour is compared.
+    shared: u64,
+    /// `Σ min(n_o, n_s) · |c_o − c_s|` (mean of the three channels).
+    colour: f64,
+    /// `Σ min(n_o, n_s) · (c_o − c_s)` (mean of the three channels).
+    signed: f64,
+}
+
+/// The sums of pair `i` of the two models' images.
+fn compare_pair(original: &CoverageImages, simplified: &CoverageImages, i: usize) -> PairSums {
+    let (o, s) = (&original.samples[i], &simplified.samples[i]);
+    let (o_rgb, s_rgb) = (&original.colour[i], &simplified.colour[i]);
+    // Images drawn without colour have none to compare.
+    let with_colour = o_rgb.len() == o.len() && s_rgb.len() == s.len();
+    let half = original.samples_per_pixel;
+    let mut sums = PairSums::default();
+    for (p, (&no, &ns)) in o.iter().zip(s).enumerate() {
+        let (no, ns) = (u64::from(no), u64::from(ns));
+        sums.original += no;
+        sums.simplified += ns;
+        sums.differing += no.abs_diff(ns);
+        let (bo, bs) = (2 * no >= u64::from(half), 2 * ns >= u64::from(half));
+        sums.original_pixels += u64::from(bo);
+        sums.differing_pixels += u64::from(bo != bs);
+        let w = no.min(ns);
+        if with_colour && w > 0 {
+            let (a, b) = (o_rgb[p], s_rgb[p]);
+            let d: f32 = (0..3).map(|c| (a[c] - b[c]).abs()).sum();
+            let sd: f32 = (0..3).map(|c| a[c] - b[c]).sum();
+            sums.shared += w;
+            sums.colour += w as f64 * f64::from(d) / 3.0;
+            sums.signed += w as f64 * f64::from(sd) / 3.0;
+        }
+    }
+    sums
+}
+
+/// The report of the pairs' sums (`views · frames` of them, view-major).
+fn report_of(
+    pairs: &[PairSums],
+    views: usize,
+    frames: usize,
+    samples_per_pixel: u32,
+) -> CoverageReport {
+    let per_pair: Vec<f64> = (pairs.iter())
+        .map(|p| p.differing as f64 / p.original as f64)
+        .collect();
+    let ratio_per_pair: Vec<f64> = (pairs.iter())
+        .map(|p| p.simplified as f64 / p.original as f64)
+        .collect();
+    let per_view = per_pair
+        .chunks(frames.max(1))
+        .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+        .collect();
+    let colour_per_pair: Vec<f64> = (pairs.iter())
+        .map(|p| {
+            if p.shared > 0 {
+                p.colour / p.shared as f64
+            } else {
+                f64::NAN
+            }
+        })
+        .collect();
+    let shifts: Vec<f64> = (pairs.iter())
+        .filter(|p| p.shared > 0)
+        .map(|p| (p.signed / p.shared as f64).abs())
+        .collect();
+    let coloured: Vec<f64> = colour_per_pair
+        .iter()
+        .copied()
+        .filter(|c| !c.is_nan())
+        .collect();
+    let kept: Vec<f64> = (pairs.iter())
+        .filter(|p| p.original_pixels > 0)
+        .map(|p| p.differing_pixels as f64 / p.original_pixels as f64)
+        .filter(|&score| score <= 1.0)
+        .collect();
+    debug_assert_eq!(pairs.len(), views * frames);
+    CoverageReport {
+        mean: mean_or_nan(&per_pair),
         per_view,
-        mean: mean_or_nan(total, kept_total),
-        discarded,
-        original_pixels,
-        differing_pixels,
-        colour_difference: mean_or_nan(colour_sum, colour_pairs),
+        ratio: mean_or_nan(&ratio_per_pair),
+        original_coverage: (pairs.iter())
+            .map(|p| p.original as f64 / f64::from(samples_per_pixel))
+            .collect(),
+        binary: BinaryCoverage {
+            mean: mean_or_nan(&kept),
+            discarded: pairs.len() - kept.len(),
+            original_pixels: pairs.iter().map(|p| p.original_pixels).collect(),
+            differing_pixels: pairs.iter().map(|p| p.differing_pixels).collect(),
+        },
+        per_pair,
+        ratio_per_pair,
+        colour_difference: mean_or_nan(&coloured),
         colour_per_pair,
-        colour_shift: mean_or_nan(shift_sum, colour_pairs),
-    })
-}
-
-/// `differing / covered`, or `None` when the pair is discarded (score above 1, or nothing
-/// covered in the original) per spec §5.4.
-fn pair_score(differing: u64, covered: u64) -> Option<f64> {
-    if covered == 0 {
-        return None;
+        colour_shift: mean_or_nan(&shifts),
     }
-    let score = differing as f64 / covered as f64;
-    (score <= 1.0).then_some(score)
 }
 
-fn mean_or_nan(sum: f64, count: usize) -> f64 {
-    if count == 0 {
+/// The mean of `values`, NaN when there are none.
+fn mean_or_nan(values: &[f64]) -> f64 {
+    if values.is_empty() {
         f64::NAN
     } else {
-        sum / count as f64
+        values.iter().sum::<f64>() / values.len() as f64
     }
 }
 
-/// The depth complexity of `scene` from view `view` of `params`' ring, framed by the bounds
-/// (see the module docs), at the metric's size and supersampling: fragments rasterised per
+/// The depth complexity of `scene` from view `view` (ring by ring) of `params`, framed by the
+/// bounds (see [`crate::framing`]), at the metric's size and samples: fragments rasterised per
 /// covered sample ([`frond_render::depth_complexity`]), drawn by the CPU rasteriser whatever
 /// `params.rasteriser` says.
 pub fn depth_complexity(
     scene: &DrawScene,
     bounds_min: Vec3,
     bounds_max: Vec3,
-    view: u32,
+    view: usize,
     params: &CoverageParams,
 ) -> Result<f64, MetricError> {
-    let camera = view_camera(bounds_min, bounds_max, view, params)?;
+    let framing = framing(bounds_min, bounds_max, params)?;
+    let camera = framing.cameras.get(view).ok_or(MetricError::NoViews)?;
     let textures = SoftwareTextures::new(scene, false)?;
     Ok(frond_render::depth_complexity(
         scene,
         &textures,
-        projection(scene, &camera, params)?,
-        params.width,
-        params.height,
-        params.supersample,
+        projection(scene, camera, &framing)?,
+        framing.width,
+        framing.height,
+        framing.supersample,
     )?)
 }
 
-/// The wgpu path's projection for `camera` at the metric's size: depth planes around the
-/// scene's own bounds.
+/// The projection of `camera` for the framing's image: depth planes around the scene's own
+/// bounds.
 fn projection(
     scene: &DrawScene,
     camera: &Camera,
-    params: &CoverageParams,
+    framing: &Framing,
 ) -> Result<glam::Mat4, MetricError> {
     camera.validate()?;
-    let aspect = params.width as f32 / params.height as f32;
+    let aspect = framing.aspect();
     Ok(match scene.bounds() {
         Some((min, max)) => camera.view_proj_for_bounds(aspect, min, max),
         None => camera.view_proj(aspect),
@@ -548,61 +581,38 @@ fn same_textures(a: &DrawScene, b: &DrawScene) -> bool {
             .eq(b.meshes.iter().map(|m| (m.material, m.indices.is_empty())))
 }
 
-/// A mask, its covered pixels' colour and, for the first pair, its render's depth complexity.
-type SoftwareMask = (Vec<bool>, Vec<[f32; 3]>, Option<f64>);
-
-/// The binary coverage mask of `scene` at the metric's size drawn by the CPU rasteriser, the
-/// covered pixels' colour when `params.colour` (else an empty vector), and the render's depth
-/// complexity when `with_depth`.
-fn software_mask(
-    scene: &DrawScene,
-    textures: &SoftwareTextures,
-    camera: &Camera,
-    params: &CoverageParams,
-    with_depth: bool,
-) -> Result<SoftwareMask, MetricError> {
-    let view_proj = projection(scene, camera, params)?;
-    let (w, h, ss) = (params.width, params.height, params.supersample);
-    let (image, depth) = if with_depth {
-        let (image, depth) = render_coverage_with_depth(scene, textures, view_proj, w, h, ss)?;
-        (image, Some(depth))
-    } else {
-        (render_coverage(scene, textures, view_proj, w, h, ss)?, None)
-    };
-    Ok((image.covered, image.colour, depth))
-}
-
-/// The binary coverage mask of `scene` at the metric's size: rendered `supersample`× larger,
-/// a pixel covered when at least half of its samples are.
-fn coverage_mask(
+/// The coverage image of `scene` drawn by the wgpu renderer `K` times the image's size, each
+/// pixel's covered samples counted and their colour averaged.
+fn gpu_image(
     renderer: &Renderer,
     scene: &DrawScene,
     camera: &Camera,
-    params: &CoverageParams,
-) -> Result<(Vec<bool>, Vec<[f32; 3]>), MetricError> {
-    let ss = params.supersample.max(1) as usize;
-    let (w, h) = (params.width as usize, params.height as usize);
+    framing: &Framing,
+) -> Result<PairImage, MetricError> {
+    let k = framing.supersample as usize;
+    let (w, h) = (framing.width as usize, framing.height as usize);
     let frame = renderer.render_mipmapped(
         scene,
         camera,
-        params.width * ss as u32,
-        params.height * ss as u32,
+        framing.width * k as u32,
+        framing.height * k as u32,
         BACKGROUND,
     )?;
-    let big_w = w * ss;
+    let big_w = w * k;
     let linear = &*frond_render::SRGB_LINEAR;
-    let mut mask = vec![false; w * h];
+    let mut samples = vec![0u16; w * h];
     let mut colour = vec![[0.0f32; 3]; w * h];
-    // Rows are independent: downsample them in parallel (each pixel's sum is in a fixed order).
-    mask.par_chunks_mut(w)
+    // Rows are independent: resolve them in parallel (each pixel's sum is in a fixed order).
+    samples
+        .par_chunks_mut(w)
         .zip(colour.par_chunks_mut(w))
         .enumerate()
-        .for_each(|(y, (mask_row, colour_row))| {
+        .for_each(|(y, (count_row, colour_row))| {
             for x in 0..w {
-                let (mut covered, mut sum) = (0usize, [0.0f32; 3]);
-                for dy in 0..ss {
-                    let row = (y * ss + dy) * big_w + x * ss;
-                    for i in row..row + ss {
+                let (mut covered, mut sum) = (0u16, [0.0f32; 3]);
+                for dy in 0..k {
+                    let row = (y * k + dy) * big_w + x * k;
+                    for i in row..row + k {
                         if frame.coverage.get(i).copied().unwrap_or(false) {
                             covered += 1;
                             for (c, v) in sum.iter_mut().enumerate() {
@@ -612,13 +622,13 @@ fn coverage_mask(
                         }
                     }
                 }
-                mask_row[x] = 2 * covered >= ss * ss;
+                count_row[x] = covered;
                 if covered > 0 {
-                    colour_row[x] = sum.map(|v| v / covered as f32);
+                    colour_row[x] = sum.map(|v| v / f32::from(covered));
                 }
             }
         });
-    Ok((mask, colour))
+    Ok((samples, colour))
 }
 
 fn validate(
@@ -626,17 +636,8 @@ fn validate(
     simplified: usize,
     params: &CoverageParams,
 ) -> Result<(), MetricError> {
-    if params.views == 0 {
-        return Err(MetricError::NoViews);
-    }
     if params.frames == 0 {
         return Err(MetricError::NoFrames);
-    }
-    if params.width == 0 || params.height == 0 {
-        return Err(MetricError::InvalidSize {
-            width: params.width,
-            height: params.height,
-        });
     }
     let frames = params.frames as usize;
     if original != frames || simplified != frames {
@@ -649,120 +650,9 @@ fn validate(
     validate_camera_params(params)
 }
 
-fn validate_camera_params(params: &CoverageParams) -> Result<(), MetricError> {
-    if params.views == 0 {
-        return Err(MetricError::NoViews);
-    }
-    let fov = params.fov_y_deg;
-    if !(fov > 0.0 && fov < 180.0) {
-        return Err(MetricError::InvalidParams(format!(
-            "fov_y_deg {fov} must be in (0, 180)"
-        )));
-    }
-    let elevation = params.elevation_deg;
-    if !(-90.0..=90.0).contains(&elevation) {
-        return Err(MetricError::InvalidParams(format!(
-            "elevation_deg {elevation} must be in [-90, 90]"
-        )));
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn corners(min: Vec3, max: Vec3) -> [Vec3; 8] {
-        std::array::from_fn(|k| {
-            Vec3::new(
-                if k & 1 == 0 { min.x } else { max.x },
-                if k & 2 == 0 { min.y } else { max.y },
-                if k & 4 == 0 { min.z } else { max.z },
-            )
-        })
-    }
-
-    #[test]
-    fn bounds_span_the_image_height_exactly() {
-        let boxes = [
-            (Vec3::new(-1.0, 0.0, -2.0), Vec3::new(3.0, 5.0, 1.0)),
-            (Vec3::new(-1.0, -1.0, -1.0), Vec3::new(1.0, 1.0, 1.0)),
-            (Vec3::new(10.0, 0.0, 10.0), Vec3::new(10.5, 8.0, 10.5)),
-            // A flat vertical card facing +Z.
-            (Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0)),
-        ];
-        for (min, max) in boxes {
-            for elevation_deg in [0.0f32, 15.0, -30.0, 60.0] {
-                let params = CoverageParams {
-                    views: 7,
-                    elevation_deg,
-                    fov_y_deg: 35.0,
-                    ..CoverageParams::default()
-                };
-                for view in 0..params.views {
-                    let cam = view_camera(min, max, view, &params).expect("camera");
-                    let m = cam.view_proj_for_bounds(4.0 / 3.0, min, max);
-                    let ys: Vec<f32> = corners(min, max)
-                        .iter()
-                        .map(|&c| {
-                            let clip = m * c.extend(1.0);
-                            assert!(clip.w > 0.0, "corner {c} behind the eye");
-                            clip.y / clip.w
-                        })
-                        .collect();
-                    let top = ys.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-                    let bottom = ys.iter().copied().fold(f32::INFINITY, f32::min);
-                    let reach = top.max(-bottom);
-                    assert!(
-                        (reach - 1.0).abs() < 1e-4,
-                        "{min}..{max} elevation {elevation_deg} view {view}: ys {ys:?}"
-                    );
-                    if elevation_deg == 0.0 {
-                        assert!((top - 1.0).abs() < 1e-4 && (bottom + 1.0).abs() < 1e-4);
-                    }
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn card_distance_is_analytic() {
-        // A card of height 2 at the centre plane: distance = 1 / tan(φ/2).
-        let params = CoverageParams {
-            views: 1,
-            fov_y_deg: 40.0,
-            ..CoverageParams::default()
-        };
-        let cam = view_camera(
-            Vec3::new(-1.0, -1.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            0,
-            &params,
-        )
-        .expect("camera");
-        let expected = 1.0 / 20.0f32.to_radians().tan();
-        assert!((cam.distance - expected).abs() < 1e-5 * expected);
-        assert_eq!(cam.azimuth_deg, 0.0);
-        assert_eq!(cam.target, Vec3::ZERO);
-    }
-
-    #[test]
-    fn ring_is_even() {
-        assert_eq!(ring_azimuth_deg(0, 5), 0.0);
-        assert_eq!(ring_azimuth_deg(1, 5), 72.0);
-        assert_eq!(ring_azimuth_deg(4, 5), 288.0);
-        assert_eq!(ring_azimuth_deg(2, 3), 240.0);
-        assert_eq!(ring_azimuth_deg(0, 0), 0.0);
-    }
-
-    #[test]
-    fn pair_scores_and_discards() {
-        assert_eq!(pair_score(0, 10), Some(0.0));
-        assert_eq!(pair_score(10, 10), Some(1.0));
-        assert_eq!(pair_score(11, 10), None);
-        assert_eq!(pair_score(0, 0), None);
-        assert!(mean_or_nan(0.0, 0).is_nan());
-    }
 
     #[test]
     fn bad_inputs_are_rejected() {
@@ -782,45 +672,67 @@ mod tests {
             ..ok.clone()
         };
         assert!(matches!(validate(0, 0, &p), Err(MetricError::NoFrames)));
-        let p = CoverageParams {
-            width: 0,
-            ..ok.clone()
-        };
-        assert!(matches!(
-            validate(1, 1, &p),
-            Err(MetricError::InvalidSize { .. })
-        ));
-        for fov_y_deg in [0.0, 180.0, f32::NAN] {
-            let p = CoverageParams {
-                fov_y_deg,
-                ..ok.clone()
-            };
-            assert!(matches!(
-                validate(1, 1, &p),
-                Err(MetricError::InvalidParams(_))
-            ));
-        }
-        let p = CoverageParams {
-            elevation_deg: 91.0,
-            ..ok.clone()
-        };
-        assert!(matches!(
-            validate(1, 1, &p),
-            Err(MetricError::InvalidParams(_))
-        ));
+    }
 
-        let flat = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, 1.0));
+    #[test]
+    fn pairs_score_their_covered_fractions() {
+        // Four pixels of 4 samples: the original covers 4, 2, 0, 4; the simplification 2, 2,
+        // 2, 4. Σ|Δ| = 4 of Σα_o = 10 samples; ratio 10/10; binary: the original covers
+        // pixels 0, 1, 3, the simplification 0, 1, 2, 3: one of three differs.
+        let images = |counts: Vec<u16>| CoverageImages {
+            width: 2,
+            height: 2,
+            views: 1,
+            frames: 1,
+            samples_per_pixel: 4,
+            samples: vec![counts],
+            colour: vec![vec![]],
+            first_depth_complexity: None,
+        };
+        let (o, s) = (images(vec![4, 2, 0, 4]), images(vec![2, 2, 2, 4]));
+        let r = compare_images(&o, &s, &[0]).expect("compare");
+        assert_eq!(r.per_pair, vec![0.4]);
+        assert_eq!(r.mean, 0.4);
+        assert_eq!(r.ratio, 1.0);
+        assert_eq!(r.original_coverage, vec![2.5]);
+        assert_eq!(r.binary.original_pixels, vec![3]);
+        assert_eq!(r.binary.differing_pixels, vec![1]);
+        assert!((r.binary.mean - 1.0 / 3.0).abs() < 1e-12);
+        assert!(r.colour_difference.is_nan(), "no colour drawn");
+        // Nothing covered in the original: an error, not a discarded pair.
+        let empty = images(vec![0; 4]);
         assert!(matches!(
-            view_camera(flat.0, flat.1, 0, &ok),
-            Err(MetricError::InvalidBounds { .. })
+            compare_images(&empty, &s, &[0]),
+            Err(MetricError::NothingCovered { view: 0, frame: 0 })
         ));
-        assert!(matches!(
-            view_camera(Vec3::ONE, Vec3::ZERO, 0, &ok),
-            Err(MetricError::InvalidBounds { .. })
-        ));
-        assert!(matches!(
-            view_camera(Vec3::ZERO, Vec3::splat(f32::NAN), 0, &ok),
-            Err(MetricError::InvalidBounds { .. })
-        ));
+        // A bloated simplification scores above 1 and is kept; the binary rule discards it.
+        let sparse = images(vec![1, 0, 0, 0]);
+        let full = images(vec![4; 4]);
+        let r = compare_images(&sparse, &full, &[0]).expect("compare");
+        assert_eq!(r.mean, 15.0);
+        assert_eq!(r.ratio, 16.0);
+        assert_eq!(r.binary.discarded, 1);
+        assert!(r.binary.mean.is_nan());
+    }
+
+    #[test]
+    fn colour_is_weighted_by_the_shared_coverage() {
+        let images = |counts: Vec<u16>, rgb: Vec<[f32; 3]>| CoverageImages {
+            width: 2,
+            height: 1,
+            views: 1,
+            frames: 1,
+            samples_per_pixel: 4,
+            samples: vec![counts],
+            colour: vec![rgb],
+            first_depth_complexity: None,
+        };
+        // Pixel 0 shares 1 sample and differs by 0.6; pixel 1 shares 3 and differs by 0.2.
+        let o = images(vec![4, 3], vec![[0.6; 3], [0.2; 3]]);
+        let s = images(vec![1, 4], vec![[0.0; 3], [0.0; 3]]);
+        let r = compare_images(&o, &s, &[0]).expect("compare");
+        let expected = (1.0 * 0.6 + 3.0 * 0.2) / 4.0;
+        assert!((r.colour_difference - expected).abs() < 1e-6, "{r:?}");
+        assert!((r.colour_shift - expected).abs() < 1e-6);
     }
 }

@@ -16,27 +16,35 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::aggregate::{
-    TriangleScores, axis_aggregate, colour_difference_metric, coverage_metric, triangle_aggregate,
+    TriangleScores, axis_aggregate, binary_coverage_metric, colour_difference_metric,
+    coverage_metric, triangle_aggregate,
 };
 use crate::cost::cost;
 use crate::coverage::{
-    CoverageMasks, CoverageParams, CoverageReport, MetricError, compare_masks, coverage_masks,
+    CoverageImages, CoverageParams, CoverageReport, DEFAULT_ELEVATIONS_DEG, MetricError,
+    compare_images, coverage_images,
 };
 use crate::dominating_axis::{AxisMetrics, axis_metrics};
+use crate::framing::samples_per_side;
 use crate::matching::{match_foreign, match_triangles};
 use crate::metric_id::MetricId;
-use crate::report::{Costs, CoverageMetrics, EvalReport, EvalTimings};
+use crate::report::{Costs, CoverageMetrics, EVAL_SCHEMA_VERSION, EvalReport, EvalTimings, Metric};
 use crate::triangle_metrics::{image_trajectory, triangle_metrics};
 
 /// What `frond eval` was asked for.
 #[derive(Clone, Debug)]
 pub struct EvalRequest {
-    /// Ring views of the colour metric (odd, thesis §8.3.1).
+    /// Views per ring of the coverage metrics (odd, thesis §8.3.1).
     pub views: u32,
-    /// Frames of the animated colour metric.
+    /// Frames of the animated coverage metrics.
     pub frames: u32,
-    /// Image size of the colour metric.
-    pub size: (u32, u32),
+    /// The screen height the candidate is judged at: the tree's rest height spans this many
+    /// pixels ([`crate::framing`]).
+    pub screen_height: f32,
+    /// The screen's vertical field of view, degrees (the switch values').
+    pub fov_deg: f32,
+    /// The screen's height in pixels (the switch values').
+    pub resolution: f32,
     /// Samples over the loop for the trajectory metrics.
     pub samples: usize,
     /// Clip (default: the original's first); the candidate plays the clip of the same name.
@@ -81,11 +89,6 @@ impl EvalError {
     }
 }
 
-/// The colour metric's image for a tree seen `screen_height` pixels high: that height, 4:3.
-pub fn image_for_screen_height(screen_height: u32) -> (u32, u32) {
-    (screen_height.saturating_mul(4).div_ceil(3), screen_height)
-}
-
 /// The candidate's clip to play at the original's clip `name`: the one of the same name, else
 /// its first.
 pub fn candidate_clip(candidate: &Tree, name: Option<&str>) -> Option<usize> {
@@ -118,9 +121,11 @@ pub struct EvalContext<'a> {
     original: &'a Tree,
     sampled: Sampled,
     frame_times: Vec<f32>,
-    /// Per image size and whether drawn with colour.
-    masks: HashMap<((u32, u32), bool), CoverageMasks>,
+    /// The original's images per screen height (its bits), parts drawn and colour.
+    images: HashMap<ImagesKey, CoverageImages>,
     views: u32,
+    fov_deg: f32,
+    resolution: f32,
     /// [`EvalRequest::white_albedo`].
     white_albedo: bool,
     lighting: Lighting,
@@ -160,8 +165,10 @@ impl<'a> EvalContext<'a> {
             original,
             sampled,
             frame_times,
-            masks: Default::default(),
+            images: Default::default(),
             views: req.views,
+            fov_deg: req.fov_deg,
+            resolution: req.resolution,
             white_albedo: req.white_albedo,
             lighting: req.lighting,
             original_file,
@@ -179,33 +186,36 @@ impl<'a> EvalContext<'a> {
         self.sampled.clip.as_deref()
     }
 
-    /// Renders the original's coverage masks (without colour, as [`EvalContext::coverage`]
-    /// draws them) at each of `sizes` now rather than on first use: `frond lod` draws them while
-    /// it builds the LODs they are compared with.
-    pub fn prepare_coverage(&mut self, sizes: &[(u32, u32)]) -> Result<(), EvalError> {
-        for &size in sizes {
-            self.original_masks(size, false)?;
+    /// Renders the original's coverage images (without colour, as [`EvalContext::coverage`]
+    /// draws them) at each of `screen_heights` now rather than on first use: `frond lod` draws
+    /// them while it builds the LODs they are compared with.
+    pub fn prepare_coverage(&mut self, screen_heights: &[f32]) -> Result<(), EvalError> {
+        for &h in screen_heights {
+            self.original_images(h, TreeParts::All, false)?;
         }
         Ok(())
     }
 
-    fn params(&self, size: (u32, u32), colour: bool) -> CoverageParams {
+    /// The coverage metric's parameters at `screen_height`.
+    pub fn params(&self, screen_height: f32, colour: bool) -> CoverageParams {
         CoverageParams {
             views: self.views,
+            elevations_deg: DEFAULT_ELEVATIONS_DEG.to_vec(),
             frames: self.frame_times.len() as u32,
-            width: size.0,
-            height: size.1,
+            screen_height,
+            fov_y_deg: self.fov_deg,
+            resolution: self.resolution,
             colour,
             lighting: self.lighting,
             ..Default::default()
         }
     }
 
-    fn scenes(&self, tree: &Tree, clip: Option<usize>) -> Vec<DrawScene> {
+    fn scenes(&self, tree: &Tree, clip: Option<usize>, parts: TreeParts) -> Vec<DrawScene> {
         self.frame_times
             .iter()
             .map(|&t| {
-                let mut scene = tree_scene(tree, clip, t, TreeParts::Foliage);
+                let mut scene = tree_scene(tree, clip, t, parts);
                 if self.white_albedo {
                     whiten(&mut scene);
                 }
@@ -221,123 +231,160 @@ impl<'a> EvalContext<'a> {
         )
     }
 
-    /// The original's coverage masks at `size` (with colour or not), rendered on first use.
-    fn original_masks(
+    /// The original's coverage images at `screen_height` (of `parts`, with colour or not),
+    /// rendered on first use.
+    fn original_images(
         &mut self,
-        size: (u32, u32),
+        screen_height: f32,
+        parts: TreeParts,
         colour: bool,
-    ) -> Result<&CoverageMasks, EvalError> {
-        if !self.masks.contains_key(&(size, colour)) {
+    ) -> Result<&CoverageImages, EvalError> {
+        let key = (screen_height.to_bits(), parts_key(parts), colour);
+        if !self.images.contains_key(&key) {
             let oc = self.original.clip_index(self.sampled.clip.as_deref());
-            let (lo, hi) = self.bounds();
-            let m = coverage_masks(
-                self.renderer,
-                &self.scenes(self.original, oc),
-                lo,
-                hi,
-                &self.params(size, colour),
-            )
-            .map_err(EvalError::colour(&self.original.source, "colour metric"))?;
-            self.masks.insert((size, colour), m);
+            let m = self.images_of(self.original, oc, screen_height, parts, colour)?;
+            self.images.insert(key, m);
         }
-        Ok(&self.masks[&(size, colour)])
+        Ok(&self.images[&key])
     }
 
-    /// `candidate`'s coverage masks at `size`, playing its clip `clip`.
-    fn candidate_masks(
+    /// `tree`'s coverage images at `screen_height`, playing its clip `clip`.
+    fn images_of(
         &self,
-        candidate: &Tree,
+        tree: &Tree,
         clip: Option<usize>,
-        size: (u32, u32),
+        screen_height: f32,
+        parts: TreeParts,
         colour: bool,
-    ) -> Result<CoverageMasks, EvalError> {
+    ) -> Result<CoverageImages, EvalError> {
         let (lo, hi) = self.bounds();
-        coverage_masks(
+        coverage_images(
             self.renderer,
-            &self.scenes(candidate, clip),
+            &self.scenes(tree, clip, parts),
             lo,
             hi,
-            &self.params(size, colour),
+            &self.params(screen_height, colour),
         )
-        .map_err(EvalError::colour(&candidate.source, "colour metric"))
+        .map_err(EvalError::colour(&tree.source, "coverage metric"))
     }
 
-    /// The animated coverage error of `candidate` with images of `size` (spec
-    /// animated-billboard-clouds §5.4): the animated colour metric [`EvalContext::evaluate`]
-    /// reports, alone — no per-triangle metrics, no file cost. `frond lod` measures each LOD's
-    /// error with it.
+    /// `candidate`'s coverage images at `screen_height` as [`EvalContext::coverage`] draws
+    /// them (the whole tree, without colour), playing the clip the original plays.
+    pub fn images(
+        &self,
+        candidate: &Tree,
+        screen_height: f32,
+    ) -> Result<CoverageImages, EvalError> {
+        let cc = candidate_clip(candidate, self.sampled.clip.as_deref());
+        self.images_of(candidate, cc, screen_height, TreeParts::All, false)
+    }
+
+    /// The animated coverage error of `candidate` at `screen_height` (spec
+    /// animated-billboard-clouds §5.4 filtered, [`crate::coverage`]): the coverage metrics
+    /// [`EvalContext::evaluate`] reports, alone — no per-triangle metrics, no file cost.
     pub fn coverage(
         &mut self,
         candidate: &Tree,
-        size: (u32, u32),
+        screen_height: f32,
     ) -> Result<CoverageReport, EvalError> {
-        self.coverage_with_depth(candidate, size).map(|r| r.0)
+        self.measure(candidate, screen_height).map(|m| m.report)
     }
 
-    /// [`EvalContext::coverage`], with the depth complexities of the candidate and of the
-    /// original ([`EvalContext::depth_complexity`]: the same values) read off the metric's
-    /// own first render of each, where it has them.
-    pub fn coverage_with_depth(
-        &mut self,
-        candidate: &Tree,
-        size: (u32, u32),
-    ) -> Result<(CoverageReport, f64, f64), EvalError> {
-        let cc = candidate_clip(candidate, self.sampled.clip.as_deref());
-        // The coverage alone: drawn without colour (no depth test, alpha only).
-        let cand_masks = self.candidate_masks(candidate, cc, size, false)?;
+    /// [`EvalContext::coverage`], with the candidate's images (for comparing it with other
+    /// models at the same size, [`EvalContext::compare`]) and the depth complexities of the
+    /// candidate and of the original read off the metric's own first render of each.
+    pub fn measure(&mut self, candidate: &Tree, screen_height: f32) -> Result<Measured, EvalError> {
+        let images = self.images(candidate, screen_height)?;
         let all: Vec<usize> = (0..self.frame_times.len()).collect();
-        let original = self.original_masks(size, false)?;
-        let report = compare_masks(original, &cand_masks, &all).map_err(EvalError::colour(
+        let original = self.original_images(screen_height, TreeParts::All, false)?;
+        let report = compare_images(original, &images, &all).map_err(EvalError::colour(
             &candidate.source,
-            "animated colour metric",
+            "animated coverage metric",
         ))?;
         let original_depth = original.first_depth_complexity;
         let original_tree = self.original;
-        let depth = |masks_depth: Option<f64>, tree: &Tree| match masks_depth {
+        let depth = |images_depth: Option<f64>, tree: &Tree| match images_depth {
             Some(d) => Ok(d),
-            None => self.depth_complexity(tree, size),
+            None => self.depth_complexity(tree, screen_height),
         };
-        Ok((
+        Ok(Measured {
             report,
-            depth(cand_masks.first_depth_complexity, candidate)?,
-            depth(original_depth, original_tree)?,
-        ))
+            depth_complexity: depth(images.first_depth_complexity, candidate)?,
+            original_depth_complexity: depth(original_depth, original_tree)?,
+            images,
+        })
     }
 
-    /// The depth complexity of `candidate`'s foliage at `size`, from the metric's first view
-    /// at its first frame ([`crate::coverage::depth_complexity`]).
-    pub fn depth_complexity(&self, candidate: &Tree, size: (u32, u32)) -> Result<f64, EvalError> {
+    /// The animated coverage error of the images `candidate` against those of `reference`
+    /// (both from [`EvalContext::images`] or [`EvalContext::measure`] at `screen_height`), the
+    /// original's when `reference` is None: what a player sees change when an engine swaps
+    /// one model for the other at that size.
+    pub fn compare(
+        &mut self,
+        reference: Option<&CoverageImages>,
+        candidate: &CoverageImages,
+        screen_height: f32,
+        file: &Path,
+    ) -> Result<CoverageReport, EvalError> {
+        let all: Vec<usize> = (0..self.frame_times.len()).collect();
+        let reference = match reference {
+            Some(r) => r,
+            None => self.original_images(screen_height, TreeParts::All, false)?,
+        };
+        compare_images(reference, candidate, &all)
+            .map_err(EvalError::colour(file, "animated coverage metric"))
+    }
+
+    /// The depth complexity of `candidate`'s foliage at `screen_height`, from the metric's
+    /// first view at its first frame ([`crate::coverage::depth_complexity`]).
+    pub fn depth_complexity(&self, candidate: &Tree, screen_height: f32) -> Result<f64, EvalError> {
         let clip = candidate_clip(candidate, self.sampled.clip.as_deref());
         let t = self.frame_times.first().copied().unwrap_or(0.0);
         let scene = tree_scene(candidate, clip, t, TreeParts::Foliage);
         let (lo, hi) = self.bounds();
-        crate::coverage::depth_complexity(&scene, lo, hi, 0, &self.params(size, false))
+        crate::coverage::depth_complexity(&scene, lo, hi, 0, &self.params(screen_height, false))
             .map_err(EvalError::colour(&candidate.source, "depth complexity"))
     }
 
-    /// Evaluates `candidate` with images of `size`; `same_file` (the two files have the same
+    /// Evaluates `candidate` at `screen_height`; `same_file` (the two files have the same
     /// bytes) matches every triangle to itself.
     pub fn evaluate(
         &mut self,
         candidate: &Tree,
         same_file: bool,
-        size: (u32, u32),
+        screen_height: f32,
     ) -> Result<EvalReport, EvalError> {
         let t0 = Instant::now();
         let candidate_file = file_cost(&candidate.source, &self.limits).map_err(EvalError::Cost)?;
         let cc = candidate_clip(candidate, self.sampled.clip.as_deref());
-        let cand_masks = self.candidate_masks(candidate, cc, size, true)?;
         let all: Vec<usize> = (0..self.frame_times.len()).collect();
         let original: &'a Tree = self.original;
-        let orig_masks = self.original_masks(size, true)?;
+        let colour_error = EvalError::colour(&original.source, "animated coverage metric");
+        // The foliage alone, without colour; a tree without foliage has no such error.
+        let images = self.images_of(candidate, cc, screen_height, TreeParts::Foliage, false)?;
+        let foliage = compare_images(
+            self.original_images(screen_height, TreeParts::Foliage, false)?,
+            &images,
+            &all,
+        );
+        let foliage = match foliage {
+            Ok(r) => coverage_metric(MetricId::CoverageFoliage, &r),
+            Err(MetricError::NothingCovered { .. }) => Metric::skipped(
+                MetricId::CoverageFoliage,
+                "the original has no foliage to cover any pixel",
+            ),
+            Err(e) => return Err(colour_error(e)),
+        };
+        let images = self.images_of(candidate, cc, screen_height, TreeParts::All, true)?;
+        let framing = (images.width, images.height);
+        let orig_images = self.original_images(screen_height, TreeParts::All, true)?;
         // The static metric (F = 1) is the animated one's first frame: the same renders.
-        let stat = compare_masks(orig_masks, &cand_masks, &[0])
-            .map_err(EvalError::colour(&original.source, "static colour metric"))?;
-        let anim = compare_masks(orig_masks, &cand_masks, &all).map_err(EvalError::colour(
+        let stat = compare_images(orig_images, &images, &[0]).map_err(EvalError::colour(
             &original.source,
-            "animated colour metric",
+            "static coverage metric",
         ))?;
-        drop(cand_masks);
+        let anim = compare_images(orig_images, &images, &all).map_err(colour_error)?;
+        drop(images);
         let t1 = Instant::now();
         let mut report = score(
             self.original,
@@ -348,9 +395,15 @@ impl<'a> EvalContext<'a> {
             &stat,
             &anim,
         );
+        report.coverage.foliage = foliage;
         report.views = self.views;
+        report.elevations_deg = DEFAULT_ELEVATIONS_DEG.to_vec();
         report.frames = self.frame_times.len() as u32;
-        report.size = [size.0, size.1];
+        report.screen_height = screen_height;
+        report.fov_deg = self.fov_deg;
+        report.resolution = self.resolution;
+        report.size = [framing.0, framing.1];
+        report.samples_per_side = samples_per_side(screen_height);
         report.cost = Costs {
             original: cost(self.original, self.original_file.clone()),
             candidate: cost(candidate, candidate_file),
@@ -358,6 +411,30 @@ impl<'a> EvalContext<'a> {
         report.timings_s.colour = (t1 - t0).as_secs_f64();
         report.timings_s.total = t0.elapsed().as_secs_f64();
         Ok(report)
+    }
+}
+
+/// What [`EvalContext::measure`] finds of one candidate.
+pub struct Measured {
+    /// The coverage metrics against the original.
+    pub report: CoverageReport,
+    /// The candidate's images, to compare it with other models at the same size.
+    pub images: CoverageImages,
+    /// The candidate's depth complexity ([`crate::coverage::depth_complexity`]).
+    pub depth_complexity: f64,
+    /// The original's, drawn alike.
+    pub original_depth_complexity: f64,
+}
+
+/// The key of the original's cached images: screen height (bits), parts drawn, colour.
+type ImagesKey = (u32, u8, bool);
+
+/// [`TreeParts`] as a key.
+fn parts_key(parts: TreeParts) -> u8 {
+    match parts {
+        TreeParts::All => 0,
+        TreeParts::Wood => 1,
+        TreeParts::Foliage => 2,
     }
 }
 
@@ -370,7 +447,7 @@ pub fn evaluate(
     same_file: bool,
     req: &EvalRequest,
 ) -> Result<EvalReport, EvalError> {
-    EvalContext::new(renderer, original, req)?.evaluate(candidate, same_file, req.size)
+    EvalContext::new(renderer, original, req)?.evaluate(candidate, same_file, req.screen_height)
 }
 
 /// Everything of a report but the colour renders and the cost: the per-triangle and animation
@@ -415,21 +492,31 @@ fn score(
         None => agg(id, &|m| (f(&m.1), f(&m.1))),
     };
     EvalReport {
+        schema_version: EVAL_SCHEMA_VERSION,
         colour_shift: anim.colour_shift,
         original: original.source.display().to_string(),
         candidate: candidate.source.display().to_string(),
         clip: sampled.clip.clone(),
         samples: sampled.samples(),
-        // Set by the caller, which knows the colour metric's setup.
+        // Set by the caller, which knows the coverage metrics' setup.
         views: 0,
+        elevations_deg: Vec::new(),
         frames: 0,
+        screen_height: 0.0,
+        fov_deg: 0.0,
+        resolution: 0.0,
         size: [0, 0],
+        samples_per_side: 0,
         tree_height: original.height(),
         coverage: CoverageMetrics {
             static_: coverage_metric(MetricId::CoverageStatic, stat),
             animated: coverage_metric(MetricId::CoverageAnimated, anim),
-            discarded_pairs: anim.discarded,
-            pairs: anim.original_pixels.len(),
+            binary: binary_coverage_metric(anim),
+            // Set by the caller, which draws the foliage alone.
+            foliage: Metric::skipped(MetricId::CoverageFoliage, "not measured"),
+            ratio: anim.ratio,
+            discarded_pairs: anim.binary.discarded,
+            pairs: anim.per_pair.len(),
         },
         colour_difference: colour,
         plane_distance: agg(MetricId::PlaneDistance, &|m| {

@@ -1,8 +1,8 @@
 //! Fidelity metrics (spec animated-billboard-clouds §5) and `frond eval`'s evaluation of a
 //! candidate against the animated original.
 //!
-//! The coverage ("colour") metric of §5.4, with the thesis' experiment setup of §8.2
-//! and the checklist rules of §11 item 7, in [`coverage`]; App. A's normalisation in
+//! The coverage error of §5.4 on covered fractions (the thesis' binary rule beside it), in
+//! [`coverage`], with its cameras and image sizes in [`framing`]; App. A's normalisation in
 //! [`normalise`]; the dominating-axis animation metrics of §5.5 in [`dominating_axis`]; plane,
 //! projected, Euclidean distance and orientation metrics of §5.2–5.3 in [`triangle_metrics`];
 //! the cost of a model (§5.7) in [`cost`]; run statistics (§5.8) and Pareto fronts in
@@ -18,6 +18,7 @@ pub mod cost;
 pub mod coverage;
 pub mod dominating_axis;
 pub mod eval;
+pub mod framing;
 pub mod matching;
 pub mod metric_id;
 /// App. A's normalisation, shared with the spectral descriptions (which sit upstream).
@@ -27,11 +28,11 @@ pub mod statistics;
 pub mod triangle_metrics;
 
 pub use coverage::{
-    CoverageMasks, CoverageParams, CoverageReport, MetricError, Rasteriser, compare_masks,
-    coverage_error, coverage_masks, depth_complexity, ring_azimuth_deg, view_camera,
+    BinaryCoverage, CoverageImages, CoverageParams, CoverageReport, DEFAULT_ELEVATIONS_DEG,
+    DEFAULT_FOV_DEG, DEFAULT_RESOLUTION, MetricError, Rasteriser, compare_images, coverage_error,
+    coverage_images, depth_complexity,
 };
-pub use eval::{
-    EvalContext, EvalError, EvalRequest, candidate_clip, evaluate, image_for_screen_height,
-};
+pub use eval::{EvalContext, EvalError, EvalRequest, Measured, candidate_clip, evaluate};
+pub use framing::{Framing, framing, ring_azimuth_deg, samples_per_side};
 pub use metric_id::MetricId;
 pub use report::{Costs, CoverageMetrics, EvalReport, EvalTimings, Metric};

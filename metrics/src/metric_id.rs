@@ -7,10 +7,14 @@
 /// One metric of `frond eval` (spec animated-billboard-clouds §5).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum MetricId {
-    /// The colour (coverage) metric of §5.4 on the first frame only (F = 1).
+    /// The coverage error (§5.4 with covered fractions) on the first frame only (F = 1).
     CoverageStatic,
-    /// The colour (coverage) metric of §5.4 over every frame of the loop.
+    /// The coverage error (§5.4 with covered fractions) over every frame of the loop.
     CoverageAnimated,
+    /// The thesis' binary coverage error of §5.4 over every frame, on the same renders.
+    CoverageBinary,
+    /// The coverage error of the foliage alone over every frame.
+    CoverageFoliage,
     /// Mean colour difference over the foliage pixels both renders cover.
     ColourDifference,
     /// `D_plane` of §5.2.
@@ -27,10 +31,17 @@ pub enum MetricId {
     DominatingAxisSpectral,
 }
 
-const COVERAGE_DEF: &str = "spec §5.4: Σ|o−s|/P_f over binary foliage masks per (view, frame), \
-    views on a ring at elevation 0, pairs above 1 discarded; mean over pairs, max = worst pair";
-const COLOUR_DEF: &str = "mean |Δ linear RGB| over pixels both foliage renders cover, per \
-    (view, frame) of the animated colour metric; max = worst pair";
+const COVERAGE_DEF: &str = "spec §5.4 filtered: Σ|α_o−α_s|/Σα_o per (view, frame), α = covered \
+    fraction of each pixel's K×K samples (wood and foliage), the tree's height H pixels; views \
+    on rings at 0° and 30°; mean over every pair, max = worst pair";
+const BINARY_DEF: &str = "spec §5.4 as the thesis defines it, on the same renders: a pixel \
+    covered when α ≥ ½, Σ|o−s|/P_f per (view, frame), pairs above 1 or with P_f = 0 discarded; \
+    mean over the rest, max = worst kept pair";
+const FOLIAGE_DEF: &str = "spec §5.4 filtered, as coverage_animated but with the foliage \
+    alone drawn";
+const COLOUR_DEF: &str = "mean |Δ linear RGB| over the pixels both renders cover, each \
+    weighted by the coverage both share, min(α_o, α_s), per (view, frame) of the animated \
+    coverage error; max = worst pair";
 const PLANE_DEF: &str = "spec §5.2: distance of each foliage triangle's centroid to its \
     billboard's plane over the loop (world units); mean of per-triangle means, max of maxes";
 const PROJECTED_DEF: &str = "spec §5.2: distance of the centroid's projection to its fixed \
@@ -47,9 +58,11 @@ const AXIS_SPEC_DEF: &str = "spec §5.5: NE(amplitudeDistance) of the dominating
 
 impl MetricId {
     /// Every metric, in the eval report's order.
-    pub const ALL: [MetricId; 9] = [
+    pub const ALL: [MetricId; 11] = [
         MetricId::CoverageStatic,
         MetricId::CoverageAnimated,
+        MetricId::CoverageBinary,
+        MetricId::CoverageFoliage,
         MetricId::ColourDifference,
         MetricId::PlaneDistance,
         MetricId::ProjectedDistance,
@@ -65,6 +78,8 @@ impl MetricId {
         match self {
             MetricId::CoverageStatic => "coverage_static",
             MetricId::CoverageAnimated => "coverage_animated",
+            MetricId::CoverageBinary => "coverage_binary",
+            MetricId::CoverageFoliage => "coverage_foliage",
             MetricId::ColourDifference => "colour_difference",
             MetricId::PlaneDistance => "plane_distance",
             MetricId::ProjectedDistance => "projected_distance",
@@ -80,6 +95,8 @@ impl MetricId {
         match self {
             MetricId::CoverageStatic => "coverage_static_max",
             MetricId::CoverageAnimated => "coverage_animated_max",
+            MetricId::CoverageBinary => "coverage_binary_max",
+            MetricId::CoverageFoliage => "coverage_foliage_max",
             MetricId::ColourDifference => "colour_difference_max",
             MetricId::PlaneDistance => "plane_distance_max",
             MetricId::ProjectedDistance => "projected_distance_max",
@@ -90,12 +107,14 @@ impl MetricId {
         }
     }
 
-    /// Where the metric sits in `frond eval --json`: the two colour metrics under `coverage`,
+    /// Where the metric sits in `frond eval --json`: the coverage metrics under `coverage`,
     /// the others at the top level under their column name.
     pub fn json_path(self) -> &'static [&'static str] {
         match self {
             MetricId::CoverageStatic => &["coverage", "static"],
             MetricId::CoverageAnimated => &["coverage", "animated"],
+            MetricId::CoverageBinary => &["coverage", "binary"],
+            MetricId::CoverageFoliage => &["coverage", "foliage"],
             MetricId::ColourDifference => &["colour_difference"],
             MetricId::PlaneDistance => &["plane_distance"],
             MetricId::ProjectedDistance => &["projected_distance"],
@@ -109,8 +128,10 @@ impl MetricId {
     /// The metric in words, as chart axes name it.
     pub fn label(self) -> &'static str {
         match self {
-            MetricId::CoverageStatic => "static colour error",
-            MetricId::CoverageAnimated => "animated colour error",
+            MetricId::CoverageStatic => "static coverage error",
+            MetricId::CoverageAnimated => "animated coverage error",
+            MetricId::CoverageBinary => "binary coverage error (thesis)",
+            MetricId::CoverageFoliage => "foliage coverage error",
             MetricId::ColourDifference => "foreground colour difference",
             MetricId::PlaneDistance => "plane distance (world)",
             MetricId::ProjectedDistance => "projected distance (world)",
@@ -124,8 +145,10 @@ impl MetricId {
     /// A short heading for table columns (the sweep's `stability.md`).
     pub fn short_label(self) -> &'static str {
         match self {
-            MetricId::CoverageStatic => "static colour",
-            MetricId::CoverageAnimated => "animated colour",
+            MetricId::CoverageStatic => "static coverage",
+            MetricId::CoverageAnimated => "animated coverage",
+            MetricId::CoverageBinary => "binary coverage",
+            MetricId::CoverageFoliage => "foliage coverage",
             MetricId::ColourDifference => "colour diff",
             MetricId::PlaneDistance => "plane dist.",
             MetricId::ProjectedDistance => "projected dist.",
@@ -141,6 +164,8 @@ impl MetricId {
     pub fn definition(self) -> &'static str {
         match self {
             MetricId::CoverageStatic | MetricId::CoverageAnimated => COVERAGE_DEF,
+            MetricId::CoverageBinary => BINARY_DEF,
+            MetricId::CoverageFoliage => FOLIAGE_DEF,
             MetricId::ColourDifference => COLOUR_DEF,
             MetricId::PlaneDistance => PLANE_DEF,
             MetricId::ProjectedDistance => PROJECTED_DEF,
@@ -154,9 +179,10 @@ impl MetricId {
     /// The metric's unit or range (every metric: lower is better, 0 is a perfect match).
     pub fn unit(self) -> &'static str {
         match self {
-            MetricId::CoverageStatic | MetricId::CoverageAnimated => {
-                "differing pixels per original foliage pixel, 0–1"
+            MetricId::CoverageStatic | MetricId::CoverageAnimated | MetricId::CoverageFoliage => {
+                "covered area missing or extra per area the original covers, 0 up"
             }
+            MetricId::CoverageBinary => "differing pixels per original covered pixel, 0–1",
             MetricId::ColourDifference => "linear RGB, 0–1",
             MetricId::PlaneDistance | MetricId::ProjectedDistance | MetricId::EuclideanDistance => {
                 "world units"
@@ -205,6 +231,8 @@ mod tests {
                 Some(match id {
                     MetricId::CoverageStatic => "static",
                     MetricId::CoverageAnimated => "animated",
+                    MetricId::CoverageBinary => "binary",
+                    MetricId::CoverageFoliage => "foliage",
                     _ => id.column(),
                 })
             );

@@ -44,18 +44,25 @@ impl Metric {
     }
 }
 
-/// The static and animated colour (coverage) metric (§5.4).
+/// The coverage metrics (§5.4; [`crate::coverage`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CoverageMetrics {
     /// The first frame only ([`MetricId::CoverageStatic`]).
     #[serde(rename = "static")]
     pub static_: Metric,
-    /// Every frame ([`MetricId::CoverageAnimated`]).
+    /// Every frame ([`MetricId::CoverageAnimated`]): the coverage error.
     pub animated: Metric,
-    /// (view, frame) pairs of the animated metric discarded because they scored above 1 (the
+    /// The thesis' binary error on the same renders ([`MetricId::CoverageBinary`]).
+    pub binary: Metric,
+    /// The foliage alone ([`MetricId::CoverageFoliage`]).
+    pub foliage: Metric,
+    /// The coverage ratio over every frame: per pair the candidate's covered area over the
+    /// original's, then the mean (below 1 the candidate thins, above 1 it bloats).
+    pub ratio: f64,
+    /// (view, frame) pairs the binary error discarded because they scored above 1 (the
     /// thesis: no fidelity from that view) or the original covered no pixel.
     pub discarded_pairs: usize,
-    /// (view, frame) pairs of the animated metric.
+    /// (view, frame) pairs of the animated metrics.
     pub pairs: usize,
 }
 
@@ -86,9 +93,15 @@ pub struct EvalTimings {
     pub trajectories: f64,
 }
 
+/// The version of the eval report's layout: raised whenever a field changes meaning.
+pub const EVAL_SCHEMA_VERSION: u32 = 2;
+
 /// The report (`frond eval --json`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EvalReport {
+    /// The layout's version ([`EVAL_SCHEMA_VERSION`]; 1 for reports written before it).
+    #[serde(default = "first_version")]
+    pub schema_version: u32,
     /// The original's file.
     pub original: String,
     /// The candidate's file.
@@ -97,12 +110,22 @@ pub struct EvalReport {
     pub clip: Option<String>,
     /// Samples over the loop of the trajectory metrics.
     pub samples: usize,
-    /// Ring views of the colour metric.
+    /// Views per ring of the coverage metrics.
     pub views: u32,
-    /// Frames of the animated colour metric.
+    /// The rings' elevations, degrees.
+    pub elevations_deg: Vec<f32>,
+    /// Frames of the animated coverage metrics.
     pub frames: u32,
-    /// Image size of the colour metric.
+    /// The screen height the tree was seen at: its rest height spans this many pixels.
+    pub screen_height: f32,
+    /// The screen's vertical field of view, degrees.
+    pub fov_deg: f32,
+    /// The screen's height, pixels.
+    pub resolution: f32,
+    /// Image size of the coverage metrics, pixels.
     pub size: [u32; 2],
+    /// Samples per pixel side, `K`.
+    pub samples_per_side: u32,
     /// Distances below are in world units; this is the original's height for scale.
     pub tree_height: f32,
     /// [`MetricId::CoverageStatic`] and [`MetricId::CoverageAnimated`].
@@ -136,6 +159,11 @@ pub struct EvalReport {
     pub timings_s: EvalTimings,
 }
 
+/// The schema version of a report written before versions were.
+fn first_version() -> u32 {
+    1
+}
+
 /// NaN: what a float field the JSON lacks reads as.
 fn not_a_number() -> f64 {
     f64::NAN
@@ -152,6 +180,8 @@ impl EvalReport {
         match id {
             MetricId::CoverageStatic => &self.coverage.static_,
             MetricId::CoverageAnimated => &self.coverage.animated,
+            MetricId::CoverageBinary => &self.coverage.binary,
+            MetricId::CoverageFoliage => &self.coverage.foliage,
             MetricId::ColourDifference => &self.colour_difference,
             MetricId::PlaneDistance => &self.plane_distance,
             MetricId::ProjectedDistance => &self.projected_distance,
@@ -171,20 +201,29 @@ mod tests {
     fn report() -> EvalReport {
         let m = |id: MetricId| Metric::skipped(id, id.column());
         EvalReport {
+            schema_version: EVAL_SCHEMA_VERSION,
             original: "a.glb".into(),
             candidate: "b.glb".into(),
             clip: None,
             samples: 4,
             views: 5,
+            elevations_deg: vec![0.0, 30.0],
             frames: 5,
+            screen_height: 60.0,
+            fov_deg: 60.0,
+            resolution: 1080.0,
             size: [8, 6],
+            samples_per_side: 17,
             tree_height: 1.0,
             colour_shift: 0.0,
             coverage: CoverageMetrics {
                 static_: m(MetricId::CoverageStatic),
                 animated: m(MetricId::CoverageAnimated),
+                binary: m(MetricId::CoverageBinary),
+                foliage: m(MetricId::CoverageFoliage),
+                ratio: 1.0,
                 discarded_pairs: 0,
-                pairs: 25,
+                pairs: 50,
             },
             colour_difference: m(MetricId::ColourDifference),
             plane_distance: m(MetricId::PlaneDistance),

@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use frond_lod::switching::SwitchValues;
 use frond_lod::{LodEntry, LodReport};
-use frond_metrics::candidate_clip;
+use frond_metrics::{DEFAULT_FOV_DEG, candidate_clip};
 use frond_render::{DrawScene, Frame, PosedTree, Renderer, TreeParts};
 use frond_scene::{FileCost, Tree};
 
@@ -16,7 +16,7 @@ use crate::error::PreviewError;
 use crate::html::{esc, figure, href, page};
 use crate::stills::{
     EXTRA, MISSING, PixelDifference, apng, atlas_png, covered_box, crop, difference, png,
-    preview_camera, render_pose, still_size,
+    preview_view, render_pose,
 };
 use crate::units;
 use crate::viewer::{
@@ -110,7 +110,6 @@ pub fn lod_pictures(
             given: 0,
         });
     };
-    let camera = preview_camera(lod0)?;
     // LOD0 at the start of its clip: the reference every LOD's still is compared with.
     let (clip0, start0) = clip_start(lod0, report.clip.as_deref());
     let reference = PosedTree::new(lod0, clip0, start0, TreeParts::All);
@@ -130,7 +129,7 @@ pub fn lod_pictures(
             scene: reference.scene(),
             still: lod0_still.as_ref(),
         };
-        let (p, still) = lod_pictures_of(renderer, req, &camera, reference, k, h, &dir)?;
+        let (p, still) = lod_pictures_of(renderer, req, reference, k, h, &dir)?;
         if k == 0 {
             lod0_still = Some(still);
         }
@@ -212,7 +211,6 @@ pub fn lod_page(
 fn lod_pictures_of(
     renderer: &Renderer,
     req: &LodPreviewRequest,
-    camera: &frond_render::Camera,
     reference: Reference,
     k: usize,
     h: f32,
@@ -221,7 +219,13 @@ fn lod_pictures_of(
     let report = req.report;
     let tree = req.lods[k];
     let (clip, start) = clip_start(tree, report.clip.as_deref());
-    let size = still_size(h);
+    let (fov, resolution) = report
+        .switching
+        .map_or((DEFAULT_FOV_DEG, req.resolution), |v| {
+            (v.fov_deg, v.resolution)
+        });
+    let (camera, size) = preview_view(req.lods[0], h, fov, resolution)?;
+    let camera = &camera;
     let mut posed = PosedTree::new(tree, clip, start, TreeParts::All);
     let still = render_pose(renderer, tree, posed.scene(), camera, size, "still")?;
     let mut files = Vec::new();
@@ -276,7 +280,7 @@ fn lod_pictures_of(
             "a still",
         )?,
     ));
-    let flip_size = still_size(h.min(FLIP_HEIGHT));
+    let (flip_camera, flip_size) = preview_view(req.lods[0], h.min(FLIP_HEIGHT), fov, resolution)?;
     // A frame of a LOD this heavy costs half a second on a CPU renderer: fewer of them keep
     // the preview under a tenth of the run (the 1M-triangle preset: 12 % with 12 frames).
     let heavy = tree.triangles.len() > HEAVY_TRIANGLES;
@@ -290,7 +294,14 @@ fn lod_pictures_of(
         .map(|i| {
             let t = start + report.period * i as f32 / n as f32;
             let scene = posed.pose(clip, t);
-            render_pose(renderer, tree, scene, camera, flip_size, "flip-book frame")
+            render_pose(
+                renderer,
+                tree,
+                scene,
+                &flip_camera,
+                flip_size,
+                "flip-book frame",
+            )
         })
         .collect::<Result<_, _>>()?;
     let delay = (1000.0 * report.period / n as f32)

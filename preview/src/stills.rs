@@ -2,7 +2,7 @@
 //! LOD0 from the same camera, the difference of the two, the wind loop as an animated PNG, and
 //! the LOD's atlas.
 
-use frond_metrics::{CoverageParams, image_for_screen_height, view_camera};
+use frond_metrics::{CoverageParams, framing};
 use frond_render::{Camera, DrawScene, Frame, Renderer};
 use frond_scene::Tree;
 use glam::Vec3;
@@ -12,29 +12,35 @@ use crate::error::PreviewError;
 /// Elevation of the preview camera in degrees: a little above the tree, as a player stands.
 const ELEVATION_DEG: f32 = 8.0;
 
-/// The one camera every still of a chain is seen from: view 0 of the coverage metric's ring
-/// ([`view_camera`]), raised by 8°, framing the input's rest bounds so LOD0 and
-/// every LOD line up pixel for pixel.
-pub fn preview_camera(input: &Tree) -> Result<Camera, PreviewError> {
+/// The camera and image size a chain's stills at `screen_height` are seen with: the coverage
+/// metric's framing ([`frond_metrics::framing`]) of the input's rest bounds at that size on the
+/// switch values' screen (`fov_deg`, `resolution`), one view raised by 8°, so the tree stands
+/// `screen_height` pixels tall as the engine shows it and LOD0 and every LOD line up pixel for
+/// pixel.
+pub fn preview_view(
+    input: &Tree,
+    screen_height: f32,
+    fov_deg: f32,
+    resolution: f32,
+) -> Result<(Camera, (u32, u32)), PreviewError> {
     let params = CoverageParams {
-        elevation_deg: ELEVATION_DEG,
+        views: 1,
+        elevations_deg: vec![ELEVATION_DEG],
+        screen_height: screen_height.max(1.0),
+        fov_y_deg: fov_deg,
+        resolution,
         ..Default::default()
     };
-    view_camera(
+    let f = framing(
         Vec3::from(input.bounds.min),
         Vec3::from(input.bounds.max),
-        0,
         &params,
     )
     .map_err(|source| PreviewError::Camera {
         file: input.source.display().to_string(),
         source,
-    })
-}
-
-/// The image in which the tree stands `screen_height` pixels high (the metric's 4:3 image).
-pub fn still_size(screen_height: f32) -> (u32, u32) {
-    image_for_screen_height(screen_height.round().max(1.0) as u32)
+    })?;
+    Ok((f.cameras[0], (f.width, f.height)))
 }
 
 /// A posed tree's scene (`tree` names it in errors), mip-mapped as engines sample textures, on

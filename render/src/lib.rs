@@ -63,7 +63,7 @@ pub use pipeline::{LIGHT_DIRECTION, alpha_mip_chain, linear_mip_chain, mip_chain
 pub use renderer::{Output, Renderer};
 pub use scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
 pub use software::{
-    CoverageImage, Lighting, SoftwareTextures, depth_complexity, render_coverage,
+    CoverageImage, Lighting, MAX_SUPERSAMPLE, SoftwareTextures, depth_complexity, render_coverage,
     render_coverage_with_depth,
 };
 pub use srgb::{SRGB_LINEAR, linear_to_srgb, srgb_to_linear};

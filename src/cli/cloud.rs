@@ -10,7 +10,6 @@ use crate::cli::progress::{Spinner, print_json};
 use crate::cli::values::BakeRasteriserArg;
 use frond_app::cloud_cmd::{CloudRequest, run_cloud};
 use frond_app::lod_settings::BakeRasteriser;
-use frond_app::render_cmd::parse_size;
 use frond_billboard::cloud::CloudParams;
 use frond_billboard::plane_search::SearchParams;
 use frond_render::Renderer;
@@ -58,9 +57,10 @@ pub struct CloudArgs {
     /// Views of the coverage check (0 skips it).
     #[arg(long, default_value_t = 5)]
     pub coverage_views: u32,
-    /// Image size of the coverage check.
-    #[arg(long, default_value = "800x600")]
-    pub coverage_size: String,
+    /// Screen height of the coverage check: the tree's rest height spans this many pixels of
+    /// a 1080-pixel screen with a 60° vertical field of view.
+    #[arg(long, default_value_t = 600.0)]
+    pub coverage_height: f32,
     /// Use the plain O(planes·S·triangles) search (for comparison).
     #[arg(long)]
     pub plain: bool,
@@ -94,7 +94,7 @@ impl CloudArgs {
             max_atlas,
             bake_rasteriser,
             coverage_views,
-            coverage_size,
+            coverage_height,
             plain,
             output,
             json,
@@ -126,7 +126,7 @@ impl CloudArgs {
             samples,
             clip,
             coverage_views,
-            coverage_size: parse_size(&coverage_size)?,
+            coverage_height,
         };
         let bar = Spinner::start();
         bar.say(&format!(

@@ -9,7 +9,6 @@ use crate::cli::args::ImportArgs;
 use crate::cli::progress::{Spinner, print_json};
 use crate::cli::values::LightingArg;
 use frond_app::eval_cmd::{Costs, EvalSettings, run_eval};
-use frond_app::render_cmd::parse_size;
 use frond_scene::input_file::human_bytes;
 
 /// `frond eval`.
@@ -27,12 +26,16 @@ pub struct EvalArgs {
     /// Frames of the animated colour metric, uniform over the loop.
     #[arg(long, default_value_t = 5)]
     pub frames: u32,
-    /// Image size of the colour metric (default 800x600).
-    #[arg(long, conflicts_with = "screen_height")]
-    pub size: Option<String>,
-    /// Size the images for a tree seen this many pixels high (the LOD's size), 4:3.
-    #[arg(long)]
-    pub screen_height: Option<u32>,
+    /// Judge the candidate with the tree seen this many pixels high (its rest height on
+    /// screen, as `frond lod` sizes LODs): a LOD at its own size.
+    #[arg(long, default_value_t = 600.0)]
+    pub screen_height: f32,
+    /// Vertical field of view of the screen, degrees (as `frond lod --fov`).
+    #[arg(long, default_value_t = 60.0)]
+    pub fov: f32,
+    /// Height of the screen, pixels (as `frond lod --resolution`).
+    #[arg(long, default_value_t = 1080.0)]
+    pub resolution: f32,
     /// Samples over the loop for the trajectory metrics.
     #[arg(long, default_value_t = 64)]
     pub samples: usize,
@@ -63,8 +66,9 @@ impl EvalArgs {
             read: self.import.read(),
             views: self.views,
             frames: self.frames,
-            size: self.size.as_deref().map(parse_size).transpose()?,
             screen_height: self.screen_height,
+            fov: self.fov,
+            resolution: self.resolution,
             samples: self.samples,
             clip: self.clip.clone(),
             white_albedo: self.white_albedo,

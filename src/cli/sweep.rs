@@ -133,7 +133,10 @@ impl SweepArgs {
         let eval = EvalRequest {
             views,
             frames,
-            size: (800, 600),
+            // Each row is judged at its own screen height (`SweepRow::screen_height`).
+            screen_height: screen_height.max(1.0),
+            fov_deg: lod.fov,
+            resolution: lod.resolution,
             samples,
             clip,
             limits: import.limits.limits(),

@@ -306,7 +306,7 @@ fn build_into(
             let tag = format!("eval{k}");
             let eval = ChildRequest::Eval(EvalSettings {
                 read: reading(ctx, overrides),
-                screen_height: Some(h.round().max(1.0) as u32),
+                screen_height: h,
                 samples: overrides.samples.unwrap_or(64),
                 clip: overrides.clip.clone(),
                 ..EvalSettings::defaults(&input, Path::new(&l.file))

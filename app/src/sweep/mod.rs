@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::child_job::{JobEnd, run_job};
 use crate::child_request::ChildRequest;
-use crate::eval_cmd::{EvalContext, EvalRequest, image_for_screen_height, same_bytes};
+use crate::eval_cmd::{EvalContext, EvalRequest, same_bytes};
 use crate::lod_cmd::lod_name;
 use crate::lod_settings::{LodSettings, MethodChoice, Sampling};
 use crate::out_folder::{OutFolder, write_atomic};
@@ -282,9 +282,8 @@ fn evaluate_into(ctx: &mut EvalContext, row: &mut Row, candidate: &Path, dir: &P
             return Ok(());
         }
     };
-    let size = image_for_screen_height(row.screen_height.round().max(1.0) as u32);
     let same_file = same_bytes(ctx.original_path(), candidate);
-    let report = match ctx.evaluate(&cand, same_file, size) {
+    let report = match ctx.evaluate(&cand, same_file, row.screen_height) {
         Ok(r) => r,
         Err(e) => {
             // Through anyhow, whose `{:#}` prints the causes too.

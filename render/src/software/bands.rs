@@ -13,6 +13,9 @@ use crate::scene::DrawScene;
 /// Most samples per side of the supersampled image (coordinates stay exact in `f32`).
 pub(crate) const MAX_SIDE: u64 = 1 << 15;
 
+/// Most samples per pixel side: a pixel's covered samples are counted in 16 bits.
+pub const MAX_SUPERSAMPLE: u32 = 255;
+
 /// Pixel rows per band: the unit of parallel work and of memory (one band's samples per
 /// thread).
 pub(crate) const BAND_PIXELS: usize = 16;
@@ -31,13 +34,13 @@ pub(crate) fn checked_target(
         u64::from(width) * u64::from(ss),
         u64::from(height) * u64::from(ss),
     );
-    if width == 0 || height == 0 || sw > MAX_SIDE || sh > MAX_SIDE {
+    if width == 0 || height == 0 || sw > MAX_SIDE || sh > MAX_SIDE || ss > MAX_SUPERSAMPLE {
         return Err(RenderError::InvalidSize {
             width,
             height,
             reason: format!(
                 "both sides must be at least 1 pixel and at most {MAX_SIDE} samples \
-                 ({supersample}x supersampled)"
+                 ({supersample}x supersampled, at most {MAX_SUPERSAMPLE}x)"
             ),
         });
     }

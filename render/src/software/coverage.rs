@@ -18,11 +18,28 @@ pub struct CoverageImage {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// `width · height` flags: at least half of the pixel's samples passed the alpha test.
-    pub covered: Vec<bool>,
+    /// Samples of each pixel (`supersample²`).
+    pub samples_per_pixel: u32,
+    /// `width · height` counts: how many of the pixel's samples are covered (passed the alpha
+    /// test of something drawn there).
+    pub samples: Vec<u16>,
     /// `width · height` mean linear RGB of the pixel's covered samples (zero where none is);
     /// empty unless colour was asked for ([`SoftwareTextures::new`]).
     pub colour: Vec<[f32; 3]>,
+}
+
+impl CoverageImage {
+    /// The fraction of pixel `i`'s samples covered, 0..1: what MSAA, alpha-to-coverage or a
+    /// distant eye shows of it.
+    pub fn covered_fraction(&self, i: usize) -> f32 {
+        f32::from(self.samples[i]) / self.samples_per_pixel as f32
+    }
+
+    /// Whether at least half of pixel `i`'s samples are covered (spec
+    /// animated-billboard-clouds §5.4's binary pixel).
+    pub fn is_covered(&self, i: usize) -> bool {
+        2 * u32::from(self.samples[i]) >= self.samples_per_pixel
+    }
 }
 
 /// Renders `scene` through `view_proj` (wgpu clip space, as [`crate::Renderer::render_view`])
@@ -66,8 +83,7 @@ pub fn depth_complexity(
 }
 
 /// [`render_coverage`] and [`depth_complexity`] of the same render at once: the same mask, and
-/// the same depth complexity (its pixels are not saturated, so the covered samples are
-/// counted exactly). The metric's first (view, frame) pair gives both, one render fewer.
+/// the same depth complexity. The metric's first (view, frame) pair gives both, one render fewer.
 pub fn render_coverage_with_depth(
     scene: &DrawScene,
     textures: &SoftwareTextures,
@@ -81,10 +97,7 @@ pub fn render_coverage_with_depth(
         textures,
         view_proj,
         [width, height, supersample],
-        Shortcuts {
-            saturate: false,
-            ..Shortcuts::ALL
-        },
+        Shortcuts::ALL,
     )?;
     let depth = if covered == 0 {
         0.0
@@ -94,8 +107,7 @@ pub fn render_coverage_with_depth(
     Ok((image, depth))
 }
 
-/// [`render_coverage`], the drawn triangles' area in samples, and the samples covered (all
-/// of a decided pixel's when `shortcuts.saturate`, see [`Raster::saturate`]).
+/// [`render_coverage`], the drawn triangles' area in samples, and the samples covered.
 pub(super) fn rasterise(
     scene: &DrawScene,
     textures: &SoftwareTextures,
@@ -115,12 +127,13 @@ pub(super) fn rasterise(
     let mut image = CoverageImage {
         width,
         height,
-        covered: Vec::with_capacity(width as usize * height as usize),
+        samples_per_pixel: ss * ss,
+        samples: Vec::with_capacity(width as usize * height as usize),
         colour: Vec::new(),
     };
     let mut covered_samples = 0;
     for band in resolved {
-        image.covered.extend(band.mask);
+        image.samples.extend(band.samples);
         image.colour.extend(band.colour);
         covered_samples += band.covered_samples;
     }
@@ -160,7 +173,7 @@ mod tests {
         assert_eq!(count(&half), 600);
         assert!(half.colour.is_empty(), "no colour asked for");
         // The left half, row by row.
-        assert!((0..30).all(|y| (0..40).all(|x| half.covered[y * 40 + x] == (x < 20))));
+        assert!((0..30).all(|y| (0..40).all(|x| half.is_covered(y * 40 + x) == (x < 20))));
     }
 
     #[test]
@@ -336,7 +349,7 @@ mod tests {
         // z crosses 0 at y = 0: the upper half stays.
         let image = render(&scene, false, 2);
         assert_eq!(count(&image), 600);
-        assert!(image.covered[0] && !image.covered[1199]);
+        assert!(image.is_covered(0) && !image.is_covered(1199));
     }
 
     #[test]
@@ -386,7 +399,7 @@ mod tests {
             render_coverage(&scene, t, Mat4::IDENTITY, 60, 40, 2).expect("render")
         };
         let image = draw(&colour);
-        let covered = image.covered.iter().filter(|c| **c).count();
+        let covered = count(&image);
         assert!(
             covered > 100 && covered < 60 * 40,
             "{covered} pixels covered"

@@ -45,6 +45,7 @@ pub(crate) mod spans;
 mod test_scenes;
 pub(crate) mod textures;
 
+pub use bands::MAX_SUPERSAMPLE;
 pub use coverage::{CoverageImage, depth_complexity, render_coverage, render_coverage_with_depth};
 pub use shading::Lighting;
 pub use textures::SoftwareTextures;

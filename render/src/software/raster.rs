@@ -18,12 +18,9 @@ use crate::srgb::SRGB_LINEAR;
 use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
 
 /// The shortcuts a coverage render takes, each giving the same image (tests compare them):
-/// see [`Raster::saturate`], [`Raster::lanes`], [`Raster::hulls`] and
-/// [`Raster::covered_rows`].
+/// see [`Raster::lanes`], [`Raster::hulls`] and [`Raster::covered_rows`].
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Shortcuts {
-    /// Mark a decided pixel's other samples covered ([`Raster::saturate`]).
-    pub(super) saturate: bool,
     /// Test eight samples at once where the machine can ([`Raster::lanes`]).
     pub(super) lanes: bool,
     /// Walk only where the alpha test can pass ([`Raster::hulls`]).
@@ -35,7 +32,6 @@ pub(super) struct Shortcuts {
 impl Shortcuts {
     /// Every shortcut: what the renders take.
     pub(super) const ALL: Shortcuts = Shortcuts {
-        saturate: true,
         lanes: true,
         hulls: true,
         covered_rows: true,
@@ -44,11 +40,11 @@ impl Shortcuts {
 
 /// One band of the image, resolved: its pixels' coverage and colour, and its covered samples.
 pub(super) struct Band {
-    /// Per pixel of the band, top row first: at least half of its samples are covered.
-    pub(super) mask: Vec<bool>,
+    /// Per pixel of the band, top row first: how many of its samples are covered.
+    pub(super) samples: Vec<u16>,
     /// Per pixel, the mean colour of its covered samples (colour renders; empty otherwise).
     pub(super) colour: Vec<[f32; 3]>,
-    /// The band's covered samples (with saturation, a decided pixel's count whole).
+    /// The band's covered samples.
     pub(super) covered_samples: u64,
 }
 
@@ -77,17 +73,11 @@ pub(super) struct Raster<'a> {
     width: usize,
     /// Samples per pixel side.
     ss: usize,
-    /// Coverage without colour, the mask alone wanted: once half of a pixel's samples are
-    /// covered the pixel is (the resolve's rule) and its other samples are marked covered too,
-    /// so the leaf cards drawn over it later skip them instead of alpha-testing each (the
-    /// same mask; the covered-sample count is then not the true one).
-    saturate: bool,
 }
 
 impl<'a> Raster<'a> {
     /// The raster of `bands` (set up from `scene` for a target `width` samples wide, `ss` a
-    /// pixel side), with the `shortcuts` asked for: `saturate` when the mask alone is wanted
-    /// (see [`Raster::saturate`]), `lanes` to test eight samples at once where the machine
+    /// pixel side), with the `shortcuts` asked for: `lanes` to test eight samples at once where the machine
     /// can, `hulls` to walk only the parts of triangles where the alpha test can pass,
     /// `covered_rows` to skip rows covered already.
     pub(super) fn new(
@@ -97,7 +87,6 @@ impl<'a> Raster<'a> {
         width: usize,
         ss: usize,
         Shortcuts {
-            saturate,
             lanes,
             hulls,
             covered_rows,
@@ -121,7 +110,6 @@ impl<'a> Raster<'a> {
             shading: &bands.shading,
             width,
             ss,
-            saturate: saturate && !textures.colour,
         }
     }
 
@@ -156,9 +144,9 @@ impl<'a> Raster<'a> {
         for &ti in bin {
             self.draw_triangle(&mut band, ti);
         }
-        let (mask, colour) = self.resolve(y1 - y0, &band.covered, &band.rgb);
+        let (samples, colour) = self.resolve(y1 - y0, &band.covered, &band.rgb);
         Band {
-            mask,
+            samples,
             colour,
             covered_samples: band.covered.iter().map(|w| u64::from(w.count_ones())).sum(),
         }
@@ -290,7 +278,7 @@ impl<'a> Raster<'a> {
                 while hits != 0 {
                     let i = hits.trailing_zeros() as usize;
                     hits &= hits - 1;
-                    self.cover(&mut band.covered, &mut band.pixel_count, row, x + i);
+                    self.cover(&mut band.covered, row, x + i);
                 }
             }
             x += 8;
@@ -327,10 +315,6 @@ impl<'a> Raster<'a> {
             while todo != 0 {
                 let bit = todo.trailing_zeros() as usize;
                 todo &= todo - 1;
-                // A pixel decided since `todo` was read (saturation) needs no test.
-                if self.saturate && band.covered[row_word + word] >> bit & 1 == 1 {
-                    continue;
-                }
                 self.draw_sample(band, t, surface, span, word * 64 + bit);
             }
             sx = run_end + 1;
@@ -367,7 +351,7 @@ impl<'a> Raster<'a> {
         {
             return;
         }
-        self.cover(&mut band.covered, &mut band.pixel_count, row, x);
+        self.cover(&mut band.covered, row, x);
         if band.colour {
             band.depth[s] = z;
             let lighting = self.textures.lighting;
@@ -376,26 +360,11 @@ impl<'a> Raster<'a> {
     }
 
     /// Marks sample `x` of the band's sample row `row` covered (`covered`: the band's bits, 64
-    /// to a word) and, when saturating, counts it for its pixel (`pixel_count`, the band's),
-    /// marking the pixel's other samples once half of them are.
+    /// to a word).
     #[inline(always)]
-    fn cover(&self, covered: &mut [u64], pixel_count: &mut [u32], row: usize, x: usize) {
+    fn cover(&self, covered: &mut [u64], row: usize, x: usize) {
         let words = self.width.div_ceil(64);
         covered[row * words + x / 64] |= 1 << (x % 64);
-        if self.saturate {
-            let ss = self.ss;
-            let (py, px) = (row / ss, x / ss);
-            let count = &mut pixel_count[py * (self.width / ss) + px];
-            *count += 1;
-            // `2·count ≥ ss²`, the resolve's rule, first holds at this count.
-            if *count as usize == (ss * ss).div_ceil(2) {
-                for r in py * ss..(py + 1) * ss {
-                    for c in px * ss..(px + 1) * ss {
-                        covered[r * words + c / 64] |= 1 << (c % 64);
-                    }
-                }
-            }
-        }
     }
 
     /// What the octagon of coverage render triangle `t`'s levels (`t` with its mip levels,
@@ -486,41 +455,63 @@ impl<'a> Raster<'a> {
     }
 
     /// Pixels of a band of `rows` sample rows (`covered`: bits, 64 to a word, rows padded to
-    /// whole words): covered when at least half of their samples are, colour the mean of the
-    /// covered samples'.
-    fn resolve(&self, rows: usize, covered: &[u64], rgb: &[Vec3]) -> (Vec<bool>, Vec<[f32; 3]>) {
+    /// whole words): how many of their samples are covered, and the mean colour of those.
+    fn resolve(&self, rows: usize, covered: &[u64], rgb: &[Vec3]) -> (Vec<u16>, Vec<[f32; 3]>) {
         let ss = self.ss;
         let words = self.width.div_ceil(64);
         let (w, h) = (self.width / ss, rows / ss);
-        let mut mask = Vec::with_capacity(w * h);
-        let mut colour = Vec::with_capacity(if rgb.is_empty() { 0 } else { w * h });
+        let mut samples = vec![0u16; w * h];
+        for y in 0..rows {
+            let row = &covered[y * words..(y + 1) * words];
+            let counts = &mut samples[(y / ss) * w..(y / ss + 1) * w];
+            for (px, count) in counts.iter_mut().enumerate() {
+                // At most 255² samples a pixel ([`checked_target`](super::bands::checked_target)).
+                *count += bits_set(row, px * ss, ss) as u16;
+            }
+        }
+        if rgb.is_empty() {
+            return (samples, Vec::new());
+        }
+        let mut colour = Vec::with_capacity(w * h);
         for py in 0..h {
             for px in 0..w {
-                let (mut count, mut sum) = (0usize, Vec3::ZERO);
-                for dy in 0..ss {
-                    let y = py * ss + dy;
+                let mut sum = Vec3::ZERO;
+                for y in py * ss..(py + 1) * ss {
                     for x in px * ss..(px + 1) * ss {
                         if covered[y * words + x / 64] >> (x % 64) & 1 == 1 {
-                            count += 1;
-                            if !rgb.is_empty() {
-                                sum += rgb[y * self.width + x];
-                            }
+                            sum += rgb[y * self.width + x];
                         }
                     }
                 }
-                mask.push(2 * count >= ss * ss);
-                if !rgb.is_empty() {
-                    let mean = if count > 0 {
-                        sum / count as f32
-                    } else {
-                        Vec3::ZERO
-                    };
-                    colour.push(mean.to_array());
-                }
+                let count = samples[py * w + px];
+                let mean = if count > 0 {
+                    sum / f32::from(count)
+                } else {
+                    Vec3::ZERO
+                };
+                colour.push(mean.to_array());
             }
         }
-        (mask, colour)
+        (samples, colour)
     }
+}
+
+/// The set bits of `row` (64 to a word, lowest first) among the `len` from bit `start`.
+#[inline]
+fn bits_set(row: &[u64], start: usize, len: usize) -> u32 {
+    let (mut x, end, mut n) = (start, start + len, 0);
+    while x < end {
+        let (word, shift) = (x / 64, x % 64);
+        let take = (64 - shift).min(end - x);
+        let mask = if take == 64 {
+            u64::MAX
+        } else {
+            ((1u64 << take) - 1) << shift
+        };
+        n += (row[word] & mask).count_ones();
+        x += take;
+    }
+    n
 }
 
 /// One band being drawn: its sample buffers, and what every sample's shading reads.
@@ -540,8 +531,6 @@ struct BandBuffers {
     depth: Vec<f32>,
     /// Per sample, the colour drawn there (colour renders; empty otherwise).
     rgb: Vec<Vec3>,
-    /// Per pixel of the band, its covered samples (when saturating).
-    pixel_count: Vec<u32>,
     /// sRGB to linear light, a byte's value.
     linear: &'static [f32; 256],
     /// The light's direction ([`LIGHT_DIRECTION`]).
@@ -572,11 +561,6 @@ impl BandBuffers {
             } else {
                 Vec::new()
             },
-            pixel_count: if raster.saturate {
-                vec![0u32; (rows / raster.ss) * (raster.width / raster.ss)]
-            } else {
-                Vec::new()
-            },
             linear: &SRGB_LINEAR,
             light: Vec3::from(LIGHT_DIRECTION),
         }
@@ -596,7 +580,7 @@ mod tests {
     use glam::Mat4;
 
     use super::*;
-    use crate::scene::{DrawMaterial, DrawMesh, DrawTexture};
+    use crate::scene::DrawMaterial;
     use crate::software::coverage::rasterise;
     use crate::software::test_scenes::{count, quad, random_cards};
 
@@ -630,34 +614,26 @@ mod tests {
                         }] += 1;
                     }
                 }
-                for saturate in [true, false] {
-                    let draw = |lanes, hulls| {
-                        let shortcuts = Shortcuts {
-                            saturate,
-                            lanes,
-                            hulls,
-                            covered_rows: lanes || hulls,
-                        };
-                        rasterise(&scene, &textures, view_proj, [w, h, ss], shortcuts)
-                            .expect("render")
+                let draw = |lanes, hulls| {
+                    let shortcuts = Shortcuts {
+                        lanes,
+                        hulls,
+                        covered_rows: lanes || hulls,
                     };
-                    let plain = draw(false, false);
-                    let what = format!("{cards} cards, {w}x{h}, {ss}x, saturate {saturate}");
-                    assert!(count(&plain.0) > 0, "{what}: nothing drawn");
-                    for (lanes, hulls) in [(false, true), (true, false), (true, true)] {
-                        if lanes && !lanes_available {
-                            continue;
-                        }
-                        let other = draw(lanes, hulls);
-                        let what = format!("{what}, lanes {lanes}, octagons {hulls}");
-                        let differ = (plain.0.covered.iter())
-                            .zip(&other.0.covered)
-                            .filter(|(a, b)| a != b)
-                            .count();
-                        assert_eq!(differ, 0, "{what}: pixels that differ");
-                        assert_eq!(plain.1, other.1, "{what}: area");
-                        assert_eq!(plain.2, other.2, "{what}: covered samples");
+                    rasterise(&scene, &textures, view_proj, [w, h, ss], shortcuts).expect("render")
+                };
+                let plain = draw(false, false);
+                let what = format!("{cards} cards, {w}x{h}, {ss}x");
+                assert!(count(&plain.0) > 0, "{what}: nothing drawn");
+                for (lanes, hulls) in [(false, true), (true, false), (true, true)] {
+                    if lanes && !lanes_available {
+                        continue;
                     }
+                    let other = draw(lanes, hulls);
+                    let what = format!("{what}, lanes {lanes}, octagons {hulls}");
+                    assert!(plain.0.samples == other.0.samples, "{what}: pixels differ");
+                    assert_eq!(plain.1, other.1, "{what}: area");
+                    assert_eq!(plain.2, other.2, "{what}: covered samples");
                 }
                 if !lanes_available {
                     continue;
@@ -699,58 +675,43 @@ mod tests {
         );
     }
 
-    /// Marking a decided pixel's samples covered changes no mask: many overlapping
-    /// alpha-tested quads (a noisy alpha, offset and sloped) at several supersamplings.
+    /// Each pixel counts its covered samples: a quad's edge covers the pixel it crosses by
+    /// the fraction of its sample columns left of the edge, at
+    /// supersamplings from 1 to 128 (a pixel of more than one word of samples).
     #[test]
-    fn saturated_pixels_give_the_same_mask() {
-        let (w, h) = (23u32, 17u32);
-        let rgba: Vec<u8> = (0..w * h)
-            .flat_map(|i| {
-                let a = (i.wrapping_mul(2_654_435_761) >> 24) as u8;
-                [90, 160, 40, a]
-            })
-            .collect();
-        let meshes: Vec<DrawMesh> = (0..12)
-            .map(|k| {
-                let x0 = -1.0 + 0.13 * k as f32;
-                let mut m = quad(x0, x0 + 0.9, 0.2 + 0.05 * k as f32, k % 3 == 0, 0);
-                m.positions[2][1] -= 0.1 * k as f32;
-                m
-            })
-            .collect();
+    fn pixels_count_their_covered_samples() {
         let scene = DrawScene {
-            meshes,
-            materials: vec![DrawMaterial {
-                texture: Some(0),
-                alpha_cutoff: Some(0.5),
-                double_sided: true,
-                ..DrawMaterial::opaque([1.0; 4])
-            }],
-            textures: vec![DrawTexture {
-                width: w,
-                height: h,
-                rgba,
-            }],
+            meshes: vec![quad(-1.0, 0.08, 0.5, false, 0)],
+            materials: vec![DrawMaterial::opaque([1.0; 4])],
+            textures: vec![],
         };
         let textures = SoftwareTextures::new(&scene, false).expect("textures");
-        for ss in [1, 2, 3, 4] {
-            let size = [61, 47, ss];
-            let saturated =
-                rasterise(&scene, &textures, Mat4::IDENTITY, size, Shortcuts::ALL).expect("r");
-            let shortcuts = Shortcuts {
-                saturate: false,
-                ..Shortcuts::ALL
-            };
-            let exact = rasterise(&scene, &textures, Mat4::IDENTITY, size, shortcuts).expect("r");
-            assert_eq!(saturated.0.covered, exact.0.covered, "{ss}x");
-            let covered = exact.0.covered.iter().filter(|&&c| c).count();
-            assert!(covered > 100 && covered < 61 * 47, "{ss}x: {covered}");
-            // Only the count of covered samples grows (the decided pixels' other samples).
-            if ss > 1 {
-                assert!(saturated.2 > exact.2, "{ss}x: saturation never acted");
-            } else {
-                assert_eq!(saturated.2, exact.2);
+        for ss in [1u32, 2, 5, 64, 100, 128] {
+            let (image, _, covered) = rasterise(
+                &scene,
+                &textures,
+                Mat4::IDENTITY,
+                [10, 3, ss],
+                Shortcuts::ALL,
+            )
+            .expect("render");
+            assert_eq!(image.samples_per_pixel, ss * ss);
+            // x = 0.08 in clip space is 5.4 pixels from the left: pixel 5's sample columns at
+            // (j + ½)/ss are covered while left of 0.4.
+            let left = (0..ss)
+                .filter(|&j| (j as f32 + 0.5) / (ss as f32) < 0.4)
+                .count();
+            let row: Vec<f32> = (0..10).map(|x| image.covered_fraction(x)).collect();
+            for (x, f) in row.iter().enumerate() {
+                let expected = match x {
+                    0..5 => 1.0,
+                    5 => (left as u32 * ss) as f32 / (ss * ss) as f32,
+                    _ => 0.0,
+                };
+                assert_eq!(*f, expected, "{ss}x, pixel {x}: {row:?}");
             }
+            let per_row: u64 = image.samples[..10].iter().map(|&n| u64::from(n)).sum();
+            assert_eq!(covered, 3 * per_row, "{ss}x");
         }
     }
 }

@@ -29,7 +29,9 @@ pub(super) fn quad(x0: f32, x1: f32, z: f32, flip: bool, material: usize) -> Dra
 }
 
 pub(super) fn count(image: &CoverageImage) -> usize {
-    image.covered.iter().filter(|c| **c).count()
+    (0..image.samples.len())
+        .filter(|&i| image.is_covered(i))
+        .count()
 }
 
 /// A 37×20 alpha: a disc of opaque texels with a soft rim, and noise — every kind of
