@@ -27,8 +27,10 @@
 //!
 //! Alpha-tested textures are read through coverage-preserving mip chains
 //! ([`frond_render::alpha_mip_chain`]: each level's alpha rescaled so as many texels pass the
-//! test as at full size), the level chosen at the spacing of the samples (≥ 1,000 over the
-//! tree's height), so the covered area of a minified leaf stays that of its full-size texture.
+//! test as at full size), at the level of a sample's footprint (at least 512 samples over the
+//! tree's height): a leaf keeps the shape and covered area of its full-size texture at every
+//! size. Reading the level of a pixel's footprint instead, as a GPU does for a multisampled
+//! pixel, would leave a far leaf a texel or two, all covered or none: its area lost.
 
 use frond_render::{
     Camera, DrawScene, Lighting, RenderError, Renderer, SoftwareTextures, render_coverage,

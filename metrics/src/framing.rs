@@ -28,7 +28,7 @@
 //! # Samples
 //!
 //! Each pixel is `K × K` point samples, the fraction of them covered being the pixel's
-//! coverage α. `K` is [`samples_per_side`]: at least 1,000 samples over the tree's height, so
+//! coverage α. `K` is [`samples_per_side`]: at least 512 samples over the tree's height, so
 //! that a leaf spans several samples even when the tree is a few pixels tall.
 
 use frond_render::{Camera, MAX_SUPERSAMPLE, Projection};
@@ -43,19 +43,21 @@ pub const SWAY_MARGIN: f32 = 0.1;
 /// The nearest a camera stands to the tree's centre, in radii of its rest bounds' sphere.
 pub const MIN_DISTANCE_RADII: f32 = 1.5;
 
-/// Samples over the tree's height the metric takes at least ([`samples_per_side`]).
-pub const SAMPLES_OVER_HEIGHT: f32 = 1000.0;
+/// Samples over the tree's height the metric takes at least ([`samples_per_side`]): a leaf a
+/// hundredth of the tree's height spans five samples across at any size, which resolves its
+/// covered area to a few percent; the renders' cost grows with the square of this.
+pub const SAMPLES_OVER_HEIGHT: f32 = 512.0;
 
 /// Fewest samples per pixel side: a pixel's coverage takes at least 4 values besides 0 and 1
 /// even for a tree hundreds of pixels tall.
 pub const MIN_SAMPLES_PER_SIDE: u32 = 2;
 
-/// Most samples per pixel side: 1,000 samples over the tree down to a tree 8 pixels tall
-/// (`⌈1000/8⌉ = 125`); below that, fewer, the counts of a pixel's samples fitting 16 bits.
+/// Most samples per pixel side: [`SAMPLES_OVER_HEIGHT`] over the tree down to a tree 4 pixels
+/// tall; below that, fewer, the counts of a pixel's samples fitting 16 bits.
 pub const MAX_SAMPLES_PER_SIDE: u32 = 128;
 
 /// `K`, the samples per pixel side of a tree `screen_height` pixels tall:
-/// `⌈1000 / H⌉` within [[`MIN_SAMPLES_PER_SIDE`], [`MAX_SAMPLES_PER_SIDE`]].
+/// `⌈512 / H⌉` within [[`MIN_SAMPLES_PER_SIDE`], [`MAX_SAMPLES_PER_SIDE`]].
 pub fn samples_per_side(screen_height: f32) -> u32 {
     let k = (SAMPLES_OVER_HEIGHT / screen_height.max(1e-3)).ceil();
     (k.min(MAX_SAMPLES_PER_SIDE as f32) as u32).clamp(MIN_SAMPLES_PER_SIDE, MAX_SAMPLES_PER_SIDE)
@@ -302,15 +304,16 @@ mod tests {
     }
 
     #[test]
-    fn samples_per_side_keep_a_thousand_over_the_tree() {
-        assert_eq!(samples_per_side(8.0), 125);
-        assert_eq!(samples_per_side(20.0), 50);
-        assert_eq!(samples_per_side(60.0), 17);
+    fn samples_per_side_keep_512_over_the_tree() {
+        assert_eq!(samples_per_side(8.0), 64);
+        assert_eq!(samples_per_side(20.0), 26);
+        assert_eq!(samples_per_side(60.0), 9);
+        assert_eq!(samples_per_side(200.0), 3);
         assert_eq!(samples_per_side(600.0), 2);
         assert_eq!(samples_per_side(2000.0), 2);
         assert_eq!(samples_per_side(1.0), MAX_SAMPLES_PER_SIDE);
-        for h in [8.0f32, 13.0, 60.0, 333.0, 999.0] {
-            assert!(samples_per_side(h) as f32 * h >= 1000.0, "{h}");
+        for h in [4.0f32, 8.0, 13.0, 60.0, 333.0, 511.0] {
+            assert!(samples_per_side(h) as f32 * h >= 512.0, "{h}");
         }
     }
 

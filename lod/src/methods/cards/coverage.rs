@@ -28,9 +28,12 @@ const RING_VIEWS: usize = 8;
 const ELEVATED_VIEWS: usize = 4;
 const ELEVATED_DEG: f32 = 40.0;
 /// Samples per pixel side: cards smaller than a pixel still cover part of one, which sampling
-/// pixel centres alone would miss (the coverage metric renders 4× supersampled for the same
-/// reason).
+/// pixel centres alone would miss (the coverage metric counts many samples a pixel for the
+/// same reason).
 const SUPERSAMPLE: f32 = 4.0;
+/// Samples over the tree's height of the coverage metric's renders, at least
+/// (`frond_metrics::framing::SAMPLES_OVER_HEIGHT`, downstream of this crate).
+const METRIC_SAMPLES: f32 = 512.0;
 /// At most this many samples across the tree's height per view: bounds memory and time at
 /// near sizes, where leaves span several pixels and a coarser grid still resolves them.
 const MAX_SAMPLES_ACROSS: f32 = 512.0;
@@ -245,8 +248,9 @@ pub struct CardCoverage {
     views: Vec<View>,
     /// World units per sample.
     spacing: f32,
-    /// World units per sample of the coverage metric's supersampled render at this LOD's
-    /// size (a pixel over [`SUPERSAMPLE`]).
+    /// World units per sample of the coverage metric's render at this LOD's size, whose
+    /// sample footprint sets the mip level it reads: at least [`METRIC_SAMPLES`] samples over
+    /// the tree's height and 2 per pixel side (`frond_metrics::framing`'s rule).
     render_spacing: f32,
     /// Samples per pixel side, when the samples are finer than pixels: coverage is compared
     /// per pixel, as the metric does.
@@ -291,7 +295,7 @@ impl CardCoverage {
             original: OnceLock::new(),
             views,
             spacing,
-            render_spacing: pixel / SUPERSAMPLE,
+            render_spacing: (pixel / 2.0).min(height / METRIC_SAMPLES),
             per_pixel: ((pixel / spacing).round() as usize).max(1),
             cards,
         }
@@ -392,10 +396,9 @@ impl CardCoverage {
     }
 
     /// The mip level the renderer samples a triangle at, corners `p` in samples and `uv` in
-    /// texture coordinates of a `size` texture: log₂ of the larger texel step per rendered
-    /// sample (the GPU's rule; an orthographic view maps a triangle affinely, so it is one
-    /// level). The metric renders [`SUPERSAMPLE`] samples per pixel; where this grid is coarser
-    /// the step is scaled to the renderer's.
+    /// texture coordinates of a `size` texture: log₂ of the larger texel step per sample of the
+    /// coverage metric's render (the GPU's rule; an orthographic view maps a triangle
+    /// affinely, so it is one level).
     fn mip_level(&self, p: &[Vec2; 3], uv: &[Vec2; 3], size: Vec2) -> f32 {
         let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
         let (t1, t2) = ((uv[1] - uv[0]) * size, (uv[2] - uv[0]) * size);
@@ -563,9 +566,10 @@ impl CardCoverage {
             .collect()
     }
 
-    /// Samples, over all views, covered by exactly one of `original` ([`CardCoverage::masks`])
-    /// and the cards `keep` marks scaled by `scale`: the coverage metric's numerator (spec
-    /// animated-billboard-clouds §5.4) on these views.
+    /// Over all views, the coverage by the cards `keep` marks, scaled by `scale`, that differs
+    /// from `original` ([`CardCoverage::masks`]): per pixel the difference of the two covered
+    /// sample counts, summed — the coverage error's numerator (spec animated-billboard-clouds
+    /// §5.4 on covered fractions, `frond_metrics::coverage`) on these views, in samples.
     pub fn differing(&self, original: &[Vec<bool>], keep: &[bool], scale: f32) -> u64 {
         self.masks(keep, scale)
             .iter()
@@ -573,25 +577,28 @@ impl CardCoverage {
             .zip(&self.views)
             .map(|((m, o), v)| {
                 let (a, b) = (self.pixels(v, o), self.pixels(v, m));
-                a.iter().zip(&b).filter(|(x, y)| x != y).count() as u64
+                a.iter()
+                    .zip(&b)
+                    .map(|(x, y)| u64::from(x.abs_diff(*y)))
+                    .sum::<u64>()
             })
             .sum()
     }
 
-    /// A view's sample mask as pixels: a pixel of [`Self::per_pixel`]² samples is covered when
-    /// at least half of them are (the coverage metric's rule for its supersampled renders).
-    fn pixels(&self, view: &View, mask: &[bool]) -> Vec<bool> {
+    /// A view's sample mask as pixels of [`Self::per_pixel`]² samples: how many of each
+    /// pixel's samples are covered (the coverage metric's covered fraction, in samples).
+    fn pixels(&self, view: &View, mask: &[bool]) -> Vec<u32> {
         let k = self.per_pixel;
         if k <= 1 {
-            return mask.to_vec();
+            return mask.iter().map(|&c| u32::from(c)).collect();
         }
         let (w, h) = (view.width.div_ceil(k), view.height.div_ceil(k));
-        let mut count = vec![0usize; w * h];
+        let mut count = vec![0u32; w * h];
         for (s, _) in mask.iter().enumerate().filter(|(_, c)| **c) {
             let (x, y) = (s % view.width, s / view.width);
             count[(y / k) * w + x / k] += 1;
         }
-        count.iter().map(|&n| 2 * n >= k * k).collect()
+        count
     }
 
     fn mask(&self, view: &View, cards: &[usize], scale: f32) -> Vec<bool> {
@@ -896,8 +903,8 @@ mod tests {
         );
         assert!((map.at(uv, map.level(3.5), REPEAT) - 0.5 * (a + b)).abs() < 1e-6);
 
-        // The level follows the texel step per rendered sample: the whole 512² texture over a
-        // triangle 8 samples wide is 64 texels a sample, level 6.
+        // The level follows the texel step per metric sample: the whole 512² texture over a
+        // triangle 8 samples wide is 64 texels a sample, and a metric sample is `grid` of them.
         let (tree, foliage, pieces) = sample();
         let coverage =
             CardCoverage::new(&tree, &foliage, &pieces, &tree.bounds, tree.height() / 60.0);
@@ -909,7 +916,7 @@ mod tests {
     }
 
     #[test]
-    fn fine_samples_are_compared_as_the_metrics_pixels() {
+    fn fine_samples_are_counted_per_pixel_as_the_metric_counts_them() {
         let (tree, foliage, pieces) = sample();
         let coverage =
             CardCoverage::new(&tree, &foliage, &pieces, &tree.bounds, tree.height() / 15.0);
@@ -919,7 +926,8 @@ mod tests {
         assert_eq!(k, 4);
         let view = &coverage.views[0];
         let mut mask = vec![false; view.width * view.height];
-        // Half of the first pixel's samples covered: covered; one fewer of the second's: not.
+        // Half of the first pixel's samples covered, one fewer of the second's: each pixel
+        // counts its own.
         let half = (k * k).div_ceil(2);
         for i in 0..half {
             mask[(i / k) * view.width + i % k] = true;
@@ -932,8 +940,8 @@ mod tests {
             pixels.len(),
             view.width.div_ceil(k) * view.height.div_ceil(k)
         );
-        assert!(pixels[0] && !pixels[1]);
-        assert_eq!(pixels.iter().filter(|p| **p).count(), 1);
+        assert_eq!(pixels[..2], [half as u32, half as u32 - 1]);
+        assert_eq!(pixels.iter().sum::<u32>() as usize, 2 * half - 1);
     }
 
     #[test]
