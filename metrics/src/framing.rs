@@ -120,7 +120,7 @@ pub fn framing(
     let (lo, hi) = (bounds_min.as_dvec3(), bounds_max.as_dvec3());
     let tree_height = hi.y - lo.y;
     let radius = (hi - lo).length() * 0.5;
-    if !(tree_height > 1e-6 * radius.max(1e-30)) {
+    if tree_height.is_nan() || tree_height <= 1e-6 * radius.max(1e-30) {
         return Err(invalid("no height: a tree's size on screen is its height"));
     }
     let tan_half = (f64::from(params.fov_y_deg) * 0.5).to_radians().tan();
@@ -203,12 +203,12 @@ pub(crate) fn validate_camera_params(params: &CoverageParams) -> Result<(), Metr
         )));
     }
     let (h, r) = (params.screen_height, params.resolution);
-    if !(h.is_finite() && h >= 1.0 && h <= 100_000.0) {
+    if !(1.0..=100_000.0).contains(&h) {
         return Err(MetricError::InvalidParams(format!(
             "the screen height {h} px must be 1 to 100000 pixels"
         )));
     }
-    if !(r.is_finite() && r >= 1.0 && r <= 100_000.0) {
+    if !(1.0..=100_000.0).contains(&r) {
         return Err(MetricError::InvalidParams(format!(
             "the screen resolution {r} px must be 1 to 100000 pixels"
         )));

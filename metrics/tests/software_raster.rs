@@ -1,19 +1,46 @@
 //! The coverage metric's CPU rasteriser ([`frond_render::render_coverage`], the default)
-//! against the wgpu path it replaced ([`Rasteriser::Gpu`]) on real trees: the sample (in every
-//! checkout) and two shared trees. Both draw the posed foliage from the metric's views and
-//! frames; their masks must agree to within 1 % of the covered pixels and their colours to
-//! within the colour metric's noise, and the CPU masks must not depend on the thread count.
+//! against the wgpu path ([`Rasteriser::Gpu`]: its own rasterisation and texture filtering,
+//! `K × K` pixels of a render `K` times the image's size counted per pixel) at the same
+//! cameras, on real trees: the sample (in every checkout) and every shared tree, at 600, 200,
+//! 60 and 20 pixels. Both draw the whole tree posed at two frames from the metric's default
+//! views (5 on each of two rings). At each size:
+//!
+//! - one rasteriser's images scored against the other's, as the metric scores a LOD, differ by
+//!   at most [`BOUND`];
+//! - the metric's value for a simplified candidate (the tree with every second foliage card
+//!   removed) computed with either rasteriser agrees to within [`BOUND`].
+//!
+//! The CPU images must not depend on the thread count, and their first render gives the depth
+//! complexity.
 
-use std::path::Path;
+mod common;
+
 use std::sync::OnceLock;
 
+use common::{load, without_every_second_card};
 use frond_metrics::{
-    CoverageMasks, CoverageParams, Rasteriser, compare_masks, coverage_masks,
-    image_for_screen_height,
+    CoverageImages, CoverageParams, Rasteriser, compare_images, coverage_images, depth_complexity,
 };
 use frond_render::{DrawScene, Renderer, TreeParts, tree_scene};
-use frond_scene::{ImportOptions, Tree, import};
+use frond_scene::Tree;
 use glam::Vec3;
+
+/// The largest difference allowed between the two rasterisers, in units of the coverage error.
+const BOUND: f64 = 0.02;
+
+/// The screen heights of a default LOD chain, and the smallest the metric judges.
+const SIZES: [f32; 4] = [600.0, 200.0, 60.0, 20.0];
+
+/// Every shared tree ([`frond_testdata::trees_dir`]).
+const SHARED: [&str; 7] = [
+    "bush_1.glb",
+    "oak_dense.glb",
+    "oak_large.glb",
+    "oak_medium.glb",
+    "oak_medium_blendedleaves.glb",
+    "pine_medium.glb",
+    "pine_medium_blender.glb",
+];
 
 fn renderer() -> &'static Renderer {
     static RENDERER: OnceLock<Renderer> = OnceLock::new();
@@ -22,123 +49,187 @@ fn renderer() -> &'static Renderer {
     })
 }
 
-fn load(path: &Path) -> Tree {
-    import(path, &ImportOptions::default()).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
-/// The foliage of `tree` at `frames` times over its first clip's loop.
-fn frames(tree: &Tree, frames: usize) -> Vec<DrawScene> {
+/// `tree`'s `parts` at `frames` times over its first clip's loop.
+fn frames(tree: &Tree, frames: usize, parts: TreeParts) -> Vec<DrawScene> {
     let clip = tree.clip_index(None);
     let period = clip.map_or(0.0, |c| tree.rig.clips[c].duration());
     (0..frames)
         .map(|f| {
             let t = period * f as f32 / frames as f32;
-            tree_scene(tree, clip, t, TreeParts::Foliage)
+            tree_scene(tree, clip, t, parts)
         })
         .collect()
 }
 
-fn masks(tree: &Tree, scenes: &[DrawScene], params: &CoverageParams) -> CoverageMasks {
-    let (lo, hi) = (Vec3::from(tree.bounds.min), Vec3::from(tree.bounds.max));
-    coverage_masks(renderer(), scenes, lo, hi, params).unwrap_or_else(|e| panic!("masks: {e}"))
+/// The metric's images of `scenes`, framed by `bounds_of`'s rest bounds.
+fn images(bounds_of: &Tree, scenes: &[DrawScene], params: &CoverageParams) -> CoverageImages {
+    let (lo, hi) = (
+        Vec3::from(bounds_of.bounds.min),
+        Vec3::from(bounds_of.bounds.max),
+    );
+    coverage_images(renderer(), scenes, lo, hi, params).unwrap_or_else(|e| panic!("images: {e}"))
 }
 
-/// Renders `tree` at `screen_height` with both rasterisers and checks their agreement.
-fn agree(path: &Path, screen_height: u32) {
-    let tree = load(path);
-    let scenes = frames(&tree, 2);
-    let (width, height) = image_for_screen_height(screen_height);
+/// What the two rasterisers give for one tree at one size.
+struct Agreement {
+    /// The thinned candidate's coverage error, CPU images.
+    cpu: f64,
+    /// The same, wgpu images.
+    gpu: f64,
+    /// The CPU images of the whole tree scored against the wgpu ones.
+    images: f64,
+    /// Their colour difference.
+    colour: f64,
+}
+
+/// Renders `tree` and its thinned candidate at `screen_height` with both rasterisers (the
+/// metric's default views, two frames, colour) and scores them.
+fn measure(tree: &Tree, thinned: &Tree, screen_height: f32) -> Agreement {
+    let params = CoverageParams {
+        frames: 2,
+        screen_height,
+        ..Default::default()
+    };
+    let gpu_params = CoverageParams {
+        rasteriser: Rasteriser::Gpu,
+        ..params.clone()
+    };
+    let (original, candidate) = (
+        frames(tree, 2, TreeParts::All),
+        frames(thinned, 2, TreeParts::All),
+    );
+    let both = |p: &CoverageParams| (images(tree, &original, p), images(tree, &candidate, p));
+    let (cpu_o, cpu_s) = both(&params);
+    let (gpu_o, gpu_s) = both(&gpu_params);
+    let score = |o: &CoverageImages, s: &CoverageImages| {
+        compare_images(o, s, &[0, 1]).unwrap_or_else(|e| panic!("compare: {e}"))
+    };
+    let images = score(&gpu_o, &cpu_o);
+    Agreement {
+        cpu: score(&cpu_o, &cpu_s).mean,
+        gpu: score(&gpu_o, &gpu_s).mean,
+        images: images.mean,
+        colour: images.colour_difference,
+    }
+}
+
+/// Checks the agreement of the two rasterisers on `path` at every size of [`SIZES`], after
+/// printing every size's numbers (so one failure shows them all).
+fn agree(name: &str, tree: &Tree) {
+    let (thinned, cards) = without_every_second_card(tree);
+    assert!(cards >= 2, "{name}: {cards} foliage cards");
+    let results: Vec<(f32, Agreement)> = SIZES
+        .iter()
+        .map(|&h| {
+            let a = measure(tree, &thinned, h);
+            eprintln!(
+                "{name} at {h} px: CPU {:.4}, GPU {:.4}, CPU-vs-GPU images {:.4} (colour {:.4})",
+                a.cpu, a.gpu, a.images, a.colour
+            );
+            (h, a)
+        })
+        .collect();
+    for (h, a) in &results {
+        assert!(
+            a.images <= BOUND,
+            "{name} at {h} px: the CPU images differ from the GPU's by {}",
+            a.images
+        );
+        assert!(
+            (a.cpu - a.gpu).abs() <= BOUND,
+            "{name} at {h} px: the candidate scores {} on the CPU, {} on the GPU",
+            a.cpu,
+            a.gpu
+        );
+        // A thinned tree misses coverage: a real error, not the noise of the comparison.
+        assert!(a.cpu > 2.0 * BOUND, "{name} at {h} px: {}", a.cpu);
+        assert!(
+            a.colour <= BOUND,
+            "{name} at {h} px: colours differ by {}",
+            a.colour
+        );
+    }
+}
+
+#[test]
+fn cpu_and_gpu_agree_on_the_sample() {
+    agree("sapling", &load(&frond_testdata::sample()));
+}
+
+/// Every shared tree present; one skip line for each absent one.
+#[test]
+fn heavy_cpu_and_gpu_agree_on_shared_trees() {
+    if !frond_testdata::heavy(env!("CARGO_CRATE_NAME")) {
+        return;
+    }
+    for name in SHARED {
+        match frond_testdata::tree(name) {
+            Some(path) => agree(name, &load(&path)),
+            None => frond_testdata::report_skip(
+                "heavy_cpu_and_gpu_agree_on_shared_trees",
+                &[name.to_string()],
+            ),
+        }
+    }
+}
+
+/// Whatever the thread count, the CPU rasteriser gives the same sample counts and colours.
+#[test]
+fn cpu_images_do_not_depend_on_the_thread_count() {
+    let tree = load(&frond_testdata::sample());
+    let scenes = frames(&tree, 2, TreeParts::All);
     let params = CoverageParams {
         views: 3,
         frames: 2,
-        width,
-        height,
+        screen_height: 60.0,
         ..Default::default()
     };
-    let cpu = masks(&tree, &scenes, &params);
-    let gpu = masks(
-        &tree,
-        &scenes,
-        &CoverageParams {
-            rasteriser: Rasteriser::Gpu,
-            ..params.clone()
-        },
-    );
-    // One rasteriser's masks scored against the other's, as the metric scores a LOD.
-    let r = compare_masks(&gpu, &cpu, &[0, 1]).expect("same shapes");
-    let name = path.display();
-    eprintln!(
-        "{name} at {screen_height} px: masks differ on {:.4} of the covered pixels, colour {:.4}",
-        r.mean, r.colour_difference
-    );
-    assert_eq!(r.discarded, 0, "{name}");
-    assert!(
-        r.mean <= 0.01,
-        "{name}: masks differ on {} of the pixels",
-        r.mean
-    );
-    assert!(
-        r.colour_difference <= 0.02,
-        "{name}: colours differ by {}",
-        r.colour_difference
-    );
-    // Whatever the thread count, the same masks.
+    let many = images(&tree, &scenes, &params);
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .expect("pool")
-        .install(|| masks(&tree, &scenes, &params));
-    let same = compare_masks(&cpu, &one, &[0, 1]).expect("same shapes");
-    assert_eq!(same.differing_pixels.iter().sum::<u64>(), 0, "{name}");
-    assert_eq!(same.colour_difference, 0.0, "{name}");
-}
-
-#[test]
-fn cpu_and_gpu_masks_agree_on_the_sample() {
-    agree(&frond_testdata::sample(), 600);
-    agree(&frond_testdata::sample(), 60);
-}
-
-#[test]
-fn cpu_and_gpu_masks_agree_on_shared_trees() {
-    let trees = frond_testdata::require_trees!(["oak_medium.glb", "pine_medium_blender.glb"]);
-    for tree in &trees {
-        agree(tree, 200);
+        .install(|| images(&tree, &scenes, &params));
+    for pair in 0..many.views * many.frames {
+        assert_eq!(many.fractions(pair), one.fractions(pair), "pair {pair}");
     }
+    let same = compare_images(&many, &one, &[0, 1]).expect("same shapes");
+    assert_eq!(same.mean, 0.0);
+    assert_eq!(same.colour_difference, 0.0);
+    assert_eq!(many.first_depth_complexity, one.first_depth_complexity);
 }
 
-/// The masks' first render gives the depth complexity the separate measure gives (view 0,
+/// The images' first render gives the depth complexity the separate measure gives (view 0,
 /// frame 0, same camera and textures), with and without colour; the wgpu path gives none.
 #[test]
 fn the_first_render_gives_the_depth_complexity() {
     let tree = load(&frond_testdata::sample());
-    let scenes = frames(&tree, 2);
+    let scenes = frames(&tree, 2, TreeParts::Foliage);
     let (lo, hi) = (Vec3::from(tree.bounds.min), Vec3::from(tree.bounds.max));
     for colour in [false, true] {
         let params = CoverageParams {
             views: 3,
             frames: 2,
-            width: 120,
-            height: 90,
+            screen_height: 60.0,
             colour,
             ..Default::default()
         };
-        let separate = frond_metrics::depth_complexity(&scenes[0], lo, hi, 0, &params)
-            .expect("depth complexity");
-        let from_masks = masks(&tree, &scenes, &params).first_depth_complexity;
-        assert_eq!(from_masks, Some(separate), "colour {colour}");
+        let separate = depth_complexity(&scenes[0], lo, hi, 0, &params).expect("depth complexity");
+        let from_images = images(&tree, &scenes, &params).first_depth_complexity;
+        assert_eq!(from_images, Some(separate), "colour {colour}");
         assert!(separate > 1.0, "{separate}");
     }
     let gpu = CoverageParams {
         views: 1,
+        elevations_deg: vec![0.0],
         frames: 1,
-        width: 40,
-        height: 30,
+        screen_height: 20.0,
+        samples_per_side: Some(4),
         rasteriser: Rasteriser::Gpu,
         ..Default::default()
     };
     assert_eq!(
-        masks(&tree, &scenes[..1], &gpu).first_depth_complexity,
+        images(&tree, &scenes[..1], &gpu).first_depth_complexity,
         None
     );
 }
