@@ -348,7 +348,10 @@ fn measure_errors(
             .measure(lod, h)
             .with_context(|| format!("{file}: measuring its error"))?;
         let coverage = &measured.report;
-        let switch_pop = switch_pop(ctx, lods, k, &measured.images, h)
+        let framing = ctx
+            .framing(h)
+            .with_context(|| format!("{file}: framing its measure"))?;
+        let switch_pop = switch_pop(ctx, lods, k, measured.images.as_ref(), h)
             .with_context(|| format!("{file}: measuring its switch pop"))?;
         let within_target = coverage.mean <= max_error;
         if !within_target {
@@ -368,7 +371,7 @@ fn measure_errors(
             switch_pop,
             max_error,
             within_target,
-            image: [measured.images.width, measured.images.height],
+            image: [framing.width, framing.height],
             samples_per_side: samples_per_side(h),
             views,
             elevations_deg: DEFAULT_ELEVATIONS_DEG.to_vec(),
@@ -380,19 +383,23 @@ fn measure_errors(
     Ok(())
 }
 
-/// The coverage error of LOD `k` (its `images` at `screen_height`, its size) against LOD
-/// `k − 1` drawn alike: what changes on screen when the engine swaps them. LOD1's is against
-/// the input, whose images the measure has already.
+/// The coverage error of LOD `k` (its `images` at `screen_height`, its size, when kept)
+/// against LOD `k − 1` drawn alike: what changes on screen when the engine swaps them. LOD1's
+/// is against the input, whose images the measure has already.
 fn switch_pop(
     ctx: &mut EvalContext,
     lods: &[&Tree],
     k: usize,
-    images: &CoverageImages,
+    images: Option<&CoverageImages>,
     screen_height: f32,
 ) -> Result<f64> {
-    let previous: Option<CoverageImages> = match k {
-        0 | 1 => None,
-        _ => Some(ctx.images(lods[k - 1], screen_height)?),
+    let previous = (k > 1).then(|| lods[k - 1]);
+    let Some(images) = images else {
+        return Ok(ctx.compare_trees(previous, lods[k], screen_height)?.mean);
+    };
+    let previous: Option<CoverageImages> = match previous {
+        None => None,
+        Some(tree) => Some(ctx.images(tree, screen_height)?),
     };
     let pop = ctx.compare(previous.as_ref(), images, screen_height, &lods[k].source)?;
     Ok(pop.mean)

@@ -227,7 +227,9 @@ pub enum MetricError {
 /// The coverage error of `simplified` against `original` (see the module docs), from their
 /// posed scenes of each frame (`original[f]`, `simplified[f]`), framed by `bounds_min` and
 /// `bounds_max` (pass the whole tree's rest bounds, so both models and all frames share the
-/// cameras). Deterministic: every render is, and the sums are of integer sample counts.
+/// cameras). The pairs are rendered a few at a time and compared as they come, so the images
+/// held stay within [`MAX_HELD_IMAGE_BYTES`] whatever the size. Deterministic: every render is,
+/// and the sums are of integer sample counts.
 pub fn coverage_error(
     renderer: &Renderer,
     original: &[DrawScene],
@@ -237,10 +239,44 @@ pub fn coverage_error(
     params: &CoverageParams,
 ) -> Result<CoverageReport, MetricError> {
     validate(original.len(), simplified.len(), params)?;
-    let o = coverage_images(renderer, original, bounds_min, bounds_max, params)?;
-    let s = coverage_images(renderer, simplified, bounds_min, bounds_max, params)?;
-    let frames: Vec<usize> = (0..original.len()).collect();
-    compare_images(&o, &s, &frames)
+    let framing = framing(bounds_min, bounds_max, params)?;
+    let o = Drawing::new(renderer, original, &framing, params)?;
+    let s = Drawing::new(renderer, simplified, &framing, params)?;
+    let pairs: Vec<(usize, usize)> = (0..framing.cameras.len())
+        .flat_map(|d| (0..original.len()).map(move |f| (d, f)))
+        .collect();
+    let per_pair = image_bytes(&framing, 1, params.colour).max(1);
+    let chunk = (MAX_HELD_IMAGE_BYTES / (2 * per_pair)).clamp(1, pairs.len() as u64) as usize;
+    let samples = framing.supersample * framing.supersample;
+    let mut sums = Vec::with_capacity(pairs.len());
+    for chunk in pairs.chunks(chunk) {
+        let (a, _) = o.render(chunk)?;
+        let (b, _) = s.render(chunk)?;
+        for (&(d, f), (a, b)) in chunk.iter().zip(a.iter().zip(&b)) {
+            let pair = pair_sums((&a.0, &a.1), (&b.0, &b.1), samples);
+            if pair.original == 0 {
+                return Err(MetricError::NothingCovered { view: d, frame: f });
+            }
+            sums.push(pair);
+        }
+    }
+    Ok(report_of(
+        &sums,
+        framing.cameras.len(),
+        original.len(),
+        samples,
+    ))
+}
+
+/// Most bytes of images [`coverage_error`] holds at once (and [`crate::eval::EvalContext`]
+/// keeps of one model at one size): beyond it, pairs are rendered and compared a few at a
+/// time.
+pub const MAX_HELD_IMAGE_BYTES: u64 = 384 << 20;
+
+/// Bytes of `pairs` images of `framing` (covered samples, and colour when drawn with it).
+pub fn image_bytes(framing: &Framing, pairs: usize, colour: bool) -> u64 {
+    let pixel = 2 + if colour { 12 } else { 0 };
+    u64::from(framing.width) * u64::from(framing.height) * pairs as u64 * pixel
 }
 
 /// One model's coverage images for every (view, frame) pair of the metric: per pixel, its
@@ -295,16 +331,11 @@ pub fn coverage_images(
         camera.validate()?;
     }
     let expected = framing.width as usize * framing.height as usize;
-    let (rendered, first_depth_complexity) = match params.rasteriser {
-        Rasteriser::Gpu => {
-            let images = (framing.cameras.iter())
-                .flat_map(|camera| scenes.iter().map(move |scene| (camera, scene)))
-                .map(|(camera, scene)| gpu_image(renderer, scene, camera, &framing))
-                .collect::<Result<Vec<_>, _>>()?;
-            (images, None)
-        }
-        Rasteriser::Software => software_images(scenes, &framing, params)?,
-    };
+    let pairs: Vec<(usize, usize)> = (0..framing.cameras.len())
+        .flat_map(|d| (0..scenes.len()).map(move |f| (d, f)))
+        .collect();
+    let (rendered, first_depth_complexity) =
+        Drawing::new(renderer, scenes, &framing, params)?.render(&pairs)?;
     let (mut samples, mut colour) = (Vec::new(), Vec::new());
     for (counts, rgb) in rendered {
         if counts.len() != expected {
@@ -331,50 +362,86 @@ pub fn coverage_images(
 /// One pair's image: each pixel's covered samples and their mean colour.
 type PairImage = (Vec<u16>, Vec<[f32; 3]>);
 
-/// Every (view, frame) image of `scenes` drawn by the CPU rasteriser, in parallel (each is
-/// deterministic, and they are collected in order), with the first pair's depth complexity.
-fn software_images(
-    scenes: &[DrawScene],
-    framing: &Framing,
-    params: &CoverageParams,
-) -> Result<(Vec<PairImage>, Option<f64>), MetricError> {
-    // Mip chains prepared once for the frames that share them (a model's frames do).
-    let mut prepared: Vec<SoftwareTextures> = Vec::new();
-    let mut of_frame: Vec<usize> = Vec::with_capacity(scenes.len());
-    for (f, scene) in scenes.iter().enumerate() {
-        match (0..f).find(|&g| same_textures(&scenes[g], scene)) {
-            Some(g) => of_frame.push(of_frame[g]),
-            None => {
-                of_frame.push(prepared.len());
-                prepared.push(
-                    SoftwareTextures::new(scene, params.colour)?.with_lighting(params.lighting),
-                );
+/// One model's frames ready to be drawn from the metric's views: by the CPU rasteriser with
+/// their textures' mip chains prepared once (a model's frames share them), or by wgpu.
+struct Drawing<'a> {
+    renderer: &'a Renderer,
+    scenes: &'a [DrawScene],
+    framing: &'a Framing,
+    rasteriser: Rasteriser,
+    /// The CPU rasteriser's prepared textures, and which of them each frame draws with.
+    prepared: Vec<SoftwareTextures>,
+    of_frame: Vec<usize>,
+}
+
+impl<'a> Drawing<'a> {
+    fn new(
+        renderer: &'a Renderer,
+        scenes: &'a [DrawScene],
+        framing: &'a Framing,
+        params: &CoverageParams,
+    ) -> Result<Drawing<'a>, MetricError> {
+        let (mut prepared, mut of_frame) = (Vec::new(), Vec::with_capacity(scenes.len()));
+        if params.rasteriser == Rasteriser::Software {
+            for (f, scene) in scenes.iter().enumerate() {
+                match (0..f).find(|&g| same_textures(&scenes[g], scene)) {
+                    Some(g) => of_frame.push(of_frame[g]),
+                    None => {
+                        of_frame.push(prepared.len());
+                        prepared.push(
+                            SoftwareTextures::new(scene, params.colour)?
+                                .with_lighting(params.lighting),
+                        );
+                    }
+                }
             }
         }
-    }
-    let pairs: Vec<(usize, usize)> = (0..framing.cameras.len())
-        .flat_map(|d| (0..scenes.len()).map(move |f| (d, f)))
-        .collect();
-    let images: Vec<(PairImage, Option<f64>)> = pairs
-        .par_iter()
-        .map(|&(d, f)| {
-            let first = (d, f) == (0, 0);
-            let scene = &scenes[f];
-            let view_proj = projection(scene, &framing.cameras[d], framing)?;
-            let (w, h, k) = (framing.width, framing.height, framing.supersample);
-            let textures = &prepared[of_frame[f]];
-            let (image, depth) = if first {
-                let (image, depth) =
-                    render_coverage_with_depth(scene, textures, view_proj, w, h, k)?;
-                (image, Some(depth))
-            } else {
-                (render_coverage(scene, textures, view_proj, w, h, k)?, None)
-            };
-            Ok(((image.samples, image.colour), depth))
+        Ok(Drawing {
+            renderer,
+            scenes,
+            framing,
+            rasteriser: params.rasteriser,
+            prepared,
+            of_frame,
         })
-        .collect::<Result<_, MetricError>>()?;
-    let first_depth = images.first().and_then(|(_, d)| *d);
-    Ok((images.into_iter().map(|(i, _)| i).collect(), first_depth))
+    }
+
+    /// The images of the (view, frame) `pairs`, in order, and the depth complexity of the
+    /// pair (0, 0) when among them and drawn by the CPU rasteriser. The CPU rasteriser draws
+    /// them in parallel (each render is deterministic, and they are collected in order).
+    fn render(
+        &self,
+        pairs: &[(usize, usize)],
+    ) -> Result<(Vec<PairImage>, Option<f64>), MetricError> {
+        let framing = self.framing;
+        if self.rasteriser == Rasteriser::Gpu {
+            let images = (pairs.iter())
+                .map(|&(d, f)| {
+                    gpu_image(self.renderer, &self.scenes[f], &framing.cameras[d], framing)
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            return Ok((images, None));
+        }
+        let images: Vec<(PairImage, Option<f64>)> = pairs
+            .par_iter()
+            .map(|&(d, f)| {
+                let scene = &self.scenes[f];
+                let view_proj = projection(scene, &framing.cameras[d], framing)?;
+                let (w, h, k) = (framing.width, framing.height, framing.supersample);
+                let textures = &self.prepared[self.of_frame[f]];
+                let (image, depth) = if (d, f) == (0, 0) {
+                    let (image, depth) =
+                        render_coverage_with_depth(scene, textures, view_proj, w, h, k)?;
+                    (image, Some(depth))
+                } else {
+                    (render_coverage(scene, textures, view_proj, w, h, k)?, None)
+                };
+                Ok(((image.samples, image.colour), depth))
+            })
+            .collect::<Result<_, MetricError>>()?;
+        let first_depth = images.iter().find_map(|(_, d)| *d);
+        Ok((images.into_iter().map(|(i, _)| i).collect(), first_depth))
+    }
 }
 
 /// Scores `simplified` against `original` over the frames `frames` of each view (all of them
@@ -397,7 +464,11 @@ pub fn compare_images(
     for d in 0..original.views {
         for &f in frames {
             let i = d * original.frames + f;
-            let pair = compare_pair(original, simplified, i);
+            let pair = pair_sums(
+                (&original.samples[i], &original.colour[i]),
+                (&simplified.samples[i], &simplified.colour[i]),
+                original.samples_per_pixel,
+            );
             if pair.original == 0 {
                 return Err(MetricError::NothingCovered { view: d, frame: f });
             }
@@ -433,13 +504,16 @@ struct PairSums {
     signed: f64,
 }
 
-/// The sums of pair `i` of the two models' images.
-fn compare_pair(original: &CoverageImages, simplified: &CoverageImages, i: usize) -> PairSums {
-    let (o, s) = (&original.samples[i], &simplified.samples[i]);
-    let (o_rgb, s_rgb) = (&original.colour[i], &simplified.colour[i]);
+/// The sums of one pair's two images (covered samples and colour per pixel, `samples` a
+/// pixel).
+fn pair_sums(
+    (o, o_rgb): (&[u16], &[[f32; 3]]),
+    (s, s_rgb): (&[u16], &[[f32; 3]]),
+    samples: u32,
+) -> PairSums {
     // Images drawn without colour have none to compare.
     let with_colour = o_rgb.len() == o.len() && s_rgb.len() == s.len();
-    let half = original.samples_per_pixel;
+    let half = samples;
     let mut sums = PairSums::default();
     for (p, (&no, &ns)) in o.iter().zip(s).enumerate() {
         let (no, ns) = (u64::from(no), u64::from(ns));

@@ -21,11 +21,11 @@ use crate::aggregate::{
 };
 use crate::cost::cost;
 use crate::coverage::{
-    CoverageImages, CoverageParams, CoverageReport, DEFAULT_ELEVATIONS_DEG, MetricError,
-    compare_images, coverage_images,
+    CoverageImages, CoverageParams, CoverageReport, DEFAULT_ELEVATIONS_DEG, MAX_HELD_IMAGE_BYTES,
+    MetricError, compare_images, coverage_error, coverage_images, image_bytes,
 };
 use crate::dominating_axis::{AxisMetrics, axis_metrics};
-use crate::framing::samples_per_side;
+use crate::framing::{framing, samples_per_side};
 use crate::matching::{match_foreign, match_triangles};
 use crate::metric_id::MetricId;
 use crate::report::{Costs, CoverageMetrics, EVAL_SCHEMA_VERSION, EvalReport, EvalTimings, Metric};
@@ -294,25 +294,130 @@ impl<'a> EvalContext<'a> {
     /// models at the same size, [`EvalContext::compare`]) and the depth complexities of the
     /// candidate and of the original read off the metric's own first render of each.
     pub fn measure(&mut self, candidate: &Tree, screen_height: f32) -> Result<Measured, EvalError> {
-        let images = self.images(candidate, screen_height)?;
+        let cc = candidate_clip(candidate, self.sampled.clip.as_deref());
         let all: Vec<usize> = (0..self.frame_times.len()).collect();
-        let original = self.original_images(screen_height, TreeParts::All, false)?;
-        let report = compare_images(original, &images, &all).map_err(EvalError::colour(
-            &candidate.source,
-            "animated coverage metric",
-        ))?;
-        let original_depth = original.first_depth_complexity;
+        let (mut reports, images) = self
+            .reports(
+                candidate,
+                cc,
+                screen_height,
+                (TreeParts::All, false),
+                &[&all],
+            )
+            .map_err(EvalError::colour(
+                &candidate.source,
+                "animated coverage metric",
+            ))?;
+        let original_depth = match &images {
+            Some(_) => {
+                self.original_images(screen_height, TreeParts::All, false)?
+                    .first_depth_complexity
+            }
+            None => None,
+        };
         let original_tree = self.original;
         let depth = |images_depth: Option<f64>, tree: &Tree| match images_depth {
             Some(d) => Ok(d),
             None => self.depth_complexity(tree, screen_height),
         };
+        let candidate_depth = images.as_ref().and_then(|i| i.first_depth_complexity);
         Ok(Measured {
-            report,
-            depth_complexity: depth(images.first_depth_complexity, candidate)?,
+            report: reports.remove(0),
+            depth_complexity: depth(candidate_depth, candidate)?,
             original_depth_complexity: depth(original_depth, original_tree)?,
             images,
         })
+    }
+
+    /// The metric's framing at `screen_height`: its cameras and image size.
+    pub fn framing(&self, screen_height: f32) -> Result<crate::framing::Framing, EvalError> {
+        let (lo, hi) = self.bounds();
+        framing(lo, hi, &self.params(screen_height, false))
+            .map_err(EvalError::colour(&self.original.source, "coverage metric"))
+    }
+
+    /// Whether one model's images at `screen_height` (with colour or not) are kept whole: within
+    /// [`MAX_HELD_IMAGE_BYTES`]. Larger ones are rendered and compared a few pairs at a time.
+    fn held(&self, screen_height: f32, colour: bool) -> Result<bool, MetricError> {
+        let (lo, hi) = self.bounds();
+        let f = framing(lo, hi, &self.params(screen_height, colour))?;
+        let pairs = f.cameras.len() * self.frame_times.len();
+        Ok(image_bytes(&f, pairs, colour) <= MAX_HELD_IMAGE_BYTES)
+    }
+
+    /// `candidate` (playing clip `cc`) against the original at `screen_height`, drawing
+    /// `parts` with colour or not, over each of `frame_sets`: from the original's images kept
+    /// and the candidate's (returned) where they are held ([`EvalContext::held`]), else pair by
+    /// pair ([`coverage_error`]).
+    fn reports(
+        &mut self,
+        candidate: &Tree,
+        cc: Option<usize>,
+        screen_height: f32,
+        (parts, colour): (TreeParts, bool),
+        frame_sets: &[&[usize]],
+    ) -> Result<(Vec<CoverageReport>, Option<CoverageImages>), MetricError> {
+        let unpack = |e: EvalError| match e {
+            EvalError::Colour { source, .. } => source,
+            other => MetricError::InvalidParams(other.to_string()),
+        };
+        if self.held(screen_height, colour)? {
+            let images = self
+                .images_of(candidate, cc, screen_height, parts, colour)
+                .map_err(unpack)?;
+            let original = self
+                .original_images(screen_height, parts, colour)
+                .map_err(unpack)?;
+            let reports = (frame_sets.iter())
+                .map(|set| compare_images(original, &images, set))
+                .collect::<Result<_, _>>()?;
+            return Ok((reports, Some(images)));
+        }
+        let (lo, hi) = self.bounds();
+        let oc = self.original.clip_index(self.sampled.clip.as_deref());
+        let (o, c) = (
+            self.scenes(self.original, oc, parts),
+            self.scenes(candidate, cc, parts),
+        );
+        let reports = (frame_sets.iter())
+            .map(|set| {
+                let pick = |scenes: &[DrawScene]| -> Vec<DrawScene> {
+                    set.iter().map(|&f| scenes[f].clone()).collect()
+                };
+                let params = CoverageParams {
+                    frames: set.len() as u32,
+                    ..self.params(screen_height, colour)
+                };
+                coverage_error(self.renderer, &pick(&o), &pick(&c), lo, hi, &params)
+            })
+            .collect::<Result<_, _>>()?;
+        Ok((reports, None))
+    }
+
+    /// The animated coverage error of `candidate` against `reference` (the original when None)
+    /// at `screen_height`, both drawn whole and compared pair by pair: the switch pop where
+    /// the images are too large to keep ([`Measured::images`] is None).
+    pub fn compare_trees(
+        &self,
+        reference: Option<&Tree>,
+        candidate: &Tree,
+        screen_height: f32,
+    ) -> Result<CoverageReport, EvalError> {
+        let reference = reference.unwrap_or(self.original);
+        let clip = |t: &Tree| candidate_clip(t, self.sampled.clip.as_deref());
+        let (lo, hi) = self.bounds();
+        coverage_error(
+            self.renderer,
+            &self.scenes(reference, clip(reference), TreeParts::All),
+            &self.scenes(candidate, clip(candidate), TreeParts::All),
+            lo,
+            hi,
+            &self.params(screen_height, false),
+        )
+        .map_err(EvalError::colour(
+            &candidate.source,
+            "animated coverage metric",
+        ))
     }
 
     /// The animated coverage error of the images `candidate` against those of `reference`
@@ -361,30 +466,36 @@ impl<'a> EvalContext<'a> {
         let original: &'a Tree = self.original;
         let colour_error = EvalError::colour(&original.source, "animated coverage metric");
         // The foliage alone, without colour; a tree without foliage has no such error.
-        let images = self.images_of(candidate, cc, screen_height, TreeParts::Foliage, false)?;
-        let foliage = compare_images(
-            self.original_images(screen_height, TreeParts::Foliage, false)?,
-            &images,
-            &all,
+        let foliage = self.reports(
+            candidate,
+            cc,
+            screen_height,
+            (TreeParts::Foliage, false),
+            &[&all],
         );
         let foliage = match foliage {
-            Ok(r) => coverage_metric(MetricId::CoverageFoliage, &r),
+            Ok((r, _)) => coverage_metric(MetricId::CoverageFoliage, &r[0]),
             Err(MetricError::NothingCovered { .. }) => Metric::skipped(
                 MetricId::CoverageFoliage,
                 "the original has no foliage to cover any pixel",
             ),
             Err(e) => return Err(colour_error(e)),
         };
-        let images = self.images_of(candidate, cc, screen_height, TreeParts::All, true)?;
-        let framing = (images.width, images.height);
-        let orig_images = self.original_images(screen_height, TreeParts::All, true)?;
         // The static metric (F = 1) is the animated one's first frame: the same renders.
-        let stat = compare_images(orig_images, &images, &[0]).map_err(EvalError::colour(
-            &original.source,
-            "static coverage metric",
-        ))?;
-        let anim = compare_images(orig_images, &images, &all).map_err(colour_error)?;
-        drop(images);
+        let (mut reports, _) = self
+            .reports(
+                candidate,
+                cc,
+                screen_height,
+                (TreeParts::All, true),
+                &[&[0], &all],
+            )
+            .map_err(colour_error)?;
+        let (anim, stat) = (reports.remove(1), reports.remove(0));
+        let (lo, hi) = self.bounds();
+        let f = framing(lo, hi, &self.params(screen_height, true))
+            .map_err(EvalError::colour(&original.source, "coverage metric"))?;
+        let framing = (f.width, f.height);
         let t1 = Instant::now();
         let mut report = score(
             self.original,
@@ -418,8 +529,9 @@ impl<'a> EvalContext<'a> {
 pub struct Measured {
     /// The coverage metrics against the original.
     pub report: CoverageReport,
-    /// The candidate's images, to compare it with other models at the same size.
-    pub images: CoverageImages,
+    /// The candidate's images, to compare it with other models at the same size; None when
+    /// too large to keep ([`EvalContext::compare_trees`] compares the models then).
+    pub images: Option<CoverageImages>,
     /// The candidate's depth complexity ([`crate::coverage::depth_complexity`]).
     pub depth_complexity: f64,
     /// The original's, drawn alike.
