@@ -1,8 +1,9 @@
 //! The preview page `frond lod` writes beside its files (`<name>_preview.html`), the batch's
 //! `index.html`, and `frond view`'s server, read back as a browser would: every picture the page
-//! names is there and decodes, stills line up with LOD0's, the difference image's counts are the
-//! page's, flip-books are animated PNGs of the loop, the live view's config names the combined
-//! file's nodes, the whole stays small, and two runs write the same bytes.
+//! names is there and decodes, stills line up with LOD0's, the difference image's covered areas
+//! are the page's, the measured errors are on it, flip-books are animated PNGs of the loop, the
+//! live view's config names the combined file's nodes, the whole stays small, and two runs
+//! write the same bytes.
 //! (`tests/preview_browser.rs` opens the page in Chromium.)
 
 mod common;
@@ -48,14 +49,174 @@ fn png_size(path: &Path) -> (u32, u32) {
     (img.width(), img.height())
 }
 
-/// Pixels of an RGBA PNG equal to `colour`.
-fn count_colour(path: &Path, colour: [u8; 4]) -> usize {
-    let img = image::open(path).expect("decodes").to_rgba8();
-    img.pixels().filter(|p| p.0 == colour).count()
+/// The pixels of a PNG as RGBA8.
+fn rgba(path: &Path) -> Vec<[u8; 4]> {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgba8();
+    img.pixels().map(|p| p.0).collect()
+}
+
+/// The cells of the table row labelled `label`, one per LOD, as HTML.
+fn row_cells(html: &str, label: &str) -> Vec<String> {
+    let head = format!("<tr><td>{label}</td>");
+    let start = html.find(&head).unwrap_or_else(|| panic!("a row {label}")) + head.len();
+    let end = start + html[start..].find("</tr>").expect("the row ends");
+    html[start..end]
+        .split("<td")
+        .skip(1)
+        .map(|c| {
+            let c = &c[c.find('>').expect("a cell") + 1..];
+            c[..c.find("</td>").expect("the cell ends")].to_string()
+        })
+        .collect()
+}
+
+/// LOD `k`'s section of a page.
+fn section(html: &str, k: usize) -> &str {
+    let start = html
+        .find(&format!("<section class=\"lod\" id=\"lod{k}\">"))
+        .unwrap_or_else(|| panic!("a section for LOD{k}"));
+    let end = start + html[start..].find("</section>").expect("the section ends");
+    &html[start..end]
+}
+
+/// What a LOD's still misses and adds against LOD0's, read off the two stills' alpha (each
+/// pixel's covered fraction, to 1/255): (LOD0's area, missing, extra, pixels whose alpha
+/// differ).
+fn still_difference(reference: &[[u8; 4]], lod: &[[u8; 4]]) -> (f64, f64, f64, usize) {
+    let (mut area, mut missing, mut extra, mut differing) = (0.0, 0.0, 0.0, 0);
+    for (r, l) in reference.iter().zip(lod) {
+        let (a0, a) = (f64::from(r[3]) / 255.0, f64::from(l[3]) / 255.0);
+        area += a0;
+        missing += (a0 - a).max(0.0);
+        extra += (a - a0).max(0.0);
+        differing += usize::from(r[3] != l[3]);
+    }
+    (area, missing, extra, differing)
 }
 
 fn sample_run(out: &Path, extra: &[&str]) -> LodReport {
     frond_lod_measured(&root().join("samples/sapling.glb"), out, extra)
+}
+
+/// LOD `k`'s stills in `out` at its size `h` against the page `html`: LOD0, the LOD and their
+/// difference line up, cropped to the tree, filtered, and the page's missing and extra areas
+/// are theirs.
+fn check_stills(out: &Path, html: &str, k: usize, h: f64) -> StillDifference {
+    // The LOD, LOD0 and their difference at the LOD's own size (the coverage metric's framing,
+    // the tree's rest height spanning `h` pixels), cropped alike to the tree.
+    let still = out.join(format!("sapling_preview/lod{k}.png"));
+    let reference = out.join(format!("sapling_preview/lod{k}_lod0.png"));
+    let diff = out.join(format!("sapling_preview/lod{k}_diff.png"));
+    let size = png_size(&still);
+    assert_eq!(png_size(&reference), size, "LOD{k}: LOD0's still lines up");
+    assert_eq!(png_size(&diff), size, "LOD{k}: the difference lines up");
+    let (still, reference, diff) = (rgba(&still), rgba(&reference), rgba(&diff));
+    // LOD0 stands about `h` pixels tall in its still (its rest height spans `h` at the
+    // bounds' centre; a pixel it partly covers at either end counts), and the still is
+    // cropped to it with 2 pixels around.
+    let rows: Vec<usize> = (reference.chunks(size.0 as usize).enumerate())
+        .filter(|(_, row)| row.iter().any(|p| p[3] > 0))
+        .map(|(y, _)| y)
+        .collect();
+    let tall = (rows.last().expect("LOD0 covers some") - rows[0] + 1) as f64;
+    assert!(
+        tall <= h + 2.0 && tall >= 0.9 * h,
+        "LOD{k}: LOD0 {tall} px tall in a still of a tree {h} px high"
+    );
+    assert!(
+        f64::from(size.1) <= tall + 4.0,
+        "LOD{k}: a still {size:?} cropped to a tree {tall} px tall"
+    );
+    // The stills are filtered as a player sees them: edge pixels partly covered.
+    assert!(
+        still.iter().any(|p| p[3] > 0 && p[3] < 255),
+        "LOD{k}: a still with fractional coverage"
+    );
+    // The difference covers what either covers, pixel by pixel.
+    for (i, ((r, l), d)) in reference.iter().zip(&still).zip(&diff).enumerate() {
+        assert!(
+            d[3].abs_diff(r[3].max(l[3])) <= 1,
+            "LOD{k}, pixel {i}: the difference's alpha {} is not max({}, {})",
+            d[3],
+            r[3],
+            l[3]
+        );
+    }
+    // The table's missing and extra areas are the stills' covered fractions': each
+    // pixel's alpha is its fraction to 1/255, and the table writes 3 digits.
+    let (area, missing, extra, differing) = still_difference(&reference, &still);
+    let cells = row_cells(html, "Covered area missing · extra in the still (px)");
+    let (page_missing, page_extra) = cells[k].split_once(" · ").expect("missing · extra");
+    let close = |page: &str, png: f64, what: &str| {
+        let page: f64 = page.parse().expect("a number");
+        let tolerance = differing as f64 / 255.0 + 0.005 * png + 1e-9;
+        assert!(
+            (page - png).abs() <= tolerance,
+            "LOD{k}: the page's {what} {page} px, the stills' {png} (±{tolerance})"
+        );
+    };
+    close(page_missing, missing, "missing");
+    close(page_extra, extra, "extra");
+    assert!(area > 0.0, "LOD{k}: LOD0's still covers something");
+    StillDifference { missing, diff }
+}
+
+/// A LOD's missing area read off its stills, and its difference image's pixels.
+struct StillDifference {
+    missing: f64,
+    diff: Vec<[u8; 4]>,
+}
+
+/// LOD `k`'s measured error `m` is on the page `html`, as the report has it, with its ratio,
+/// switch pop, binary error, rings and samples, in the table and in the LOD's section.
+fn check_measured(html: &str, k: usize, m: &frond_lod::report::MeasuredError) {
+    let sig = frond_preview::units::significant;
+    let ratio = format!("{} %", sig(100.0 * m.coverage_ratio));
+    let binary = m.coverage_binary.map_or("—".into(), sig);
+    let cell = |label: &str| row_cells(html, label)[k].clone();
+    assert!(
+        cell("Coverage error at its own size (target)").contains(&sig(m.coverage)),
+        "LOD{k}: its error {}",
+        m.coverage
+    );
+    assert_eq!(
+        cell("Coverage ratio (covered area, LOD0 = 100 %)"),
+        ratio,
+        "LOD{k}"
+    );
+    assert_eq!(
+        cell("Switch pop (error against the LOD before, at this size)"),
+        sig(m.switch_pop),
+        "LOD{k}"
+    );
+    assert_eq!(
+        cell("<small>Binary error (thesis: covered when ≥ ½ of a pixel is)</small>"),
+        format!("<small>{binary}</small>"),
+        "LOD{k}"
+    );
+    let samples = format!("{0}×{0}", m.samples_per_side);
+    assert_eq!(cell("Samples a pixel"), samples, "LOD{k}");
+    let text = section(html, k);
+    for said in [
+        format!(
+            "<span class=\"{}\">{}</span>",
+            if m.within_target { "ok" } else { "over" },
+            sig(m.coverage)
+        ),
+        format!("It covers {ratio} of LOD0's covered area"),
+        format!(
+            "Switch pop {}: its error against LOD{}",
+            sig(m.switch_pop),
+            k - 1
+        ),
+        format!("{binary}.</small>"),
+        format!("{} views a ring on rings at 0° and 30°", m.views),
+        format!("{samples} samples a pixel"),
+    ] {
+        assert!(text.contains(&said), "LOD{k}'s section says {said}");
+    }
 }
 
 #[test]
@@ -82,6 +243,8 @@ fn lod_writes_a_preview_page_that_shows_every_lod_from_its_written_file() {
         );
     }
     let lods = &report.lods;
+    // Each measured LOD's missing area and difference image.
+    let mut stills: Vec<(usize, StillDifference)> = Vec::new();
     for (k, lod) in lods.iter().enumerate() {
         let file = lod.file.as_str();
         assert!(referenced.contains(file), "the page links {file}");
@@ -104,34 +267,32 @@ fn lod_writes_a_preview_page_that_shows_every_lod_from_its_written_file() {
         let Some(h) = lod.screen_height.map(written_f64) else {
             continue;
         };
-        // The LOD, LOD0 and their difference at the LOD's own size (the image the coverage
-        // metric renders, whose height the tree's bounds span), cropped alike to the tree.
-        let still = out.join(format!("sapling_preview/lod{k}.png"));
-        let reference = out.join(format!("sapling_preview/lod{k}_lod0.png"));
-        let diff = out.join(format!("sapling_preview/lod{k}_diff.png"));
-        let size = png_size(&still);
-        assert_eq!(png_size(&reference), size, "LOD{k}: LOD0's still lines up");
-        assert_eq!(png_size(&diff), size, "LOD{k}: the difference lines up");
-        assert!(
-            f64::from(size.1) <= h && f64::from(size.1) >= 0.5 * h,
-            "LOD{k}: a still {size:?} of a tree {h} px high"
-        );
-        // The page's missing/extra counts are the difference image's red and blue pixels.
-        let missing = count_colour(&diff, frond_preview::stills::MISSING);
-        let extra = count_colour(&diff, frond_preview::stills::EXTRA);
-        let counts = format!(
-            "<td>{} · {}</td>",
-            frond_preview::units::count(missing as u64),
-            frond_preview::units::count(extra as u64)
-        );
-        assert!(html.contains(&counts), "LOD{k}: the table says {counts}");
-        // The measured error is on the page, as the report has it.
-        let e = lod.error.as_ref().expect("measured").coverage;
-        assert!(
-            html.contains(&frond_preview::units::significant(e)),
-            "LOD{k}: its error {e}"
-        );
+        stills.push((k, check_stills(&out, &html, k, h)));
+        check_measured(&html, k, lod.error.as_ref().expect("measured"));
     }
+    // The LOD that thins out most shows what it misses: red, as strong as the fraction of
+    // each pixel missing, not only all or nothing.
+    let thinnest = (lods.iter().enumerate())
+        .filter_map(|(k, l)| Some((k, l.error.as_ref()?.coverage_ratio)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .expect("measured LODs");
+    assert!(thinnest.1 < 1.0, "a LOD thins out: {thinnest:?}");
+    let (_, StillDifference { missing, diff }) = stills
+        .iter()
+        .find(|(k, _)| *k == thinnest.0)
+        .expect("its stills");
+    assert!(*missing > 0.0, "LOD{}: misses some of LOD0", thinnest.0);
+    let red = frond_preview::stills::MISSING;
+    assert!(
+        diff.iter()
+            .any(|p| p[..3] == red[..3] && p[3] > 0 && p[3] < 255),
+        "LOD{}: partly missing pixels in red of their fraction",
+        thinnest.0
+    );
+    assert!(
+        html.contains("each pixel counted by the fraction of it covered"),
+        "the page says what the coverage error is"
+    );
 
     // The cost table reads the written files: each LOD's triangles as the report's cost.
     for lod in lods {

@@ -6,6 +6,7 @@
 
 use std::time::Instant;
 
+use frond_lod::report::MeasuredError;
 use frond_lod::switching::SwitchValues;
 use frond_lod::{LodEntry, LodReport};
 use frond_metrics::{DEFAULT_FOV_DEG, candidate_clip};
@@ -15,8 +16,8 @@ use frond_scene::{FileCost, Tree};
 use crate::error::PreviewError;
 use crate::html::{esc, figure, href, page};
 use crate::stills::{
-    EXTRA, MISSING, PixelDifference, apng, atlas_png, covered_box, crop, difference, png,
-    preview_view, render_pose,
+    EXTRA, FilteredStill, MISSING, PixelDifference, apng, atlas_png, crop, difference, png,
+    preview_view, render_filtered, render_pose, supersampling,
 };
 use crate::units;
 use crate::viewer::{
@@ -71,8 +72,11 @@ struct LodPictures {
     files: Vec<(String, Vec<u8>)>,
     /// The stills' size (cropped to the tree).
     still: [u32; 2],
-    /// The image height the stills were rendered at (the tree's height on screen).
-    screen_height: u32,
+    /// The tree's height in the stills, pixels: the LOD's screen height (LOD0's: the first
+    /// LOD's).
+    tree_height: f32,
+    /// Samples per pixel side of the stills and their difference.
+    samples_per_side: u32,
     flip: [u32; 2],
     /// Frames of its flip-book.
     flip_frames: u32,
@@ -122,7 +126,7 @@ pub fn lod_pictures(
     // still is the reference of the LODs drawn at its size (the same pose, camera and size:
     // the same picture), rendered once.
     let mut pictures: Vec<LodPictures> = Vec::with_capacity(req.lods.len());
-    let mut lod0_still: Option<Frame> = None;
+    let mut lod0_still: Option<FilteredStill> = None;
     for k in 0..req.lods.len() {
         let h = report.lods[k].screen_height.unwrap_or(lod0_height);
         let reference = Reference {
@@ -215,7 +219,7 @@ fn lod_pictures_of(
     k: usize,
     h: f32,
     dir: &str,
-) -> Result<(LodPictures, Frame), PreviewError> {
+) -> Result<(LodPictures, FilteredStill), PreviewError> {
     let report = req.report;
     let tree = req.lods[k];
     let (clip, start) = clip_start(tree, report.clip.as_deref());
@@ -227,27 +231,42 @@ fn lod_pictures_of(
     let (camera, size) = preview_view(req.lods[0], h, fov, resolution)?;
     let camera = &camera;
     let mut posed = PosedTree::new(tree, clip, start, TreeParts::All);
-    let still = render_pose(renderer, tree, posed.scene(), camera, size, "still")?;
+    // Each pixel K×K samples as the coverage metric takes them: the stills are what a player
+    // sees, their difference is judged as the metric judges.
+    let samples = supersampling(h, size, renderer.max_dimension());
+    let still = render_filtered(
+        renderer,
+        tree,
+        posed.scene(),
+        camera,
+        size,
+        samples,
+        "still",
+    )?;
     let mut files = Vec::new();
     let mut diff = PixelDifference::default();
     let rect;
     if k > 0 {
         let rendered;
-        let reference = match reference.still.filter(|f| (f.width, f.height) == size) {
+        let reference = match reference
+            .still
+            .filter(|f| (f.width, f.height, f.samples_per_side) == (size.0, size.1, samples))
+        {
             Some(still) => still,
             None => {
-                rendered = render_pose(
+                rendered = render_filtered(
                     renderer,
                     req.lods[0],
                     reference.scene,
                     camera,
                     size,
+                    samples,
                     "still",
                 )?;
                 &rendered
             }
         };
-        rect = covered_box(&[reference, &still], 2);
+        rect = still.covered_box(Some(reference), 2);
         let (rgba, d) = difference(reference, &still);
         diff = d;
         files.push((
@@ -269,7 +288,7 @@ fn lod_pictures_of(
             )?,
         ));
     } else {
-        rect = covered_box(&[&still], 2);
+        rect = still.covered_box(None, 2);
     }
     files.push((
         format!("{dir}/lod{k}.png"),
@@ -319,7 +338,8 @@ fn lod_pictures_of(
     let pictures = LodPictures {
         files,
         still: [rect[2], rect[3]],
-        screen_height: size.1,
+        tree_height: h,
+        samples_per_side: samples,
         flip: flip.size,
         flip_frames: n,
         atlas,
@@ -333,7 +353,7 @@ fn lod_pictures_of(
 #[derive(Clone, Copy)]
 struct Reference<'a> {
     scene: &'a DrawScene,
-    still: Option<&'a Frame>,
+    still: Option<&'a FilteredStill>,
 }
 
 /// The LOD's clip of the run's clip `name` (as `frond eval` picks it) and the time it starts.
@@ -378,7 +398,8 @@ fn body(report: &LodReport, pictures: &[LodPictures], config: &ViewConfig) -> St
     }
     b.push_str(
         "<footer><p class=\"muted\">Stills, differences and flip-books are frond's own renders \
-         (wood and foliage, textures mip-mapped as engines sample them) from one camera. KB and \
+         (wood and foliage, textures mip-mapped as engines sample them) from one camera; the \
+         stills and differences at the coverage metric's samples a pixel. KB and \
          MB are 1024 and 1024² bytes. The live view is three.js r187, vendored in \
          <code>viewer/</code>.</p></footer>\n",
     );
@@ -589,20 +610,9 @@ fn cost_table(report: &LodReport, pictures: &[LodPictures]) -> String {
             },
         ));
     }
+    t.push_str(&measured_rows(lods));
     t.push_str(&text_row(
-        "Coverage error at its own size (target)",
-        lods.iter().map(|e| match &e.error {
-            Some(m) => format!(
-                "<td class=\"{}\">{} <small>({})</small></td>",
-                if m.within_target { "ok" } else { "over" },
-                units::significant(m.coverage),
-                units::significant(m.max_error)
-            ),
-            None => NONE.into(),
-        }),
-    ));
-    t.push_str(&text_row(
-        "Pixels missing · extra in the still",
+        "Covered area missing · extra in the still (px)",
         pictures.iter().enumerate().map(|(k, p)| {
             let d = p.difference;
             if k == 0 {
@@ -610,14 +620,90 @@ fn cost_table(report: &LodReport, pictures: &[LodPictures]) -> String {
             } else {
                 cell(&format!(
                     "{} · {}",
-                    units::count(d.missing),
-                    units::count(d.extra)
+                    units::significant(d.missing),
+                    units::significant(d.extra)
                 ))
             }
         }),
     ));
-    t.push_str("</table></section>\n");
+    t.push_str("</table>\n");
+    t.push_str(COVERAGE_NOTE);
+    t.push_str("</section>\n");
     t
+}
+
+/// What the coverage measures are, under the cost table.
+const COVERAGE_NOTE: &str = "<p class=\"muted\">The coverage error is the covered area a LOD \
+     misses or adds, over the area LOD0 covers, each pixel counted by the fraction of it covered \
+     (as MSAA, alpha-to-coverage or a distant eye show it), at the LOD's own size: 0 is perfect, \
+     red is over the target. The coverage ratio is the LOD's covered area over LOD0's: below \
+     100 % it thins out, above it bloats. The switch pop is the LOD's error against the LOD \
+     before it at this size, what a player sees change when the engine swaps them. The binary \
+     error is the thesis' rule on the same renders (a pixel covered when half its samples are), \
+     for comparison.</p>\n";
+
+/// The table's rows of the measured errors ([`MeasuredError`]), a cell per LOD (none for a
+/// LOD not measured).
+fn measured_rows(lods: &[LodEntry]) -> String {
+    let row = |label: &str, show: &dyn Fn(&MeasuredError) -> String| {
+        text_row(
+            label,
+            lods.iter()
+                .map(|e| e.error.as_ref().map_or(NONE.into(), show)),
+        )
+    };
+    let mut t = row("Coverage error at its own size (target)", &|m| {
+        format!(
+            "<td class=\"{}\">{} <small>({})</small></td>",
+            if m.within_target { "ok" } else { "over" },
+            units::significant(m.coverage),
+            units::significant(m.max_error)
+        )
+    });
+    t.push_str(&row("Coverage ratio (covered area, LOD0 = 100 %)", &|m| {
+        cell(&format!(
+            "{} %",
+            units::significant(100.0 * m.coverage_ratio)
+        ))
+    }));
+    t.push_str(&row(
+        "Switch pop (error against the LOD before, at this size)",
+        &|m| cell(&units::significant(m.switch_pop)),
+    ));
+    t.push_str(&row(
+        "<small>Binary error (thesis: covered when ≥ ½ of a pixel is)</small>",
+        &|m| cell(&format!("<small>{}</small>", binary(m.coverage_binary))),
+    ));
+    t.push_str(&row("Measured from", &|m| {
+        cell(&format!(
+            "{} views a ring × {} frames <small>{}</small>",
+            m.views,
+            m.frames,
+            esc(&rings(&m.elevations_deg))
+        ))
+    }));
+    t.push_str(&row("Samples a pixel", &|m| {
+        cell(&format!("{0}×{0}", m.samples_per_side))
+    }));
+    t
+}
+
+/// The thesis' binary error, `—` where every pair was discarded.
+fn binary(b: Option<f64>) -> String {
+    b.map_or("—".into(), units::significant)
+}
+
+/// The metric's rings: "the ring at 0°", "rings at 0° and 30°".
+fn rings(elevations_deg: &[f32]) -> String {
+    let deg: Vec<String> = elevations_deg
+        .iter()
+        .map(|&e| format!("{}°", units::significant(f64::from(e))))
+        .collect();
+    match deg.as_slice() {
+        [] => "no rings".into(),
+        [one] => format!("the ring at {one}"),
+        [init @ .., last] => format!("rings at {} and {last}", init.join(", ")),
+    }
 }
 
 /// A cell of the table for a LOD without the value.
@@ -648,11 +734,11 @@ fn distance(d: f32) -> String {
 /// One LOD's section.
 fn lod_section(report: &LodReport, k: usize, e: &LodEntry, p: &LodPictures) -> String {
     let dir = format!("{}_preview", report.name);
-    let h = p.screen_height;
-    // Start magnified so the still reads at about 240 px or more.
-    let zoom = if h >= 240 {
+    let h = units::significant(f64::from(p.tree_height));
+    // Start magnified so the tree reads at about 240 px or more.
+    let zoom = if p.tree_height >= 240.0 {
         1
-    } else if h >= 120 {
+    } else if p.tree_height >= 120.0 {
         2
     } else {
         4
@@ -670,43 +756,34 @@ fn lod_section(report: &LodReport, k: usize, e: &LodEntry, p: &LodPictures) -> S
         esc(&e.method_reason),
     );
     if let Some(m) = &e.error {
-        s.push_str(&format!(
-            "<p>Coverage error at {} px, {} views × {} frames of the loop: <span class=\"{}\">{}</span> \
-             (target {}). Depth complexity {} (the input's {} at this size).</p>\n",
-            m.image[1],
-            m.views,
-            m.frames,
-            if m.within_target { "ok" } else { "over" },
-            units::significant(m.coverage),
-            units::significant(m.max_error),
-            units::significant(m.depth_complexity),
-            units::significant(m.input_depth_complexity),
-        ));
+        s.push_str(&measured_paragraph(k, e, m));
     }
     s.push_str(&format!(
         "<div class=\"zoom\" data-zoom=\"{zoom}\">Stills: <button type=\"button\" data-z=\"1\">1×</button>\
          <button type=\"button\" data-z=\"2\">2×</button><button type=\"button\" data-z=\"4\">4×</button> \
-         <span class=\"muted\">(pixels as a player sees them at {h} px)</span></div>\n<div class=\"row\">"
+         <span class=\"muted\">(pixels as a player sees them, the tree {h} px high; each pixel the mean of {0}×{0} \
+         samples, as opaque as the fraction of them covered)</span></div>\n<div class=\"row\">",
+        p.samples_per_side
     ));
     let size = p.still;
     if k == 0 {
         s.push_str(&figure(
             &format!("{dir}/lod0.png"),
             size,
-            &format!("LOD0 at {h} px"),
+            &format!("LOD0, {h} px high"),
             true,
         ));
     } else {
         s.push_str(&figure(
             &format!("{dir}/lod{k}_lod0.png"),
             size,
-            &format!("LOD0 at {h} px"),
+            &format!("LOD0, {h} px high"),
             true,
         ));
         s.push_str(&figure(
             &format!("{dir}/lod{k}.png"),
             size,
-            &format!("LOD{k} at {h} px, same camera"),
+            &format!("LOD{k}, {h} px high, same camera"),
             true,
         ));
         let d = p.difference;
@@ -714,19 +791,22 @@ fn lod_section(report: &LodReport, k: usize, e: &LodEntry, p: &LodPictures) -> S
             &format!("{dir}/lod{k}_diff.png"),
             size,
             &format!(
-                "Difference: <span class=\"legend\"><span style=\"background:rgb({},{},{})\"></span>missing \
-                 {} px<span style=\"background:rgb({},{},{})\"></span>extra {} px</span> ({} % of LOD0's \
-                 {} px)",
+                "Difference, each pixel {k2}×{k2} samples: <span class=\"legend\"><span \
+                 style=\"background:rgb({},{},{})\"></span>missing {} px<span \
+                 style=\"background:rgb({},{},{})\"></span>extra {} px</span> of LOD0's {} px \
+                 covered: {} %, the coverage error of this one view (colour strength is the \
+                 fraction of a pixel missing or extra)",
                 MISSING[0],
                 MISSING[1],
                 MISSING[2],
-                units::count(d.missing),
+                units::significant(d.missing),
                 EXTRA[0],
                 EXTRA[1],
                 EXTRA[2],
-                units::count(d.extra),
+                units::significant(d.extra),
+                units::significant(d.reference),
                 units::significant(100.0 * d.error()),
-                units::count(d.reference),
+                k2 = p.samples_per_side,
             ),
             true,
         ));
@@ -762,6 +842,47 @@ fn lod_section(report: &LodReport, k: usize, e: &LodEntry, p: &LodPictures) -> S
     s
 }
 
+/// What LOD `k`'s measured error says, in words.
+fn measured_paragraph(k: usize, e: &LodEntry, m: &MeasuredError) -> String {
+    let height = e.screen_height.map_or_else(
+        || m.image[1].to_string(),
+        |h| units::significant(f64::from(h)),
+    );
+    format!(
+        "<p>Coverage error at its own size, the tree {height} px high: <span class=\"{}\">{}</span> \
+         (target {}): the covered area it misses or adds over the area LOD0 covers, each pixel \
+         counted by the fraction of it covered. It covers {} % of LOD0's covered area ({}). \
+         Switch pop {}: its error against LOD{} at this size, what a player sees change when the \
+         engine swaps them. Measured from {} views a ring on {}, × {} frames of the loop, \
+         {}×{} samples a pixel, in {}×{} px images. <small class=\"muted\">Binary error (the \
+         thesis' rule, a pixel covered when half its samples are): {}.</small> Depth complexity \
+         {} (the input's {} at this size).</p>\n",
+        if m.within_target { "ok" } else { "over" },
+        units::significant(m.coverage),
+        units::significant(m.max_error),
+        units::significant(100.0 * m.coverage_ratio),
+        if m.coverage_ratio < 1.0 {
+            "below 100 %: it thins out"
+        } else if m.coverage_ratio > 1.0 {
+            "above 100 %: it bloats"
+        } else {
+            "as much"
+        },
+        units::significant(m.switch_pop),
+        k.saturating_sub(1),
+        m.views,
+        esc(&rings(&m.elevations_deg)),
+        m.frames,
+        m.samples_per_side,
+        m.samples_per_side,
+        m.image[0],
+        m.image[1],
+        binary(m.coverage_binary),
+        units::significant(m.depth_complexity),
+        units::significant(m.input_depth_complexity),
+    )
+}
+
 /// The zoom buttons of the stills: each section's pictures at 1×, 2× or 4× their pixels.
 const ZOOM_JS: &str = r#"<script>
 for (const bar of document.querySelectorAll('.zoom')) {
@@ -778,3 +899,64 @@ for (const bar of document.querySelectorAll('.zoom')) {
 }
 </script>
 "#;
+
+#[cfg(test)]
+mod tests {
+    use frond_lod::method_api::MethodName;
+
+    use super::*;
+
+    fn measured(ratio: f64, binary: Option<f64>) -> MeasuredError {
+        MeasuredError {
+            coverage: 0.123,
+            coverage_ratio: ratio,
+            coverage_binary: binary,
+            switch_pop: 0.0456,
+            max_error: 0.1,
+            within_target: false,
+            image: [98, 114],
+            samples_per_side: 17,
+            views: 5,
+            elevations_deg: vec![0.0, 30.0],
+            frames: 5,
+            depth_complexity: 3.0,
+            input_depth_complexity: 11.0,
+        }
+    }
+
+    #[test]
+    fn measured_rows_show_error_ratio_pop_binary_rings_and_samples() {
+        let lod0 = LodEntry::new(MethodName::INPUT, "the input");
+        let mut lod1 = LodEntry::new(MethodName::INPUT, "thinned");
+        lod1.error = Some(measured(0.97, None));
+        let mut lod2 = lod1.clone();
+        lod2.error = Some(measured(1.25, Some(0.111)));
+        let rows = measured_rows(&[lod0, lod1.clone(), lod2]);
+        assert!(
+            rows.contains("<td class=\"over\">0.123 <small>(0.1)</small></td>"),
+            "over its target: red: {rows}"
+        );
+        assert!(rows.contains("<td>97 %</td><td>125 %</td>"), "{rows}");
+        assert!(rows.contains("<td>0.0456</td>"), "{rows}");
+        assert!(
+            rows.contains("<td><small>—</small></td><td><small>0.111</small></td>"),
+            "{rows}"
+        );
+        assert!(rows.contains("rings at 0° and 30°"), "{rows}");
+        assert!(rows.contains("<td>17×17</td>"), "{rows}");
+        assert_eq!(rows.matches(NONE).count(), 6, "LOD0 is not measured");
+
+        let p = measured_paragraph(1, &lod1, lod1.error.as_ref().expect("measured"));
+        assert!(p.contains("It covers 97 % of LOD0's covered area (below 100 %: it thins out)"));
+        assert!(p.contains("Switch pop 0.0456: its error against LOD0"));
+        assert!(p.contains("Binary error"));
+        assert!(p.contains("—.</small>"));
+    }
+
+    #[test]
+    fn rings_read_as_a_list() {
+        assert_eq!(rings(&[0.0]), "the ring at 0°");
+        assert_eq!(rings(&[0.0, 30.0]), "rings at 0° and 30°");
+        assert_eq!(rings(&[-10.0, 0.0, 45.5]), "rings at -10°, 0° and 45.5°");
+    }
+}

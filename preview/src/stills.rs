@@ -1,11 +1,14 @@
 //! The pictures of a preview, all from frond's own renderer: a LOD at its screen height beside
 //! LOD0 from the same camera, the difference of the two, the wind loop as an animated PNG, and
-//! the LOD's atlas.
+//! the LOD's atlas. Stills and differences take the coverage metric's `K × K` samples a pixel
+//! (spec animated-billboard-clouds §5.4): a pixel is as opaque as the fraction of it covered, and
+//! the difference counts the fractions the metric counts.
 
-use frond_metrics::{CoverageParams, framing};
+use frond_metrics::{CoverageParams, framing, samples_per_side};
 use frond_render::{Camera, DrawScene, Frame, Renderer};
 use frond_scene::Tree;
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::error::PreviewError;
 
@@ -62,79 +65,228 @@ pub fn render_pose(
         })
 }
 
-/// What a LOD misses and adds against LOD0 at the same size, in pixels.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+/// Largest side, in pixels, of the supersampled render a filtered still is resolved from
+/// ([`supersampling`]): well within every device's texture limit, and 64 MB of colour.
+pub const MAX_SUPERSAMPLED_SIDE: u32 = 4096;
+
+/// Samples per pixel side a still of `size` pixels of a tree `screen_height` pixels tall is
+/// drawn with: the coverage metric's `K` ([`samples_per_side`]), lowered where `K` times the
+/// still's larger side would pass `max_side` pixels (the renderer's limit) or
+/// [`MAX_SUPERSAMPLED_SIDE`]; at least 1.
+pub fn supersampling(screen_height: f32, size: (u32, u32), max_side: u32) -> u32 {
+    let fit = max_side.min(MAX_SUPERSAMPLED_SIDE) / size.0.max(size.1).max(1);
+    samples_per_side(screen_height).min(fit).max(1)
+}
+
+/// A still as the coverage metric sees it: each pixel `K × K` samples, the fraction of them
+/// covered its coverage α (as MSAA, alpha-to-coverage or a distant eye show a leaf), and its
+/// picture as a player sees it: the covered samples' mean colour, alpha the covered fraction.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FilteredStill {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Samples per pixel side, `K`.
+    pub samples_per_side: u32,
+    /// Covered samples of each pixel, row-major, top row first (at most `K²`).
+    pub covered: Vec<u32>,
+    /// `width * height * 4` bytes of sRGB RGBA8, straight alpha: per pixel the mean colour of
+    /// its covered samples (averaged in linear light), alpha the covered fraction.
+    pub rgba: Vec<u8>,
+}
+
+impl FilteredStill {
+    /// The covered fraction α of pixel `i` (0 outside the image).
+    pub fn fraction(&self, i: usize) -> f64 {
+        let n = f64::from(self.samples_per_side * self.samples_per_side);
+        self.covered
+            .get(i)
+            .map_or(0.0, |&c| if n > 0.0 { f64::from(c) / n } else { 0.0 })
+    }
+
+    /// The still of `frame`, drawn `k` times its size (`width · k × height · k`): each pixel's
+    /// `k × k` samples counted and their colour averaged.
+    pub fn resolve(frame: &Frame, k: u32) -> FilteredStill {
+        let k = k.max(1);
+        let (width, height) = (frame.width / k, frame.height / k);
+        let (w, ku, big_w) = (width as usize, k as usize, frame.width as usize);
+        let linear = &*frond_render::SRGB_LINEAR;
+        let n = f64::from(k * k);
+        let mut covered = vec![0u32; w * height as usize];
+        let mut rgba = vec![0u8; 4 * w * height as usize];
+        // Rows are independent (each pixel's sum is in a fixed order): the same bytes on any
+        // number of threads.
+        covered
+            .par_chunks_mut(w.max(1))
+            .zip(rgba.par_chunks_mut(4 * w.max(1)))
+            .enumerate()
+            .for_each(|(y, (count_row, rgba_row))| {
+                for x in 0..w {
+                    let (mut c, mut sum) = (0u32, [0.0f32; 3]);
+                    for dy in 0..ku {
+                        let row = (y * ku + dy) * big_w + x * ku;
+                        for i in row..row + ku {
+                            if frame.coverage.get(i).copied().unwrap_or(false) {
+                                c += 1;
+                                for (ch, v) in sum.iter_mut().enumerate() {
+                                    let byte = frame.rgba.get(4 * i + ch).copied().unwrap_or(0);
+                                    *v += linear[usize::from(byte)];
+                                }
+                            }
+                        }
+                    }
+                    count_row[x] = c;
+                    if c > 0 {
+                        let px = &mut rgba_row[4 * x..4 * x + 4];
+                        for (o, v) in px.iter_mut().zip(sum) {
+                            *o = frond_render::linear_to_srgb(v / c as f32);
+                        }
+                        px[3] = (255.0 * f64::from(c) / n).round() as u8;
+                    }
+                }
+            });
+        FilteredStill {
+            width,
+            height,
+            samples_per_side: k,
+            covered,
+            rgba,
+        }
+    }
+
+    /// The smallest rectangle holding every pixel `self` or `other` (same size) covers at
+    /// all, grown by `pad` pixels within the image ([`covered_rect`]).
+    pub fn covered_box(&self, other: Option<&FilteredStill>, pad: u32) -> [u32; 4] {
+        covered_rect(self.width, self.height, pad, |i| {
+            self.covered[i] > 0 || other.is_some_and(|o| o.covered.get(i).is_some_and(|&c| c > 0))
+        })
+    }
+}
+
+/// A posed tree's still (`tree` names it in errors) at `size` pixels, drawn `k` times that
+/// size by [`render_pose`] and resolved into each pixel's covered fraction and mean colour
+/// ([`FilteredStill::resolve`]).
+pub fn render_filtered(
+    renderer: &Renderer,
+    tree: &Tree,
+    scene: &DrawScene,
+    camera: &Camera,
+    size: (u32, u32),
+    k: u32,
+    what: &'static str,
+) -> Result<FilteredStill, PreviewError> {
+    let k = k.max(1);
+    let frame = render_pose(
+        renderer,
+        tree,
+        scene,
+        camera,
+        (size.0 * k, size.1 * k),
+        what,
+    )?;
+    Ok(FilteredStill::resolve(&frame, k))
+}
+
+/// What a LOD misses and adds against LOD0 at the same size, in pixels, each pixel counted by
+/// its covered fraction α as the coverage metric counts it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PixelDifference {
-    /// Pixels LOD0 covers.
-    pub reference: u64,
-    /// Pixels LOD0 covers and the LOD does not.
-    pub missing: u64,
-    /// Pixels the LOD covers and LOD0 does not.
-    pub extra: u64,
+    /// LOD0's covered area, `Σ α_LOD0`.
+    pub reference: f64,
+    /// The area LOD0 covers and the LOD does not, `Σ max(α_LOD0 − α_LOD, 0)`.
+    pub missing: f64,
+    /// The area the LOD covers and LOD0 does not, `Σ max(α_LOD − α_LOD0, 0)`.
+    pub extra: f64,
 }
 
 impl PixelDifference {
-    /// Missing plus extra pixels over LOD0's covered ones (the coverage metric's score of this
-    /// one view and frame).
+    /// Missing plus extra area over LOD0's covered area: the coverage metric's score of this
+    /// one view and frame (`Σ|α_LOD0 − α_LOD| / Σα_LOD0`); 0 when LOD0 covers nothing.
     pub fn error(&self) -> f64 {
-        if self.reference == 0 {
-            0.0
+        if self.reference > 0.0 {
+            (self.missing + self.extra) / self.reference
         } else {
-            (self.missing + self.extra) as f64 / self.reference as f64
+            0.0
         }
     }
 }
 
-/// Colour of a pixel LOD0 covers and the LOD misses.
+/// Colour of the area LOD0 covers and the LOD misses.
 pub const MISSING: [u8; 4] = [230, 40, 40, 255];
-/// Colour of a pixel the LOD covers and LOD0 does not.
+/// Colour of the area the LOD covers and LOD0 does not.
 pub const EXTRA: [u8; 4] = [30, 120, 255, 255];
 
-/// The difference image of `lod` against `reference` (same size): [`MISSING`] and [`EXTRA`]
-/// pixels in colour, pixels both cover in the LOD's colour faded to grey, the rest transparent.
-pub fn difference(reference: &Frame, lod: &Frame) -> (Vec<u8>, PixelDifference) {
+/// The difference image of `lod` against `reference` (same size), each pixel split as its
+/// samples are: the part both cover in the LOD's colour faded to grey, the part LOD0 covers
+/// beyond the LOD in [`MISSING`] (or the part the LOD covers beyond LOD0 in [`EXTRA`]), the
+/// pixel's colour their area-weighted mean and its alpha the area either covers,
+/// `max(α_LOD0, α_LOD)`: a pixel LOD0 fully covers and the LOD not at all is opaque red, one
+/// it covers a quarter of and the LOD not at all red at a quarter opacity.
+pub fn difference(reference: &FilteredStill, lod: &FilteredStill) -> (Vec<u8>, PixelDifference) {
     let mut out = vec![0u8; lod.rgba.len()];
     let mut d = PixelDifference::default();
-    for (i, (&r, &l)) in reference.coverage.iter().zip(&lod.coverage).enumerate() {
-        let px = &mut out[4 * i..4 * i + 4];
-        d.reference += u64::from(r);
-        match (r, l) {
-            (true, false) => {
-                d.missing += 1;
-                px.copy_from_slice(&MISSING);
-            }
-            (false, true) => {
-                d.extra += 1;
-                px.copy_from_slice(&EXTRA);
-            }
-            (true, true) => {
-                let c = &lod.rgba[4 * i..4 * i + 3];
-                let grey = (u32::from(c[0]) + u32::from(c[1]) + u32::from(c[2])) / 3;
-                for (o, &v) in px.iter_mut().zip(c) {
-                    *o = ((u32::from(v) + 3 * grey) / 4 / 2 + 100) as u8;
-                }
-                px[3] = 255;
-            }
-            (false, false) => {}
+    for (i, px) in out.chunks_exact_mut(4).enumerate() {
+        let (r, l) = (reference.fraction(i), lod.fraction(i));
+        d.reference += r;
+        let both = r.min(l);
+        let (part, colour) = if r > l {
+            d.missing += r - l;
+            (r - l, MISSING)
+        } else {
+            d.extra += l - r;
+            (l - r, EXTRA)
+        };
+        let area = both + part;
+        if area <= 0.0 {
+            continue;
         }
+        let faded = faded(&lod.rgba[4 * i..4 * i + 3]);
+        for (c, o) in px[..3].iter_mut().enumerate() {
+            let v = (both * f64::from(faded[c]) + part * f64::from(colour[c])) / area;
+            *o = v.round() as u8;
+        }
+        px[3] = (255.0 * area).round() as u8;
     }
     (out, d)
 }
 
+/// An sRGB colour faded towards a light grey: where both cover, the LOD's shape is seen
+/// without drawing the eye from the missing and extra parts.
+fn faded(c: &[u8]) -> [u8; 3] {
+    let grey = (u32::from(c[0]) + u32::from(c[1]) + u32::from(c[2])) / 3;
+    std::array::from_fn(|i| ((u32::from(c[i]) + 3 * grey) / 4 / 2 + 100) as u8)
+}
+
 /// The smallest rectangle `[x, y, width, height]` holding every covered pixel of `frames` (all
-/// of one size), grown by `pad` pixels within the image: the stills are cropped to it, the same
-/// for LOD0 and the LOD so they still line up. The whole image when nothing is covered.
+/// of one size), grown by `pad` pixels within the image: the flip-books are cropped to it.
+/// The whole image when nothing is covered.
 pub fn covered_box(frames: &[&Frame], pad: u32) -> [u32; 4] {
     let Some(first) = frames.first() else {
         return [0, 0, 0, 0];
     };
-    let (w, h) = (first.width, first.height);
+    covered_rect(first.width, first.height, pad, |i| {
+        frames
+            .iter()
+            .any(|f| f.coverage.get(i).copied().unwrap_or(false))
+    })
+}
+
+/// The smallest rectangle `[x, y, width, height]` of a `width × height` image holding every
+/// pixel `i` (row-major) that `covered(i)`, grown by `pad` pixels within the image: the stills
+/// of LOD0 and a LOD are cropped to the same one, so they still line up. The whole image when
+/// nothing is covered.
+pub fn covered_rect(
+    width: u32,
+    height: u32,
+    pad: u32,
+    covered: impl Fn(usize) -> bool,
+) -> [u32; 4] {
+    let (w, h) = (width, height);
     let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
-    for f in frames {
-        for (i, _) in f.coverage.iter().enumerate().filter(|(_, c)| **c) {
-            let (x, y) = (i as u32 % w, i as u32 / w);
-            (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1));
-        }
+    for i in (0..w as usize * h as usize).filter(|&i| covered(i)) {
+        let (x, y) = (i as u32 % w, i as u32 / w);
+        (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1));
     }
     if x1 <= x0 || y1 <= y0 {
         return [0, 0, w, h];
@@ -263,24 +415,116 @@ mod tests {
         }
     }
 
+    /// A one-row still of `K = 2` (4 samples a pixel) covering `covered[i]` samples of pixel
+    /// `i`, in one green.
+    fn still(covered: &[u32]) -> FilteredStill {
+        FilteredStill {
+            width: covered.len() as u32,
+            height: 1,
+            samples_per_side: 2,
+            covered: covered.to_vec(),
+            rgba: covered
+                .iter()
+                .flat_map(|&c| {
+                    if c > 0 {
+                        [90, 120, 60, (255 * c / 4) as u8]
+                    } else {
+                        [0; 4]
+                    }
+                })
+                .collect(),
+        }
+    }
+
     #[test]
-    fn difference_counts_and_colours_missing_and_extra_pixels() {
-        let reference = frame(&[true, true, false, false, true]);
-        let lod = frame(&[true, false, true, false, true]);
+    fn difference_sums_covered_fractions_as_the_metric_does() {
+        // Pixel by pixel (of 4 samples): both full; LOD0 full, the LOD a quarter (¾ missing);
+        // LOD0 none, the LOD half (½ extra); neither; LOD0 a quarter, the LOD none.
+        let reference = still(&[4, 4, 0, 0, 1]);
+        let lod = still(&[4, 1, 2, 0, 0]);
         let (rgba, d) = difference(&reference, &lod);
         assert_eq!(
             d,
             PixelDifference {
-                reference: 3,
-                missing: 1,
-                extra: 1
+                reference: 2.25,
+                missing: 1.0,
+                extra: 0.5
             }
         );
-        assert!((d.error() - 2.0 / 3.0).abs() < 1e-12);
-        assert_eq!(&rgba[4..8], &MISSING);
-        assert_eq!(&rgba[8..12], &EXTRA);
-        assert_eq!(rgba[12 + 3], 0, "neither covers: transparent");
-        assert_eq!(rgba[3], 255, "both cover: opaque");
+        assert!((d.error() - 1.5 / 2.25).abs() < 1e-12);
+        let px = |i: usize| &rgba[4 * i..4 * i + 4];
+        assert_eq!(px(0)[3], 255, "both cover all of it: opaque");
+        assert_eq!(px(3)[3], 0, "neither covers: transparent");
+        // Only missing or only extra: the pure colour, as opaque as the fraction.
+        assert_eq!(
+            px(2),
+            &[EXTRA[0], EXTRA[1], EXTRA[2], 128][..],
+            "half extra"
+        );
+        assert_eq!(
+            px(4),
+            &[MISSING[0], MISSING[1], MISSING[2], 64][..],
+            "a quarter missing"
+        );
+        // Three quarters missing beside a quarter both cover: opaque, mostly red.
+        let faded = faded(&[90, 120, 60]);
+        let mix = |c: usize| (0.25 * f64::from(faded[c]) + 0.75 * f64::from(MISSING[c])).round();
+        assert_eq!(px(1), &[mix(0) as u8, mix(1) as u8, mix(2) as u8, 255][..]);
+
+        // A LOD against itself: nothing missing, nothing extra.
+        let (same, d) = difference(&reference, &reference);
+        assert_eq!((d.missing, d.extra, d.error()), (0.0, 0.0, 0.0));
+        assert_eq!(d.reference, 2.25);
+        assert!(
+            same.chunks_exact(4)
+                .all(|p| p[..3] != MISSING[..3] && p[..3] != EXTRA[..3]),
+            "no red or blue: {same:?}"
+        );
+    }
+
+    #[test]
+    fn resolved_still_counts_samples_and_averages_their_colour_in_linear_light() {
+        // A 4×2 render at K = 2: pixel 0 has 3 of its 4 samples covered, white and black,
+        // pixel 1 none.
+        let (white, black) = ([255, 255, 255, 255], [0, 0, 0, 255]);
+        let rgba: Vec<u8> = [white, white, [0; 4], [0; 4], black, [0; 4], [0; 4], [0; 4]].concat();
+        let frame = Frame {
+            width: 4,
+            height: 2,
+            coverage: rgba.chunks_exact(4).map(|p| p[3] > 0).collect(),
+            rgba,
+        };
+        let s = FilteredStill::resolve(&frame, 2);
+        assert_eq!((s.width, s.height, s.samples_per_side), (2, 1, 2));
+        assert_eq!(s.covered, vec![3, 0]);
+        assert_eq!(s.fraction(0), 0.75);
+        // Two thirds of white in linear light is sRGB 213, not the byte mean 170.
+        let grey = frond_render::linear_to_srgb(2.0 / 3.0);
+        assert_eq!(&s.rgba[..4], &[grey, grey, grey, 191]);
+        assert_eq!(&s.rgba[4..], &[0; 4]);
+        assert_eq!(s.covered_box(None, 0), [0, 0, 1, 1]);
+    }
+
+    #[test]
+    fn supersampling_is_the_metrics_within_the_side_limit() {
+        assert_eq!(
+            supersampling(100.0, (120, 130), 16384),
+            samples_per_side(100.0)
+        );
+        // 20 × 130 px would be 2600: within 4096.
+        assert_eq!(supersampling(50.0, (60, 130), 16384), 20);
+        // A tree 8 px tall on a 2000 px wide image: 2 samples a side fit 4096.
+        assert_eq!(supersampling(8.0, (2000, 10), 16384), 2);
+        assert_eq!(
+            supersampling(8.0, (2000, 10), 2048),
+            1,
+            "the device's limit"
+        );
+        assert_eq!(
+            supersampling(8.0, (9000, 10), 16384),
+            1,
+            "at least one sample"
+        );
     }
 
     #[test]
