@@ -14,10 +14,12 @@
 //! every view, the rest bounds grown by [`SWAY_MARGIN`] of the tree's height on each side (the
 //! wind moves the crown; a LOD that bloats must still be seen).
 //!
-//! A tree nearer than [`MIN_DISTANCE_RADII`] bounding radii would put part of the crown beside
-//! or behind the eye (a tree taller than the screen); its screen is then taken larger, the
-//! same field of view, so that the camera stands there (a 2,000 px tree is seen as on a
-//! screen tall enough to hold it).
+//! A camera nearer than [`MIN_DISTANCE_RADII`] bounding radii (a tree filling more than about
+//! a third of the screen) would see the crown's near side many times larger than its far side
+//! and need an image several times the tree's size (at 2,000 px, tens of millions of pixels);
+//! its screen is then taken larger, the same field of view, so that the camera stands there.
+//! The tree's height still spans `H` pixels; only the perspective is that of a farther view.
+//! On the default screen (1,080 px, 60°) this applies above about 400 px.
 //!
 //! # Views
 //!
@@ -41,7 +43,7 @@ use crate::coverage::{CoverageParams, MetricError};
 pub const SWAY_MARGIN: f32 = 0.1;
 
 /// The nearest a camera stands to the tree's centre, in radii of its rest bounds' sphere.
-pub const MIN_DISTANCE_RADII: f32 = 1.5;
+pub const MIN_DISTANCE_RADII: f32 = 3.0;
 
 /// Samples over the tree's height the metric takes at least ([`samples_per_side`]): a leaf a
 /// hundredth of the tree's height spans five samples across at any size, which resolves its
@@ -156,7 +158,7 @@ pub fn framing(
                 if k & 4 == 0 { grown_lo.z } else { grown_hi.z },
             );
             let v = view.transform_point3(corner);
-            // In front of the eye: the distance is at least 1.5 radii, the margin under 0.5.
+            // In front of the eye: the distance is at least 3 radii, the margin under 0.5.
             let depth = (-v.z).max(1e-3 * distance);
             half_w = half_w.max(v.x.abs() * focal / depth);
             half_h = half_h.max(v.y.abs() * focal / depth);
@@ -262,8 +264,9 @@ mod tests {
                 let mid = pixel(&f, camera, centre);
                 assert!((mid.0 - f.width as f32 / 2.0).abs() < 1e-2, "{mid:?}");
             }
-            // The switch values' distance: d = h / (2 (H/R) tan(φ/2)).
+            // The switch values' distance, d = h / (2 (H/R) tan(φ/2)), from 3 radii on.
             let d = 10.0 / (2.0 * (h / 1080.0) * 30f32.to_radians().tan());
+            let d = d.max(3.0 * (hi - lo).length() * 0.5);
             assert!(
                 (f.distance - d).abs() < 1e-4 * d,
                 "{h}: {} vs {d}",
@@ -297,10 +300,10 @@ mod tests {
                 }
             }
         }
-        // A tree taller than the screen is seen from 1.5 radii.
+        // A tree taller than a third of the screen is seen from 3 radii.
         let f = framing(lo, hi, &params(2000.0)).expect("framing");
         let radius = (hi - lo).length() * 0.5;
-        assert!((f.distance - 1.5 * radius).abs() < 1e-4 * radius);
+        assert!((f.distance - 3.0 * radius).abs() < 1e-4 * radius);
     }
 
     #[test]
