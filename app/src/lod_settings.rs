@@ -393,8 +393,9 @@ impl BuildSettings {
     }
 }
 
-/// The coverage error each LOD should stay within by default (see [`LodSettings::max_error`]).
-pub const DEFAULT_MAX_ERROR: f32 = 0.15;
+/// The coverage error each LOD should stay within by default (see [`LodSettings::max_error`]):
+/// a tenth of the covered area missing or extra at the LOD's own size, the far end's target.
+pub const DEFAULT_MAX_ERROR: f32 = 0.10;
 
 /// Everything one `frond lod` run is asked.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -56,14 +56,15 @@ pub struct LodArgs {
     #[arg(long, default_value_t = 0.5, value_parser = parse_ratio)]
     pub triangle_ratio: f32,
     /// Coverage error each LOD should stay within, seen at its own screen height (frond eval's
-    /// `coverage.animated.mean` at `--screen-height H`). Measured on the written files and
-    /// reported per LOD; a LOD over it is still written, at its budget, with a warning (budgets
-    /// come first). The default is the worst the default card LODs reach at 200 px on the
-    /// shared trees (0.14).
+    /// `coverage.animated.mean` at `--screen-height H`): the covered area it misses or adds
+    /// over the input's, each pixel counted by the fraction of it covered. Measured on the
+    /// written files and reported per LOD; a LOD over it is still written, at its budget, with
+    /// a warning (budgets come first).
     #[arg(long, default_value_t = DEFAULT_MAX_ERROR, value_parser = parse_ratio)]
     pub max_error: f32,
     /// Skip measuring each LOD's error after writing it (the measurement renders the input and
-    /// every LOD from five views over five frames at the LOD's size).
+    /// every LOD from five views on each of two rings, 0° and 30°, over five frames at the
+    /// LOD's size).
     #[arg(long)]
     pub no_measure: bool,
     /// Skip `<name>_preview.html`, the page showing each LOD at its screen size beside LOD0,
