@@ -57,7 +57,11 @@ fn assert_floor(name: &str, report: &LodReport) {
             "{name} at {h} px: ratio {}",
             e.coverage_ratio
         );
-        assert!(e.switch_pop <= FLOOR, "{name} at {h} px: pop {}", e.switch_pop);
+        assert!(
+            e.switch_pop <= FLOOR,
+            "{name} at {h} px: pop {}",
+            e.switch_pop
+        );
     }
 }
 
@@ -69,7 +73,12 @@ fn numbers_at_every_size(tree: &Path, lod: &Path, sizes: &[&str], extra: &[&str]
         args.extend_from_slice(extra);
         let same = frond_eval(tree, tree, &args);
         let c = &same.coverage;
-        assert_eq!(c.animated.mean, Some(0.0), "{} against itself at {h} px", tree.display());
+        assert_eq!(
+            c.animated.mean,
+            Some(0.0),
+            "{} against itself at {h} px",
+            tree.display()
+        );
         assert_eq!(c.ratio, 1.0, "{h} px");
         let other = frond_eval(tree, lod, &args);
         let c = &other.coverage;
@@ -98,7 +107,12 @@ fn the_sample_scores_zero_against_itself_and_a_number_against_a_lod_from_8_to_20
     let lod = dir.path().join(&report.lods[1].file);
     // One view and frame at the ends of the range: the renders are the large ones.
     numbers_at_every_size(&sample, &lod, &["20", "60", "200"], &[]);
-    numbers_at_every_size(&sample, &lod, &["8", "2000"], &["--views", "1", "--frames", "1"]);
+    numbers_at_every_size(
+        &sample,
+        &lod,
+        &["8", "2000"],
+        &["--views", "1", "--frames", "1"],
+    );
 }
 
 #[test]

@@ -296,8 +296,8 @@ fn fill_switching(tree: &Tree, req: &LodRequest, report: &mut LodReport) {
 
 /// Views and frames of the measured error: `frond eval`'s defaults, so the report's number is
 /// the one `frond eval INPUT LOD --screen-height H` prints.
-const MEASURE_VIEWS: u32 = 5;
-const MEASURE_FRAMES: u32 = 5;
+const MEASURE_VIEWS: u32 = frond_metrics::DEFAULT_VIEWS;
+const MEASURE_FRAMES: u32 = frond_metrics::DEFAULT_FRAMES;
 
 /// Every LOD after LOD0 read back from its staged file as `frond eval` reads a candidate, in
 /// the report's order.

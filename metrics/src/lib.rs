@@ -29,8 +29,8 @@ pub mod triangle_metrics;
 
 pub use coverage::{
     BinaryCoverage, CoverageImages, CoverageParams, CoverageReport, DEFAULT_ELEVATIONS_DEG,
-    DEFAULT_FOV_DEG, DEFAULT_RESOLUTION, MetricError, Rasteriser, compare_images, coverage_error,
-    coverage_images, depth_complexity,
+    DEFAULT_FOV_DEG, DEFAULT_FRAMES, DEFAULT_RESOLUTION, DEFAULT_VIEWS, MetricError, Rasteriser,
+    compare_images, coverage_error, coverage_images, depth_complexity,
 };
 pub use eval::{EvalContext, EvalError, EvalRequest, Measured, candidate_clip, evaluate};
 pub use framing::{Framing, framing, ring_azimuth_deg, samples_per_side};

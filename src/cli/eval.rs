@@ -20,11 +20,11 @@ pub struct EvalArgs {
     /// The candidate model (.glb/.gltf); a `frond lod` LOD's `.mapping.json` beside it
     /// enables the per-triangle metrics.
     pub candidate: PathBuf,
-    /// Ring views of the colour metric.
-    #[arg(long, default_value_t = 5)]
+    /// Views per ring of the coverage metrics (two rings: 0° and 30°).
+    #[arg(long, default_value_t = frond_metrics::DEFAULT_VIEWS)]
     pub views: u32,
-    /// Frames of the animated colour metric, uniform over the loop.
-    #[arg(long, default_value_t = 5)]
+    /// Frames of the animated coverage metrics, uniform over the loop.
+    #[arg(long, default_value_t = frond_metrics::DEFAULT_FRAMES)]
     pub frames: u32,
     /// Judge the candidate with the tree seen this many pixels high (its rest height on
     /// screen, as `frond lod` sizes LODs): a LOD at its own size.

@@ -63,7 +63,7 @@ pub struct LodArgs {
     #[arg(long, default_value_t = DEFAULT_MAX_ERROR, value_parser = parse_ratio)]
     pub max_error: f32,
     /// Skip measuring each LOD's error after writing it (the measurement renders the input and
-    /// every LOD from five views on each of two rings, 0° and 30°, over five frames at the
+    /// every LOD from five views on each of two rings, 0° and 30°, over three frames at the
     /// LOD's size).
     #[arg(long)]
     pub no_measure: bool,
