@@ -10,8 +10,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use common::{fixture, frond, frond_ok, parse_json, read_json, root, validate};
-use frond_app::batch::summary::{BatchSummary, Status, TreeEntry};
-use frond_metrics::MetricId;
+use frond_app::batch::summary::{BatchSummary, LodMetric, Status, TreeEntry};
 
 /// Small, quick settings for every batch here.
 const FAST: &[&str] = &["--lods", "100,30", "--samples", "16", "--planes", "60"];
@@ -377,6 +376,50 @@ fn broken_files_are_isolated_with_one_error_line_each() {
     assert_eq!(csv.lines().count(), 6);
 }
 
+/// `--eval`'s numbers of a tree of one LOD: every summary number for LOD1, evaluated at its
+/// size, the coverage errors fractions of the tree's area, the covered area about the tree's;
+/// none for LOD0, the input.
+fn check_eval_numbers(t: &TreeEntry) {
+    let lod1 = &t.lods[1];
+    assert_eq!(
+        lod1.metrics.keys().copied().collect::<Vec<_>>(),
+        LodMetric::ALL,
+        "{}",
+        t.tree
+    );
+    for m in [
+        LodMetric::CoverageStatic,
+        LodMetric::CoverageAnimated,
+        LodMetric::CoverageFoliage,
+    ] {
+        let cov = lod1.metric(m).unwrap_or(f64::NAN);
+        assert!((0.0..1.0).contains(&cov), "{}: {m:?} {cov}", t.tree);
+    }
+    let ratio = lod1.metric(LodMetric::CoverageRatio).unwrap_or(f64::NAN);
+    assert!(
+        (0.5..1.5).contains(&ratio),
+        "{}: coverage ratio {ratio}",
+        t.tree
+    );
+    assert!(lod1.metric(LodMetric::DominatingAxis).is_some());
+    assert!(t.lods[0].metrics.is_empty(), "LOD0 is the input");
+}
+
+/// `summary.csv` at `path` has a column per summary number, last, and its first tree's line
+/// is `first`'s: LOD0's cell empty before LOD1's value.
+fn check_csv_numbers(path: &Path, first: &TreeEntry) {
+    let csv = std::fs::read_to_string(path).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let keys: Vec<&str> = LodMetric::ALL.iter().map(|m| m.key()).collect();
+    assert_eq!(header[header.len() - keys.len()..], keys[..]);
+    let ratio = first.lods[1].metric(LodMetric::CoverageRatio).unwrap();
+    // (The metric cells are last and hold no comma; the settings' JSON before them does.)
+    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let from_end = header.len() - header.iter().position(|h| *h == "coverage_ratio").unwrap();
+    assert_eq!(row[row.len() - from_end], format!(";{ratio:.5}"));
+}
+
 #[test]
 fn manifest_overrides_preset_eval_and_staleness() {
     let dir = tempfile::tempdir().unwrap();
@@ -467,12 +510,7 @@ fn manifest_overrides_preset_eval_and_staleness() {
         assert_eq!(warned, expected);
         let lods = &t.lods;
         assert_eq!(lods.len(), 2);
-        // LOD1 evaluated at its size: coverage errors are fractions (the summary's `coverage`
-        // is the static colour metric's mean).
-        let metric = |key: &str| lods[1].metrics.get(key).copied().flatten();
-        let cov = metric("coverage").unwrap();
-        assert!((0.0..=1.0).contains(&cov), "{cov}");
-        assert!(metric(MetricId::DominatingAxis.column()).is_some());
+        check_eval_numbers(t);
         let files: Vec<&str> = t.files.iter().map(|f| f.name.as_str()).collect();
         assert!(
             files.iter().any(|f| f.ends_with(".png")),
@@ -492,8 +530,7 @@ fn manifest_overrides_preset_eval_and_staleness() {
             );
         }
     }
-    let csv = std::fs::read_to_string(out.join("summary.csv")).unwrap();
-    assert!(csv.lines().next().unwrap().contains("coverage_animated"));
+    check_csv_numbers(&out.join("summary.csv"), &trees[0]);
 
     // Nothing changed: nothing rebuilt.
     let again = run();

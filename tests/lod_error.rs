@@ -1,11 +1,13 @@
-//! Each LOD's error at its own size: `frond lod` measures it on the written
-//! files and reports the number `frond eval INPUT LOD --screen-height H` gives, warns about a
-//! LOD over `--max-error` and writes it all the same; the card LODs of the sample stay within
-//! the errors their coverage-driven thinning reached when it was written.
+//! Each LOD's error at its own size: `frond lod` measures it on the written files and reports
+//! the numbers `frond eval INPUT LOD --screen-height H` gives (the coverage error, its ratio and
+//! the binary error, on the same framing), with the switch pop against the LOD before it; warns
+//! about a LOD over `--max-error` and writes it all the same; the card LODs of the sample stay
+//! within the errors their coverage-driven thinning reaches.
 
 mod common;
 
 use common::*;
+use frond_lod::report::LOD_REPORT_SCHEMA_VERSION;
 use frond_lod::{LodEntry, LodReport};
 
 /// Runs `frond lod` on the sample at `lods` with the error measured against `max_error`;
@@ -15,10 +17,21 @@ fn measured_chain(out: &std::path::Path, lods: &str, max_error: &str) -> LodRepo
     frond_lod_measured(&sample, out, &["--lods", lods, "--max-error", max_error])
 }
 
+/// The highest coverage error of the sample's card LOD at 200 px: every card is kept (trimmed
+/// to its texture's alpha), the wood simplified, so the LOD draws the tree's outline all but
+/// exactly.
+const MAX_ERROR_200: f64 = 0.005;
+
+/// The highest coverage error of the sample's card LOD at 60 px: cards thinned where the others
+/// cover for them, the rest scaled to keep the covered area.
+const MAX_ERROR_60: f64 = 0.03;
+
 #[test]
 fn the_report_gives_each_lods_error_as_frond_eval_measures_it() {
     let out = tempfile::tempdir().expect("tempdir");
     let report = measured_chain(out.path(), "200,60", "0.15");
+    assert_eq!(report.schema_version, LOD_REPORT_SCHEMA_VERSION);
+    assert_eq!(LOD_REPORT_SCHEMA_VERSION, 2);
     let lods = &report.lods;
     assert_eq!(lods.len(), 3);
     assert!(lods[0].error.is_none(), "LOD0 is the input");
@@ -32,8 +45,11 @@ fn the_report_gives_each_lods_error_as_frond_eval_measures_it() {
     );
     assert!((0.0..t.total).contains(&t.export), "{t:?}");
     let sample = root().join("samples/sapling.glb");
-    // The card LODs' errors when coverage-driven thinning was written: 0.093 and 0.216.
-    for (lod, (h, bound)) in lods[1..].iter().zip([(200u32, 0.12), (60, 0.26)]) {
+    for (k, (lod, (h, bound))) in lods[1..]
+        .iter()
+        .zip([(200u32, MAX_ERROR_200), (60, MAX_ERROR_60)])
+        .enumerate()
+    {
         let file = lod.file.as_str();
         let e = lod.error.as_ref().expect("error");
         let coverage = e.coverage;
@@ -47,10 +63,47 @@ fn the_report_gives_each_lods_error_as_frond_eval_measures_it() {
             (coverage - measured).abs() < 1e-9,
             "{file}: report {coverage}, frond eval {measured}"
         );
-        assert_eq!(e.image, [(h * 4).div_ceil(3), h]);
+        // The same renders: frond eval's ratio, binary error and framing.
+        assert!(
+            (e.coverage_ratio - eval.coverage.ratio).abs() < 1e-9,
+            "{file}: ratio {} against frond eval's {}",
+            e.coverage_ratio,
+            eval.coverage.ratio
+        );
+        let binary = eval.coverage.binary.mean;
+        assert!(
+            e.coverage_binary
+                .zip(binary)
+                .is_some_and(|(a, b)| (a - b).abs() < 1e-9),
+            "{file}: binary {:?} against frond eval's {binary:?}",
+            e.coverage_binary
+        );
+        assert_eq!(e.image, eval.size, "{file}");
+        assert_eq!(e.samples_per_side, eval.samples_per_side, "{file}");
+        assert_eq!(
+            (e.views, &e.elevations_deg, e.frames),
+            (eval.views, &eval.elevations_deg, eval.frames),
+            "{file}"
+        );
         assert_eq!(e.within_target, coverage <= 0.15);
         assert_eq!(lod.method.name(), "cards");
         assert!(coverage <= bound, "{file}: error {coverage} at {h} px");
+        // The cards are scaled to keep the tree's covered area: neither thinned nor bloated.
+        assert!(
+            (e.coverage_ratio - 1.0).abs() <= 0.02,
+            "{file}: coverage ratio {} at {h} px",
+            e.coverage_ratio
+        );
+        // The switch pop: LOD1 replaces the input itself, so its pop is its error; a later
+        // LOD's is against the LOD before it, a number of its own.
+        assert!(
+            e.switch_pop.is_finite() && (0.0..1.0).contains(&e.switch_pop),
+            "{file}: switch pop {}",
+            e.switch_pop
+        );
+        if k == 0 {
+            assert_eq!(e.switch_pop, coverage, "{file}");
+        }
     }
     // The default chain keeps the monotone rule on every cost read back from its files (the
     // 60 px cards grow only within the 200 px LOD's alpha-tested area): no warning names one.

@@ -147,6 +147,10 @@ fn sweep_writes_rows_stability_and_charts() {
         for k in [
             "coverage_static",
             "coverage_animated",
+            "coverage_ratio",
+            "coverage_binary",
+            "discarded_pairs",
+            "coverage_foliage",
             "colour_difference",
             "plane_distance",
             "orientation",
@@ -166,6 +170,13 @@ fn sweep_writes_rows_stability_and_charts() {
             assert!(num(r, "plane_distance_max") <= num(r, "epsilon") * 1.001 + 1e-6);
         }
         assert!(num(r, "coverage_animated") < 1.0);
+        // A cloud at a few percent of the diagonal keeps about the tree's covered area.
+        let ratio = num(r, "coverage_ratio");
+        assert!(
+            (0.5..1.5).contains(&ratio),
+            "{}: coverage ratio {ratio}",
+            r["run"]
+        );
     }
     // Fewer billboards at the larger ε, for both methods.
     for m in ["per-bone", "static"] {
@@ -185,8 +196,16 @@ fn sweep_writes_rows_stability_and_charts() {
         .iter()
         .find(|r| r["method"] == "candidate:sapling.glb")
         .expect("candidate row");
-    assert_eq!(num(cand, "coverage_animated"), 0.0);
-    assert_eq!(num(cand, "coverage_static"), 0.0);
+    for k in [
+        "coverage_animated",
+        "coverage_static",
+        "coverage_binary",
+        "coverage_foliage",
+        "discarded_pairs",
+    ] {
+        assert_eq!(num(cand, k), 0.0, "{k}");
+    }
+    assert_eq!(num(cand, "coverage_ratio"), 1.0);
     assert!(num(cand, "plane_distance_max") < 1e-4);
 
     // Stability: 4 configurations of 2 seeds each, spreads consistent with the rows.
@@ -251,6 +270,28 @@ fn sweep_writes_rows_stability_and_charts() {
     }
     let time_svg = std::fs::read_to_string(out.join("accuracy_vs_time.svg")).expect("svg");
     assert!(time_svg.contains("Pareto front"));
+    // The accuracy is the coverage error, named so on every chart's axis and title.
+    for stem in [
+        "accuracy_vs_billboards",
+        "accuracy_vs_texture_bytes",
+        "accuracy_vs_time",
+    ] {
+        let texts =
+            svg_texts(&std::fs::read_to_string(out.join(format!("{stem}.svg"))).expect("svg"));
+        for want in [
+            "animated coverage error (lower is better)",
+            "coverage error",
+        ] {
+            assert!(
+                texts.iter().any(|t| t.contains(want)),
+                "{stem}: no '{want}' in {texts:?}"
+            );
+        }
+        assert!(
+            !texts.iter().any(|t| t.contains("colour error")),
+            "{stem}: {texts:?}"
+        );
+    }
     // Axes in the units people use: texture bytes in KB/MB, build time in ms/s.
     let bytes_svg =
         std::fs::read_to_string(out.join("accuracy_vs_texture_bytes.svg")).expect("svg");
@@ -285,6 +326,8 @@ fn sweep_writes_rows_stability_and_charts() {
             "{stem} on the page"
         );
     }
+    assert!(page.contains("animated coverage error"), "{page}");
+    assert!(!page.contains("colour error"), "{page}");
     for r in &runs {
         assert!(
             page.contains(&format!("<td>{}</td>", r["run"])),

@@ -51,10 +51,10 @@ pub struct SweepArgs {
     /// External candidate (any glTF) evaluated at every screen height (repeatable).
     #[arg(long = "candidate", value_name = "FILE")]
     pub candidates: Vec<PathBuf>,
-    /// Ring views of the colour metric.
+    /// Views a ring of the coverage metric.
     #[arg(long, default_value_t = 5)]
     pub views: u32,
-    /// Frames of the animated colour metric.
+    /// Frames of the animated coverage metric.
     #[arg(long, default_value_t = 5)]
     pub frames: u32,
     /// Animation samples over the loop (build and trajectory metrics).

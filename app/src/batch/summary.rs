@@ -5,7 +5,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use serde::{Deserialize, Serialize};
+use frond_metrics::{EvalReport, MetricId};
+use serde::de::Error as _;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::shard::Shard;
 use crate::csv_text::text_cell;
@@ -32,6 +34,101 @@ pub struct FileEntry {
     pub bytes: u64,
 }
 
+/// A number of `frond eval` that a LOD's summary line keeps with `--eval` (docs/batch.md),
+/// measured at the LOD's own screen height: a metric's mean, or the coverage ratio. Written as
+/// its key ([`LodMetric::key`]), in declaration order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum LodMetric {
+    /// [`MetricId::CoverageStatic`]: the coverage error on the loop's first frame.
+    CoverageStatic,
+    /// [`MetricId::CoverageAnimated`]: the LOD's coverage error over the loop (spec §5.4 on
+    /// covered fractions), as `frond lod` reports it.
+    CoverageAnimated,
+    /// The coverage ratio ([`frond_metrics::CoverageMetrics::ratio`]): the LOD's covered area
+    /// over the input's, per (view, frame) and then the mean; below 1 the LOD thins, above 1
+    /// it bloats.
+    CoverageRatio,
+    /// [`MetricId::CoverageBinary`]: the thesis' binary coverage error.
+    CoverageBinary,
+    /// [`MetricId::CoverageFoliage`]: the coverage error of the foliage alone.
+    CoverageFoliage,
+    /// [`MetricId::ColourDifference`].
+    ColourDifference,
+    /// [`MetricId::ProjectedDistance`].
+    ProjectedDistance,
+    /// [`MetricId::Orientation`].
+    Orientation,
+    /// [`MetricId::DominatingAxis`].
+    DominatingAxis,
+}
+
+impl LodMetric {
+    /// Every number the summary keeps per LOD, in order.
+    pub const ALL: [LodMetric; 9] = [
+        LodMetric::CoverageStatic,
+        LodMetric::CoverageAnimated,
+        LodMetric::CoverageRatio,
+        LodMetric::CoverageBinary,
+        LodMetric::CoverageFoliage,
+        LodMetric::ColourDifference,
+        LodMetric::ProjectedDistance,
+        LodMetric::Orientation,
+        LodMetric::DominatingAxis,
+    ];
+
+    /// The eval metric whose mean it is; None for the coverage ratio.
+    pub fn metric_id(self) -> Option<MetricId> {
+        match self {
+            LodMetric::CoverageStatic => Some(MetricId::CoverageStatic),
+            LodMetric::CoverageAnimated => Some(MetricId::CoverageAnimated),
+            LodMetric::CoverageRatio => None,
+            LodMetric::CoverageBinary => Some(MetricId::CoverageBinary),
+            LodMetric::CoverageFoliage => Some(MetricId::CoverageFoliage),
+            LodMetric::ColourDifference => Some(MetricId::ColourDifference),
+            LodMetric::ProjectedDistance => Some(MetricId::ProjectedDistance),
+            LodMetric::Orientation => Some(MetricId::Orientation),
+            LodMetric::DominatingAxis => Some(MetricId::DominatingAxis),
+        }
+    }
+
+    /// Its key in `summary.json`'s `metrics` and its `summary.csv` column: the metric's
+    /// `results.csv` column ([`MetricId::column`]), or `coverage_ratio`.
+    pub fn key(self) -> &'static str {
+        self.metric_id().map_or("coverage_ratio", MetricId::column)
+    }
+
+    /// The one whose key is `key`.
+    pub fn from_key(key: &str) -> Option<LodMetric> {
+        LodMetric::ALL.into_iter().find(|m| m.key() == key)
+    }
+
+    /// Its value in `report`: the metric's mean (None when skipped), or the ratio (None when
+    /// not a number).
+    pub fn of(self, report: &EvalReport) -> Option<f64> {
+        match self.metric_id() {
+            Some(id) => report.metric(id).mean,
+            None => Some(report.coverage.ratio).filter(|r| r.is_finite()),
+        }
+    }
+}
+
+impl Serialize for LodMetric {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.key())
+    }
+}
+
+impl<'de> Deserialize<'de> for LodMetric {
+    /// A key of [`LodMetric::ALL`]; any other (a summary written before the coverage metric
+    /// measured covered fractions called the static error `coverage`) is an error, so an
+    /// older tree's stamp does not pass for up to date.
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<LodMetric, D::Error> {
+        let key = String::deserialize(d)?;
+        LodMetric::from_key(&key)
+            .ok_or_else(|| D::Error::custom(format!("'{key}' is not a summary metric")))
+    }
+}
+
 /// One LOD of a tree, from its `report.json` (and `frond eval` with `--eval`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LodLine {
@@ -49,9 +146,17 @@ pub struct LodLine {
     pub bones: u64,
     /// Decoded bytes (RGBA8) of every image the LOD draws with.
     pub texture_bytes: u64,
-    /// Mean of each `frond eval` metric (with `--eval`; not for LOD0, the input itself).
+    /// `frond eval`'s numbers at the LOD's screen height ([`LodMetric`]; with `--eval`, not
+    /// for LOD0, the input itself); None where the metric was skipped.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
-    pub metrics: BTreeMap<String, Option<f64>>,
+    pub metrics: BTreeMap<LodMetric, Option<f64>>,
+}
+
+impl LodLine {
+    /// The LOD's `metric`, when it was measured and has a value.
+    pub fn metric(&self, metric: LodMetric) -> Option<f64> {
+        self.metrics.get(&metric).copied().flatten()
+    }
 }
 
 /// One tree's line of the summary; also its stamp `batch.json` in its output folder.
@@ -258,16 +363,14 @@ impl BatchSummary {
 
     fn csv(&self) -> Result<Vec<u8>> {
         let mut w = csv::Writer::from_writer(Vec::new());
-        let metric_names: Vec<String> = {
-            let mut names: Vec<String> = self
-                .trees
-                .iter()
-                .flat_map(|t| t.lods.iter().flat_map(|l| l.metrics.keys().cloned()))
-                .collect();
-            names.sort();
-            names.dedup();
-            names
-        };
+        // The metrics any LOD has, in their order.
+        let metric_names: Vec<LodMetric> = self
+            .trees
+            .iter()
+            .flat_map(|t| t.lods.iter().flat_map(|l| l.metrics.keys().copied()))
+            .collect::<std::collections::BTreeSet<LodMetric>>()
+            .into_iter()
+            .collect();
         let mut header: Vec<String> = [
             "tree",
             "output",
@@ -296,7 +399,7 @@ impl BatchSummary {
         .iter()
         .map(|s| s.to_string())
         .collect();
-        header.extend(metric_names.iter().cloned());
+        header.extend(metric_names.iter().map(|m| m.key().to_string()));
         w.write_record(&header).context("writing summary.csv")?;
         for t in &self.trees {
             // LOD values joined by ';', LOD0 first.
@@ -346,12 +449,7 @@ impl BatchSummary {
             ];
             for m in &metric_names {
                 row.push(join(&|l| {
-                    l.metrics
-                        .get(m)
-                        .copied()
-                        .flatten()
-                        .map(|v| format!("{v:.5}"))
-                        .unwrap_or_default()
+                    l.metric(*m).map(|v| format!("{v:.5}")).unwrap_or_default()
                 }));
             }
             w.write_record(&row).context("writing summary.csv")?;
@@ -450,4 +548,116 @@ pub fn merge(parts: &[(PathBuf, BatchSummary)]) -> Result<(BatchSummary, Vec<Str
         jobs: parts.iter().map(|(_, s)| s.jobs).sum(),
     };
     Ok((summary, warnings))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lod_metrics_read_back_by_their_keys_in_order() {
+        let keys: Vec<&str> = LodMetric::ALL.iter().map(|m| m.key()).collect();
+        assert_eq!(
+            keys,
+            [
+                "coverage_static",
+                "coverage_animated",
+                "coverage_ratio",
+                "coverage_binary",
+                "coverage_foliage",
+                "colour_difference",
+                "projected_distance",
+                "orientation",
+                "dominating_axis",
+            ]
+        );
+        let mut sorted = LodMetric::ALL;
+        sorted.sort();
+        assert_eq!(sorted, LodMetric::ALL, "ALL is in declaration order");
+        let line = LodLine {
+            file: "t_LOD1.glb".into(),
+            screen_height: Some(60.0),
+            method: "cards".into(),
+            triangles: 10,
+            billboards: 0,
+            bones: 1,
+            texture_bytes: 4,
+            metrics: LodMetric::ALL
+                .into_iter()
+                .enumerate()
+                .map(|(k, m)| (m, (k != 3).then_some(k as f64 / 8.0)))
+                .collect(),
+        };
+        let json = serde_json::to_string(&line).unwrap();
+        assert!(
+            json.contains(r#""metrics":{"coverage_static":0.0,"coverage_animated":0.125,"coverage_ratio":0.25,"coverage_binary":null,"#),
+            "{json}"
+        );
+        let back: LodLine = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, line);
+        assert_eq!(back.metric(LodMetric::CoverageRatio), Some(0.25));
+        assert_eq!(back.metric(LodMetric::CoverageBinary), None);
+        // A line of a summary from before the filtered coverage error (its static error was
+        // `coverage`) does not read: its tree's stamp is not up to date.
+        let old = json.replace("\"coverage_static\"", "\"coverage\"");
+        let err = serde_json::from_str::<LodLine>(&old).unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("'coverage' is not a summary metric"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn the_csv_has_a_column_per_metric_any_lod_has() {
+        let line = |metrics: &[(LodMetric, Option<f64>)]| LodLine {
+            file: "x.glb".into(),
+            screen_height: None,
+            method: "input".into(),
+            triangles: 0,
+            billboards: 0,
+            bones: 0,
+            texture_bytes: 0,
+            metrics: metrics.iter().copied().collect(),
+        };
+        let tree = TreeEntry {
+            lods: vec![
+                line(&[]),
+                line(&[
+                    (LodMetric::CoverageRatio, Some(0.875)),
+                    (LodMetric::CoverageAnimated, Some(0.0625)),
+                ]),
+            ],
+            status: Status::Built,
+            ..TreeEntry::failed(
+                &super::super::inputs::TreeInput {
+                    path: "t.glb".into(),
+                    relative: "t.glb".into(),
+                    output: "t".into(),
+                    overrides: Default::default(),
+                },
+                "",
+            )
+        };
+        let summary = BatchSummary {
+            frond: "0".into(),
+            input: "lib".into(),
+            preset: None,
+            shard: None,
+            merged_from: Vec::new(),
+            counts: Counts::of(std::slice::from_ref(&tree)),
+            trees: vec![tree],
+            wall_s: 0.0,
+            jobs: 1,
+        };
+        let csv = String::from_utf8(summary.csv().unwrap()).unwrap();
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        assert_eq!(
+            header[header.len() - 2..],
+            ["coverage_animated", "coverage_ratio"]
+        );
+        let row = lines.next().unwrap();
+        assert!(row.ends_with(",;0.06250,;0.87500"), "{row}");
+    }
 }

@@ -10,11 +10,11 @@ use anyhow::{Context, Result};
 use sha2::{Digest, Sha256};
 
 use frond_lod::{LodReport, ReportTimings};
-use frond_metrics::{EvalReport, MetricId};
+use frond_metrics::EvalReport;
 use frond_scene::InputLimits;
 
 use super::inputs::{Overrides, TreeInput, hex, input_hash};
-use super::summary::{FileEntry, LodLine, Status, TreeEntry};
+use super::summary::{FileEntry, LodLine, LodMetric, Status, TreeEntry};
 use crate::child_job::{ChildSpec, JobEnd, run_child};
 use crate::child_request::ChildRequest;
 use crate::engine_preset::EnginePreset;
@@ -129,25 +129,6 @@ pub fn params_hash(settings: &LodSettings, eval: bool) -> String {
 /// `<key>%<pid>` and `<key>%old%<pid>`.
 fn tmp_key(output: &str) -> String {
     output.replace('%', "%25").replace('/', "%2F")
-}
-
-/// The `frond eval` metrics `--eval` puts in each LOD's summary line (their means; docs/batch.md).
-const SUMMARY_METRICS: [MetricId; 6] = [
-    MetricId::CoverageStatic,
-    MetricId::CoverageAnimated,
-    MetricId::ColourDifference,
-    MetricId::ProjectedDistance,
-    MetricId::Orientation,
-    MetricId::DominatingAxis,
-];
-
-/// A metric's key in the summary: its `results.csv` column, except the static colour metric,
-/// which the summary has always called `coverage`.
-fn summary_key(id: MetricId) -> &'static str {
-    match id {
-        MetricId::CoverageStatic => "coverage",
-        _ => id.column(),
-    }
 }
 
 /// Processes one tree; never fails: a failure is the entry's status and reason.
@@ -321,8 +302,8 @@ fn build_into(
                 &std::fs::read(&out).with_context(|| format!("{}: cannot read", out.display()))?,
             )
             .with_context(|| format!("frond eval of {} printed no report", l.file))?;
-            for id in SUMMARY_METRICS {
-                l.metrics.insert(summary_key(id).into(), r.metric(id).mean);
+            for m in LodMetric::ALL {
+                l.metrics.insert(m, m.of(&r));
             }
         }
         entry

@@ -1,5 +1,6 @@
-//! Which charts a sweep draws from its result rows: accuracy against cost and against build
-//! time (Pareto front marked), and every metric against ε; one line per method (the mean over
+//! Which charts a sweep draws from its result rows: accuracy (the animated coverage error at
+//! each run's screen height) against cost and against build time (Pareto front marked), and
+//! every metric against ε; one line per method (the mean over
 //! seeds with its range), external candidates as their own markers or levels. The drawing
 //! itself is [`frond_preview::charts`].
 
@@ -11,7 +12,8 @@ use frond_preview::charts::{Chart, MeanPoint, PALETTE, Panel, Series, Unit, tick
 
 use super::results::Row;
 
-/// The accuracy the cost and time charts put on their y axis.
+/// The accuracy the cost and time charts put on their y axis: the animated coverage error
+/// (spec §5.4 on covered fractions), each run seen at its own screen height.
 pub const ACCURACY: MetricId = MetricId::CoverageAnimated;
 
 /// The y-axis label of the cost and time charts.
@@ -150,14 +152,14 @@ fn wants_log(xs: impl Iterator<Item = f64>) -> bool {
     hi / lo > 20.0 && median < lo + 0.25 * (hi - lo)
 }
 
-/// The charts of a sweep: accuracy vs billboards, vs texture bytes, vs build time (with the
-/// Pareto front over every run), and each metric vs ε.
+/// The charts of a sweep: the coverage error vs billboards, vs texture bytes, vs build time
+/// (with the Pareto front over every run), and each metric vs ε.
 pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
     let cost = |stem: &str, x: &str, label: &str, x_unit: Unit| Chart {
         file_stem: stem.into(),
         columns: 1,
         panels: vec![Panel {
-            title: format!("accuracy vs {label}"),
+            title: format!("coverage error at the run's size vs {label}"),
             x_label: label.into(),
             y_label: accuracy_label(),
             x_log: wants_log(rows.iter().map(|r| r.get(x))),
@@ -195,7 +197,9 @@ pub fn sweep_charts(rows: &[Row]) -> Vec<Chart> {
         file_stem: "accuracy_vs_time".into(),
         columns: 1,
         panels: vec![Panel {
-            title: "speed vs accuracy (Pareto front: no run both faster and more accurate)".into(),
+            title: "coverage error vs build time (Pareto front: no run both faster and more \
+                    accurate)"
+                .into(),
             x_label: "build time of the LOD".into(),
             y_label: accuracy_label(),
             x_unit: Unit::Seconds,

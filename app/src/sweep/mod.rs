@@ -4,8 +4,8 @@
 //!
 //! Each build is a child process of the same `frond` binary with a wall-clock limit, so a run
 //! that fails, panics or hangs is recorded with its reason and the sweep goes on. Evaluation
-//! runs in the sweep's own process: the original's loop is sampled and its colour-metric
-//! images rendered once, not once per run.
+//! runs in the sweep's own process: the original's loop is sampled and its coverage images
+//! rendered once per screen height, not once per run.
 
 pub mod charts;
 pub mod grid;
@@ -49,7 +49,7 @@ pub struct SweepRequest {
     /// External candidates (any glTF), evaluated at every grid point's screen height.
     pub candidates: Vec<PathBuf>,
     /// Wall-clock limit of one `lod` child (the evaluation runs in the sweep's process, which
-    /// renders the original once per image size for every run).
+    /// renders the original once per screen height for every run).
     pub timeout: Duration,
     /// Keep every run's LOD files (otherwise only the report, eval.json and the logs stay).
     pub keep: bool,
@@ -80,7 +80,8 @@ pub struct SweepSummary {
     pub rows: Vec<Row>,
     /// Each configuration over its seeds, as `stability.csv` has them.
     pub stability: Vec<Stability>,
-    /// Runs on the Pareto front of build time vs animated colour error.
+    /// Runs on the Pareto front of build time vs the animated coverage error at the run's
+    /// screen height ([`charts::ACCURACY`]).
     pub pareto_front: Vec<String>,
     /// Every file written, this summary last.
     pub files: Vec<String>,

@@ -6,7 +6,7 @@ use frond_preview::html::{esc, href, page};
 use frond_preview::units;
 
 use super::charts::ACCURACY;
-use super::results::Row;
+use super::results::{self, Row};
 
 /// The page of a sweep of `input` with `rows`, `charts` (written as `<stem>.png`/`.svg` beside
 /// it) and the runs on the Pareto front.
@@ -19,10 +19,17 @@ pub fn sweep_page(input: &str, rows: &[Row], charts: &[Chart], pareto: &[String]
         esc(input),
         rows.len()
     );
-    b.push_str(
-        "<p class=\"muted\">Each line is a method; its points are labelled with the screen \
-         height the LOD was built and measured at. Click a chart for its SVG.</p>\n",
-    );
+    b.push_str(&format!(
+        "<p class=\"muted\">Accuracy is the {} (spec §5.4 on covered fractions): per view and \
+         frame the covered area the LOD misses or adds, over the area the tree covers, with the \
+         tree seen at the run's screen height; 0 is a perfect match, 1 what a LOD covering \
+         nothing scores, above 1 a LOD that adds more area outside the tree than it shares \
+         with it (a failed run). The \
+         coverage ratio is the LOD's covered area over the tree's: below 1 it thins, above 1 it \
+         bloats. Each line is a method; its points are labelled with the screen height the LOD \
+         was built and measured at. Click a chart for its SVG.</p>\n",
+        esc(ACCURACY.label())
+    ));
     for c in charts {
         b.push_str(&format!(
             "<figure><a href=\"{0}.svg\"><img src=\"{0}.png\" alt=\"{1}\" style=\"max-width:100%\"></a>\
@@ -33,8 +40,8 @@ pub fn sweep_page(input: &str, rows: &[Row], charts: &[Chart], pareto: &[String]
     }
     b.push_str(&format!(
         "<h2>Runs</h2>\n<table class=\"costs\"><tr><th>run</th><th>method</th><th>screen height</th>\
-         <th>seed</th><th>ε</th><th>{}</th><th>billboards</th><th>texture bytes</th><th>build time</th>\
-         <th></th></tr>\n",
+         <th>seed</th><th>ε</th><th>{}</th><th>coverage ratio</th><th>billboards</th>\
+         <th>texture bytes</th><th>build time</th><th></th></tr>\n",
         esc(ACCURACY.label())
     ));
     let num = |r: &Row, c: &str, f: fn(f64) -> String| {
@@ -45,7 +52,7 @@ pub fn sweep_page(input: &str, rows: &[Row], charts: &[Chart], pareto: &[String]
         let front = pareto.contains(&r.run);
         b.push_str(&format!(
             "<tr><td>{}</td><td>{}</td><td>{} px</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>\
-             <td>{}</td><td>{}</td><td>{}</td></tr>\n",
+             <td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
             esc(&r.run),
             esc(&r.method),
             units::significant(f64::from(r.screen_height)),
@@ -53,6 +60,7 @@ pub fn sweep_page(input: &str, rows: &[Row], charts: &[Chart], pareto: &[String]
             r.epsilon_pct
                 .map_or("–".into(), |e| format!("{} %", units::significant(e))),
             num(r, ACCURACY.column(), units::significant),
+            num(r, results::COVERAGE_RATIO, units::significant),
             num(r, "billboards", |v| units::count(v as u64)),
             num(r, "texture_bytes", units::bytes),
             num(r, "t_lod", units::duration),

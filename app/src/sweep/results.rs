@@ -38,7 +38,14 @@ const TIME_COLUMNS: &[&str] = &[
     "t_eval",
 ];
 
-/// The colour metric's discarded (view, frame) pairs (spec §5.4).
+/// The coverage ratio (spec §5.4 filtered; [`frond_metrics::CoverageMetrics::ratio`]): per
+/// (view, frame) pair the run's covered area over the tree's, then the mean; below 1 the LOD
+/// thins, above 1 it bloats.
+pub const COVERAGE_RATIO: &str = "coverage_ratio";
+
+/// The (view, frame) pairs the thesis' binary coverage error discarded (spec §5.4: a pair above
+/// 1, or one where the original covers no pixel), kept for the thesis' experiments; the filtered
+/// errors discard none.
 const DISCARDED_PAIRS: &str = "discarded_pairs";
 
 /// Key columns of `results.csv`, before [`columns`].
@@ -54,10 +61,10 @@ const KEY_COLUMNS: [&str; 9] = [
     "reason",
 ];
 
-/// Numeric columns of `results.csv`, in order: cost, every metric's mean and max
-/// ([`MetricId`]), the discarded colour pairs, the times; a row lacks those that do not apply
-/// (empty cell). The two colour metrics come first with their maxima after both, then the
-/// discarded pairs, as the file always had them.
+/// Numeric columns of `results.csv`, in order: cost; the static and animated coverage errors
+/// with their maxima after both, as the file always had them, and the coverage ratio; every
+/// other metric's mean and max in [`MetricId::ALL`] order, the binary coverage error followed
+/// by the pairs it discarded; the times. A row lacks those that do not apply (empty cell).
 pub fn columns() -> Vec<&'static str> {
     let mut c = COST_COLUMNS.to_vec();
     let [stat, anim] = [MetricId::CoverageStatic, MetricId::CoverageAnimated];
@@ -66,13 +73,16 @@ pub fn columns() -> Vec<&'static str> {
         anim.column(),
         stat.max_column(),
         anim.max_column(),
-        DISCARDED_PAIRS,
+        COVERAGE_RATIO,
     ]);
     for id in MetricId::ALL
         .into_iter()
         .filter(|id| ![stat, anim].contains(id))
     {
         c.extend([id.column(), id.max_column()]);
+        if id == MetricId::CoverageBinary {
+            c.push(DISCARDED_PAIRS);
+        }
     }
     c.extend_from_slice(TIME_COLUMNS);
     c
@@ -84,7 +94,7 @@ pub fn is_timing(column: &str) -> bool {
 }
 
 /// The quantities of the stability table: cost, every metric but the derived ones
-/// ([`MetricId::is_derived`]) and the build time.
+/// ([`MetricId::is_derived`]), the coverage ratio and the build time.
 pub fn stability_quantities() -> Vec<&'static str> {
     let mut q = vec!["billboards", "billboard_area", "texture_bytes", "bones"];
     q.extend(
@@ -93,6 +103,7 @@ pub fn stability_quantities() -> Vec<&'static str> {
             .filter(|id| !id.is_derived())
             .map(MetricId::column),
     );
+    q.push(COVERAGE_RATIO);
     q.push("t_lod");
     q
 }
@@ -118,7 +129,7 @@ pub struct Row {
     /// The run's random seed (`frond lod`'s); None for an external candidate.
     pub seed: Option<u64>,
     /// Why the run failed (`timeout`, `error`, `empty output`, `error > 1`, `NaN`, with
-    /// details); None when it did not.
+    /// details; [`judge`]); None when it did not.
     pub failure: Option<String>,
     /// The numeric columns ([`columns`]) it has.
     pub values: BTreeMap<String, f64>,
@@ -176,13 +187,14 @@ pub fn add_lod_report(row: &mut Row, report: &LodReport) {
 }
 
 /// Fills a row's metrics (and, for candidates, cost) from `frond eval`'s report: each metric's
-/// mean and max (absent when skipped).
+/// mean and max (absent when skipped), the coverage ratio and the binary error's discarded pairs.
 pub fn add_eval_report(row: &mut Row, eval: &EvalReport) {
     for id in MetricId::ALL {
         let m = eval.metric(id);
         insert_finite(row, id.column(), m.mean);
         insert_finite(row, id.max_column(), m.max);
     }
+    insert_finite(row, COVERAGE_RATIO, Some(eval.coverage.ratio));
     row.values
         .insert(DISCARDED_PAIRS.into(), eval.coverage.discarded_pairs as f64);
     let c = &eval.cost.candidate;
@@ -216,8 +228,24 @@ fn insert_finite(row: &mut Row, column: &str, value: Option<f64>) {
     }
 }
 
-/// Why an evaluated run counts as failed (spec §5.4: a colour error above 1 means no fidelity),
-/// or None.
+/// The coverage errors a run is judged by: the tree seen whole, on the first frame and over the
+/// loop (spec §5.4 filtered, at the row's screen height).
+const JUDGED: [MetricId; 2] = [MetricId::CoverageStatic, MetricId::CoverageAnimated];
+
+/// Why an evaluated run counts as failed, or None. In this order:
+///
+/// - `empty output`: a LOD (not a candidate) without foliage, neither billboard nor leaf card;
+/// - `NaN`: a coverage error ([`JUDGED`]) or the coverage ratio has no value, or any column
+///   is not a number;
+/// - `error > 1`: a coverage error above 1. The filtered error (spec §5.4 on covered fractions)
+///   is, per (view, frame), the area the run misses plus the area it adds over the area the
+///   tree covers. What it misses is at most the tree's area (a run covering nothing scores
+///   exactly 1), so it passes 1 only where the run adds more area outside the tree than it
+///   shares with it: the LOD bloats past any fidelity, the thesis' "error above 1".
+///
+/// The thesis' binary error's discarded pairs (pairs above 1 there) no longer fail a run: the
+/// filtered error discards none, and `discarded_pairs` stays in the CSV for the thesis'
+/// experiments.
 pub fn judge(row: &Row, eval: &EvalReport) -> Option<String> {
     // Foliage is billboards, or the cards method's leaf cards (triangles beside the wood).
     // (A missing count is NaN: no card.)
@@ -225,15 +253,7 @@ pub fn judge(row: &Row, eval: &EvalReport) -> Option<String> {
     if !row.is_candidate() && row.get("billboards") == 0.0 && !has_cards {
         return Some("empty output: the LOD has no foliage (no billboard, no card)".into());
     }
-    let discarded = row.get(DISCARDED_PAIRS);
-    if discarded > 0.0 {
-        let pairs = eval.coverage.pairs;
-        return Some(format!(
-            "error > 1: the colour metric scored above 1 (or the original covered nothing) in \
-             {discarded} of {pairs} (view, frame) pairs"
-        ));
-    }
-    for id in [MetricId::CoverageStatic, MetricId::CoverageAnimated] {
+    for id in JUDGED {
         if !row.get(id.column()).is_finite() {
             let why = eval
                 .metric(id)
@@ -243,8 +263,25 @@ pub fn judge(row: &Row, eval: &EvalReport) -> Option<String> {
             return Some(format!("NaN: {}: {why}", id.column()));
         }
     }
+    if !row.get(COVERAGE_RATIO).is_finite() {
+        return Some(format!("NaN: {COVERAGE_RATIO}"));
+    }
     if let Some((k, _)) = row.values.iter().find(|(_, v)| !v.is_finite()) {
         return Some(format!("NaN: {k}"));
+    }
+    for id in JUDGED {
+        let error = row.get(id.column());
+        if error > 1.0 {
+            let ratio = row.get(COVERAGE_RATIO);
+            return Some(format!(
+                "error > 1: {} = {} at {} px: the run adds more area outside the tree than it \
+                 shares with it (coverage ratio {})",
+                id.column(),
+                sig(error),
+                row.screen_height,
+                sig(ratio)
+            ));
+        }
     }
     None
 }
@@ -386,15 +423,16 @@ pub fn stability_csv(table: &[Stability]) -> Result<Vec<u8>> {
 /// `stability.md`: a Markdown table per configuration row, "mean (average absolute deviation,
 /// relative)" per quantity, then the failed runs with their reasons.
 pub fn stability_markdown(table: &[Stability], rows: &[Row]) -> String {
-    let metrics = [
-        MetricId::CoverageStatic,
-        MetricId::CoverageAnimated,
-        MetricId::ColourDifference,
-        MetricId::DominatingAxis,
-        MetricId::DominatingAxisSpectral,
-    ];
+    let metric = |id: MetricId| (id.column(), id.short_label());
     let mut cols = vec![("billboards", "billboards"), ("billboard_area", "area")];
-    cols.extend(metrics.map(|id| (id.column(), id.short_label())));
+    cols.extend([
+        metric(MetricId::CoverageStatic),
+        metric(MetricId::CoverageAnimated),
+        (COVERAGE_RATIO, "coverage ratio"),
+        metric(MetricId::ColourDifference),
+        metric(MetricId::DominatingAxis),
+        metric(MetricId::DominatingAxisSpectral),
+    ]);
     cols.push(("t_lod", "build s"));
     let mut s = String::from("| method | screen px | ε | ε % diag | runs | failed |");
     for (_, h) in &cols {
@@ -455,6 +493,7 @@ pub use frond_preview::units::four_significant as sig;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use frond_metrics::report::{Costs, CoverageMetrics, EvalTimings, Metric};
 
     fn row(method: &str, seed: u64, billboards: f64, colour: f64) -> Row {
         let mut values = BTreeMap::new();
@@ -506,37 +545,102 @@ mod tests {
     }
 
     /// An eval report whose k-th metric ([`MetricId::ALL`] order) has `metric(k)` as its mean
-    /// and max, over `pairs` (view, frame) pairs, none discarded.
+    /// and max, with coverage ratio `ratio` over `pairs` (view, frame) pairs, `discarded` of
+    /// them discarded by the binary error.
     fn eval_report(
         metric: impl Fn(usize) -> (Option<f64>, Option<f64>),
+        ratio: f64,
+        discarded: usize,
         pairs: usize,
     ) -> EvalReport {
-        let mut eval = serde_json::json!({
-            "original": "o.glb", "candidate": "c.glb", "clip": null, "samples": 8, "views": 5,
-            "frames": 5, "size": [800, 600], "tree_height": 1.0, "colour_shift": 0.0,
-            "matching": "", "coverage": {"discarded_pairs": 0, "pairs": pairs},
-        });
-        for (k, id) in MetricId::ALL.into_iter().enumerate() {
+        let m = |k: usize| {
+            let id = MetricId::ALL[k];
             let (mean, max) = metric(k);
-            let v = serde_json::json!({
-                "mean": mean, "max": max, "skipped_reason": null, "definition": "",
-            });
-            let (last, parents) = id.json_path().split_last().unwrap();
-            let parent = parents.iter().fold(&mut eval, |v, p| &mut v[p]);
-            parent[*last] = v;
+            Metric {
+                mean,
+                max,
+                skipped_reason: mean.is_none().then(|| format!("{} skipped", id.column())),
+                definition: id.definition().into(),
+            }
+        };
+        let at = |id: MetricId| m(MetricId::ALL.iter().position(|x| *x == id).unwrap());
+        EvalReport {
+            schema_version: frond_metrics::report::EVAL_SCHEMA_VERSION,
+            original: "o.glb".into(),
+            candidate: "c.glb".into(),
+            clip: None,
+            samples: 8,
+            views: 5,
+            elevations_deg: vec![0.0, 30.0],
+            frames: 5,
+            screen_height: 600.0,
+            fov_deg: 60.0,
+            resolution: 1080.0,
+            size: [800, 660],
+            samples_per_side: 2,
+            tree_height: 1.0,
+            coverage: CoverageMetrics {
+                static_: at(MetricId::CoverageStatic),
+                animated: at(MetricId::CoverageAnimated),
+                binary: at(MetricId::CoverageBinary),
+                foliage: at(MetricId::CoverageFoliage),
+                ratio,
+                discarded_pairs: discarded,
+                pairs,
+            },
+            colour_difference: at(MetricId::ColourDifference),
+            colour_shift: 0.0,
+            plane_distance: at(MetricId::PlaneDistance),
+            projected_distance: at(MetricId::ProjectedDistance),
+            euclidean_distance: at(MetricId::EuclideanDistance),
+            orientation: at(MetricId::Orientation),
+            dominating_axis: at(MetricId::DominatingAxis),
+            dominating_axis_spectral: at(MetricId::DominatingAxisSpectral),
+            matching: String::new(),
+            cost: Costs::default(),
+            timings_s: EvalTimings::default(),
         }
-        serde_json::from_value(eval).expect("an eval report")
+    }
+
+    /// A static run of 10 billboards, both coverage errors 0.2, read from an eval report with
+    /// the binary error's `discarded` pairs of 50 and coverage ratio `ratio`.
+    fn evaluated(ratio: f64, discarded: usize) -> (Row, EvalReport) {
+        let coverage = |k: usize| {
+            if k < 2 {
+                (Some(0.2), Some(0.2))
+            } else {
+                (None, None)
+            }
+        };
+        let eval = eval_report(coverage, ratio, discarded, 50);
+        let mut r = row("static", 1, 10.0, 0.2);
+        add_eval_report(&mut r, &eval);
+        (r, eval)
     }
 
     #[test]
     fn judging_runs() {
-        let ok = eval_report(|_| (None, None), 25);
-        let mut r = row("static", 1, 10.0, 0.2);
-        r.values.insert("coverage_static".into(), 0.2);
+        let (mut r, ok) = evaluated(0.9, 0);
         assert_eq!(judge(&r, &ok), None);
-        r.values.insert("discarded_pairs".into(), 2.0);
-        assert!(judge(&r, &ok).unwrap().starts_with("error > 1"));
-        r.values.insert("discarded_pairs".into(), 0.0);
+        // The binary error's discarded pairs stay in the row, and fail nothing.
+        let (r2, eval2) = evaluated(0.9, 7);
+        assert_eq!(r2.get(DISCARDED_PAIRS), 7.0);
+        assert_eq!(judge(&r2, &eval2), None);
+        // A filtered error above 1: the LOD adds more area than it shares with the tree.
+        r.values.insert("coverage_animated".into(), 1.25);
+        r.values.insert(COVERAGE_RATIO.into(), 2.5);
+        let why = judge(&r, &ok).unwrap();
+        assert!(
+            why.starts_with("error > 1: coverage_animated = 1.250 at 600 px")
+                && why.contains("2.500"),
+            "{why}"
+        );
+        // Exactly 1 (a LOD covering nothing) is no fidelity, but not a failure of its own.
+        r.values.insert("coverage_animated".into(), 1.0);
+        assert_eq!(judge(&r, &ok), None);
+        r.values.remove(COVERAGE_RATIO);
+        assert_eq!(judge(&r, &ok).unwrap(), "NaN: coverage_ratio");
+        r.values.insert(COVERAGE_RATIO.into(), 0.9);
         r.values.remove("coverage_static");
         assert!(judge(&r, &ok).unwrap().starts_with("NaN: coverage_static"));
         r.values.insert("billboards".into(), 0.0);
@@ -548,6 +652,14 @@ mod tests {
         assert_eq!(judge(&r, &ok), None);
         r.values.insert("triangles".into(), 859.0);
         assert!(judge(&r, &ok).unwrap().starts_with("empty output"));
+        // A skipped coverage error names the report's reason.
+        let (mut r, _) = evaluated(0.9, 0);
+        let none = eval_report(|_| (None, None), 0.9, 0, 50);
+        r.values.remove("coverage_static");
+        assert_eq!(
+            judge(&r, &none).unwrap(),
+            "NaN: coverage_static: coverage_static skipped"
+        );
     }
 
     #[test]
@@ -576,7 +688,7 @@ mod tests {
                 !KEY_COLUMNS.contains(c)
                     && !COST_COLUMNS.contains(c)
                     && !TIME_COLUMNS.contains(c)
-                    && *c != DISCARDED_PAIRS
+                    && ![DISCARDED_PAIRS, COVERAGE_RATIO].contains(c)
             })
             .collect();
         let mut want: Vec<&str> = MetricId::ALL
@@ -593,30 +705,42 @@ mod tests {
             "run,method,lod_method,screen_height,epsilon,epsilon_pct,seed,status,reason,\
              billboards,triangles,wood_triangles,bones,texture_bytes,billboard_area,draw_calls,\
              file_bytes,coverage_static,coverage_animated,coverage_static_max,\
-             coverage_animated_max,discarded_pairs,colour_difference,colour_difference_max,\
-             plane_distance,plane_distance_max,projected_distance,projected_distance_max,\
-             euclidean_distance,euclidean_distance_max,orientation,orientation_max,\
-             dominating_axis,dominating_axis_max,dominating_axis_spectral,\
+             coverage_animated_max,coverage_ratio,coverage_binary,coverage_binary_max,\
+             discarded_pairs,coverage_foliage,coverage_foliage_max,colour_difference,\
+             colour_difference_max,plane_distance,plane_distance_max,projected_distance,\
+             projected_distance_max,euclidean_distance,euclidean_distance_max,orientation,\
+             orientation_max,dominating_axis,dominating_axis_max,dominating_axis_spectral,\
              dominating_axis_spectral_max,t_sample,t_reference_pose,t_plane_search,t_bake,\
              t_motion_fit,t_budget,t_wood,t_export,t_lod,t_eval"
         );
-        // Every metric but the derived one is in the stability table.
+        // Every metric but the derived one is in the stability table, with the ratio.
         let q = stability_quantities();
         for id in MetricId::ALL {
             assert_eq!(q.contains(&id.column()), !id.is_derived(), "{id:?}");
         }
+        assert!(q.contains(&COVERAGE_RATIO));
     }
 
     #[test]
     fn eval_reports_fill_every_metric_column() {
-        let eval = eval_report(|k| (Some(k as f64), Some(10.0 + k as f64)), 25);
+        let eval = eval_report(|k| (Some(k as f64), Some(10.0 + k as f64)), 1.125, 3, 50);
         let mut r = row("static", 1, 10.0, 0.2);
         add_eval_report(&mut r, &eval);
         for (k, id) in MetricId::ALL.into_iter().enumerate() {
             assert_eq!(r.get(id.column()), k as f64, "{id:?}");
             assert_eq!(r.get(id.max_column()), 10.0 + k as f64, "{id:?}");
         }
-        assert_eq!(r.get(DISCARDED_PAIRS), 0.0);
+        assert_eq!(r.get(COVERAGE_RATIO), 1.125);
+        assert_eq!(r.get(DISCARDED_PAIRS), 3.0);
+        // The CSV writes them back in their columns.
+        let csv = String::from_utf8(results_csv(&[r]).unwrap()).unwrap();
+        let mut lines = csv.lines().map(|l| l.split(',').collect::<Vec<_>>());
+        let (header, line) = (lines.next().unwrap(), lines.next().unwrap());
+        let at = |c: &str| line[header.iter().position(|h| *h == c).unwrap()];
+        assert_eq!(at("coverage_ratio"), "1.125");
+        assert_eq!(at("discarded_pairs"), "3");
+        assert_eq!(at("coverage_binary"), "2");
+        assert_eq!(at("coverage_foliage_max"), "13");
     }
 
     #[test]
