@@ -1,4 +1,4 @@
-//! Compare a candidate (a LOD, any glTF) with the original: colour (coverage), colour
+//! Compare a candidate (a LOD, any glTF) with the original: coverage, colour
 //! difference, distance, orientation and animation metrics, and cost.
 
 use std::path::PathBuf;
@@ -42,12 +42,12 @@ pub struct EvalArgs {
     /// Clip (default: the original's first; the candidate plays the clip of that name).
     #[arg(long)]
     pub clip: Option<String>,
-    /// Draw the colour metric's surfaces white (alpha kept): colour_difference then measures
+    /// Draw the coverage renders' surfaces white (alpha kept): colour_difference then measures
     /// the lighting alone, how closely the candidate's normals and normal maps light it like
     /// the original under the metric's directional light.
     #[arg(long)]
     pub white_albedo: bool,
-    /// How the colour metric lights surfaces: two-sided (0.6 + 0.4·|n·L|, the default) or
+    /// How the coverage renders light surfaces: two-sided (0.6 + 0.4·|n·L|, the default) or
     /// lambert (0.3 + 0.7·max(0, n·L) on the side facing the viewer, as engines light
     /// double-sided foliage).
     #[arg(long, value_enum, default_value_t = LightingArg::TwoSided)]
@@ -92,6 +92,20 @@ pub fn run_settings(settings: &EvalSettings, json: bool) -> Result<()> {
     if json {
         return print_json(&report);
     }
+    crate::say!(
+        "at {} px ({} views on rings at {:?}°, {} frames, {}x{} samples a pixel):",
+        report.screen_height,
+        report.views,
+        report.elevations_deg,
+        report.frames,
+        report.samples_per_side,
+        report.samples_per_side
+    );
+    crate::say!(
+        "{:36} {:.5}  (the candidate's covered area over the original's)",
+        "coverage ratio",
+        report.coverage.ratio
+    );
     for id in frond_metrics::metric_id::MetricId::ALL {
         let m = report.metric(id);
         let name = id.label();

@@ -52,10 +52,10 @@ pub struct SweepArgs {
     #[arg(long = "candidate", value_name = "FILE")]
     pub candidates: Vec<PathBuf>,
     /// Views a ring of the coverage metric.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = frond_metrics::DEFAULT_VIEWS)]
     pub views: u32,
     /// Frames of the animated coverage metric.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = frond_metrics::DEFAULT_FRAMES)]
     pub frames: u32,
     /// Animation samples over the loop (build and trajectory metrics).
     #[arg(long, default_value_t = 64)]
