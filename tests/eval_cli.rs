@@ -155,7 +155,7 @@ fn the_cost_is_read_from_the_files_and_agrees_with_inspect() {
 const MAX_PER_BONE_ERROR: f64 = 0.05;
 
 /// The coverage metric's image at `screen_height` with `views` a ring for the original `tree`:
-/// its rest bounds framed from every view on the default screen ([`frond_metrics::framing`]).
+/// its rest bounds framed from every view on the default screen ([`frond_metrics::framing()`]).
 fn image_size(tree: &Path, screen_height: f32, views: u32) -> [u32; 2] {
     let t = frond_scene::import(tree, &Default::default()).expect("the tree reads");
     let f = frond_metrics::framing(

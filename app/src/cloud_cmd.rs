@@ -31,7 +31,7 @@ pub struct CloudRequest {
     pub clip: Option<String>,
     /// Coverage views (0 skips the check).
     pub coverage_views: u32,
-    /// Screen height of the coverage check, pixels ([`frond_metrics::framing`]).
+    /// Screen height of the coverage check, pixels ([`frond_metrics::framing()`]).
     pub coverage_height: f32,
 }
 

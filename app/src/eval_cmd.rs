@@ -59,7 +59,7 @@ pub struct EvalSettings {
     /// Frames of the animated colour metric.
     pub frames: u32,
     /// The screen height the tree is judged at: its rest height spans this many pixels
-    /// ([`frond_metrics::framing`]).
+    /// ([`frond_metrics::framing()`]).
     pub screen_height: f32,
     /// The screen's vertical field of view, degrees (as `frond lod --fov`).
     pub fov: f32,

@@ -2,7 +2,7 @@
 //! "The coverage error"): how much of what a player sees of the tree a LOD misses or adds,
 //! at the LOD's own screen size.
 //!
-//! The original and its simplification are rendered from the views of [`crate::framing`] for
+//! The original and its simplification are rendered from the views of [`crate::framing`](mod@crate::framing) for
 //! `F` frames, each pixel resolved to the fraction α of its `K × K` samples something drawn
 //! covers: what MSAA, alpha-to-coverage, TAA or a distant eye show of it. Each (view, frame)
 //! pair scores `Σ_p |α_o − α_s| / Σ_p α_o` over the image; the error is the mean over every
@@ -79,7 +79,7 @@ pub struct CoverageParams {
     /// the static metric (§5.4).
     pub frames: u32,
     /// The screen height `H` the tree is seen at, pixels: its rest height spans `H` pixels
-    /// ([`crate::framing`]).
+    /// ([`crate::framing`](mod@crate::framing)).
     pub screen_height: f32,
     /// Vertical field of view of the screen, degrees within (0, 180).
     pub fov_y_deg: f32,
@@ -616,7 +616,7 @@ fn mean_or_nan(values: &[f64]) -> f64 {
 }
 
 /// The depth complexity of `scene` from view `view` (ring by ring) of `params`, framed by the
-/// bounds (see [`crate::framing`]), at the metric's size and samples: fragments rasterised per
+/// bounds (see [`crate::framing`](mod@crate::framing)), at the metric's size and samples: fragments rasterised per
 /// covered sample ([`frond_render::depth_complexity`]), drawn by the CPU rasteriser whatever
 /// `params.rasteriser` says.
 pub fn depth_complexity(

@@ -39,7 +39,7 @@ pub struct EvalRequest {
     /// Frames of the animated coverage metrics.
     pub frames: u32,
     /// The screen height the candidate is judged at: the tree's rest height spans this many
-    /// pixels ([`crate::framing`]).
+    /// pixels ([`crate::framing`](mod@crate::framing)).
     pub screen_height: f32,
     /// The screen's vertical field of view, degrees (the switch values').
     pub fov_deg: f32,

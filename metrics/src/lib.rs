@@ -2,7 +2,7 @@
 //! candidate against the animated original.
 //!
 //! The coverage error of §5.4 on covered fractions (the thesis' binary rule beside it), in
-//! [`coverage`], with its cameras and image sizes in [`framing`]; App. A's normalisation in
+//! [`coverage`], with its cameras and image sizes in [`framing`](mod@framing); App. A's normalisation in
 //! [`normalise`]; the dominating-axis animation metrics of §5.5 in [`dominating_axis`]; plane,
 //! projected, Euclidean distance and orientation metrics of §5.2–5.3 in [`triangle_metrics`];
 //! the cost of a model (§5.7) in [`cost`]; run statistics (§5.8) and Pareto fronts in

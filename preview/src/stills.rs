@@ -16,7 +16,7 @@ use crate::error::PreviewError;
 const ELEVATION_DEG: f32 = 8.0;
 
 /// The camera and image size a chain's stills at `screen_height` are seen with: the coverage
-/// metric's framing ([`frond_metrics::framing`]) of the input's rest bounds at that size on the
+/// metric's framing ([`frond_metrics::framing()`]) of the input's rest bounds at that size on the
 /// switch values' screen (`fov_deg`, `resolution`), one view raised by 8°, so the tree stands
 /// `screen_height` pixels tall as the engine shows it and LOD0 and every LOD line up pixel for
 /// pixel.

@@ -235,7 +235,7 @@ const JUDGED: [MetricId; 2] = [MetricId::CoverageStatic, MetricId::CoverageAnima
 /// Why an evaluated run counts as failed, or None. In this order:
 ///
 /// - `empty output`: a LOD (not a candidate) without foliage, neither billboard nor leaf card;
-/// - `NaN`: a coverage error ([`JUDGED`]) or the coverage ratio has no value, or any column
+/// - `NaN`: a coverage error (the static and animated ones) or the coverage ratio has no value, or any column
 ///   is not a number;
 /// - `error > 1`: a coverage error above 1. The filtered error (spec §5.4 on covered fractions)
 ///   is, per (view, frame), the area the run misses plus the area it adds over the area the
