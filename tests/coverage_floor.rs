@@ -122,34 +122,17 @@ fn the_sample_through_the_lod_path_with_nothing_removed_scores_the_floor() {
     assert_floor("sapling", &report);
 }
 
-/// The shared trees (`FROND_TEST_TREES`), each skipped with one line when absent.
-const SHARED: [&str; 7] = [
-    "bush_1.glb",
-    "oak_dense.glb",
-    "oak_large.glb",
-    "oak_medium.glb",
-    "oak_medium_blendedleaves.glb",
-    "pine_medium.glb",
-    "pine_medium_blender.glb",
-];
-
 #[test]
 fn heavy_shared_trees_through_the_lod_path_with_nothing_removed_score_the_floor() {
     if !frond_testdata::heavy(env!("CARGO_CRATE_NAME")) {
         return;
     }
-    for name in SHARED {
-        let Some(tree) = frond_testdata::tree(name) else {
-            frond_testdata::report_skip(
-                "heavy_shared_trees_through_the_lod_path_with_nothing_removed_score_the_floor",
-                &[name.to_string()],
-            );
-            continue;
-        };
+    let what = "heavy_shared_trees_through_the_lod_path_with_nothing_removed_score_the_floor";
+    frond_testdata::each_shared_tree(what, |name, tree| {
         let dir = tempfile::tempdir().expect("temp dir");
         let report = nothing_removed(&tree, dir.path());
         assert_floor(name, &report);
-    }
+    });
 }
 
 #[test]
@@ -157,14 +140,8 @@ fn heavy_shared_trees_score_zero_against_themselves_and_a_number_against_a_lod()
     if !frond_testdata::heavy(env!("CARGO_CRATE_NAME")) {
         return;
     }
-    for name in SHARED {
-        let Some(tree) = frond_testdata::tree(name) else {
-            frond_testdata::report_skip(
-                "heavy_shared_trees_score_zero_against_themselves_and_a_number_against_a_lod",
-                &[name.to_string()],
-            );
-            continue;
-        };
+    let what = "heavy_shared_trees_score_zero_against_themselves_and_a_number_against_a_lod";
+    frond_testdata::each_shared_tree(what, |_, tree| {
         let dir = tempfile::tempdir().expect("temp dir");
         let report = frond_lod_measured(
             &tree,
@@ -175,5 +152,5 @@ fn heavy_shared_trees_score_zero_against_themselves_and_a_number_against_a_lod()
         // One view and frame: the range's renders, not the views', are what is tested.
         let one = ["--views", "1", "--frames", "1"];
         numbers_at_every_size(&tree, &lod, &["8", "60", "2000"], &one);
-    }
+    });
 }

@@ -31,17 +31,6 @@ const BOUND: f64 = 0.02;
 /// The screen heights of a default LOD chain, and the smallest the metric judges.
 const SIZES: [f32; 4] = [600.0, 200.0, 60.0, 20.0];
 
-/// Every shared tree ([`frond_testdata::trees_dir`]).
-const SHARED: [&str; 7] = [
-    "bush_1.glb",
-    "oak_dense.glb",
-    "oak_large.glb",
-    "oak_medium.glb",
-    "oak_medium_blendedleaves.glb",
-    "pine_medium.glb",
-    "pine_medium_blender.glb",
-];
-
 fn renderer() -> &'static Renderer {
     static RENDERER: OnceLock<Renderer> = OnceLock::new();
     RENDERER.get_or_init(|| {
@@ -171,16 +160,10 @@ fn heavy_cpu_and_gpu_agree_on_shared_trees() {
     if !frond_testdata::heavy(env!("CARGO_CRATE_NAME")) {
         return;
     }
-    for name in SHARED {
-        match frond_testdata::tree(name) {
-            // Three views a ring and one frame: the wgpu path on llvmpipe is slow.
-            Some(path) => agree(name, &load(&path), (3, 1)),
-            None => frond_testdata::report_skip(
-                "heavy_cpu_and_gpu_agree_on_shared_trees",
-                &[name.to_string()],
-            ),
-        }
-    }
+    // Three views a ring and one frame: the wgpu path on llvmpipe is slow.
+    frond_testdata::each_shared_tree("heavy_cpu_and_gpu_agree_on_shared_trees", |name, path| {
+        agree(name, &load(&path), (3, 1))
+    });
 }
 
 /// Whatever the thread count, the CPU rasteriser gives the same sample counts and colours.

@@ -41,6 +41,28 @@ pub fn trees_dir() -> PathBuf {
     }
 }
 
+/// Every shared tree (`MANIFEST.json`'s files), by file name.
+pub const SHARED_TREES: [&str; 7] = [
+    "bush_1.glb",
+    "oak_dense.glb",
+    "oak_large.glb",
+    "oak_medium.glb",
+    "oak_medium_blendedleaves.glb",
+    "pine_medium.glb",
+    "pine_medium_blender.glb",
+];
+
+/// Calls `f` with the name and path of every shared tree present ([`SHARED_TREES`]), and
+/// reports each absent one as skipped by the test `what` (one line each).
+pub fn each_shared_tree(what: &str, mut f: impl FnMut(&str, PathBuf)) {
+    for name in SHARED_TREES {
+        match tree(name) {
+            Some(path) => f(name, path),
+            None => report_skip(what, &[name.to_string()]),
+        }
+    }
+}
+
 /// The shared tree (or other shared file, e.g. `MANIFEST.json`, `_meta/x.structure.json`)
 /// `name` in [`trees_dir`], or `None` when the folder or the file is absent.
 pub fn tree(name: &str) -> Option<PathBuf> {
