@@ -340,8 +340,9 @@ fn the_framing_puts_the_rest_height_at_h_pixels() {
         let p = params(1, 1, h);
         let f = framing(min, max, &p).expect("framing");
         // The switch values' distance: the rest height at H pixels of a 1080-pixel screen
-        // of 60°.
+        // of 60°, from 3 bounding radii on.
         let d = 3.0 * 1080.0 / (2.0 * 30f32.to_radians().tan() * h);
+        let d = d.max(3.0 * (max - min).length() * 0.5);
         assert!((f.distance - d).abs() < 1e-4 * d, "{h}: {}", f.distance);
         assert!(
             f.height as f32 >= 1.2 * h,
