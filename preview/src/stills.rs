@@ -511,8 +511,11 @@ mod tests {
             supersampling(100.0, (120, 130), 16384),
             samples_per_side(100.0)
         );
-        // 20 × 130 px would be 2600: within 4096.
-        assert_eq!(supersampling(50.0, (60, 130), 16384), 20);
+        // K × 130 px is within 4096.
+        assert_eq!(
+            supersampling(50.0, (60, 130), 16384),
+            samples_per_side(50.0)
+        );
         // A tree 8 px tall on a 2000 px wide image: 2 samples a side fit 4096.
         assert_eq!(supersampling(8.0, (2000, 10), 16384), 2);
         assert_eq!(
