@@ -335,7 +335,6 @@ fn measure_errors(
     report: &mut LodReport,
     max_error: f64,
 ) -> Result<()> {
-    let views = ctx.params(1.0, false).views;
     for k in 1..report.lods.len().min(lods.len()) {
         let entry = &report.lods[k];
         let Some(h) = entry.screen_height else {
@@ -373,7 +372,7 @@ fn measure_errors(
             within_target,
             image: [framing.width, framing.height],
             samples_per_side: samples_per_side(h),
-            views,
+            views: MEASURE_VIEWS,
             elevations_deg: DEFAULT_ELEVATIONS_DEG.to_vec(),
             frames: MEASURE_FRAMES,
             depth_complexity: measured.depth_complexity,

@@ -239,7 +239,7 @@ impl<'a> EvalContext<'a> {
         parts: TreeParts,
         colour: bool,
     ) -> Result<&CoverageImages, EvalError> {
-        let key = (screen_height.to_bits(), parts_key(parts), colour);
+        let key = (screen_height.to_bits(), parts, colour);
         if !self.images.contains_key(&key) {
             let oc = self.original.clip_index(self.sampled.clip.as_deref());
             let m = self.images_of(self.original, oc, screen_height, parts, colour)?;
@@ -539,16 +539,7 @@ pub struct Measured {
 }
 
 /// The key of the original's cached images: screen height (bits), parts drawn, colour.
-type ImagesKey = (u32, u8, bool);
-
-/// [`TreeParts`] as a key.
-fn parts_key(parts: TreeParts) -> u8 {
-    match parts {
-        TreeParts::All => 0,
-        TreeParts::Wood => 1,
-        TreeParts::Foliage => 2,
-    }
-}
+type ImagesKey = (u32, TreeParts, bool);
 
 /// Evaluates `candidate` against `original`; `same_file` (the two files have the same bytes)
 /// matches every triangle to itself.

@@ -9,7 +9,7 @@ use glam::{Vec3, Vec4};
 use crate::scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
 
 /// Which triangles of the tree to draw.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TreeParts {
     /// Every triangle: wood and foliage.
     All,
