@@ -61,9 +61,12 @@ pub fn preview_name(name: &str) -> String {
 const FLIP_HEIGHT: f32 = 160.0;
 /// LOD0's still when no LOD gives a size.
 const LOD0_HEIGHT: f32 = 400.0;
-/// LODs with more triangles than this get at most [`HEAVY_FLIP_FRAMES`] flip-book frames.
-const HEAVY_TRIANGLES: usize = 250_000;
-const HEAVY_FLIP_FRAMES: u32 = 6;
+/// Triangles drawn over one flip-book's frames: a frame costs about its triangles on a CPU
+/// renderer (posing and setup, not pixels, at the flip-book's size), so a heavy LOD gets fewer
+/// frames and the preview stays a small part of the run.
+const FLIP_TRIANGLE_FRAMES: usize = 1_000_000;
+/// The fewest frames a flip-book gets, however heavy the LOD: enough to read the sway.
+const MIN_FLIP_FRAMES: u32 = 6;
 /// Largest side of an atlas thumbnail.
 const ATLAS_SIDE: u32 = 512;
 
@@ -300,15 +303,7 @@ fn lod_pictures_of(
         )?,
     ));
     let (flip_camera, flip_size) = preview_view(req.lods[0], h.min(FLIP_HEIGHT), fov, resolution)?;
-    // A frame of a LOD this heavy costs half a second on a CPU renderer: fewer of them keep
-    // the preview under a tenth of the run (the 1M-triangle preset: 12 % with 12 frames).
-    let heavy = tree.triangles.len() > HEAVY_TRIANGLES;
-    let n = if heavy {
-        req.flip_frames.min(HEAVY_FLIP_FRAMES)
-    } else {
-        req.flip_frames
-    }
-    .max(1);
+    let n = flip_frames(req.flip_frames, tree.triangles.len());
     let frames: Vec<Frame> = (0..n)
         .map(|i| {
             let t = start + report.period * i as f32 / n as f32;
@@ -346,6 +341,13 @@ fn lod_pictures_of(
         difference: diff,
     };
     Ok((pictures, still))
+}
+
+/// Frames of a flip-book of a LOD of `triangles`: `asked`, fewer where they would draw more
+/// than [`FLIP_TRIANGLE_FRAMES`] triangles, never under [`MIN_FLIP_FRAMES`] (or `asked`).
+fn flip_frames(asked: u32, triangles: usize) -> u32 {
+    let affordable = (FLIP_TRIANGLE_FRAMES / triangles.max(1)).min(u32::MAX as usize) as u32;
+    asked.min(affordable.max(MIN_FLIP_FRAMES)).max(1)
 }
 
 /// What LOD `k > 0` is compared with: LOD0's scene at the start of its clip, and its still
@@ -922,6 +924,16 @@ mod tests {
             depth_complexity: 3.0,
             input_depth_complexity: 11.0,
         }
+    }
+
+    #[test]
+    fn heavy_lods_get_fewer_flip_frames_but_never_under_the_floor() {
+        assert_eq!(flip_frames(12, 7_200), 12, "a light LOD: every frame asked");
+        assert_eq!(flip_frames(12, 128_000), 7, "1M triangles over the frames");
+        assert_eq!(flip_frames(12, 1_000_000), MIN_FLIP_FRAMES);
+        assert_eq!(flip_frames(4, 1_000_000), 4, "never more than asked");
+        assert_eq!(flip_frames(0, 10), 1);
+        assert_eq!(flip_frames(12, 0), 12);
     }
 
     #[test]

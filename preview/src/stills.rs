@@ -321,6 +321,7 @@ pub fn png(width: u32, height: u32, rgba: &[u8], what: &str) -> Result<Vec<u8>, 
         let mut enc = png::Encoder::new(&mut out, width, height);
         enc.set_color(png::ColorType::Rgba);
         enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::Fast);
         let mut w = enc.write_header().map_err(encode(what))?;
         w.write_image_data(rgba).map_err(encode(what))?;
         w.finish().map_err(encode(what))?;
@@ -345,6 +346,7 @@ pub fn apng(frames: &[Frame], delay_ms: u16, what: &str) -> Result<Picture, Prev
         let mut enc = png::Encoder::new(&mut out, rect[2], rect[3]);
         enc.set_color(png::ColorType::Rgba);
         enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::Fast);
         enc.set_animated(frames.len() as u32, 0)
             .map_err(encode(what))?;
         enc.set_frame_delay(delay_ms.max(1), 1000)
