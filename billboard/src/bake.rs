@@ -41,6 +41,7 @@ pub use baked::{Atlas, BakeError, BakedCloud, Cell};
 pub use params::{BakeParams, BakeRasteriser, MAX_ATLAS_SIDE, MAX_SUPERSAMPLE};
 
 use coverage::preserve_coverage;
+pub use coverage::{MAX_FORESHORTENING, foreshortening};
 use cpu_raster::{BakeTextures, bake_textures, render_atlas_cpu};
 use finish::finish_cells;
 use job::{AtlasJob, two_sided};
@@ -118,11 +119,28 @@ pub fn bake_cloud(
         &mut samples,
     )?;
     let rendered = start.elapsed();
+    let mut grown = Vec::new();
     if params.preserve_coverage {
-        preserve_coverage(&mut samples, &cells, ss * ss, cutoff_samples(params));
+        let scales: Vec<f64> = quads
+            .iter()
+            .zip(members)
+            .map(|(q, tris)| foreshortening(soup, q, tris))
+            .collect();
+        grown = preserve_coverage(
+            &mut samples,
+            &cells,
+            &scales,
+            ss * ss,
+            cutoff_samples(params),
+        );
     }
 
-    let atlas = finish_cells(samples, &cells, quads, params.padding);
+    let mut atlas = finish_cells(samples, &cells, quads, params.padding);
+    // Grown texels pass the alpha test with the colour and normal dilation gave them.
+    for i in grown {
+        atlas.color[4 * i + 3] = 255;
+        atlas.normal[4 * i + 3] = 255;
+    }
     let uv_rects = cells.iter().map(|c| uv_rect(c, width, height)).collect();
     let texture_bytes = atlas.color.len() + atlas.normal.len();
     tracing::debug!(
@@ -258,6 +276,79 @@ mod tests {
     }
 
     #[test]
+    fn foreshortening_is_the_leaves_area_over_their_projection_onto_the_quad() {
+        let quad = flat_quad(Vec2::splat(2.0));
+        let tilted = |deg: f32| {
+            let (s, c) = deg.to_radians().sin_cos();
+            [Vec3::ZERO, Vec3::X, Vec3::new(0.0, c, s)]
+        };
+        let soup = TriangleSoup {
+            positions: vec![tilted(0.0), tilted(60.0), tilted(89.9), tilted(180.0)],
+            uvs: vec![[Vec2::ZERO; 3]; 4],
+            material: vec![0; 4],
+        };
+        let f = |tris: &[usize]| foreshortening(&soup, &quad, tris);
+        assert!(
+            (f(&[0]) - 1.0).abs() < 1e-6,
+            "a leaf in the plane keeps its coverage"
+        );
+        assert!((f(&[3]) - 1.0).abs() < 1e-6, "facing away counts alike");
+        assert!(
+            (f(&[1]) - 2.0).abs() < 1e-4,
+            "60° off the plane: half its area projected"
+        );
+        assert!(
+            (f(&[0, 1]) - 4.0 / 3.0).abs() < 1e-4,
+            "area-weighted over the leaves"
+        );
+        assert_eq!(f(&[2]), coverage::MAX_FORESHORTENING, "edge-on: capped");
+        assert_eq!(f(&[]), 1.0);
+    }
+
+    #[test]
+    fn scaled_coverage_grows_beside_the_covered_texels() {
+        // A 12x12 cell with a 4x4 block of fully covered texels in its middle: asked for twice
+        // its coverage, it keeps the 16 and grows 16 more, each next to the block.
+        let mut d = Downsampled::new(12, 12);
+        let cells = [Cell {
+            x: 0,
+            y: 0,
+            width: 12,
+            height: 12,
+        }];
+        let covered = |x: usize, y: usize| (4..8).contains(&x) && (4..8).contains(&y);
+        for y in 0..12usize {
+            for x in 0..12usize {
+                let i = y * 12 + x;
+                if covered(x, y) {
+                    d.samples[i] = 16;
+                    d.color[i * 4 + 3] = 255;
+                    d.normal[i * 4 + 3] = 255;
+                }
+            }
+        }
+        let grown = preserve_coverage(&mut d, &cells, &[2.0], 16, 8);
+        assert_eq!(grown.len(), 16);
+        for &i in &grown {
+            let (x, y) = (i % 12, i / 12);
+            assert!(!covered(x, y));
+            assert!(
+                (2..10).contains(&x) && (2..10).contains(&y),
+                "({x}, {y}) beside the block"
+            );
+        }
+        let mut again = Downsampled::new(12, 12);
+        again.samples.clone_from(&d.samples);
+        assert_eq!(
+            preserve_coverage(&mut again, &cells, &[2.0], 16, 8),
+            grown,
+            "the same texels every time"
+        );
+        // At its own coverage nothing grows.
+        assert!(preserve_coverage(&mut d, &cells, &[1.0], 16, 8).is_empty());
+    }
+
+    #[test]
     fn preserved_coverage_passes_as_many_texels_as_are_covered() {
         // A 10x10 cell of texels each a quarter covered (4 of 16 samples), plus a 4x4 cell
         // fully covered: the 0.5 test keeps none of the first; preserving coverage keeps 25.
@@ -300,7 +391,7 @@ mod tests {
                 .count()
         };
         assert_eq!(passing(&d, &cells[0]), 0);
-        preserve_coverage(&mut d, &cells, 16, 8);
+        preserve_coverage(&mut d, &cells, &vec![1.0; cells.len()], 16, 8);
         // Σ n / 16 = (50·4 + 50·5) / 16 = 28.1 → 28 texels; ties at 5 samples: 50 have 5.
         // The threshold is the 28th largest count (5), so all 50 five-sample texels pass:
         // the closest achievable count with per-texel thresholds.
@@ -489,7 +580,7 @@ mod tests {
         let sparse = |x: usize, y: usize| 4 + ((x + 8 * y) % 4) as u16;
         let mut d = fill(&sparse);
         assert_eq!(passing(&d), 0);
-        preserve_coverage(&mut d, std::slice::from_ref(&cell), 16, 8);
+        preserve_coverage(&mut d, std::slice::from_ref(&cell), &[1.0], 16, 8);
         assert_eq!(passing(&d), 32);
         assert!(d.color.chunks(4).all(|p| p[3] == 0 || p[3] == 255));
         // A leaf over three full columns and an edge column at 15/16: 32 texels pass for a
@@ -501,7 +592,7 @@ mod tests {
             _ => 0,
         };
         let mut d = fill(&leaf);
-        preserve_coverage(&mut d, std::slice::from_ref(&cell), 16, 8);
+        preserve_coverage(&mut d, std::slice::from_ref(&cell), &[1.0], 16, 8);
         assert_eq!(d.color, fill(&leaf).color);
         assert!(d.color.chunks(4).any(|p| p[3] > 128 && p[3] < 255));
     }
@@ -522,7 +613,7 @@ mod tests {
         for i in 0..40 {
             d.samples[i] = 5;
         }
-        preserve_coverage(&mut d, &cells, 16, 8);
+        preserve_coverage(&mut d, &cells, &vec![1.0; cells.len()], 16, 8);
         let kept = (0..40).filter(|&i| d.color[i * 4 + 3] >= 128).count();
         assert!((12..=13).contains(&kept), "{kept}");
     }

@@ -9,6 +9,7 @@ pub mod cloud;
 pub mod plane;
 pub mod plane_search;
 pub mod quad;
+pub mod quad_split;
 pub mod rectangle;
 pub mod soup;
 pub mod source_copy;

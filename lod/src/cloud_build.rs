@@ -12,6 +12,7 @@ use rayon::prelude::*;
 use frond_billboard::bake::{BakeError, MAX_ATLAS_SIDE, bake_cloud};
 use frond_billboard::cloud::{CloudError, fit_quad};
 use frond_billboard::plane_search::{PlaneSearch, search_planes, valid_for_plane};
+use frond_billboard::quad_split::{QuadGroup, split_quads};
 use frond_billboard::{Plane, Quad, TriangleSoup, source_copy};
 use frond_scene::Rig;
 use frond_scene::rigid_fit::rigid_fit;
@@ -319,14 +320,28 @@ fn search_clusters(
 /// Plane searches tried to fit the billboard budget before the plane count is capped outright.
 const EPSILON_TRIES: usize = 6;
 
+/// The most [`budgeted_search`] widens ε for the atlas's sake, as a multiple of the LOD's ε
+/// (one pixel by default): a leaf up to two pixels off its place is the price of texels enough
+/// to keep the crown's coverage at far LODs; near LODs, whose atlases hold far fewer texels
+/// than pixels anyway, would pay more in parallax than they gained.
+const MAX_AREA_WIDENING: f32 = 2.0;
+
+/// Share of the atlas's texels the quads' own texels take once packed (the rest is padding
+/// and packing gaps): what [`budgeted_search`] counts on when it sizes the quads' area.
+const ATLAS_FILL: f32 = 0.6;
+
 /// The planes of every cluster within the LOD's billboard budget
-/// ([`BuildContext::max_billboards`]): searched at the LOD's ε; while there are too many, ε
-/// grows by `(planes / budget)^1.5` (the plane count falls roughly as ε^-⅔ on the shared
-/// trees) until they fit, then is bisected (geometrically) between the last ε with too many
-/// planes and the smallest that fits, for [`EPSILON_TRIES`] searches in all: the smallest ε
-/// found that fits wins. If none fits, each cluster keeps its share of the budget (largest
-/// remainders, at least one plane) and joins its leftovers to its nearest plane. Returns the
-/// searches and the ε they used.
+/// ([`BuildContext::max_billboards`]) and its atlas: searched at the LOD's ε; while there are
+/// too many planes, or their quads cover more area than the atlas holds at the LOD's texel
+/// density (about one texel per pixel, spec view-dependent-hierarchies-gpu §2.4), ε grows:
+/// by `(planes / budget)^1.5` (the plane count falls roughly as ε^-⅔ on the shared trees) or
+/// `(area / atlas area)^0.7` (the area falls about as ε^-1.5), until they fit; then ε is
+/// bisected (geometrically) between the last ε that did not fit and the smallest that does,
+/// for [`EPSILON_TRIES`] searches in all: the smallest ε found that fits wins. Widening ε
+/// rather than dropping leaves: a wider slab of leaves on each plane, every leaf still on one.
+/// If none fits, each cluster keeps its share of the billboard budget (largest remainders, at
+/// least one plane) and joins its leftovers to its nearest plane. Returns the searches and the
+/// ε they used.
 fn budgeted_search(
     ctx: &BuildContext,
     soup: &TriangleSoup,
@@ -340,31 +355,51 @@ fn budgeted_search(
         return (first, epsilon);
     };
     let budget = budget.max(clusters.len());
-    let mut over = (epsilon, planes(&first));
-    if over.1 <= budget {
+    let density = ctx.level.texels_per_unit;
+    let atlas_area = if density > 0.0 {
+        ATLAS_FILL * (ctx.cloud.bake.max_atlas as f32).powi(2) / (density * density)
+    } else {
+        f32::INFINITY
+    };
+    // How far over its budgets a search at `e` is: 1 or less when it fits. The atlas widens ε
+    // to at most MAX_AREA_WIDENING times the LOD's: beyond it, parallax costs more than texels.
+    let area_cap = MAX_AREA_WIDENING * epsilon;
+    let over_by = |r: &[(TriangleSoup, PlaneSearch)], e: f32| -> f32 {
+        let by_planes = (planes(r) as f32 / budget as f32).powf(1.5);
+        let by_area = if e < area_cap {
+            (quad_area(r) / atlas_area).powf(0.7)
+        } else {
+            0.0
+        };
+        by_planes.max(by_area)
+    };
+    let mut over = (epsilon, over_by(&first, epsilon));
+    if over.1 <= 1.0 {
         return (first, epsilon);
     }
     let mut fits: Option<(f32, Vec<(TriangleSoup, PlaneSearch)>)> = None;
     let mut last = first;
     for _ in 1..EPSILON_TRIES {
         let next = match &fits {
-            None => {
-                let grow = (over.1 as f32 / budget as f32).powf(1.5).max(1.05);
-                (over.0.max(1e-6 * ctx.scale) * grow).min(ctx.scale)
-            }
+            None => (over.0.max(1e-6 * ctx.scale) * over.1.max(1.05)).min(ctx.scale),
             Some((hi, _)) => (over.0 * hi).sqrt(),
         };
         let result = search_clusters(ctx, soup, clusters, next, &|_| None);
-        let n = planes(&result);
-        if n <= budget {
+        let by = over_by(&result, next);
+        if by <= 1.0 {
             fits = Some((next, result));
         } else {
-            over = (next, n);
+            over = (next, by);
             last = result;
         }
     }
     if let Some((e, result)) = fits {
         return (result, e);
+    }
+    if planes(&last) <= budget {
+        // Within the billboard budget but over the atlas: the widest ε tried, and the bake
+        // lowers its density.
+        return (last, over.0);
     }
     let counts: Vec<usize> = last.iter().map(|(_, s)| s.clusters.len()).collect();
     let shares = proportional_shares(&counts, budget);
@@ -373,6 +408,18 @@ fn budgeted_search(
         search_clusters(ctx, soup, clusters, e, &|ci| Some(shares[ci])),
         e,
     )
+}
+
+/// Total area (world units²) of the minimal quads of every plane of `searches`.
+fn quad_area(searches: &[(TriangleSoup, PlaneSearch)]) -> f32 {
+    searches
+        .par_iter()
+        .map(|(sub, search)| {
+            (search.clusters.iter())
+                .map(|c| fit_quad(sub, &c.plane, &c.triangles).area())
+                .sum::<f32>()
+        })
+        .sum()
 }
 
 /// Splits `budget` over clusters in proportion to `counts` (largest remainders), each at least
@@ -420,7 +467,8 @@ fn cluster_quads(
 ) -> (Vec<Vec<ClusterQuad>>, f32) {
     let (searches, epsilon) = budgeted_search(ctx, soup, clusters);
     let increased_density = ctx.cloud.increased_density;
-    let quads = clusters
+    // Every plane's group in the soup's own indices, cluster by cluster.
+    let per_cluster: Vec<Vec<QuadGroup>> = clusters
         .par_iter()
         .zip(searches.par_iter())
         .map(|(cluster, (sub, search))| {
@@ -428,7 +476,6 @@ fn cluster_quads(
                 .clusters
                 .iter()
                 .map(|c| {
-                    let quad = fit_quad(sub, &c.plane, &c.triangles);
                     let own: Vec<usize> = c.triangles.iter().map(|&t| cluster.members[t]).collect();
                     let drawn = if increased_density {
                         let mut m: Vec<usize> = valid_for_plane(sub, &c.plane, epsilon)
@@ -442,11 +489,26 @@ fn cluster_quads(
                     } else {
                         own.clone()
                     };
-                    (quad, own, drawn)
+                    QuadGroup::new(soup, c.plane, own, drawn, 0)
                 })
                 .collect()
         })
         .collect();
+    let cluster_of: Vec<usize> = (per_cluster.iter().enumerate())
+        .flat_map(|(ci, g)| std::iter::repeat_n(ci, g.len()))
+        .collect();
+    let groups: Vec<QuadGroup> = (per_cluster.into_iter().flatten().enumerate())
+        .map(|(i, g)| QuadGroup { source: i, ..g })
+        .collect();
+    // What the billboard budget leaves after the planes goes to compact quads.
+    let groups = match ctx.max_billboards {
+        Some(max) => split_quads(soup, groups, max),
+        None => groups,
+    };
+    let mut quads: Vec<Vec<ClusterQuad>> = vec![Vec::new(); clusters.len()];
+    for g in groups {
+        quads[cluster_of[g.source]].push((g.quad, g.own, g.drawn));
+    }
     (quads, epsilon)
 }
 

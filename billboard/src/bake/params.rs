@@ -29,9 +29,13 @@ pub struct BakeParams {
     /// down, keeping its aspect ratio).
     pub max_side: u32,
     /// Per quad, move the alpha-test threshold so that as many texels pass as the quad's
-    /// summed coverage (in texels): sparse foliage baked at low resolution keeps its density
-    /// instead of vanishing where no texel is half covered (the coverage-preserving rule the
-    /// renderer's mip chains use). Off: a texel passes when `alpha_cutoff` of it is covered.
+    /// summed coverage (in texels) times its foreshortening (its leaves' area over their
+    /// projection onto it, [`foreshortening`](crate::bake::foreshortening)): sparse foliage
+    /// baked at low resolution keeps its density instead of vanishing where no texel is half
+    /// covered (the coverage-preserving rule the renderer's mip chains use), and leaves
+    /// flattened onto a plane at an angle keep what they cover seen from every side, growing
+    /// texels beside the covered ones where those are too few. Off: a texel passes when
+    /// `alpha_cutoff` of it is covered.
     pub preserve_coverage: bool,
     /// Which rasteriser draws the atlas: the CPU bake rasteriser (default: the same atlas on
     /// every machine) or the wgpu renderer (a GPU, when there is one).
