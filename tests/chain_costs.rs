@@ -15,9 +15,20 @@ use frond_scene::{FileCost, InputLimits, file_cost};
 
 /// The files' costs of the default chain of `tree` written into `out`, LOD0 first.
 fn chain_costs(tree: &Path, out: &Path, extra: &[&str]) -> Vec<(String, FileCost)> {
+    let costs = written_costs(tree, out, extra);
+    assert_eq!(
+        costs.len(),
+        4,
+        "LOD0 and the three default LODs are written"
+    );
+    costs
+}
+
+/// The files' costs of the chain `frond lod` writes of `tree` into `out` with `extra`, LOD0
+/// first, each the same as the report's.
+fn written_costs(tree: &Path, out: &Path, extra: &[&str]) -> Vec<(String, FileCost)> {
     let report = frond_lod(tree, out, extra);
     let lods = &report.lods;
-    assert_eq!(lods.len(), 4, "LOD0 and the three default LODs are written");
     lods.iter()
         .map(|l| {
             let file = l.file.clone();
@@ -124,6 +135,58 @@ fn the_smaller_shared_trees_chains_get_cheaper_at_every_step() {
     frond_testdata::require_trees!(names);
     for n in names {
         check(&shared_tree(n), n);
+    }
+}
+
+/// An impostor-class LOD (20 px, the far end) fits the far end's budget, read back from its
+/// file, whatever the method: at most 1 % of the input's triangles (at least 64, at most
+/// 512), 8 joints, 2 draw calls and 64 KiB of texture counted with its mips (decoded × 4/3);
+/// and it is cheaper than the LOD before it in everything.
+#[test]
+fn the_far_end_fits_the_impostor_budget_with_every_method() {
+    for (tree, name) in [
+        (root().join("samples/sapling.glb"), "sapling"),
+        (fixture("bush_1.glb"), "bush_1"),
+    ] {
+        let input = file_cost(&tree, &InputLimits::default()).expect("input cost");
+        for method in ["static", "spectral", "skeleton", "cards"] {
+            let out = tempfile::tempdir().expect("tempdir");
+            let costs = written_costs(
+                &tree,
+                out.path(),
+                &["--lods", "200,60,20", "--method", method],
+            );
+            // The far LOD against the one before it (billboard methods' near LODs can draw
+            // the input's leaf texture beside their atlas, a draw call more than LOD0).
+            assert_cheaper_each_step(&input, &costs[costs.len() - 2..]);
+            let (file, far) = costs.last().expect("the far LOD");
+            let triangles = frond_lod::chain::impostor_triangles(costs[0].1.triangles as usize);
+            eprintln!(
+                "{name} {method} {file}: {} triangles of {triangles}, {} joints, {} draw calls, \
+                 {} B decoded texture",
+                far.triangles, far.joints_per_skin_max, far.draw_calls, far.texture_decoded_bytes
+            );
+            assert!(
+                far.triangles as usize <= triangles,
+                "{name} {method}: {}",
+                far.triangles
+            );
+            assert!(
+                far.joints_per_skin_max <= 8,
+                "{name} {method}: {} joints",
+                far.joints_per_skin_max
+            );
+            assert!(
+                far.draw_calls <= 2,
+                "{name} {method}: {} draw calls",
+                far.draw_calls
+            );
+            assert!(
+                far.texture_decoded_bytes * 4 / 3 <= 64 * 1024,
+                "{name} {method}: {} B decoded texture",
+                far.texture_decoded_bytes
+            );
+        }
     }
 }
 

@@ -23,8 +23,17 @@ use common::*;
 
 const SAMPLE: &str = "samples/sapling.glb";
 
-/// Small settings for every `frond lod` here: few samples and planes, no error measurement.
-const QUICK: [&str; 5] = ["--samples", "8", "--planes", "30", "--no-measure"];
+/// Small settings for every `frond lod` here: few samples and planes, no error measurement and
+/// no preview page (the set's mechanism is the same for every file, and the kill test runs
+/// `frond lod` a hundred times).
+const QUICK: [&str; 6] = [
+    "--samples",
+    "8",
+    "--planes",
+    "30",
+    "--no-measure",
+    "--no-preview",
+];
 
 /// `frond lod` of the sample into `out` with small settings, `FROND_FAULT` as given.
 fn lod(out: &Path, lods: &str, seed: &str, fault: Option<&str>) -> Output {

@@ -15,8 +15,8 @@ use frond_scene::{Bounds, Length, Part, Rig, SampleOptions, Sampled, Tree, sampl
 use crate::contract::{AnimatedBillboardCloud, CardFoliage, LoopClock};
 
 pub use crate::cost_budget::{
-    ATLAS_TEXELS_PER_SQUARED_PIXEL, LodBudget, MAX_JOINTS, TRIANGLES_PER_SQUARED_PIXEL,
-    joints_for_screen,
+    ATLAS_TEXELS_PER_SQUARED_PIXEL, IMPOSTOR_HEIGHT, IMPOSTOR_JOINTS, IMPOSTOR_TEXTURE_BYTES,
+    LodBudget, MAX_JOINTS, TRIANGLES_PER_SQUARED_PIXEL, impostor_triangles, joints_for_screen,
 };
 use crate::error::LodError;
 use crate::joint_budget::{AnimationCount, BillboardAnimation, JointCap, count};
@@ -26,7 +26,7 @@ use crate::motion_budget::{ScreenBudget, apply_budget};
 use crate::part_mesh::{part_mesh, triangle_area};
 use crate::report::LodEntry;
 use crate::screen_budget::{LodLevel, lod_levels};
-use crate::texture_budget::{ImageSizes, atlas_side, lod_image_sizes, parts_image_bytes};
+use crate::texture_budget::{ImageSizes, atlas_side_for_bytes, lod_image_sizes, parts_image_bytes};
 
 /// How the static clouds of every LOD are searched and baked (improved-billboard-cloud §2–4).
 #[derive(Clone, Debug, PartialEq)]
@@ -244,6 +244,8 @@ pub fn build_chain(
 struct Spent {
     /// LOD0's share of wood in its triangles: each LOD's triangle budget is split so.
     wood_share: f64,
+    /// The input's triangles: an impostor-class LOD's budget is a share of them.
+    input_triangles: usize,
     triangles: usize,
     /// Decoded bytes of every texture the LOD draws with (atlas and wood maps).
     texture_bytes: usize,
@@ -259,6 +261,7 @@ impl Spent {
         animation.joints = animation.joints.min(MAX_JOINTS);
         Spent {
             wood_share: lod0.entry.wood_triangles as f64 / lod0.entry.triangles.max(1) as f64,
+            input_triangles: lod0.entry.triangles,
             triangles: lod0.entry.triangles,
             texture_bytes: parts_image_bytes(tree, &lod0.parts, &lod0.image_sizes),
             alpha_tested_area: alpha_tested_area(tree, lod0),
@@ -274,20 +277,32 @@ impl Spent {
             as usize)
             .min((TRIANGLES_PER_SQUARED_PIXEL * h * h) as usize);
         let texels = (ATLAS_TEXELS_PER_SQUARED_PIXEL * h * h) as usize;
-        LodBudget {
+        let mut budget = LodBudget {
             triangles,
             wood_triangles: (triangles as f64 * self.wood_share).floor() as usize,
             joints: self.animation.joints.min(joints_for_screen(h)),
             channels: self.animation.channels,
             texture_bytes: self.texture_bytes.min(4 * texels),
             alpha_tested_area: self.alpha_tested_area,
+        };
+        if h <= IMPOSTOR_HEIGHT {
+            budget.triangles = budget
+                .triangles
+                .min(impostor_triangles(self.input_triangles));
+            budget.wood_triangles = (budget.triangles as f64 * self.wood_share).floor() as usize;
+            budget.joints = budget.joints.min(IMPOSTOR_JOINTS);
+            // The far end's own texture budget, within the LOD before it: more than a texel
+            // per pixel where 16 per H² would give fewer (alpha-tested coverage needs them).
+            budget.texture_bytes = self.texture_bytes.min(IMPOSTOR_TEXTURE_BYTES);
         }
+        budget
     }
 
     /// What has been spent once `lod` is built.
     fn after(&self, tree: &Tree, lod: &ChainLod, animation: BillboardAnimation) -> Spent {
         let mut next = Spent {
             wood_share: self.wood_share,
+            input_triangles: self.input_triangles,
             triangles: lod.entry.triangles,
             texture_bytes: lod.entry.texture_bytes,
             // A LOD over its predecessor's does not raise the bar for the next.
@@ -456,6 +471,30 @@ fn simplify_wood(wood: &WoodMesh, max_error: f32, max_triangles: usize) -> (Wood
     (mesh, error)
 }
 
+/// Times [`wood_within`] doubles the thickness under which branches go.
+const THIN_TRIES: usize = 4;
+
+/// The wood within `max_triangles`: branches narrower than `error` dropped and the rest
+/// simplified to fit ([`simplify_wood`]); where simplifying cannot reach the budget (every
+/// branch keeps a few triangles however coarse), the thinnest branches go next, the
+/// thickness doubled up to [`THIN_TRIES`] times: a far LOD keeps its trunk and limbs and its
+/// foliage keeps its billboards. Returns the mesh, its error and the branches dropped.
+fn wood_within(wood: &WoodMesh, error: f32, max_triangles: usize) -> (WoodMesh, f32, usize) {
+    let mut thickness = error;
+    let mut best = None;
+    for _ in 0..=THIN_TRIES {
+        let (kept, thin) = wood.without_thin_pieces(thickness);
+        let (mesh, e) = simplify_wood(&kept, error, max_triangles);
+        let fits = mesh.triangles() <= max_triangles;
+        best = Some((mesh, e, thin));
+        if fits || kept.triangles() == 0 {
+            break;
+        }
+        thickness *= 2.0;
+    }
+    best.unwrap_or_else(|| (WoodMesh::default(), error, 0))
+}
+
 /// How much finer than one pixel the wood may be refined into triangles the foliage left.
 const WOOD_REFINE_FLOOR: f32 = 8.0;
 
@@ -524,15 +563,14 @@ fn billboard_lod(
     let t0 = Instant::now();
     // Branches narrower than the wood's error (one pixel by default) go first; what is left is
     // simplified to its share. Triangles the wood does not need go to the foliage.
-    let (kept_wood, thin_pieces) = wood.without_thin_pieces(level.wood_error);
-    let (wood_lod, wood_error) =
-        simplify_wood(&kept_wood, level.wood_error, lod_budget.wood_triangles);
+    let (wood_lod, wood_error, thin_pieces) =
+        wood_within(wood, level.wood_error, lod_budget.wood_triangles);
     let t1 = Instant::now();
     let wood_sizes = lod_image_sizes(tree, std::slice::from_ref(&wood_lod), level.texels_per_unit);
     let wood_texture_bytes = parts_image_bytes(tree, std::slice::from_ref(&wood_lod), &wood_sizes);
     let mut params = cloud_params(req, level, k);
     let atlas_bytes = lod_budget.texture_bytes.saturating_sub(wood_texture_bytes);
-    params.bake.max_atlas = params.bake.max_atlas.min(atlas_side(atlas_bytes / 4));
+    params.bake.max_atlas = params.bake.max_atlas.min(atlas_side_for_bytes(atlas_bytes));
     // Two triangles per billboard, and room in the atlas for each (a small texture, padded).
     let max_billboards = (lod_budget.triangles.saturating_sub(wood_lod.triangles()) / 2)
         .min(atlas_bytes / 4 / TEXELS_PER_BILLBOARD);
@@ -603,7 +641,7 @@ fn billboard_lod(
             &shared,
             cards,
             wood_lod,
-            &budget,
+            (&budget, lod_budget.texture_bytes),
             built.section,
             e,
         )),
@@ -619,12 +657,37 @@ struct LodShared<'a> {
     animation: BillboardAnimation,
 }
 
+/// Halvings of a card LOD's texel density [`card_images_within`] tries.
+const CARD_DENSITY_HALVINGS: usize = 8;
+
+/// The sizes of `mesh`'s images at the LOD's texel density, halved while they decode to more
+/// than `max_bytes` (the LOD's texture budget), and the bytes they decode to.
+fn card_images_within(
+    shared: &LodShared,
+    mesh: &WoodMesh,
+    max_bytes: usize,
+) -> (ImageSizes, usize) {
+    let parts = std::slice::from_ref(mesh);
+    let mut density = shared.level.texels_per_unit;
+    let mut sizes = lod_image_sizes(shared.tree, parts, density);
+    let mut bytes = parts_image_bytes(shared.tree, parts, &sizes);
+    for _ in 0..CARD_DENSITY_HALVINGS {
+        if bytes <= max_bytes {
+            break;
+        }
+        density *= 0.5;
+        sizes = lod_image_sizes(shared.tree, parts, density);
+        bytes = parts_image_bytes(shared.tree, parts, &sizes);
+    }
+    (sizes, bytes)
+}
+
 /// A card LOD: the thinned cards and the wood in one skinned mesh, the joint budget applied.
 fn card_lod(
     shared: &LodShared,
     mut cards: CardFoliage,
     wood_lod: WoodMesh,
-    budget: &ScreenBudget,
+    (budget, texture_bytes): (&ScreenBudget, usize),
     section: Option<MethodSection>,
     mut e: LodEntry,
 ) -> ChainLod {
@@ -658,12 +721,8 @@ fn card_lod(
     let clips = carrier.playable_clips;
     e.triangles = mesh.triangles();
     e.wood_triangles = wood_triangles;
-    let image_sizes = lod_image_sizes(
-        shared.tree,
-        std::slice::from_ref(&mesh),
-        shared.level.texels_per_unit,
-    );
-    e.texture_bytes = parts_image_bytes(shared.tree, std::slice::from_ref(&mesh), &image_sizes);
+    let (image_sizes, bytes) = card_images_within(shared, &mesh, texture_bytes);
+    e.texture_bytes = bytes;
     e.clips = clips
         .iter()
         .map(|&c| cards.rig.clips[c].name.clone())

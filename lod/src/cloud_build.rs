@@ -21,10 +21,11 @@ use crate::contract::{
     AnimatedBillboard, AnimatedBillboardCloud, BillboardTexture, LoopClock, RigidMotion,
     input_textured_mesh,
 };
+use crate::cost_budget::IMPOSTOR_HEIGHT;
 use crate::error::LodError;
 pub use crate::method_api::BuildTimings;
 use crate::method_api::{BuildContext, Foliage, MethodName, MethodOutput};
-use crate::texture_budget::atlas_side;
+use crate::texture_budget::atlas_side_for_bytes;
 use crate::texture_budget::{lod_image_sizes, parts_image_bytes};
 
 /// How a cluster's billboards move.
@@ -117,8 +118,7 @@ pub fn build_animated_cloud(
     }
     // A billboard that its own triangles tile (one leaf card) keeps the card's texture; only
     // the others are baked (the hybrid cloud).
-    let copies = source_copies(ctx, &soup, &mut quads, &owns);
-    let bake: Vec<usize> = (0..quads.len()).filter(|&i| copies[i].is_none()).collect();
+    let mut copies = source_copies(ctx, &soup, &mut quads, &owns);
     let mut bake_params = params.bake.clone();
     let copied_bytes = {
         let mesh = input_textured_mesh(
@@ -134,13 +134,25 @@ pub fn build_animated_cloud(
             &lod_image_sizes(tree, parts, ctx.level.texels_per_unit),
         )
     };
-    if copied_bytes > 0 {
+    // The atlas's bytes at its largest side, normal atlas included: what the LOD's texture
+    // budget gave the foliage.
+    let budget_bytes = {
+        let side = bake_params.max_atlas as usize;
+        let half = (side / 2).max(1).next_multiple_of(4);
+        4 * (side * side + half * half)
+    };
+    if copied_bytes > budget_bytes / 2 || ctx.level.screen_height <= IMPOSTOR_HEIGHT {
+        // The input's textures would take most of the budget (a far LOD whose quads are single
+        // cards), or an impostor-class LOD would draw them besides its atlas (its budget is two
+        // draw calls, wood and foliage): every quad is baked instead, at the atlas's density.
+        copies.iter_mut().for_each(|c| *c = None);
+    } else if copied_bytes > 0 {
         // The copies' textures come out of the atlas's share of the texture budget.
-        let texels = (bake_params.max_atlas as usize).pow(2);
         bake_params.max_atlas = bake_params
             .max_atlas
-            .min(atlas_side(texels.saturating_sub(copied_bytes / 4)));
+            .min(atlas_side_for_bytes(budget_bytes - copied_bytes));
     }
+    let bake: Vec<usize> = (0..quads.len()).filter(|&i| copies[i].is_none()).collect();
     let baked = if bake.is_empty() {
         None
     } else {

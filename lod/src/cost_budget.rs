@@ -28,6 +28,28 @@ pub const ATLAS_TEXELS_PER_SQUARED_PIXEL: f32 = 16.0;
 /// binds only far LODs of large trees.
 pub const TRIANGLES_PER_SQUARED_PIXEL: f32 = 2.0;
 
+/// The largest screen height (pixels) of an impostor-class LOD: the far end of a chain, where a
+/// tree is a handful of pixels across and engines draw thousands of them. SpeedTree and the
+/// impostor bakers switch to their billboard LOD under about 5 % of the screen height (54 px
+/// of 1080); open worlds draw most of their trees at 10–30 px. Such a LOD gets the far end's
+/// budget ([`impostor_triangles`], [`IMPOSTOR_JOINTS`], [`IMPOSTOR_TEXTURE_BYTES`]).
+pub const IMPOSTOR_HEIGHT: f32 = 32.0;
+
+/// Skin joints of an impostor-class LOD: within every engine's cheapest skinning path (mobile
+/// GPUs' 8-bone palettes), and the number of motion clusters its foliage is given.
+pub const IMPOSTOR_JOINTS: usize = 8;
+
+/// Decoded texture bytes of an impostor-class LOD over all its images (colour and normal
+/// atlases, bark): 64 KiB counted with a full mip chain (4/3), so 48 KiB of level 0.
+pub const IMPOSTOR_TEXTURE_BYTES: usize = 64 * 1024 * 3 / 4;
+
+/// Triangles of an impostor-class LOD of a tree of `input_triangles`: 1 % of them, at least 64
+/// (a trunk and a few dozen billboards), at most 512 (a crown this far is a few hundred pixels,
+/// and GPUs draw sub-pixel triangles at a quarter of their rate).
+pub fn impostor_triangles(input_triangles: usize) -> usize {
+    (input_triangles / 100).clamp(64, 512)
+}
+
 /// What one billboard LOD may spend, from the hard limits, the previous LOD and its screen
 /// height (in that order of precedence).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

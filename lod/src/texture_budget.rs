@@ -186,6 +186,20 @@ pub fn parts_image_bytes(tree: &Tree, parts: &[WoodMesh], sizes: &ImageSizes) ->
 }
 
 /// The side of a square atlas of at most `texels` texels (a multiple of 4, at least 64).
+/// The largest atlas side whose colour atlas and normal atlas (half its side, rounded up to a
+/// multiple of 4, as export writes it) decode to at most `bytes` (RGBA8), and at least 64.
+pub(crate) fn atlas_side_for_bytes(bytes: usize) -> u32 {
+    let with_normals = |side: u32| {
+        let half = (side / 2).max(1).next_multiple_of(4) as usize;
+        4 * ((side as usize).pow(2) + half * half)
+    };
+    let mut side = atlas_side(bytes / 5);
+    while side > 64 && with_normals(side) > bytes {
+        side -= 4;
+    }
+    side
+}
+
 pub(crate) fn atlas_side(texels: usize) -> u32 {
     let side = (texels as f64).sqrt().floor() as u32;
     (side / 4 * 4).clamp(64, frond_billboard::bake::MAX_ATLAS_SIDE)
@@ -194,6 +208,25 @@ pub(crate) fn atlas_side(texels: usize) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_atlas_and_its_normal_atlas_fit_their_bytes() {
+        for bytes in [81_920usize, 77_824, 49_152, 25_600, 1 << 20, 20 << 20] {
+            let side = atlas_side_for_bytes(bytes) as usize;
+            let half = (side / 2).next_multiple_of(4);
+            assert!(
+                4 * (side * side + half * half) <= bytes,
+                "{bytes}: side {side}"
+            );
+            let more = side + 4;
+            let half = (more / 2).next_multiple_of(4);
+            assert!(
+                4 * (more * more + half * half) > bytes,
+                "{bytes}: {side} is not the largest"
+            );
+        }
+        assert_eq!(atlas_side_for_bytes(100), 64, "never under 64");
+    }
 
     #[test]
     fn sides_shrink_to_powers_of_two_and_never_grow() {

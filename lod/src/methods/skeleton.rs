@@ -99,7 +99,19 @@ pub fn build_skeleton_cloud(
     ctx: &BuildContext,
     sk: &SkeletonParams,
 ) -> Result<(AnimatedBillboardCloud, BuildTimings, SkeletonReport), LodError> {
-    let simplified = simplify(ctx.tree, ctx.sampled, ctx.clock.clip, sk)?;
+    let mut simplified = simplify(ctx.tree, ctx.sampled, ctx.clock.clip, sk)?;
+    // Every cloud takes a billboard at least: more clouds than the LOD's billboard budget
+    // (a far LOD's few triangles) are simplified again to that many.
+    if let Some(max) = ctx.max_billboards
+        && sk.clouds.is_none()
+        && simplified.report.clouds > max
+    {
+        let capped = SkeletonParams {
+            clouds: Some(max.max(1)),
+            ..sk.clone()
+        };
+        simplified = simplify(ctx.tree, ctx.sampled, ctx.clock.clip, &capped)?;
+    }
     if let Some(why) = &simplified.report.stopped_by {
         tracing::warn!("LOD{}: {why}", ctx.index + 1);
     }
