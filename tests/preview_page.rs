@@ -527,8 +527,8 @@ fn frond_view_serves_the_folder_and_nothing_outside_it() {
 
 /// oak_dense, the benchmark tree: the page and what it adds stay under 5 MB and cost under a
 /// tenth of the run. The cost is what the preview adds to the run's wall time (against the same
-/// run with `--no-preview`): its pictures are drawn beside the LODs' measure, so its own stage
-/// time overlaps the measure's and is not what it costs. A heavy case, in `.ci/run`'s optimised
+/// run with `--no-preview`, each the faster of two runs): its pictures are drawn beside the
+/// LODs' measure, so its own stage time overlaps the measure's and is not what it costs. A heavy case, in `.ci/run`'s optimised
 /// run.
 #[test]
 fn heavy_oak_dense_preview_stays_small_and_cheap() {
@@ -545,12 +545,29 @@ fn heavy_oak_dense_preview_stays_small_and_cheap() {
         .filter(|f| f.contains("_preview") || f.starts_with("viewer/"))
         .map(|f| std::fs::metadata(out.join(f)).expect("file").len())
         .sum();
-    let without = frond_lod_measured(
+    // Wall times on a shared machine vary by several percent from run to run: each run's
+    // fastest of two is what it costs.
+    let again = frond_lod_measured(
         &shared_tree("oak_dense.glb"),
-        &tmp.path().join("bare"),
-        &["--no-preview"],
+        &tmp.path().join("again"),
+        &[],
     );
-    let (wall, bare) = (report.timings_s.wall, without.timings_s.wall);
+    let bare: Vec<f64> = ["bare", "bare again"]
+        .iter()
+        .map(|dir| {
+            frond_lod_measured(
+                &shared_tree("oak_dense.glb"),
+                &tmp.path().join(dir),
+                &["--no-preview"],
+            )
+            .timings_s
+            .wall
+        })
+        .collect();
+    let (wall, bare) = (
+        report.timings_s.wall.min(again.timings_s.wall),
+        bare[0].min(bare[1]),
+    );
     eprintln!(
         "oak_dense preview: {added} bytes; the run {wall:.2} s, without the preview {bare:.2} s \
          (its own stage {:.2} s, beside the measure)",

@@ -9,15 +9,15 @@ use std::time::Instant;
 use frond_lod::report::MeasuredError;
 use frond_lod::switching::SwitchValues;
 use frond_lod::{LodEntry, LodReport};
-use frond_metrics::{DEFAULT_FOV_DEG, candidate_clip};
+use frond_metrics::{DEFAULT_FOV_DEG, candidate_clip, samples_per_side};
 use frond_render::{DrawScene, Frame, PosedTree, Renderer, TreeParts};
 use frond_scene::{FileCost, Tree};
 
 use crate::error::PreviewError;
 use crate::html::{esc, figure, href, page};
 use crate::stills::{
-    EXTRA, FilteredStill, MISSING, PixelDifference, apng, atlas_png, crop, difference, png,
-    preview_view, render_filtered, render_pose, supersampling,
+    Drawer, EXTRA, FLIP_SAMPLES, FilteredStill, MISSING, PixelDifference, apng, atlas_png, crop,
+    difference, png, preview_view, samples_within, supersampling,
 };
 use crate::units;
 use crate::viewer::{
@@ -64,9 +64,10 @@ const LOD0_HEIGHT: f32 = 400.0;
 /// Triangles drawn over one flip-book's frames: a frame costs about its triangles on a CPU
 /// renderer (posing and setup, not pixels, at the flip-book's size), so a heavy LOD gets fewer
 /// frames and the preview stays a small part of the run.
-const FLIP_TRIANGLE_FRAMES: usize = 1_000_000;
-/// The fewest frames a flip-book gets, however heavy the LOD: enough to read the sway.
-const MIN_FLIP_FRAMES: u32 = 6;
+const FLIP_TRIANGLE_FRAMES: usize = 400_000;
+/// The fewest frames a flip-book gets, however heavy the LOD: enough to read the sway (a
+/// loop's four quarters).
+const MIN_FLIP_FRAMES: u32 = 4;
 /// Largest side of an atlas thumbnail.
 const ATLAS_SIDE: u32 = 512;
 
@@ -120,6 +121,7 @@ pub fn lod_pictures(
     // LOD0 at the start of its clip: the reference every LOD's still is compared with.
     let (clip0, start0) = clip_start(lod0, report.clip.as_deref());
     let reference = PosedTree::new(lod0, clip0, start0, TreeParts::All);
+    let drawer0 = Drawer::new(lod0, reference.scene())?;
     let lod0_height = report
         .lods
         .iter()
@@ -135,6 +137,7 @@ pub fn lod_pictures(
         let reference = Reference {
             scene: reference.scene(),
             still: lod0_still.as_ref(),
+            drawer: &drawer0,
         };
         let (p, still) = lod_pictures_of(renderer, req, reference, k, h, &dir)?;
         if k == 0 {
@@ -234,18 +237,17 @@ fn lod_pictures_of(
     let (camera, size) = preview_view(req.lods[0], h, fov, resolution)?;
     let camera = &camera;
     let mut posed = PosedTree::new(tree, clip, start, TreeParts::All);
+    let own;
+    let drawer = if k == 0 {
+        reference.drawer
+    } else {
+        own = Drawer::new(tree, posed.scene())?;
+        &own
+    };
     // Each pixel K×K samples as the coverage metric takes them: the stills are what a player
     // sees, their difference is judged as the metric judges.
     let samples = supersampling(h, size, renderer.max_dimension());
-    let still = render_filtered(
-        renderer,
-        tree,
-        posed.scene(),
-        camera,
-        size,
-        samples,
-        "still",
-    )?;
+    let still = drawer.still(posed.scene(), camera, size, samples, "still")?;
     let mut files = Vec::new();
     let mut diff = PixelDifference::default();
     let rect;
@@ -257,15 +259,10 @@ fn lod_pictures_of(
         {
             Some(still) => still,
             None => {
-                rendered = render_filtered(
-                    renderer,
-                    req.lods[0],
-                    reference.scene,
-                    camera,
-                    size,
-                    samples,
-                    "still",
-                )?;
+                rendered =
+                    reference
+                        .drawer
+                        .still(reference.scene, camera, size, samples, "still")?;
                 &rendered
             }
         };
@@ -304,18 +301,16 @@ fn lod_pictures_of(
     ));
     let (flip_camera, flip_size) = preview_view(req.lods[0], h.min(FLIP_HEIGHT), fov, resolution)?;
     let n = flip_frames(req.flip_frames, tree.triangles.len());
+    let flip_k = samples_within(
+        flip_size,
+        samples_per_side(h.min(FLIP_HEIGHT)),
+        FLIP_SAMPLES,
+    );
     let frames: Vec<Frame> = (0..n)
         .map(|i| {
             let t = start + report.period * i as f32 / n as f32;
             let scene = posed.pose(clip, t);
-            render_pose(
-                renderer,
-                tree,
-                scene,
-                &flip_camera,
-                flip_size,
-                "flip-book frame",
-            )
+            drawer.frame(scene, &flip_camera, flip_size, flip_k, "flip-book frame")
         })
         .collect::<Result<_, _>>()?;
     let delay = (1000.0 * report.period / n as f32)
@@ -356,6 +351,8 @@ fn flip_frames(asked: u32, triangles: usize) -> u32 {
 struct Reference<'a> {
     scene: &'a DrawScene,
     still: Option<&'a FilteredStill>,
+    /// LOD0's drawer (its textures prepared once).
+    drawer: &'a Drawer<'a>,
 }
 
 /// The LOD's clip of the run's clip `name` (as `frond eval` picks it) and the time it starts.
@@ -929,7 +926,8 @@ mod tests {
     #[test]
     fn heavy_lods_get_fewer_flip_frames_but_never_under_the_floor() {
         assert_eq!(flip_frames(12, 7_200), 12, "a light LOD: every frame asked");
-        assert_eq!(flip_frames(12, 128_000), 7, "1M triangles over the frames");
+        assert_eq!(flip_frames(12, 64_000), 6, "400k triangles over the frames");
+        assert_eq!(flip_frames(12, 128_000), MIN_FLIP_FRAMES);
         assert_eq!(flip_frames(12, 1_000_000), MIN_FLIP_FRAMES);
         assert_eq!(flip_frames(4, 1_000_000), 4, "never more than asked");
         assert_eq!(flip_frames(0, 10), 1);

@@ -5,7 +5,10 @@
 //! the difference counts the fractions the metric counts.
 
 use frond_metrics::{CoverageParams, framing, samples_per_side};
-use frond_render::{Camera, DrawScene, Frame, Renderer};
+use frond_render::{
+    Camera, CoverageImage, DrawScene, Frame, Lighting, RenderError, Renderer, SoftwareTextures,
+    render_coverage,
+};
 use frond_scene::Tree;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -186,6 +189,199 @@ pub fn render_filtered(
         what,
     )?;
     Ok(FilteredStill::resolve(&frame, k))
+}
+
+/// Draws one tree's pictures with the coverage metric's CPU rasteriser, its textures (their
+/// coverage-preserving mip chains, colour included) prepared once for every still and frame:
+/// a model's frames differ in positions only. Deterministic on every machine, and the
+/// preview's cost: the wgpu path uploads and mip-maps every texture again for each picture.
+pub struct Drawer<'a> {
+    tree: &'a Tree,
+    /// Prepared for colour (flip-book frames, a still's colour).
+    textures: SoftwareTextures,
+    /// Prepared for coverage alone (a still's `K × K` samples).
+    coverage_only: SoftwareTextures,
+}
+
+impl<'a> Drawer<'a> {
+    /// The drawer of `tree`, whose posed scenes all look like `scene` (same materials and
+    /// textures).
+    pub fn new(tree: &'a Tree, scene: &DrawScene) -> Result<Drawer<'a>, PreviewError> {
+        let failed = render_error(tree, "pictures");
+        let (textures, coverage_only) = rayon::join(
+            || SoftwareTextures::new(scene, true),
+            || SoftwareTextures::new(scene, false),
+        );
+        Ok(Drawer {
+            tree,
+            textures: textures.map_err(&failed)?.with_lighting(Lighting::TwoSided),
+            coverage_only: coverage_only.map_err(&failed)?,
+        })
+    }
+
+    /// `scene` through `camera` at `size` pixels of `k × k` samples: each pixel's covered
+    /// samples and the mean colour of them, as the coverage metric draws it.
+    fn coverage(
+        &self,
+        scene: &DrawScene,
+        camera: &Camera,
+        (size, k, colour): ((u32, u32), u32, bool),
+        what: &'static str,
+    ) -> Result<CoverageImage, PreviewError> {
+        let aspect = size.0 as f32 / size.1.max(1) as f32;
+        let view_proj = match scene.bounds() {
+            Some((min, max)) => camera.view_proj_for_bounds(aspect, min, max),
+            None => camera.view_proj(aspect),
+        };
+        let textures = if colour {
+            &self.textures
+        } else {
+            &self.coverage_only
+        };
+        render_coverage(scene, textures, view_proj, size.0, size.1, k.max(1))
+            .map_err(render_error(self.tree, what))
+    }
+
+    /// A still: [`FilteredStill`] of `scene` at `size` pixels, each pixel's covered samples
+    /// counted over `k × k` (as the coverage metric counts them), its colour from one sample
+    /// a pixel ([`Drawer::frame`]), a pixel that sample misses taking the mean colour of its
+    /// neighbours that have one. Colour at every sample would cost the still `k²` times over
+    /// and hardly change a covered pixel's colour.
+    pub fn still(
+        &self,
+        scene: &DrawScene,
+        camera: &Camera,
+        size: (u32, u32),
+        k: u32,
+        what: &'static str,
+    ) -> Result<FilteredStill, PreviewError> {
+        let k = k.max(1);
+        let (coverage, colour) = rayon::join(
+            || self.coverage(scene, camera, (size, k, false), what),
+            || {
+                let kc = samples_within(size, k, STILL_COLOUR_SAMPLES);
+                self.frame(scene, camera, size, kc, what)
+            },
+        );
+        let (coverage, colour) = (coverage?, colour?);
+        let n = f64::from(k * k);
+        let (w, h) = (size.0 as usize, size.1 as usize);
+        let covered: Vec<u32> = coverage.samples.iter().map(|&c| u32::from(c)).collect();
+        let mut rgba = vec![0u8; 4 * covered.len()];
+        rgba.par_chunks_mut(4 * w.max(1))
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, px) in row.chunks_exact_mut(4).enumerate() {
+                    let c = covered[y * w + x];
+                    if c == 0 {
+                        continue;
+                    }
+                    if let Some(rgb) = pixel_colour(&colour, x, y, (w, h)) {
+                        px[..3].copy_from_slice(&rgb);
+                    }
+                    px[3] = (255.0 * f64::from(c) / n).round() as u8;
+                }
+            });
+        Ok(FilteredStill {
+            width: size.0,
+            height: size.1,
+            samples_per_side: k,
+            covered,
+            rgba,
+        })
+    }
+
+    /// A flip-book frame: `scene` at `size` pixels of `k × k` samples, each pixel as opaque as
+    /// the fraction of it covered and coloured by the mean of its covered samples.
+    pub fn frame(
+        &self,
+        scene: &DrawScene,
+        camera: &Camera,
+        size: (u32, u32),
+        k: u32,
+        what: &'static str,
+    ) -> Result<Frame, PreviewError> {
+        let k = k.max(1);
+        let image = self.coverage(scene, camera, (size, k, true), what)?;
+        let coverage: Vec<bool> = image.samples.iter().map(|&c| c > 0).collect();
+        let n = f64::from(k * k);
+        let mut rgba = vec![0u8; 4 * coverage.len()];
+        for ((px, &c), rgb) in rgba
+            .chunks_exact_mut(4)
+            .zip(&image.samples)
+            .zip(&image.colour)
+        {
+            if c > 0 {
+                for (o, v) in px.iter_mut().zip(rgb) {
+                    *o = frond_render::linear_to_srgb(*v);
+                }
+                px[3] = (255.0 * f64::from(c) / n).round() as u8;
+            }
+        }
+        Ok(Frame {
+            width: size.0,
+            height: size.1,
+            rgba,
+            coverage,
+        })
+    }
+}
+
+/// Samples a still's colour is drawn with at most (its coverage takes the metric's `K × K`
+/// whatever the size): a near still's leaves span pixels, and colour at every sample would
+/// cost it `K²` times over for no visible change.
+const STILL_COLOUR_SAMPLES: u64 = 1 << 20;
+
+/// Samples a flip-book frame is drawn with at most: far LODs' leaves, smaller than a pixel,
+/// keep their coverage, and a near LOD's dozen frames stay cheap.
+pub const FLIP_SAMPLES: u64 = 1 << 16;
+
+/// The largest samples per pixel side, at most `k` and at least 1, at which an image of `size`
+/// pixels takes at most `budget` samples.
+pub fn samples_within(size: (u32, u32), k: u32, budget: u64) -> u32 {
+    let pixels = u64::from(size.0) * u64::from(size.1);
+    (1..=k.max(1))
+        .rev()
+        .find(|&s| pixels * u64::from(s * s) <= budget)
+        .unwrap_or(1)
+}
+
+/// The colour of pixel `(x, y)` of `frame` (`w × h`): its own where covered, else the mean (in
+/// linear light) of its covered 8-neighbours'; None when none is.
+fn pixel_colour(frame: &Frame, x: usize, y: usize, (w, h): (usize, usize)) -> Option<[u8; 3]> {
+    let at = |x: usize, y: usize| {
+        let i = y * w + x;
+        frame.coverage.get(i).copied().unwrap_or(false).then(|| {
+            let p = &frame.rgba[4 * i..4 * i + 3];
+            [p[0], p[1], p[2]]
+        })
+    };
+    if let Some(c) = at(x, y) {
+        return Some(c);
+    }
+    let linear = &*frond_render::SRGB_LINEAR;
+    let (mut sum, mut n) = ([0.0f32; 3], 0u32);
+    for ny in y.saturating_sub(1)..(y + 2).min(h) {
+        for nx in x.saturating_sub(1)..(x + 2).min(w) {
+            if let Some(c) = at(nx, ny) {
+                for (s, v) in sum.iter_mut().zip(c) {
+                    *s += linear[usize::from(v)];
+                }
+                n += 1;
+            }
+        }
+    }
+    (n > 0).then(|| sum.map(|v| frond_render::linear_to_srgb(v / n as f32)))
+}
+
+/// The error of drawing `what` of `tree`.
+fn render_error(tree: &Tree, what: &'static str) -> impl Fn(RenderError) -> PreviewError {
+    let file = tree.source.display().to_string();
+    move |source| PreviewError::Render {
+        file: file.clone(),
+        what,
+        source,
+    }
 }
 
 /// What a LOD misses and adds against LOD0 at the same size, in pixels, each pixel counted by
