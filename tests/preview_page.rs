@@ -262,7 +262,7 @@ fn lod_writes_a_preview_page_that_shows_every_lod_from_its_written_file() {
         ));
         let reader = decoder.read_info().expect("PNG");
         let control = reader.info().animation_control.expect("an animated PNG");
-        assert_eq!(control.num_frames, 8, "LOD{k}: the loop in 8 frames");
+        assert_eq!(control.num_frames, 6, "LOD{k}: the loop in 6 frames");
         assert_eq!(control.num_plays, 0, "loops forever");
         let Some(h) = lod.screen_height.map(written_f64) else {
             continue;

@@ -323,7 +323,7 @@ fn read_back_lods(set: &OutputSet, report: &LodReport) -> Result<Vec<Tree>> {
 }
 
 /// Frames of each LOD's wind flip-book on the preview page.
-const PREVIEW_FLIP_FRAMES: u32 = 8;
+const PREVIEW_FLIP_FRAMES: u32 = 6;
 
 /// Fills each billboard or card LOD's `error` with its coverage error at its own screen
 /// height, on its written file read back (`lods`, the report's order), and its switch pop

@@ -64,7 +64,7 @@ const LOD0_HEIGHT: f32 = 400.0;
 /// Triangles drawn over one flip-book's frames: a frame costs about its triangles on a CPU
 /// renderer (posing and setup, not pixels, at the flip-book's size), so a heavy LOD gets fewer
 /// frames and the preview stays a small part of the run.
-const FLIP_TRIANGLE_FRAMES: usize = 400_000;
+const FLIP_TRIANGLE_FRAMES: usize = 250_000;
 /// The fewest frames a flip-book gets, however heavy the LOD: enough to read the sway (a
 /// loop's four quarters).
 const MIN_FLIP_FRAMES: u32 = 4;
@@ -926,7 +926,7 @@ mod tests {
     #[test]
     fn heavy_lods_get_fewer_flip_frames_but_never_under_the_floor() {
         assert_eq!(flip_frames(12, 7_200), 12, "a light LOD: every frame asked");
-        assert_eq!(flip_frames(12, 64_000), 6, "400k triangles over the frames");
+        assert_eq!(flip_frames(12, 50_000), 5, "250k triangles over the frames");
         assert_eq!(flip_frames(12, 128_000), MIN_FLIP_FRAMES);
         assert_eq!(flip_frames(12, 1_000_000), MIN_FLIP_FRAMES);
         assert_eq!(flip_frames(4, 1_000_000), 4, "never more than asked");

@@ -68,9 +68,11 @@ pub fn render_pose(
         })
 }
 
-/// Largest side, in pixels, of the supersampled render a filtered still is resolved from
-/// ([`supersampling`]): well within every device's texture limit, and 64 MB of colour.
-pub const MAX_SUPERSAMPLED_SIDE: u32 = 4096;
+/// Largest side, in samples, of a filtered still ([`supersampling`]): four million samples at
+/// most, which bounds a still's cost (the stills' colour has its own bound,
+/// [`STILL_COLOUR_SAMPLES`]). The metric's `K` is 2 from 256 px up, which fits any still up to
+/// 1024 px a side.
+pub const MAX_SUPERSAMPLED_SIDE: u32 = 2048;
 
 /// Samples per pixel side a still of `size` pixels of a tree `screen_height` pixels tall is
 /// drawn with: the coverage metric's `K` ([`samples_per_side`]), lowered where `K` times the
@@ -152,6 +154,28 @@ impl FilteredStill {
         FilteredStill {
             width,
             height,
+            samples_per_side: k,
+            covered,
+            rgba,
+        }
+    }
+
+    /// The still of a coverage `image` of `size` pixels at `k × k` samples drawn with colour.
+    fn of_image(image: &CoverageImage, size: (u32, u32), k: u32) -> FilteredStill {
+        let n = f64::from(k * k);
+        let covered: Vec<u32> = image.samples.iter().map(|&c| u32::from(c)).collect();
+        let mut rgba = vec![0u8; 4 * covered.len()];
+        for ((px, &c), rgb) in rgba.chunks_exact_mut(4).zip(&covered).zip(&image.colour) {
+            if c > 0 {
+                for (o, v) in px.iter_mut().zip(rgb) {
+                    *o = frond_render::linear_to_srgb(*v);
+                }
+                px[3] = (255.0 * f64::from(c) / n).round() as u8;
+            }
+        }
+        FilteredStill {
+            width: size.0,
+            height: size.1,
             samples_per_side: k,
             covered,
             rgba,
@@ -256,12 +280,15 @@ impl<'a> Drawer<'a> {
         what: &'static str,
     ) -> Result<FilteredStill, PreviewError> {
         let k = k.max(1);
+        let kc = samples_within(size, k, STILL_COLOUR_SAMPLES);
+        if kc == k {
+            // Colour at every sample costs no second pass.
+            let image = self.coverage(scene, camera, (size, k, true), what)?;
+            return Ok(FilteredStill::of_image(&image, size, k));
+        }
         let (coverage, colour) = rayon::join(
             || self.coverage(scene, camera, (size, k, false), what),
-            || {
-                let kc = samples_within(size, k, STILL_COLOUR_SAMPLES);
-                self.frame(scene, camera, size, kc, what)
-            },
+            || self.frame(scene, camera, size, kc, what),
         );
         let (coverage, colour) = (coverage?, colour?);
         let n = f64::from(k * k);
@@ -328,9 +355,9 @@ impl<'a> Drawer<'a> {
 }
 
 /// Samples a still's colour is drawn with at most (its coverage takes the metric's `K × K`
-/// whatever the size): a near still's leaves span pixels, and colour at every sample would
-/// cost it `K²` times over for no visible change.
-const STILL_COLOUR_SAMPLES: u64 = 1 << 20;
+/// whatever the size): a covered pixel's colour hardly changes with more, and colour at every
+/// sample would cost the still `K²` times over.
+pub const STILL_COLOUR_SAMPLES: u64 = 1 << 16;
 
 /// Samples a flip-book frame is drawn with at most: far LODs' leaves, smaller than a pixel,
 /// keep their coverage, and a near LOD's dozen frames stay cheap.
@@ -709,15 +736,14 @@ mod tests {
             supersampling(100.0, (120, 130), 16384),
             samples_per_side(100.0)
         );
-        // K × 130 px is within 4096.
+        // K × 130 px is within 2048 for K up to 15.
+        assert_eq!(samples_per_side(30.0), 18);
+        assert_eq!(supersampling(30.0, (60, 130), 16384), 15);
+        assert_eq!(supersampling(30.0, (60, 30), 16384), 18);
+        // A tree 8 px tall on a 1000 px wide image: 2 samples a side fit 2048.
+        assert_eq!(supersampling(8.0, (1000, 10), 16384), 2);
         assert_eq!(
-            supersampling(50.0, (60, 130), 16384),
-            samples_per_side(50.0)
-        );
-        // A tree 8 px tall on a 2000 px wide image: 2 samples a side fit 4096.
-        assert_eq!(supersampling(8.0, (2000, 10), 16384), 2);
-        assert_eq!(
-            supersampling(8.0, (2000, 10), 2048),
+            supersampling(8.0, (1000, 10), 1024),
             1,
             "the device's limit"
         );
