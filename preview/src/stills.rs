@@ -330,26 +330,12 @@ impl<'a> Drawer<'a> {
     ) -> Result<Frame, PreviewError> {
         let k = k.max(1);
         let image = self.coverage(scene, camera, (size, k, true), what)?;
-        let coverage: Vec<bool> = image.samples.iter().map(|&c| c > 0).collect();
-        let n = f64::from(k * k);
-        let mut rgba = vec![0u8; 4 * coverage.len()];
-        for ((px, &c), rgb) in rgba
-            .chunks_exact_mut(4)
-            .zip(&image.samples)
-            .zip(&image.colour)
-        {
-            if c > 0 {
-                for (o, v) in px.iter_mut().zip(rgb) {
-                    *o = frond_render::linear_to_srgb(*v);
-                }
-                px[3] = (255.0 * f64::from(c) / n).round() as u8;
-            }
-        }
+        let still = FilteredStill::of_image(&image, size, k);
         Ok(Frame {
             width: size.0,
             height: size.1,
-            rgba,
-            coverage,
+            coverage: still.covered.iter().map(|&c| c > 0).collect(),
+            rgba: still.rgba,
         })
     }
 }
