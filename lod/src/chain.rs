@@ -481,18 +481,16 @@ const THIN_TRIES: usize = 4;
 /// foliage keeps its billboards. Returns the mesh, its error and the branches dropped.
 fn wood_within(wood: &WoodMesh, error: f32, max_triangles: usize) -> (WoodMesh, f32, usize) {
     let mut thickness = error;
-    let mut best = None;
-    for _ in 0..=THIN_TRIES {
+    let mut doublings = 0;
+    loop {
         let (kept, thin) = wood.without_thin_pieces(thickness);
         let (mesh, e) = simplify_wood(&kept, error, max_triangles);
-        let fits = mesh.triangles() <= max_triangles;
-        best = Some((mesh, e, thin));
-        if fits || kept.triangles() == 0 {
-            break;
+        if doublings == THIN_TRIES || mesh.triangles() <= max_triangles || kept.triangles() == 0 {
+            return (mesh, e, thin);
         }
         thickness *= 2.0;
+        doublings += 1;
     }
-    best.unwrap_or_else(|| (WoodMesh::default(), error, 0))
 }
 
 /// How much finer than one pixel the wood may be refined into triangles the foliage left.

@@ -25,7 +25,7 @@ use crate::cost_budget::IMPOSTOR_HEIGHT;
 use crate::error::LodError;
 pub use crate::method_api::BuildTimings;
 use crate::method_api::{BuildContext, Foliage, MethodName, MethodOutput};
-use crate::texture_budget::atlas_side_for_bytes;
+use crate::texture_budget::{atlas_bytes, atlas_side_for_bytes};
 use crate::texture_budget::{lod_image_sizes, parts_image_bytes};
 
 /// How a cluster's billboards move.
@@ -136,11 +136,7 @@ pub fn build_animated_cloud(
     };
     // The atlas's bytes at its largest side, normal atlas included: what the LOD's texture
     // budget gave the foliage.
-    let budget_bytes = {
-        let side = bake_params.max_atlas as usize;
-        let half = (side / 2).max(1).next_multiple_of(4);
-        4 * (side * side + half * half)
-    };
+    let budget_bytes = atlas_bytes(bake_params.max_atlas);
     if copied_bytes > budget_bytes / 2 || ctx.level.screen_height <= IMPOSTOR_HEIGHT {
         // The input's textures would take most of the budget (a far LOD whose quads are single
         // cards), or an impostor-class LOD would draw them besides its atlas (its budget is two

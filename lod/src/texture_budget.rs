@@ -186,15 +186,18 @@ pub fn parts_image_bytes(tree: &Tree, parts: &[WoodMesh], sizes: &ImageSizes) ->
 }
 
 /// The side of a square atlas of at most `texels` texels (a multiple of 4, at least 64).
+/// Decoded bytes (RGBA8) of a colour atlas `side` texels square and its normal atlas, half its
+/// side rounded up to a multiple of 4, as export writes it.
+pub(crate) fn atlas_bytes(side: u32) -> usize {
+    let half = (side / 2).max(1).next_multiple_of(4) as usize;
+    4 * ((side as usize).pow(2) + half * half)
+}
+
 /// The largest atlas side whose colour atlas and normal atlas (half its side, rounded up to a
 /// multiple of 4, as export writes it) decode to at most `bytes` (RGBA8), and at least 64.
 pub(crate) fn atlas_side_for_bytes(bytes: usize) -> u32 {
-    let with_normals = |side: u32| {
-        let half = (side / 2).max(1).next_multiple_of(4) as usize;
-        4 * ((side as usize).pow(2) + half * half)
-    };
     let mut side = atlas_side(bytes / 5);
-    while side > 64 && with_normals(side) > bytes {
+    while side > 64 && atlas_bytes(side) > bytes {
         side -= 4;
     }
     side

@@ -6,7 +6,7 @@
 
 use frond_metrics::{CoverageParams, framing, samples_per_side};
 use frond_render::{
-    Camera, CoverageImage, DrawScene, Frame, Lighting, RenderError, Renderer, SoftwareTextures,
+    Camera, CoverageImage, DrawScene, Frame, Lighting, RenderError, SoftwareTextures,
     render_coverage,
 };
 use frond_scene::Tree;
@@ -47,25 +47,6 @@ pub fn preview_view(
         source,
     })?;
     Ok((f.cameras[0], (f.width, f.height)))
-}
-
-/// A posed tree's scene (`tree` names it in errors), mip-mapped as engines sample textures, on
-/// a transparent background.
-pub fn render_pose(
-    renderer: &Renderer,
-    tree: &Tree,
-    scene: &DrawScene,
-    camera: &Camera,
-    size: (u32, u32),
-    what: &'static str,
-) -> Result<Frame, PreviewError> {
-    renderer
-        .render_mipmapped(scene, camera, size.0, size.1, [0.0; 4])
-        .map_err(|source| PreviewError::Render {
-            file: tree.source.display().to_string(),
-            what,
-            source,
-        })
 }
 
 /// Largest side, in samples, of a filtered still ([`supersampling`]): four million samples at
@@ -110,56 +91,6 @@ impl FilteredStill {
             .map_or(0.0, |&c| if n > 0.0 { f64::from(c) / n } else { 0.0 })
     }
 
-    /// The still of `frame`, drawn `k` times its size (`width · k × height · k`): each pixel's
-    /// `k × k` samples counted and their colour averaged.
-    pub fn resolve(frame: &Frame, k: u32) -> FilteredStill {
-        let k = k.max(1);
-        let (width, height) = (frame.width / k, frame.height / k);
-        let (w, ku, big_w) = (width as usize, k as usize, frame.width as usize);
-        let linear = &*frond_render::SRGB_LINEAR;
-        let n = f64::from(k * k);
-        let mut covered = vec![0u32; w * height as usize];
-        let mut rgba = vec![0u8; 4 * w * height as usize];
-        // Rows are independent (each pixel's sum is in a fixed order): the same bytes on any
-        // number of threads.
-        covered
-            .par_chunks_mut(w.max(1))
-            .zip(rgba.par_chunks_mut(4 * w.max(1)))
-            .enumerate()
-            .for_each(|(y, (count_row, rgba_row))| {
-                for x in 0..w {
-                    let (mut c, mut sum) = (0u32, [0.0f32; 3]);
-                    for dy in 0..ku {
-                        let row = (y * ku + dy) * big_w + x * ku;
-                        for i in row..row + ku {
-                            if frame.coverage.get(i).copied().unwrap_or(false) {
-                                c += 1;
-                                for (ch, v) in sum.iter_mut().enumerate() {
-                                    let byte = frame.rgba.get(4 * i + ch).copied().unwrap_or(0);
-                                    *v += linear[usize::from(byte)];
-                                }
-                            }
-                        }
-                    }
-                    count_row[x] = c;
-                    if c > 0 {
-                        let px = &mut rgba_row[4 * x..4 * x + 4];
-                        for (o, v) in px.iter_mut().zip(sum) {
-                            *o = frond_render::linear_to_srgb(v / c as f32);
-                        }
-                        px[3] = (255.0 * f64::from(c) / n).round() as u8;
-                    }
-                }
-            });
-        FilteredStill {
-            width,
-            height,
-            samples_per_side: k,
-            covered,
-            rgba,
-        }
-    }
-
     /// The still of a coverage `image` of `size` pixels at `k × k` samples drawn with colour.
     fn of_image(image: &CoverageImage, size: (u32, u32), k: u32) -> FilteredStill {
         let n = f64::from(k * k);
@@ -189,30 +120,6 @@ impl FilteredStill {
             self.covered[i] > 0 || other.is_some_and(|o| o.covered.get(i).is_some_and(|&c| c > 0))
         })
     }
-}
-
-/// A posed tree's still (`tree` names it in errors) at `size` pixels, drawn `k` times that
-/// size by [`render_pose`] and resolved into each pixel's covered fraction and mean colour
-/// ([`FilteredStill::resolve`]).
-pub fn render_filtered(
-    renderer: &Renderer,
-    tree: &Tree,
-    scene: &DrawScene,
-    camera: &Camera,
-    size: (u32, u32),
-    k: u32,
-    what: &'static str,
-) -> Result<FilteredStill, PreviewError> {
-    let k = k.max(1);
-    let frame = render_pose(
-        renderer,
-        tree,
-        scene,
-        camera,
-        (size.0 * k, size.1 * k),
-        what,
-    )?;
-    Ok(FilteredStill::resolve(&frame, k))
 }
 
 /// Draws one tree's pictures with the coverage metric's CPU rasteriser, its textures (their
@@ -694,23 +601,23 @@ mod tests {
     }
 
     #[test]
-    fn resolved_still_counts_samples_and_averages_their_colour_in_linear_light() {
-        // A 4×2 render at K = 2: pixel 0 has 3 of its 4 samples covered, white and black,
-        // pixel 1 none.
-        let (white, black) = ([255, 255, 255, 255], [0, 0, 0, 255]);
-        let rgba: Vec<u8> = [white, white, [0; 4], [0; 4], black, [0; 4], [0; 4], [0; 4]].concat();
-        let frame = Frame {
-            width: 4,
-            height: 2,
-            coverage: rgba.chunks_exact(4).map(|p| p[3] > 0).collect(),
-            rgba,
+    fn a_still_counts_samples_and_shows_their_mean_colour_in_srgb() {
+        // A 2×1 coverage image at K = 2: pixel 0 has 3 of its 4 samples covered, their mean
+        // linear colour two thirds white; pixel 1 none.
+        let image = CoverageImage {
+            width: 2,
+            height: 1,
+            samples_per_pixel: 4,
+            samples: vec![3, 0],
+            colour: vec![[2.0 / 3.0; 3], [0.0; 3]],
         };
-        let s = FilteredStill::resolve(&frame, 2);
+        let s = FilteredStill::of_image(&image, (2, 1), 2);
         assert_eq!((s.width, s.height, s.samples_per_side), (2, 1, 2));
         assert_eq!(s.covered, vec![3, 0]);
         assert_eq!(s.fraction(0), 0.75);
         // Two thirds of white in linear light is sRGB 213, not the byte mean 170.
         let grey = frond_render::linear_to_srgb(2.0 / 3.0);
+        assert_eq!(grey, 213);
         assert_eq!(&s.rgba[..4], &[grey, grey, grey, 191]);
         assert_eq!(&s.rgba[4..], &[0; 4]);
         assert_eq!(s.covered_box(None, 0), [0, 0, 1, 1]);
