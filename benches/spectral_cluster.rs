@@ -84,6 +84,7 @@ fn main() {
             seed: 1,
             max_iterations: 20,
             shared_bone: true,
+            one_motion_per_cluster: false,
         };
         match kind {
             SpectralKind::Naive => run::<Naive>(&tree, &s, &rest, &sp),

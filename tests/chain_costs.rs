@@ -190,6 +190,65 @@ fn the_far_end_fits_the_impostor_budget_with_every_method() {
     }
 }
 
+/// The far end of `auto` is an animated billboard cloud of FFT clusters: the impostor-class
+/// LOD is built by `spectral-axis-phase` with one motion per cluster, at most the joint
+/// budget's clusters less the wood's joint; the written file skins its billboards to no more
+/// joints than that, and the measure reports how it moves against the tree.
+#[test]
+fn the_far_end_of_auto_is_an_animated_cloud_of_fft_clusters() {
+    for tree in [root().join("samples/sapling.glb"), fixture("bush_1.glb")] {
+        let out = tempfile::tempdir().expect("tempdir");
+        let report = frond_lod_measured(&tree, out.path(), &["--lods", "60,20", "--no-preview"]);
+        let far = report.lods.last().expect("the far LOD");
+        assert_eq!(
+            far.method.name(),
+            "spectral-axis-phase",
+            "{}",
+            far.method_reason
+        );
+        assert!(
+            far.method_reason.contains("impostor"),
+            "{}",
+            far.method_reason
+        );
+        let spectral: frond_lod::methods::spectral::SpectralReport = far
+            .sections
+            .typed("spectral")
+            .expect("a spectral section")
+            .expect("reads back");
+        assert!(spectral.one_motion_per_cluster, "{spectral:?}");
+        assert!(
+            (1..=7).contains(&spectral.clusters),
+            "{}",
+            spectral.clusters
+        );
+        let cost = file_cost(&out.path().join(&far.file), &InputLimits::default()).expect("cost");
+        assert!(
+            cost.joints_per_skin_max <= 8,
+            "{}: {} joints",
+            far.file,
+            cost.joints_per_skin_max
+        );
+        let error = far.error.as_ref().expect("measured");
+        let ratio = error
+            .loop_change_ratio
+            .expect("three frames of a moving tree");
+        assert!(
+            error.loop_change_input.is_some_and(|c| c > 0.0),
+            "{error:?}"
+        );
+        eprintln!(
+            "{}: {} clusters, {} joints, error {:.3}, ratio {:.3}, loop change {ratio:.3}× LOD0's",
+            far.file,
+            spectral.clusters,
+            cost.joints_per_skin_max,
+            error.coverage,
+            error.coverage_ratio
+        );
+        assert!(ratio > 0.0 && ratio.is_finite(), "it moves: {ratio}");
+    }
+}
+
 /// The benchmark tree's far LODs meet their cost targets: 60 px ≤ 32 joints, ≤ 1 MB decoded
 /// texture, ≤ 1 MB file, quad area ≤ 2× the input's leaf area; 200 px ≤ 128 joints. A heavy
 /// case (oak_dense), in `.ci/run`'s optimised run.

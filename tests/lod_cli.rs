@@ -357,6 +357,7 @@ fn spectral_skin_round_trip() {
         seed: 1,
         max_iterations: 10,
         shared_bone: true,
+        one_motion_per_cluster: false,
     };
     let (mut cloud, _, _) = with_context(&renderer, &tree, &sampled, &params, pixel, |ctx| {
         build_spectral_cloud(ctx, &sp)
@@ -480,6 +481,7 @@ fn with_context<R>(
         max_billboards: None,
         max_foliage_triangles: None,
         max_alpha_tested_area: None,
+        max_joints: None,
     })
 }
 

@@ -368,6 +368,8 @@ fn measure_errors(
             coverage_ratio: coverage.ratio,
             coverage_binary: (!binary.is_nan()).then_some(binary),
             switch_pop,
+            loop_change_input: coverage.loop_change_original,
+            loop_change_ratio: coverage.loop_change_ratio(),
             max_error,
             within_target,
             image: [framing.width, framing.height],

@@ -20,7 +20,9 @@ pub use crate::cost_budget::{
 };
 use crate::error::LodError;
 use crate::joint_budget::{AnimationCount, BillboardAnimation, JointCap, count};
-use crate::method_api::{BuildContext, BuildTimings, Foliage, Method, MethodName, MethodSection};
+use crate::method_api::{
+    BuildContext, BuildTimings, Foliage, Method, MethodName, MethodSection, PickContext,
+};
 use crate::methods::cards::is_card_foliage;
 use crate::motion_budget::{ScreenBudget, apply_budget};
 use crate::part_mesh::{part_mesh, triangle_area};
@@ -191,8 +193,15 @@ pub fn build_chain(
     let spectral = req.animation == BillboardAnimation::Spectral;
     // The poses only when a LOD's method reads them (card chains do not: 2.4 GB on the 1M
     // preset).
-    let poses =
-        (0..levels.len()).any(|k| req.method.pick(k, spectral, card_foliage).0.needs_poses());
+    let poses = (levels.iter().enumerate()).any(|(k, level)| {
+        let lod = PickContext {
+            index: k,
+            spectral_animation: spectral,
+            card_foliage,
+            screen_height: level.screen_height,
+        };
+        req.method.pick(&lod).0.needs_poses()
+    });
     let sampled = sample_foliage_with(tree, req.clip.as_deref(), req.samples, poses)
         .map_err(|e| (None, e))?;
     let t_sampled = Instant::now();
@@ -553,11 +562,12 @@ fn billboard_lod(
     lod_budget: &LodBudget,
     card_foliage: bool,
 ) -> Result<ChainLod, LodError> {
-    let (method, reason) = req.method.pick(
-        k,
-        req.animation == BillboardAnimation::Spectral,
+    let (method, reason) = req.method.pick(&PickContext {
+        index: k,
+        spectral_animation: req.animation == BillboardAnimation::Spectral,
         card_foliage,
-    );
+        screen_height: level.screen_height,
+    });
     let t0 = Instant::now();
     // Branches narrower than the wood's error (one pixel by default) go first; what is left is
     // simplified to its share. Triangles the wood does not need go to the foliage.
@@ -585,6 +595,7 @@ fn billboard_lod(
         max_billboards: Some(max_billboards.max(1)),
         max_foliage_triangles: Some(lod_budget.triangles.saturating_sub(wood_lod.triangles())),
         max_alpha_tested_area: Some(lod_budget.alpha_tested_area),
+        max_joints: Some(lod_budget.joints),
     };
     let built = method.build(&ctx)?;
     // Triangles the foliage left unused go back to the wood, as a finer wood error.

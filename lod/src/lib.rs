@@ -32,7 +32,7 @@ pub use error::LodError;
 pub use method::{auto_method, ignored_options};
 pub use method_api::{
     BuildContext, ClusteringMethod, Foliage, IgnoredOptions, Method, MethodChoice, MethodError,
-    MethodName, MethodOptions, MethodOutput, MethodPlugin, MethodSection, Registry,
+    MethodName, MethodOptions, MethodOutput, MethodPlugin, MethodSection, PickContext, Registry,
     SkeletonOptions, SpectralOptions,
 };
 pub use methods::{METHOD_NAMES, REGISTRY};

@@ -5,7 +5,7 @@
 
 pub use crate::method_api::{
     BuildContext, ClusteringMethod, Foliage, IgnoredOptions, Method, MethodError, MethodName,
-    MethodOptions, MethodOutput, SkeletonOptions, SpectralOptions,
+    MethodOptions, MethodOutput, PickContext, SkeletonOptions, SpectralOptions,
 };
 pub use crate::methods::METHOD_NAMES;
 use crate::methods::{REGISTRY, auto};
@@ -47,16 +47,10 @@ pub fn ignored_options(
     REGISTRY.ignored_options(name, spectral_given, skeleton_given, spectral_animation)
 }
 
-/// The fixed rule of `--method auto` ([`crate::methods::auto`]) for LOD `lod_index` (0 =
-/// LOD1): the method it picks and the reason written to the report. `spectral_animation`: the
-/// files animate with spectral coefficients; `card_foliage`: the tree's foliage is single leaf
-/// cards ([`crate::methods::cards::is_card_foliage`]).
-pub fn auto_method(
-    lod_index: usize,
-    spectral_animation: bool,
-    card_foliage: bool,
-) -> (MethodName, &'static str) {
-    let (pick, reason) = auto::rule(lod_index, spectral_animation, card_foliage);
+/// The fixed rule of `--method auto` ([`crate::methods::auto`]) for the LOD of `lod`: the
+/// method it picks and the reason written to the report.
+pub fn auto_method(lod: &PickContext) -> (MethodName, &'static str) {
+    let (pick, reason) = auto::rule(lod);
     let name = REGISTRY
         .parse(pick.method())
         .unwrap_or(MethodName::new(pick.method()));
@@ -69,6 +63,16 @@ mod tests {
     use crate::spectral_k;
     use frond_skeleton::BoneDescriptionKind;
     use frond_spectral::description::SpectralKind;
+
+    /// The LOD of rank `index` at `screen_height` px.
+    fn lod(index: usize, spectral: bool, cards: bool, screen_height: f32) -> PickContext {
+        PickContext {
+            index,
+            spectral_animation: spectral,
+            card_foliage: cards,
+            screen_height,
+        }
+    }
 
     #[test]
     fn method_names_round_trip() {
@@ -124,7 +128,7 @@ mod tests {
         let skeleton_name = crate::methods::skeleton::name_of(BoneDescriptionKind::AxisAngle);
         let m = Method::new(skeleton_name, spectral.clone(), SkeletonOptions::default()).unwrap();
         assert_eq!(m.name(), skeleton_name);
-        assert_eq!(m.pick(0, false, false).0.name(), skeleton_name);
+        assert_eq!(m.pick(&lod(0, false, false, 600.0)).0.name(), skeleton_name);
         let w = ignored_options(skeleton_name, true, false, false);
         assert_eq!(w, [IgnoredOptions::Spectral(skeleton_name)]);
         assert!(w[0].to_string().contains("spectral options"), "{w:?}");
@@ -132,16 +136,22 @@ mod tests {
         let m = Method::new(MethodName::AUTO, spectral, SkeletonOptions::default()).unwrap();
         assert_eq!(m.name(), MethodName::AUTO);
         let spectral_axis_phase = crate::methods::spectral::name_of(SpectralKind::AxisPhase);
-        let (picked, _) = m.pick(1, true, false);
+        let (picked, _) = m.pick(&lod(1, true, false, 200.0));
         assert_eq!(picked.name(), spectral_axis_phase);
-        let (picked, _) = m.pick(0, false, false);
+        let (picked, _) = m.pick(&lod(0, false, false, 600.0));
         assert_eq!(
             picked.name(),
             crate::methods::skeleton::name_of(crate::DEFAULT_SKELETON)
         );
-        for k in 0..3 {
-            let (picked, _) = m.pick(k, k == 1, true);
+        for (k, h) in [600.0, 200.0, 60.0].into_iter().enumerate() {
+            let (picked, _) = m.pick(&lod(k, k == 1, true, h));
             assert_eq!(picked.name(), crate::methods::cards::NAME);
+        }
+        // The far end is an animated billboard cloud of FFT clusters, whatever the foliage.
+        for (cards, spectral) in [(true, false), (false, false), (true, true)] {
+            let (picked, why) = m.pick(&lod(3, spectral, cards, 20.0));
+            assert_eq!(picked.name(), spectral_axis_phase, "{why}");
+            assert!(why.contains("impostor"), "{why}");
         }
         assert!(
             Method::new(

@@ -128,6 +128,9 @@ pub struct BuildContext<'a> {
     /// Most alpha-tested area (world units²) the LOD's foliage may have: the previous LOD's
     /// (the monotone rule on overdraw). Card LODs grow their survivors within it.
     pub max_alpha_tested_area: Option<f64>,
+    /// Most skin joints the LOD may have: spectral clustering gives the far end one cluster
+    /// per joint but the wood's.
+    pub max_joints: Option<usize>,
 }
 
 /// A method's own part of a LOD's report entry: an entry key (`spectral`, `skeleton`,
@@ -176,7 +179,7 @@ pub trait ClusteringMethod: fmt::Debug + Send + Sync {
 }
 
 /// What the choice of a LOD's method may depend on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PickContext {
     /// 0 for LOD1, the nearest billboard LOD.
     pub index: usize,
@@ -184,6 +187,9 @@ pub struct PickContext {
     pub spectral_animation: bool,
     /// The tree's foliage is single leaf cards (`crate::methods::cards::is_card_foliage`).
     pub card_foliage: bool,
+    /// The LOD's screen height, pixels: an impostor-class LOD
+    /// ([`crate::cost_budget::IMPOSTOR_HEIGHT`]) gets the far end's method.
+    pub screen_height: f32,
 }
 
 /// The reason a LOD's report gives for a method the run named (no rule picked it).
@@ -451,20 +457,8 @@ impl Method {
         &self.choice
     }
 
-    /// The method that builds LOD `lod_index` (0 = LOD1) and why: itself, or what a rule
-    /// picks. `spectral_animation`: the files animate with spectral coefficients;
-    /// `card_foliage`: the tree's foliage is single leaf cards
-    /// (`crate::methods::cards::is_card_foliage`).
-    pub fn pick(
-        &self,
-        lod_index: usize,
-        spectral_animation: bool,
-        card_foliage: bool,
-    ) -> (&dyn ClusteringMethod, &'static str) {
-        self.choice.pick(&PickContext {
-            index: lod_index,
-            spectral_animation,
-            card_foliage,
-        })
+    /// The method that builds the LOD of `lod` and why: itself, or what a rule picks.
+    pub fn pick(&self, lod: &PickContext) -> (&dyn ClusteringMethod, &'static str) {
+        self.choice.pick(lod)
     }
 }

@@ -227,6 +227,16 @@ pub struct MeasuredError {
     /// The switch pop: the coverage error of this LOD against the LOD before it, at this
     /// LOD's size, where the engine swaps them: what a player sees change.
     pub switch_pop: f64,
+    /// How much the input's coverage changes over the loop at this size: per view, each
+    /// measured frame against the next, the samples that change over those covered, then the
+    /// mean (`frond_metrics::coverage::CoverageReport::loop_change_original`); None with one
+    /// frame.
+    #[serde(default)]
+    pub loop_change_input: Option<f64>,
+    /// This LOD's change of coverage over the loop over the input's: 1 moves as much as the
+    /// tree, 0 stands still; None with one frame or an input that does not move.
+    #[serde(default)]
+    pub loop_change_ratio: Option<f64>,
     /// The target it was measured against (`--max-error`).
     pub max_error: f64,
     /// Whether `coverage ≤ max_error`; a LOD over its target is still written, at its budget,
@@ -485,6 +495,8 @@ mod tests {
             coverage_ratio: 0.97,
             coverage_binary: None,
             switch_pop: 0.0625,
+            loop_change_input: Some(0.05),
+            loop_change_ratio: Some(0.875),
             max_error: 0.25,
             within_target: true,
             image: [267, 200],

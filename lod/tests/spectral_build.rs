@@ -42,6 +42,7 @@ fn params(kind: SpectralKind, clusters: usize, tree: &Tree) -> SpectralParams {
         seed: 3,
         max_iterations: 20,
         shared_bone: true,
+        one_motion_per_cluster: false,
     }
 }
 
@@ -85,8 +86,43 @@ fn build(
         max_billboards: None,
         max_foliage_triangles: None,
         max_alpha_tested_area: None,
+        max_joints: None,
     };
     build_spectral_cloud(&ctx, sp).expect("spectral cloud")
+}
+
+/// The far end's SCA: every billboard of a cluster moves with the cluster's one motion, in
+/// world space (no shared bone), so the cloud has no more distinct motions than clusters.
+#[test]
+fn one_motion_per_cluster_gives_each_cluster_one_motion() {
+    let tree = sapling();
+    let s = sampled(&tree);
+    let renderer = Renderer::new().expect("renderer");
+    let sp = SpectralParams {
+        one_motion_per_cluster: true,
+        ..params(SpectralKind::AxisPhase, 4, &tree)
+    };
+    let (cloud, _, report) = build(&renderer, &tree, &s, &sp, tree.bounds.size());
+    assert!(report.one_motion_per_cluster);
+    assert_eq!(report.clusters, 4);
+    assert_eq!(report.shared_bone_billboards, 0);
+    let mut motions: Vec<&SpectralMotion> = Vec::new();
+    for b in &cloud.billboards {
+        assert_eq!(b.follows, None, "world-space motion");
+        let Some(RigidMotion::Spectral(m)) = &b.motion else {
+            panic!("every cluster of a swaying tree moves: {:?}", b.motion);
+        };
+        if !motions.contains(&m) {
+            motions.push(m);
+        }
+    }
+    assert!(
+        (2..=4).contains(&motions.len()),
+        "{} distinct motions for 4 clusters over {} billboards",
+        motions.len(),
+        cloud.billboards.len()
+    );
+    assert!(cloud.billboards.len() > motions.len());
 }
 
 #[test]

@@ -171,6 +171,75 @@ pub struct CoverageReport {
     /// `colour_difference`. What reads as one model being lighter or darker than the other,
     /// without the per-pixel differences that average out at a distance.
     pub colour_shift: f64,
+    /// How much the original's coverage changes over the loop ([`LoopChange`]); None with
+    /// fewer than two frames.
+    pub loop_change_original: Option<f64>,
+    /// The same of the simplified model, over the original's covered area.
+    pub loop_change_simplified: Option<f64>,
+}
+
+/// The change of a model's coverage over the loop: per view, each frame against the next
+/// (the last against the first: the loop closes), `Σ|n_f − n_{f+1}|` over the pixels, divided
+/// by the original's covered samples `Σn_o,f` of that view and frame; the mean over views and
+/// frames. The animated metric's own renders measure it, so it costs nothing more. Swaying
+/// leaves that uncover and cover pixels move it; a model that does not move scores 0. A LOD
+/// moves like the tree when its change is close to the original's: their ratio is
+/// [`CoverageReport::loop_change_ratio`].
+#[derive(Clone, Copy, Debug, Default)]
+struct LoopChange {
+    /// `Σ` over frames of the original's changed samples over its covered samples.
+    original: f64,
+    /// The same of the simplified model.
+    simplified: f64,
+    /// Frames summed.
+    frames: usize,
+}
+
+impl LoopChange {
+    /// Adds one view's frames (`frames[f]` the original's and the simplified model's covered
+    /// samples of frame `f`, in loop order).
+    fn add_view(&mut self, frames: &[(&[u16], &[u16])]) {
+        if frames.len() < 2 {
+            return;
+        }
+        for (f, (o, s)) in frames.iter().enumerate() {
+            let (o2, s2) = frames[(f + 1) % frames.len()];
+            let covered: u64 = o.iter().map(|&n| u64::from(n)).sum();
+            if covered == 0 {
+                continue;
+            }
+            let changed = |a: &[u16], b: &[u16]| -> u64 {
+                a.iter()
+                    .zip(b)
+                    .map(|(&x, &y)| u64::from(x.abs_diff(y)))
+                    .sum()
+            };
+            self.original += changed(o, o2) as f64 / covered as f64;
+            self.simplified += changed(s, s2) as f64 / covered as f64;
+            self.frames += 1;
+        }
+    }
+
+    /// The means, None when no view had two frames.
+    fn means(&self) -> (Option<f64>, Option<f64>) {
+        if self.frames == 0 {
+            return (None, None);
+        }
+        let n = self.frames as f64;
+        (Some(self.original / n), Some(self.simplified / n))
+    }
+}
+
+impl CoverageReport {
+    /// The simplified model's change of coverage over the loop over the original's: 1 moves
+    /// as much as the tree, 0 stands still; None without two frames or when the original
+    /// does not move.
+    pub fn loop_change_ratio(&self) -> Option<f64> {
+        match (self.loop_change_original, self.loop_change_simplified) {
+            (Some(o), Some(s)) if o > 0.0 => Some(s / o),
+            _ => None,
+        }
+    }
 }
 
 /// Why the coverage metric could not be computed.
@@ -253,10 +322,14 @@ pub fn coverage_error(
     let pairs: Vec<(usize, usize)> = (0..framing.cameras.len())
         .flat_map(|d| (0..original.len()).map(move |f| (d, f)))
         .collect();
-    let per_pair = image_bytes(&framing, 1, params.colour).max(1);
-    let chunk = (MAX_HELD_IMAGE_BYTES / (2 * per_pair)).clamp(1, pairs.len() as u64) as usize;
+    // Whole views at a time (a view's frames give the loop change), as many as fit.
+    let frames = original.len();
+    let per_view = image_bytes(&framing, frames, params.colour).max(1);
+    let views = (MAX_HELD_IMAGE_BYTES / (2 * per_view)).clamp(1, framing.cameras.len() as u64);
+    let chunk = views as usize * frames;
     let samples = framing.supersample * framing.supersample;
     let mut sums = Vec::with_capacity(pairs.len());
+    let mut change = LoopChange::default();
     for chunk in pairs.chunks(chunk) {
         let (a, _) = o.render(chunk)?;
         let (b, _) = s.render(chunk)?;
@@ -267,12 +340,18 @@ pub fn coverage_error(
             }
             sums.push(pair);
         }
+        for (a, b) in a.chunks(frames).zip(b.chunks(frames)) {
+            let view: Vec<(&[u16], &[u16])> = (a.iter().zip(b))
+                .map(|(a, b)| (a.0.as_slice(), b.0.as_slice()))
+                .collect();
+            change.add_view(&view);
+        }
     }
     Ok(report_of(
         &sums,
-        framing.cameras.len(),
-        original.len(),
+        (framing.cameras.len(), frames),
         samples,
+        change,
     ))
 }
 
@@ -469,6 +548,7 @@ pub fn compare_images(
         });
     }
     let mut pairs = Vec::with_capacity(original.views * frames.len());
+    let mut change = LoopChange::default();
     for d in 0..original.views {
         for &f in frames {
             let i = d * original.frames + f;
@@ -482,12 +562,22 @@ pub fn compare_images(
             }
             pairs.push(pair);
         }
+        let view: Vec<(&[u16], &[u16])> = (frames.iter())
+            .map(|&f| {
+                let i = d * original.frames + f;
+                (
+                    original.samples[i].as_slice(),
+                    simplified.samples[i].as_slice(),
+                )
+            })
+            .collect();
+        change.add_view(&view);
     }
     Ok(report_of(
         &pairs,
-        original.views,
-        frames.len(),
+        (original.views, frames.len()),
         original.samples_per_pixel,
+        change,
     ))
 }
 
@@ -544,12 +634,13 @@ fn pair_sums(
     sums
 }
 
-/// The report of the pairs' sums (`views · frames` of them, view-major).
+/// The report of the pairs' sums (`views · frames` of them, view-major) and the views' loop
+/// change.
 fn report_of(
     pairs: &[PairSums],
-    views: usize,
-    frames: usize,
+    (views, frames): (usize, usize),
     samples_per_pixel: u32,
+    change: LoopChange,
 ) -> CoverageReport {
     let per_pair: Vec<f64> = (pairs.iter())
         .map(|p| p.differing as f64 / p.original as f64)
@@ -585,6 +676,7 @@ fn report_of(
         .filter(|&score| score <= 1.0)
         .collect();
     debug_assert_eq!(pairs.len(), views * frames);
+    let (loop_change_original, loop_change_simplified) = change.means();
     CoverageReport {
         mean: mean_or_nan(&per_pair),
         per_view,
@@ -603,6 +695,8 @@ fn report_of(
         colour_difference: mean_or_nan(&coloured),
         colour_per_pair,
         colour_shift: mean_or_nan(&shifts),
+        loop_change_original,
+        loop_change_simplified,
     }
 }
 

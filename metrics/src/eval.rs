@@ -618,6 +618,8 @@ fn score(
             // Set by the caller, which draws the foliage alone.
             foliage: Metric::skipped(MetricId::CoverageFoliage, "not measured"),
             ratio: anim.ratio,
+            loop_change: anim.loop_change_original,
+            loop_change_ratio: anim.loop_change_ratio(),
             discarded_pairs: anim.binary.discarded,
             pairs: anim.per_pair.len(),
         },

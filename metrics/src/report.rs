@@ -59,6 +59,15 @@ pub struct CoverageMetrics {
     /// The coverage ratio over every frame: per pair the candidate's covered area over the
     /// original's, then the mean (below 1 the candidate thins, above 1 it bloats).
     pub ratio: f64,
+    /// How much the original's coverage changes over the loop: per view, each frame against
+    /// the next (the last against the first), the samples that change over those it covers,
+    /// then the mean; None with one frame.
+    #[serde(default)]
+    pub loop_change: Option<f64>,
+    /// The candidate's change over the original's: 1 moves as much as the tree, 0 stands
+    /// still; None with one frame or an original that does not move.
+    #[serde(default)]
+    pub loop_change_ratio: Option<f64>,
     /// (view, frame) pairs the binary error discarded because they scored above 1 (the
     /// thesis: no fidelity from that view) or the original covered no pixel.
     pub discarded_pairs: usize,
@@ -222,6 +231,8 @@ mod tests {
                 binary: m(MetricId::CoverageBinary),
                 foliage: m(MetricId::CoverageFoliage),
                 ratio: 1.0,
+                loop_change: None,
+                loop_change_ratio: None,
                 discarded_pairs: 0,
                 pairs: 50,
             },

@@ -662,6 +662,56 @@ fn images_rendered_once_compare_like_the_metric() {
     assert!(stat.mean > 0.0 && stat.mean > full.mean, "frame 1 is exact");
     // A frame outside the images is refused, not read out of bounds.
     assert!(compare_images(&o, &s, &[2]).is_err());
+    // The loop change: one frame has none; both paths give the same over two.
+    assert_eq!(
+        (stat.loop_change_original, stat.loop_change_ratio()),
+        (None, None)
+    );
+    assert_eq!(again.loop_change_original, full.loop_change_original);
+    assert!(
+        full.loop_change_original.is_some_and(|c| c > 0.0),
+        "{full:?}"
+    );
+}
+
+/// The change of coverage over the loop: a model that moves as the original does changes as
+/// much (ratio 1), one that stands still not at all (ratio 0), and the change is that of the
+/// samples each frame uncovers or covers, over the original's covered samples.
+#[test]
+fn the_loop_change_is_the_coverage_that_moves_from_frame_to_frame() {
+    let (lo, hi) = (Vec3::splat(-1.5), Vec3::splat(1.5));
+    let a = tree();
+    let mut moved = a.clone();
+    for m in &mut moved.meshes {
+        for p in &mut m.positions {
+            p[0] += 0.2;
+        }
+    }
+    let swaying = [a.clone(), moved.clone(), a.clone()];
+    let p = params(2, 3, 40.0);
+    let same = run(&swaying, &swaying, lo, hi, &p);
+    let change = same.loop_change_original.expect("three frames");
+    assert!(change > 0.05 && change < 2.0, "{change}");
+    assert_eq!(same.loop_change_simplified, Some(change));
+    assert_eq!(same.loop_change_ratio(), Some(1.0));
+    let still = [a.clone(), a.clone(), a.clone()];
+    let r = run(&swaying, &still, lo, hi, &p);
+    assert_eq!(r.loop_change_original, Some(change), "the original's own");
+    assert_eq!(
+        r.loop_change_ratio(),
+        Some(0.0),
+        "a model that stands still"
+    );
+    // Frame 0 against 1 and 1 against 2 change; 2 against 0 does not: a third less than the
+    // pairs it would be were every frame different, whatever the views.
+    let per_pair = change * 3.0 / 2.0;
+    let moved_twice = [a.clone(), moved.clone(), a, moved];
+    let four = run(&moved_twice, &moved_twice, lo, hi, &params(2, 4, 40.0));
+    let c4 = four.loop_change_original.expect("four frames");
+    assert!(
+        (c4 - per_pair).abs() < 0.05 * per_pair,
+        "{c4} vs {per_pair}"
+    );
 }
 
 /// A `size`×`size` leaf texture: an opaque disc on a clear ground, for alpha-tested cards.

@@ -51,15 +51,45 @@ pub fn figure(src: &str, size: [u32; 2], caption: &str, zoom: bool) -> String {
         href(src),
         size[0],
         size[1],
-        esc(caption),
+        text_of(caption),
         if zoom { " class=\"px\"" } else { "" },
         caption
     )
 }
 
+/// The text of `markup` (HTML this crate built, its text already escaped) with its tags
+/// removed: a caption's words as an image's `alt` attribute.
+fn text_of(markup: &str) -> String {
+    let mut text = String::with_capacity(markup.len());
+    let mut in_tag = false;
+    for c in markup.chars() {
+        match c {
+            '<' => in_tag = true,
+            '>' if in_tag => in_tag = false,
+            c if !in_tag => text.push(c),
+            _ => {}
+        }
+    }
+    text
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_figure_alt_is_its_caption_without_tags() {
+        let caption = format!(
+            "Difference: <span class=\"legend\"><span style=\"x\"></span>missing</span> {}",
+            esc("LOD0's \"a\"")
+        );
+        let f = figure("d.png", [2, 3], &caption, true);
+        assert!(
+            f.contains("alt=\"Difference: missing LOD0&#39;s &quot;a&quot;\""),
+            "{f}"
+        );
+        assert!(f.contains(&format!("<figcaption>{caption}</figcaption>")));
+    }
 
     #[test]
     fn text_and_urls_are_escaped() {

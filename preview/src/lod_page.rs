@@ -852,7 +852,7 @@ fn measured_paragraph(k: usize, e: &LodEntry, m: &MeasuredError) -> String {
          (target {}): the covered area it misses or adds over the area LOD0 covers, each pixel \
          counted by the fraction of it covered. It covers {} % of LOD0's covered area ({}). \
          Switch pop {}: its error against LOD{} at this size, what a player sees change when the \
-         engine swaps them. Measured from {} views a ring on {}, × {} frames of the loop, \
+         engine swaps them. {}Measured from {} views a ring on {}, × {} frames of the loop, \
          {}×{} samples a pixel, in {}×{} px images. <small class=\"muted\">Binary error (the \
          thesis' rule, a pixel covered when half its samples are): {}.</small> Depth complexity \
          {} (the input's {} at this size).</p>\n",
@@ -869,6 +869,7 @@ fn measured_paragraph(k: usize, e: &LodEntry, m: &MeasuredError) -> String {
         },
         units::significant(m.switch_pop),
         k.saturating_sub(1),
+        loop_sentence(m),
         m.views,
         esc(&rings(&m.elevations_deg)),
         m.frames,
@@ -880,6 +881,27 @@ fn measured_paragraph(k: usize, e: &LodEntry, m: &MeasuredError) -> String {
         units::significant(m.depth_complexity),
         units::significant(m.input_depth_complexity),
     )
+}
+
+/// What the LOD's motion does to its coverage, against LOD0's, as a sentence (empty when not
+/// measured).
+fn loop_sentence(m: &MeasuredError) -> String {
+    match (m.loop_change_ratio, m.loop_change_input) {
+        (Some(r), Some(input)) => format!(
+            "Over the loop its coverage changes {}× as much as LOD0's ({} % of LOD0's covered \
+             area changes from frame to frame): {}. ",
+            units::significant(r),
+            units::significant(100.0 * input),
+            if r < 0.7 {
+                "it moves less than the tree"
+            } else if r > 1.3 {
+                "it moves more than the tree"
+            } else {
+                "it moves like the tree"
+            }
+        ),
+        _ => String::new(),
+    }
 }
 
 /// The zoom buttons of the stills: each section's pictures at 1×, 2× or 4× their pixels.
@@ -911,6 +933,8 @@ mod tests {
             coverage_ratio: ratio,
             coverage_binary: binary,
             switch_pop: 0.0456,
+            loop_change_input: Some(0.04),
+            loop_change_ratio: Some(0.9),
             max_error: 0.1,
             within_target: false,
             image: [98, 114],
@@ -959,6 +983,11 @@ mod tests {
         let p = measured_paragraph(1, &lod1, lod1.error.as_ref().expect("measured"));
         assert!(p.contains("It covers 97 % of LOD0's covered area (below 100 %: it thins out)"));
         assert!(p.contains("Switch pop 0.0456: its error against LOD0"));
+        assert!(
+            p.contains("changes 0.9× as much as LOD0's (4 % of LOD0's covered area"),
+            "{p}"
+        );
+        assert!(p.contains("it moves like the tree"));
         assert!(p.contains("Binary error"));
         assert!(p.contains("—.</small>"));
     }

@@ -26,7 +26,7 @@ use crate::lod_cmd::lod_name;
 use crate::lod_settings::{LodSettings, MethodChoice, Sampling};
 use crate::out_folder::{OutFolder, write_atomic};
 use frond_lod::LodReport;
-use frond_lod::method::{MethodName, auto_method};
+use frond_lod::method::{MethodName, PickContext, auto_method};
 use frond_render::Renderer;
 use frond_scene::{ImportOptions, Length, Tree};
 use grid::{Grid, GridPoint};
@@ -327,7 +327,13 @@ fn lod_run(
             let heights = distinct_heights(&req.grid.points());
             let rank = heights.iter().filter(|&&h| h > p.screen_height).count();
             let cards = frond_lod::methods::cards::is_card_foliage(ctx.original());
-            MethodChoice::named(auto_method(rank, false, cards).0)
+            let lod = PickContext {
+                index: rank,
+                spectral_animation: false,
+                card_foliage: cards,
+                screen_height: p.screen_height,
+            };
+            MethodChoice::named(auto_method(&lod).0)
         }
         _ => given,
     };

@@ -585,6 +585,8 @@ mod tests {
                 binary: at(MetricId::CoverageBinary),
                 foliage: at(MetricId::CoverageFoliage),
                 ratio,
+                loop_change: None,
+                loop_change_ratio: None,
                 discarded_pairs: discarded,
                 pairs,
             },

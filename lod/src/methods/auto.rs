@@ -1,5 +1,11 @@
-//! `auto`: a fixed rule that picks a method per LOD, by what the tree's foliage is and how the
-//! files animate. A tree whose foliage is single leaf cards gets `cards` at every LOD: the
+//! `auto`: a fixed rule that picks a method per LOD, by its screen height, what the tree's
+//! foliage is and how the files animate. An impostor-class LOD (the far end,
+//! [`IMPOSTOR_HEIGHT`] and below) gets `spectral-axis-phase`: the foliage clustered by its FFT
+//! motion into at most the LOD's joint budget of clusters, each one baked billboard cloud with
+//! one motion (spec animated-billboard-clouds §4.11–4.14). There a leaf card is a fraction of
+//! a pixel, and a baked texel averages the many leaves a thinned card set would drop
+//! (docs/experiments.md, "The far end"). Nearer, a tree whose foliage is single leaf cards
+//! gets `cards` at every LOD: the
 //! input's own cards, thinned to the LOD's triangle budget, on its leaf texture downscaled to
 //! the LOD's texel density (docs/experiments.md has the coverage errors that chose it). Other
 //! foliage (leaf clusters, where thinning would punch holes) gets the rule of the method
@@ -13,6 +19,7 @@
 
 use std::sync::Arc;
 
+use crate::cost_budget::IMPOSTOR_HEIGHT;
 use crate::method_api::{
     ClusteringMethod, MethodChoice, MethodError, MethodName, MethodPlugin, OptionUse, PickContext,
 };
@@ -78,27 +85,28 @@ impl AutoPick {
     }
 }
 
-/// The rule for LOD `lod_index` (0 = LOD1): the pick, and the reason written to the report.
-/// `spectral_animation`: the files animate with spectral coefficients; `card_foliage`: the
-/// tree's foliage is single leaf cards.
-pub fn rule(
-    lod_index: usize,
-    spectral_animation: bool,
-    card_foliage: bool,
-) -> (AutoPick, &'static str) {
-    if card_foliage {
+/// The rule for the LOD of `lod`: the pick, and the reason written to the report.
+pub fn rule(lod: &PickContext) -> (AutoPick, &'static str) {
+    if lod.screen_height <= IMPOSTOR_HEIGHT {
+        (
+            AutoPick::SpectralAxisPhase,
+            "auto: impostor-class LOD -> spectral-axis-phase (the foliage clustered by its FFT \
+             motion into the joint budget's clusters, one baked billboard cloud and one motion \
+             each)",
+        )
+    } else if lod.card_foliage {
         (
             AutoPick::Cards,
             "auto: foliage of single leaf cards -> cards (the input's cards thinned to the \
              triangle budget, its leaf texture at the LOD's texel density: no atlas)",
         )
-    } else if lod_index == 0 {
+    } else if lod.index == 0 {
         (
             AutoPick::Skeleton,
             "auto: nearest LOD -> skeleton (per-bone clouds; sibling bones share a rotation only \
              where no leaf would move a pixel)",
         )
-    } else if spectral_animation {
+    } else if lod.spectral_animation {
         (
             AutoPick::SpectralAxisPhase,
             "auto: farther LOD with --animation spectral -> spectral-axis-phase (motion as a few \
@@ -122,7 +130,7 @@ struct AutoRule {
 
 impl MethodChoice for AutoRule {
     fn pick(&self, lod: &PickContext) -> (&dyn ClusteringMethod, &'static str) {
-        let (pick, reason) = rule(lod.index, lod.spectral_animation, lod.card_foliage);
+        let (pick, reason) = rule(lod);
         let k = AutoPick::ALL.iter().position(|p| *p == pick).unwrap_or(0);
         (self.picks[k].pick(lod).0, reason)
     }

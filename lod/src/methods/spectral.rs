@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::cloud_build::{Driver, FoliageCluster, build_animated_cloud, sampled_worlds};
 use crate::contract::{AnimatedBillboardCloud, RigidMotion, SpectralMotion};
+use crate::cost_budget::{IMPOSTOR_HEIGHT, IMPOSTOR_JOINTS};
 use crate::error::LodError;
 use crate::method_api::{
     BuildContext, BuildTimings, ClusteringMethod, Foliage, MethodError, MethodName, MethodOutput,
@@ -96,6 +97,10 @@ pub struct SpectralParams {
     pub max_iterations: usize,
     /// Bind billboards to their triangles' deepest shared bone (§4.12).
     pub shared_bone: bool,
+    /// Give every billboard of a cluster the cluster's one motion (the average description
+    /// of its zones) rather than the average of its own triangles': the far end, where each
+    /// cluster is to be one joint.
+    pub one_motion_per_cluster: bool,
 }
 
 /// What SCA did: the `spectral` section of a spectral LOD's report entry.
@@ -132,6 +137,9 @@ pub struct SpectralReport {
     pub t_describe: f64,
     /// Seconds of the k-means.
     pub t_cluster: f64,
+    /// Every billboard of a cluster moves with the cluster's one motion (the far end).
+    #[serde(default)]
+    pub one_motion_per_cluster: bool,
 }
 
 /// The bone node each foliage triangle follows.
@@ -173,12 +181,23 @@ impl SpectralOptions {
     /// What SCA is asked for at the LOD of `ctx`: k from the options or the LOD's screen
     /// height, the zone size from the options or [`crate::DEFAULT_ZONE_FRACTION`] of the
     /// diagonal (the LOD's ε when larger), the skeleton depth as frequency bins.
+    ///
+    /// At an impostor-class LOD ([`IMPOSTOR_HEIGHT`]) every cluster gets one motion, and k
+    /// defaults to the LOD's joint budget less the one that carries the wood: each cluster
+    /// is then one joint (the far end's design; a shared bone would add joints).
     pub fn params(&self, ctx: &BuildContext) -> SpectralParams {
+        let impostor = ctx.level.screen_height <= IMPOSTOR_HEIGHT;
+        let default_k = if impostor {
+            ctx.max_joints
+                .unwrap_or(IMPOSTOR_JOINTS)
+                .saturating_sub(1)
+                .max(1)
+        } else {
+            crate::spectral_k(ctx.level.screen_height)
+        };
         SpectralParams {
             kind: self.kind,
-            clusters: self
-                .clusters
-                .unwrap_or_else(|| crate::spectral_k(ctx.level.screen_height)),
+            clusters: self.clusters.unwrap_or(default_k),
             zone_size: match self.zone_size {
                 Some(z) => z.resolve(ctx.scale),
                 None => ctx
@@ -190,7 +209,8 @@ impl SpectralOptions {
             restarts: 2,
             seed: ctx.seed,
             max_iterations: 20,
-            shared_bone: self.shared_bone,
+            shared_bone: self.shared_bone && !impostor,
+            one_motion_per_cluster: impostor,
         }
     }
 }
@@ -416,7 +436,12 @@ impl Run<'_> {
         )?;
         let t0 = Instant::now();
         let mut report = zc.report.clone();
-        report.shared_bone_billboards = assign_motions(&mut cloud, tree, sampled, &zc, sp);
+        if sp.one_motion_per_cluster {
+            assign_cluster_motions(&mut cloud, sampled, &zc);
+            report.one_motion_per_cluster = true;
+        } else {
+            report.shared_bone_billboards = assign_motions(&mut cloud, tree, sampled, &zc, sp);
+        }
         report.terms = cloud
             .billboards
             .iter()
@@ -428,6 +453,69 @@ impl Run<'_> {
         cloud.update_playable_clips();
         timings.motion_fit = t0.elapsed().as_secs_f64();
         Ok((cloud, timings, report))
+    }
+}
+
+/// The index into `Sampled::foliage` of each foliage triangle, and the zone of each entry.
+fn foliage_zones<T: DescriptionType>(
+    sampled: &Sampled,
+    zc: &ZoneClustering<T>,
+) -> (HashMap<usize, usize>, Vec<usize>) {
+    let foliage_index: HashMap<usize, usize> = (sampled.foliage.iter().enumerate())
+        .map(|(k, &t)| (t, k))
+        .collect();
+    let mut zone_of = vec![0usize; sampled.foliage.len()];
+    for (z, zone) in zc.zones.iter().enumerate() {
+        for &k in &zone.members {
+            zone_of[k] = z;
+        }
+    }
+    (foliage_index, zone_of)
+}
+
+/// A spectral motion of description `d`, or None when it has no term.
+fn spectral_motion<T: DescriptionType>(ty: &T, d: &T::Desc) -> Option<RigidMotion> {
+    let axes = ty.components(d);
+    axes.iter().any(|a| !a.amplitudes.is_empty()).then(|| {
+        RigidMotion::Spectral(SpectralMotion {
+            axes,
+            samples: ty.samples(d).max(1),
+        })
+    })
+}
+
+/// The far end's SCA step 4: one motion per cluster. Each cluster's motion is the average
+/// description of its zones (each weighted by its triangles), and every billboard built from
+/// the cluster's triangles (each billboard holds one cluster's) moves with it, in world
+/// space: identical motions share one joint when written ([`crate::joint_budget`]).
+fn assign_cluster_motions<T: DescriptionType>(
+    cloud: &mut AnimatedBillboardCloud,
+    sampled: &Sampled,
+    zc: &ZoneClustering<T>,
+) {
+    let k = zc.assignment.iter().max().map_or(0, |&m| m + 1);
+    let motions: Vec<Option<RigidMotion>> = (0..k)
+        .into_par_iter()
+        .map(|c| {
+            let zones: Vec<usize> = (0..zc.zones.len())
+                .filter(|&z| zc.assignment[z] == c)
+                .collect();
+            let refs: Vec<&T::Desc> = zones.iter().map(|&z| &zc.descriptions[z]).collect();
+            let weights: Vec<f32> = zones.iter().map(|&z| zc.weights[z]).collect();
+            if refs.is_empty() {
+                None
+            } else {
+                spectral_motion(&zc.ty, &zc.ty.average(&refs, &weights))
+            }
+        })
+        .collect();
+    let (foliage_index, zone_of) = foliage_zones(sampled, zc);
+    for b in &mut cloud.billboards {
+        let cluster = (b.triangles.iter())
+            .find_map(|t| foliage_index.get(t))
+            .map(|&k| zc.assignment[zone_of[k]]);
+        b.follows = None;
+        b.motion = cluster.and_then(|c| motions[c].clone());
     }
 }
 
@@ -443,16 +531,7 @@ fn assign_motions<T: DescriptionType>(
 ) -> usize {
     let n = sampled.samples();
     let nv = sampled.vertices;
-    let mut foliage_index: HashMap<usize, usize> = HashMap::new();
-    for (k, &t) in sampled.foliage.iter().enumerate() {
-        foliage_index.insert(t, k);
-    }
-    let mut zone_of = vec![0usize; sampled.foliage.len()];
-    for (z, zone) in zc.zones.iter().enumerate() {
-        for &k in &zone.members {
-            zone_of[k] = z;
-        }
-    }
+    let (foliage_index, zone_of) = foliage_zones(sampled, zc);
     let bones = bone_nodes(tree, sampled);
     let worlds = if sp.shared_bone {
         sampled_worlds(&cloud.rig, &cloud.clock)
@@ -523,14 +602,7 @@ fn assign_motions<T: DescriptionType>(
                     (None, None, ty.average(&refs, &weights))
                 }
             };
-            let axes = ty.components(&desc);
-            let motion = axes.iter().any(|a| !a.amplitudes.is_empty()).then(|| {
-                RigidMotion::Spectral(SpectralMotion {
-                    axes,
-                    samples: ty.samples(&desc).max(1),
-                })
-            });
-            (follows, quad, motion)
+            (follows, quad, spectral_motion(ty, &desc))
         })
         .collect();
     let mut shared = 0;

@@ -44,6 +44,7 @@ fn main() {
         seed: 1,
         max_iterations: 20,
         shared_bone: true,
+        one_motion_per_cluster: false,
     };
     println!(
         "{}: {} foliage triangles, {} samples, k = {k}, zones 2% of the diagonal",
