@@ -124,7 +124,7 @@ pub fn bake_cloud(
         let scales: Vec<f64> = quads
             .iter()
             .zip(members)
-            .map(|(q, tris)| foreshortening(soup, q, tris))
+            .map(|(q, tris)| foreshortening(soup, q, tris) * params.coverage_gain)
             .collect();
         grown = preserve_coverage(
             &mut samples,

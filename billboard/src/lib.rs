@@ -13,6 +13,7 @@ pub mod quad_split;
 pub mod rectangle;
 pub mod soup;
 pub mod source_copy;
+pub mod view_coverage;
 
 pub use atlas::{Packing, pack};
 pub use bake::{Atlas, BakeError, BakeParams, BakeRasteriser, BakedCloud, Cell, bake_cloud};

@@ -461,6 +461,16 @@ fn dropped_clip_reason(cloud: &AnimatedBillboardCloud, tree: &Tree, c: usize) ->
 /// padding).
 const TEXELS_PER_BILLBOARD: usize = 128;
 
+/// Padding (texels) around an impostor-class LOD's billboard textures: its billboards are a
+/// few pixels across, read at the atlas's top level, where one texel keeps bilinear filtering
+/// inside each texture.
+const IMPOSTOR_PADDING: u32 = 1;
+
+/// Atlas texels an impostor-class billboard needs at least: a 4×4 texture (a billboard a few
+/// pixels across at that size) with [`IMPOSTOR_PADDING`] around it. The far end's texture
+/// budget is a few thousand texels, which a larger floor would spend on padding.
+const IMPOSTOR_TEXELS_PER_BILLBOARD: usize = 36;
+
 /// Steps of a doubling wood error tried before the wood is left over its share.
 const WOOD_TRIES: usize = 16;
 
@@ -483,13 +493,19 @@ fn simplify_wood(wood: &WoodMesh, max_error: f32, max_triangles: usize) -> (Wood
 /// Times [`wood_within`] doubles the thickness under which branches go.
 const THIN_TRIES: usize = 4;
 
-/// The wood within `max_triangles`: branches narrower than `error` dropped and the rest
-/// simplified to fit ([`simplify_wood`]); where simplifying cannot reach the budget (every
-/// branch keeps a few triangles however coarse), the thinnest branches go next, the
-/// thickness doubled up to [`THIN_TRIES`] times: a far LOD keeps its trunk and limbs and its
-/// foliage keeps its billboards. Returns the mesh, its error and the branches dropped.
-fn wood_within(wood: &WoodMesh, error: f32, max_triangles: usize) -> (WoodMesh, f32, usize) {
-    let mut thickness = error;
+/// The wood within `max_triangles`: branches narrower than `min_width` (half the LOD's pixel:
+/// narrower, a branch covers under half of the pixels it crosses) dropped and the rest
+/// simplified within `error` to fit ([`simplify_wood`]); where simplifying cannot reach the
+/// budget (every branch keeps a few triangles however coarse), the thinnest branches go
+/// next, the width doubled up to [`THIN_TRIES`] times: a far LOD keeps its trunk and limbs
+/// and its foliage keeps its billboards. Returns the mesh, its error and the branches dropped.
+fn wood_within(
+    wood: &WoodMesh,
+    min_width: f32,
+    error: f32,
+    max_triangles: usize,
+) -> (WoodMesh, f32, usize) {
+    let mut thickness = min_width;
     let mut doublings = 0;
     loop {
         let (kept, thin) = wood.without_thin_pieces(thickness);
@@ -569,19 +585,39 @@ fn billboard_lod(
         screen_height: level.screen_height,
     });
     let t0 = Instant::now();
-    // Branches narrower than the wood's error (one pixel by default) go first; what is left is
-    // simplified to its share. Triangles the wood does not need go to the foliage.
-    let (wood_lod, wood_error, thin_pieces) =
-        wood_within(wood, level.wood_error, lod_budget.wood_triangles);
+    // Branches narrower than half a pixel go first; what is left is simplified to its share. Triangles the wood does not need go to the foliage.
+    let (wood_lod, wood_error, thin_pieces) = wood_within(
+        wood,
+        0.5 * level.pixel,
+        level.wood_error,
+        lod_budget.wood_triangles,
+    );
     let t1 = Instant::now();
-    let wood_sizes = lod_image_sizes(tree, std::slice::from_ref(&wood_lod), level.texels_per_unit);
+    let wood_sizes = lod_image_sizes(
+        tree,
+        std::slice::from_ref(&wood_lod),
+        Some(wood),
+        level.texels_per_unit,
+    );
     let wood_texture_bytes = parts_image_bytes(tree, std::slice::from_ref(&wood_lod), &wood_sizes);
     let mut params = cloud_params(req, level, k);
     let atlas_bytes = lod_budget.texture_bytes.saturating_sub(wood_texture_bytes);
     params.bake.max_atlas = params.bake.max_atlas.min(atlas_side_for_bytes(atlas_bytes));
+    let texels_per_billboard = if level.screen_height <= IMPOSTOR_HEIGHT {
+        params.bake.padding = params.bake.padding.min(IMPOSTOR_PADDING);
+        IMPOSTOR_TEXELS_PER_BILLBOARD
+    } else {
+        TEXELS_PER_BILLBOARD
+    };
     // Two triangles per billboard, and room in the atlas for each (a small texture, padded).
     let max_billboards = (lod_budget.triangles.saturating_sub(wood_lod.triangles()) / 2)
-        .min(atlas_bytes / 4 / TEXELS_PER_BILLBOARD);
+        .min(atlas_bytes / 4 / texels_per_billboard);
+    tracing::debug!(
+        "LOD{}: wood {} triangles ({} B of texture), at most {max_billboards} billboards",
+        k + 1,
+        wood_lod.triangles(),
+        wood_texture_bytes
+    );
     let ctx = BuildContext {
         renderer,
         tree,
@@ -631,6 +667,7 @@ fn billboard_lod(
     };
     let shared = LodShared {
         tree,
+        wood,
         level,
         sampled,
         clock,
@@ -660,6 +697,8 @@ fn billboard_lod(
 /// What every LOD of a chain shares.
 struct LodShared<'a> {
     tree: &'a Tree,
+    /// The input's wood, whose bark density sizes every LOD's bark maps.
+    wood: &'a WoodMesh,
     level: &'a LodLevel,
     sampled: &'a Sampled,
     clock: &'a LoopClock,
@@ -678,14 +717,14 @@ fn card_images_within(
 ) -> (ImageSizes, usize) {
     let parts = std::slice::from_ref(mesh);
     let mut density = shared.level.texels_per_unit;
-    let mut sizes = lod_image_sizes(shared.tree, parts, density);
+    let mut sizes = lod_image_sizes(shared.tree, parts, Some(shared.wood), density);
     let mut bytes = parts_image_bytes(shared.tree, parts, &sizes);
     for _ in 0..CARD_DENSITY_HALVINGS {
         if bytes <= max_bytes {
             break;
         }
         density *= 0.5;
-        sizes = lod_image_sizes(shared.tree, parts, density);
+        sizes = lod_image_sizes(shared.tree, parts, Some(shared.wood), density);
         bytes = parts_image_bytes(shared.tree, parts, &sizes);
     }
     (sizes, bytes)
@@ -773,7 +812,12 @@ fn cloud_lod(
     let clips = cloud.playable_clips.clone();
     // The wood and the billboards that copy input cards draw with the input's images.
     let input_textured = [wood_lod.clone(), cloud.input_textured_mesh()];
-    let image_sizes = lod_image_sizes(tree, &input_textured, shared.level.texels_per_unit);
+    let image_sizes = lod_image_sizes(
+        tree,
+        &input_textured,
+        Some(shared.wood),
+        shared.level.texels_per_unit,
+    );
     e.epsilon = Some(cloud.epsilon);
     e.triangles = wood_lod.triangles() + 2 * cloud.billboards.len();
     e.wood_triangles = wood_lod.triangles();

@@ -13,6 +13,7 @@ use frond_billboard::bake::{BakeError, MAX_ATLAS_SIDE, bake_cloud};
 use frond_billboard::cloud::{CloudError, fit_quad};
 use frond_billboard::plane_search::{PlaneSearch, search_planes, valid_for_plane};
 use frond_billboard::quad_split::{QuadGroup, split_quads};
+use frond_billboard::view_coverage::{CoverageViews, bake_keeping_view_coverage};
 use frond_billboard::{Plane, Quad, TriangleSoup, source_copy};
 use frond_scene::Rig;
 use frond_scene::rigid_fit::rigid_fit;
@@ -131,7 +132,7 @@ pub fn build_animated_cloud(
         parts_image_bytes(
             tree,
             parts,
-            &lod_image_sizes(tree, parts, ctx.level.texels_per_unit),
+            &lod_image_sizes(tree, parts, None, ctx.level.texels_per_unit),
         )
     };
     // The atlas's bytes at its largest side, normal atlas included: what the LOD's texture
@@ -167,16 +168,37 @@ pub fn build_animated_cloud(
         // The atlas budget holds as many billboards as the chain allowed for it; one that a
         // method could not fit (too few texels even at the smallest texture per quad) doubles
         // until it fits, and the report shows it over its texture budget.
+        let views = view_coverage_views(ctx);
         Some(loop {
-            match bake_cloud(
-                renderer,
-                &soup,
-                &draw.materials,
-                &draw.textures,
-                &bake_quads,
-                &bake_drawn,
-                &bake_params,
-            ) {
+            let baked = match &views {
+                Some(views) => bake_keeping_view_coverage(
+                    renderer,
+                    &soup,
+                    &draw.materials,
+                    &draw.textures,
+                    &bake_quads,
+                    &bake_drawn,
+                    &bake_params,
+                    views,
+                )
+                .map(|(baked, ratio)| {
+                    tracing::debug!(
+                        "LOD{}: view coverage {ratio:.3} of the leaves'",
+                        ctx.index + 1
+                    );
+                    baked
+                }),
+                None => bake_cloud(
+                    renderer,
+                    &soup,
+                    &draw.materials,
+                    &draw.textures,
+                    &bake_quads,
+                    &bake_drawn,
+                    &bake_params,
+                ),
+            };
+            match baked {
                 Err(BakeError::AtlasTooSmall { .. }) if bake_params.max_atlas < MAX_ATLAS_SIDE => {
                     bake_params.max_atlas = (bake_params.max_atlas * 2).min(MAX_ATLAS_SIDE);
                 }
@@ -225,6 +247,23 @@ pub fn build_animated_cloud(
     };
     cloud.update_playable_clips();
     Ok((cloud, timings))
+}
+
+/// Views on the measure's rings (5 a ring at 0° and 30°, spec animated-billboard-clouds §5.4)
+/// at which an impostor-class LOD's bake keeps its leaves' covered area
+/// ([`bake_keeping_view_coverage`]): there a crown is a few hundred pixels and every billboard
+/// averages many leaves, so what their planes lose seen from the side shows as a thinner
+/// tree. Nearer LODs keep each billboard's own rule (their billboards hold few leaves each).
+fn view_coverage_views(ctx: &BuildContext) -> Option<CoverageViews> {
+    (ctx.level.screen_height <= IMPOSTOR_HEIGHT).then(|| CoverageViews {
+        views_per_ring: 5,
+        elevations_deg: vec![0.0, 30.0],
+        pixel: ctx.level.pixel,
+        // At least 512 samples over the tree's height, as the measure draws it.
+        samples_per_side: (512.0 / ctx.level.screen_height.max(1.0))
+            .ceil()
+            .clamp(2.0, 64.0) as u32,
+    })
 }
 
 /// Every foliage triangle in its cluster's reference frame: the average pose for rigid-fit and
@@ -387,13 +426,28 @@ fn budgeted_search(
     }
     let mut fits: Option<(f32, Vec<(TriangleSoup, PlaneSearch)>)> = None;
     let mut last = first;
+    let widest = if ctx.level.screen_height <= IMPOSTOR_HEIGHT {
+        IMPOSTOR_MAX_WIDENING * epsilon
+    } else {
+        ctx.scale
+    };
     for _ in 1..EPSILON_TRIES {
         let next = match &fits {
-            None => (over.0.max(1e-6 * ctx.scale) * over.1.max(1.05)).min(ctx.scale),
+            None => (over.0.max(1e-6 * ctx.scale) * over.1.max(1.05)).min(widest),
             Some((hi, _)) => (over.0 * hi).sqrt(),
         };
+        if next <= over.0 {
+            // At the widest ε allowed and still over: the planes are capped below.
+            break;
+        }
         let result = search_clusters(ctx, soup, clusters, next, &|_| None);
         let by = over_by(&result, next);
+        tracing::debug!(
+            "LOD{}: ε {next:.4}: {} planes of {budget}, {:.2} over its budgets",
+            ctx.index + 1,
+            planes(&result),
+            by
+        );
         if by <= 1.0 {
             fits = Some((next, result));
         } else {
@@ -417,6 +471,13 @@ fn budgeted_search(
         e,
     )
 }
+
+/// Most an impostor-class LOD's ε is widened to fit its billboard budget, in its own ε (one
+/// pixel): a crown a few dozen pixels wide is then still a few slabs deep, each billboard's
+/// leaves within a few pixels of it; past it the plane count is capped and the leftover
+/// leaves join their nearest plane (spec stochastic-billboard-clouds: no leaf is dropped).
+/// A nearer LOD widens as far as its budget asks.
+const IMPOSTOR_MAX_WIDENING: f32 = 4.0;
 
 /// Total area (world units²) of the minimal quads of every plane of `searches`.
 fn quad_area(searches: &[(TriangleSoup, PlaneSearch)]) -> f32 {

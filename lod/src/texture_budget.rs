@@ -135,24 +135,45 @@ fn shrink(side: u32, s: f32) -> u32 {
 /// [`ALPHA_TESTED_TEXELS_PER_PIXEL`] times that for alpha-tested materials): per primitive, the
 /// base-colour map's density on its triangles gives a scale ≤ 1 that every map of its material
 /// takes (they share the UV layout in practice); an image several primitives use gets the
-/// largest size any asks for.
-pub fn lod_image_sizes(tree: &Tree, parts: &[WoodMesh], texels_per_unit: f32) -> ImageSizes {
+/// largest size any asks for. A material that `reference` (the input's wood, of which the
+/// parts' wood is a simplification) draws takes its density there: a far LOD's few wood
+/// triangles stretch or collapse the bark's UVs, and their density says nothing of the map's.
+pub fn lod_image_sizes(
+    tree: &Tree,
+    parts: &[WoodMesh],
+    reference: Option<&WoodMesh>,
+    texels_per_unit: f32,
+) -> ImageSizes {
+    let base_of = |material: usize| {
+        (tree.materials.get(material))
+            .and_then(|m| m.base_color_texture)
+            .and_then(|t| tree.textures.get(t))
+    };
+    let reference_density: BTreeMap<usize, Option<f32>> = reference
+        .into_iter()
+        .flat_map(|mesh| mesh.primitives.iter().map(move |p| (mesh, p)))
+        .map(|(mesh, p)| {
+            let d = base_of(p.material)
+                .and_then(|t| texel_density(mesh, &p.indices, t.width, t.height));
+            (p.material, d)
+        })
+        .collect();
     let mut scale: BTreeMap<usize, f32> = BTreeMap::new();
     for mesh in parts {
         for p in &mesh.primitives {
             let Some(material) = tree.materials.get(p.material) else {
                 continue;
             };
-            let base = material
-                .base_color_texture
-                .and_then(|t| tree.textures.get(t));
             let wanted = match material.alpha_mode {
                 AlphaMode::Mask => ALPHA_TESTED_TEXELS_PER_PIXEL * texels_per_unit,
                 AlphaMode::Opaque | AlphaMode::Blend => texels_per_unit,
             };
-            let s = base
-                .and_then(|t| texel_density(mesh, &p.indices, t.width, t.height))
-                .map_or(1.0, |d| (wanted / d).min(1.0));
+            let density = match reference_density.get(&p.material) {
+                Some(&d) => d,
+                None => base_of(p.material)
+                    .and_then(|t| texel_density(mesh, &p.indices, t.width, t.height)),
+            };
+            let s = density.map_or(1.0, |d| (wanted / d).min(1.0));
             for j in material_images(tree, p.material) {
                 let e = scale.entry(j).or_insert(0.0);
                 *e = e.max(s);

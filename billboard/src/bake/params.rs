@@ -37,6 +37,11 @@ pub struct BakeParams {
     /// texels beside the covered ones where those are too few. Off: a texel passes when
     /// `alpha_cutoff` of it is covered.
     pub preserve_coverage: bool,
+    /// With `preserve_coverage`, every quad's coverage is scaled by this besides its
+    /// foreshortening: the correction [`bake_keeping_view_coverage`](crate::view_coverage::bake_keeping_view_coverage)
+    /// finds so that the cloud covers as much as its leaves seen from around them. 1 keeps
+    /// each quad's own rule.
+    pub coverage_gain: f64,
     /// Which rasteriser draws the atlas: the CPU bake rasteriser (default: the same atlas on
     /// every machine) or the wgpu renderer (a GPU, when there is one).
     pub rasteriser: BakeRasteriser,
@@ -68,6 +73,7 @@ impl Default for BakeParams {
             min_side: 4,
             max_side: 1024,
             preserve_coverage: false,
+            coverage_gain: 1.0,
             rasteriser: BakeRasteriser::Cpu,
         }
     }
@@ -109,6 +115,12 @@ pub(super) fn validate_params(p: &BakeParams) -> Result<(), BakeError> {
         return bad(format!(
             "alpha_cutoff must be in (0, 1], got {}",
             p.alpha_cutoff
+        ));
+    }
+    if !(p.coverage_gain.is_finite() && p.coverage_gain > 0.0) {
+        return bad(format!(
+            "coverage_gain must be finite and positive, got {}",
+            p.coverage_gain
         ));
     }
     Ok(())
