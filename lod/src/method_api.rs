@@ -213,7 +213,8 @@ impl<M: ClusteringMethod> MethodChoice for M {
 pub struct SpectralOptions {
     /// Description type (§4.4–4.8).
     pub kind: SpectralKind,
-    /// Animation clusters per LOD (None: [`crate::spectral_k`] of the LOD's screen height).
+    /// Animation clusters per LOD (None: [`crate::spectral_k`] of the LOD's screen height, or
+    /// at an impostor-class LOD its joint budget less one: [`SpectralOptions::params`]).
     pub clusters: Option<usize>,
     /// Animation zone size (None: [`crate::DEFAULT_ZONE_FRACTION`] of the diagonal or the
     /// LOD's ε, the larger).

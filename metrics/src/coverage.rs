@@ -171,8 +171,9 @@ pub struct CoverageReport {
     /// `colour_difference`. What reads as one model being lighter or darker than the other,
     /// without the per-pixel differences that average out at a distance.
     pub colour_shift: f64,
-    /// How much the original's coverage changes over the loop ([`LoopChange`]); None with
-    /// fewer than two frames.
+    /// How much the original's coverage changes over the loop: per view, each frame against
+    /// the next (the last against the first), the samples that change over those the original
+    /// covers, then the mean over views and frames; None with fewer than two frames.
     pub loop_change_original: Option<f64>,
     /// The same of the simplified model, over the original's covered area.
     pub loop_change_simplified: Option<f64>,

@@ -110,7 +110,8 @@ pub struct BuildArgs {
     #[arg(long, value_enum, default_value_t = BakeRasteriserArg::Cpu)]
     pub bake_rasteriser: BakeRasteriserArg,
     /// Spectral methods: animation clusters per LOD (default: one per 10 pixels of screen
-    /// height, at least 1).
+    /// height, at least 1; at 32 px or less the joint budget less one, each cluster moving as
+    /// one joint).
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..))]
     pub clusters: Option<u64>,
     /// Spectral methods: animation zone size, a length or % of the diagonal (default: 2% or
