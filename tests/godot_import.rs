@@ -583,7 +583,17 @@ fn godot_imports_and_renders_the_sample_chains() {
     }
     let dir = tempfile::tempdir().expect("temp dir");
     let input = root().join("samples/sapling.glb");
-    let (report, lods) = chain(&input, &dir.path().join("cards"), &[]);
+    // The default chain and its far end (`auto`'s impostor-class cloud of FFT clusters).
+    let (report, lods) = chain(
+        &input,
+        &dir.path().join("cards"),
+        &["--lods", "600,200,60,20"],
+    );
+    assert_eq!(
+        report.lods[4].method.name(),
+        "spectral-axis-phase",
+        "the far end"
+    );
     let (sk_report, sk_lods) = chain(
         &input,
         &dir.path().join("skeleton"),

@@ -553,6 +553,54 @@ fn threejs_plays_every_lod_file_like_frond_samples_it() {
     }
 }
 
+/// The far end of `auto` (an impostor-class LOD: baked billboards, one joint per FFT cluster)
+/// plays in three.js as frond samples it, its billboards moving with the wind.
+#[test]
+fn threejs_plays_the_far_end_like_frond_samples_it() {
+    let tools = common::node_tools_for(Some("three.js playback of the far end"));
+    let input_path = common::root().join("samples/sapling.glb");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("lods");
+    let report = common::frond_lod(&input_path, &out, &["--lods", "60,20"]);
+    let far = report.lods.last().expect("the far LOD");
+    assert_eq!(far.method.name(), "spectral-axis-phase", "{}", far.method_reason);
+    let file = out.join(&far.file);
+    let tree = import(&file, &ImportOptions::default()).expect("the far LOD imports");
+    let ci = (tree.rig.clips.iter())
+        .position(|c| c.name == "Wind")
+        .expect("the far LOD plays Wind");
+    let c = &tree.rig.clips[ci];
+    let Some(tools) = tools else {
+        return;
+    };
+    let period = c.end - c.start;
+    let times: Vec<f32> = [0.0, 0.25, 0.37, 0.5, 0.75]
+        .iter()
+        .map(|f| c.start + f * period)
+        .collect();
+    let play = three_play(&tools, &file, Some("Wind"), &times);
+    let tolerance = 1e-4 * tree.bounds.height();
+    let a = compare_play(&file, &tree, ci, &play, 10.0 * tolerance);
+    eprintln!(
+        "{}: {} vertices, max distance {:.3e}, motion {:.3e}",
+        far.file, a.vertices, a.max_distance, a.max_motion
+    );
+    assert!(a.one_to_one, "vertices line up one to one");
+    assert!(
+        a.max_distance <= tolerance,
+        "three.js and frond differ by {} (> {tolerance})",
+        a.max_distance
+    );
+    let moving = (play.meshes.iter())
+        .filter(|m| m.skinned)
+        .map(max_displacement)
+        .fold(0.0, f32::max);
+    assert!(
+        moving > 100.0 * tolerance,
+        "the far LOD's billboards barely move in three.js ({moving})"
+    );
+}
+
 /// `frond lod --compress`: every file validates with `EXT_meshopt_compression` and
 /// `KHR_mesh_quantization` required, is smaller, and three.js (its meshopt decoder registered
 /// by `three_sample.mjs`, as a web app does) plays it where it plays the uncompressed file;
