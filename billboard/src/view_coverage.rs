@@ -68,11 +68,12 @@ pub fn view_coverage(
     Ok((leaves, cloud))
 }
 
-/// Bakes the cloud ([`bake_cloud`]), then, while its covered area from `views` differs from
-/// its leaves' by more than [`VIEW_COVERAGE_TOLERANCE`], again with the billboards' coverage
-/// scaled by the ratio ([`BakeParams::coverage_gain`], within [`MAX_COVERAGE_GAIN`]), at
-/// most [`MAX_BAKES`] times. Returns the bake whose ratio is nearest 1, and that ratio (the
-/// cloud's covered samples over the leaves').
+/// Bakes the cloud ([`bake_cloud`]); with `views`, then, while its covered area from them
+/// differs from its leaves' by more than [`VIEW_COVERAGE_TOLERANCE`], again with the
+/// billboards' coverage scaled by the ratio ([`BakeParams::coverage_gain`], within
+/// [`MAX_COVERAGE_GAIN`]), at most [`MAX_BAKES`] times. Returns the bake whose ratio is
+/// nearest 1 and that ratio (the cloud's covered samples over the leaves'); without `views`,
+/// the one bake and no ratio.
 #[expect(
     clippy::too_many_arguments,
     reason = "bake_cloud's inputs and the views to compare from"
@@ -85,21 +86,19 @@ pub fn bake_keeping_view_coverage(
     quads: &[Quad],
     members: &[Vec<usize>],
     params: &BakeParams,
-    views: &CoverageViews,
-) -> Result<(BakedCloud, f64), BakeError> {
+    views: Option<&CoverageViews>,
+) -> Result<(BakedCloud, Option<f64>), BakeError> {
+    let bake = |p: &BakeParams| bake_cloud(renderer, soup, materials, textures, quads, members, p);
     let leaves_scene = soup_scene(soup, materials, textures);
-    let Some((lo, hi)) = leaves_scene.bounds() else {
-        return Ok((
-            bake_cloud(renderer, soup, materials, textures, quads, members, params)?,
-            1.0,
-        ));
+    let (Some(views), Some((lo, hi))) = (views, leaves_scene.bounds()) else {
+        return Ok((bake(params)?, None));
     };
     let cameras = cameras(lo, hi, views);
     let leaves = covered_samples(&leaves_scene, &cameras)?;
     let mut params = params.clone();
     let mut best: Option<(BakedCloud, f64)> = None;
     for _ in 0..MAX_BAKES {
-        let baked = bake_cloud(renderer, soup, materials, textures, quads, members, &params)?;
+        let baked = bake(&params)?;
         let cloud = covered_samples(&cloud_scene(quads, &baked), &cameras)?;
         let ratio = if leaves > 0 {
             cloud as f64 / leaves as f64
@@ -119,7 +118,8 @@ pub fn bake_keeping_view_coverage(
         }
         params.coverage_gain = gain;
     }
-    Ok(best.unwrap_or_else(|| unreachable!("at least one bake ran")))
+    let (baked, ratio) = best.unwrap_or_else(|| unreachable!("at least one bake ran"));
+    Ok((baked, Some(ratio)))
 }
 
 /// The views' orthographic cameras around the box `lo..hi`, with the image size in pixels.

@@ -9,7 +9,7 @@ use frond_render::materials_scene;
 use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
 
-use frond_billboard::bake::{BakeError, MAX_ATLAS_SIDE, bake_cloud};
+use frond_billboard::bake::{BakeError, MAX_ATLAS_SIDE};
 use frond_billboard::cloud::{CloudError, fit_quad};
 use frond_billboard::plane_search::{PlaneSearch, search_planes, valid_for_plane};
 use frond_billboard::quad_split::{QuadGroup, split_quads};
@@ -170,34 +170,25 @@ pub fn build_animated_cloud(
         // until it fits, and the report shows it over its texture budget.
         let views = view_coverage_views(ctx);
         Some(loop {
-            let baked = match &views {
-                Some(views) => bake_keeping_view_coverage(
-                    renderer,
-                    &soup,
-                    &draw.materials,
-                    &draw.textures,
-                    &bake_quads,
-                    &bake_drawn,
-                    &bake_params,
-                    views,
-                )
-                .map(|(baked, ratio)| {
+            let baked = bake_keeping_view_coverage(
+                renderer,
+                &soup,
+                &draw.materials,
+                &draw.textures,
+                &bake_quads,
+                &bake_drawn,
+                &bake_params,
+                views.as_ref(),
+            )
+            .map(|(baked, ratio)| {
+                if let Some(ratio) = ratio {
                     tracing::debug!(
                         "LOD{}: view coverage {ratio:.3} of the leaves'",
                         ctx.index + 1
                     );
-                    baked
-                }),
-                None => bake_cloud(
-                    renderer,
-                    &soup,
-                    &draw.materials,
-                    &draw.textures,
-                    &bake_quads,
-                    &bake_drawn,
-                    &bake_params,
-                ),
-            };
+                }
+                baked
+            });
             match baked {
                 Err(BakeError::AtlasTooSmall { .. }) if bake_params.max_atlas < MAX_ATLAS_SIDE => {
                     bake_params.max_atlas = (bake_params.max_atlas * 2).min(MAX_ATLAS_SIDE);

@@ -623,18 +623,24 @@ fn colour_difference_is_zero_for_equal_renders_and_known_for_recoloured_ones() {
     );
 }
 
+/// `scene` moved `dx` along x.
+fn shifted(scene: &DrawScene, dx: f32) -> DrawScene {
+    let mut moved = scene.clone();
+    for m in &mut moved.meshes {
+        for p in &mut m.positions {
+            p[0] += dx;
+        }
+    }
+    moved
+}
+
 #[test]
 fn images_rendered_once_compare_like_the_metric() {
     // Two frames: the tree, then the tree shifted right. Comparing stored images gives the
     // metric's numbers; frame 0 alone is the static metric on frame 0's scenes.
     let (lo, hi) = (Vec3::splat(-1.5), Vec3::splat(1.5));
     let a = tree();
-    let mut moved = a.clone();
-    for m in &mut moved.meshes {
-        for p in &mut m.positions {
-            p[0] += 0.2;
-        }
-    }
+    let moved = shifted(&a, 0.2);
     let mut cut = a.clone();
     cut.meshes.truncate(6);
     let original = [a.clone(), moved.clone()];
@@ -681,12 +687,7 @@ fn images_rendered_once_compare_like_the_metric() {
 fn the_loop_change_is_the_coverage_that_moves_from_frame_to_frame() {
     let (lo, hi) = (Vec3::splat(-1.5), Vec3::splat(1.5));
     let a = tree();
-    let mut moved = a.clone();
-    for m in &mut moved.meshes {
-        for p in &mut m.positions {
-            p[0] += 0.2;
-        }
-    }
+    let moved = shifted(&a, 0.2);
     let swaying = [a.clone(), moved.clone(), a.clone()];
     let p = params(2, 3, 40.0);
     let same = run(&swaying, &swaying, lo, hi, &p);
