@@ -66,6 +66,28 @@ fn params() -> BakeParams {
     }
 }
 
+/// `soup`'s leaves baked onto `quads` (each holding the triangles of `members`), with the
+/// bake keeping their covered area from [`views`] when `compare`.
+fn bake(
+    soup: &TriangleSoup,
+    quads: &[Quad],
+    members: &[Vec<usize>],
+    compare: bool,
+) -> (frond_billboard::BakedCloud, Option<f64>) {
+    let views = views();
+    bake_keeping_view_coverage(
+        &renderer(),
+        soup,
+        &[leaf()],
+        &[],
+        quads,
+        members,
+        &params(),
+        compare.then_some(&views),
+    )
+    .expect("bake")
+}
+
 fn views() -> CoverageViews {
     CoverageViews {
         views_per_ring: 5,
@@ -77,23 +99,12 @@ fn views() -> CoverageViews {
 
 #[test]
 fn a_billboard_holding_its_leaf_covers_what_the_leaf_covers_from_every_view() {
-    let r = renderer();
     let mut soup = TriangleSoup::default();
     push_leaf(&mut soup, Vec3::ZERO, 1.0, 0.0);
     let quads = [quad_z(Vec3::ZERO, 1.0)];
     let members = [vec![0, 1]];
     let textures: [DrawTexture; 0] = [];
-    let (baked, ratio) = bake_keeping_view_coverage(
-        &r,
-        &soup,
-        &[leaf()],
-        &textures,
-        &quads,
-        &members,
-        &params(),
-        Some(&views()),
-    )
-    .expect("bake");
+    let (baked, ratio) = bake(&soup, &quads, &members, true);
     let ratio = ratio.expect("views given");
     assert!((ratio - 1.0).abs() <= VIEW_COVERAGE_TOLERANCE, "{ratio}");
     let (leaves, cloud) =
@@ -101,23 +112,12 @@ fn a_billboard_holding_its_leaf_covers_what_the_leaf_covers_from_every_view() {
     assert!(leaves > 0);
     assert_eq!(cloud as f64 / leaves as f64, ratio);
     // Without views: one bake, no ratio.
-    let (_, none) = bake_keeping_view_coverage(
-        &r,
-        &soup,
-        &[leaf()],
-        &textures,
-        &quads,
-        &members,
-        &params(),
-        None,
-    )
-    .expect("bake");
+    let (_, none) = bake(&soup, &quads, &members, false);
     assert_eq!(none, None);
 }
 
 #[test]
 fn leaves_standing_across_their_billboard_are_matched_by_baking_again() {
-    let r = renderer();
     // Narrow leaves at 70° to the billboard's plane, spread along it: flattened onto it they
     // keep a third of their width, which the bake scales back to their area; seen from the
     // rings the plane then covers what they cover only by chance (measured: 7 % more).
@@ -129,23 +129,11 @@ fn leaves_standing_across_their_billboard_are_matched_by_baking_again() {
     let quads = [quad_z(Vec3::ZERO, 1.5)];
     let members = [(0..soup.positions.len()).collect::<Vec<_>>()];
     let textures: [DrawTexture; 0] = [];
-    let once =
-        frond_billboard::bake_cloud(&r, &soup, &[leaf()], &textures, &quads, &members, &params())
-            .expect("bake");
+    let (once, _) = bake(&soup, &quads, &members, false);
     let (leaves, cloud) =
         view_coverage(&soup, &[leaf()], &textures, &quads, &once, &views()).expect("views");
     let first = cloud as f64 / leaves as f64;
-    let (_, ratio) = bake_keeping_view_coverage(
-        &r,
-        &soup,
-        &[leaf()],
-        &textures,
-        &quads,
-        &members,
-        &params(),
-        Some(&views()),
-    )
-    .expect("bake");
+    let (_, ratio) = bake(&soup, &quads, &members, true);
     let ratio = ratio.expect("views given");
     eprintln!("one bake covers {first:.3} of the leaves, {MAX_BAKES} at most {ratio:.3}");
     assert!(

@@ -77,6 +77,24 @@ pub fn frond_lod(input: &Path, out: &Path, extra: &[&str]) -> LodReport {
     frond_lod_measured(input, out, &args)
 }
 
+/// The far LOD of `report`, checked to be `auto`'s far end: an impostor-class LOD built by
+/// `spectral-axis-phase` (one motion per FFT cluster), the reason saying so.
+pub fn far_end_of_auto(report: &LodReport) -> &LodEntry {
+    let far = report.lods.last().expect("the far LOD");
+    assert_eq!(
+        far.method.name(),
+        "spectral-axis-phase",
+        "{}",
+        far.method_reason
+    );
+    assert!(
+        far.method_reason.contains("impostor"),
+        "{}",
+        far.method_reason
+    );
+    far
+}
+
 /// The 600 px LOD of `tree` at ε = 0 with the per-bone method (every billboard one card), its
 /// error measured; returns the report. The cost budgets are off: at ε = 0 a LOD keeps a
 /// billboard per card, more than half the input's triangles, and the budgets would widen ε
@@ -408,6 +426,7 @@ const _: () = {
         frond_ok,
         frond_lod,
         frond_lod_measured,
+        far_end_of_auto,
         per_bone_at_zero,
         frond_eval,
         lod_report,
