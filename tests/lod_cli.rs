@@ -372,6 +372,7 @@ fn spectral_skin_round_trip() {
             pixel,
             epsilon: pixel,
             joints: UNLIMITED_JOINTS,
+            keep_sub_pixel_motion: false,
         },
         BillboardAnimation::Joints,
     );
@@ -507,6 +508,7 @@ fn build(path: &Path, per_bone: bool, screen: f32) -> Built {
             pixel,
             epsilon: pixel,
             joints: UNLIMITED_JOINTS,
+            keep_sub_pixel_motion: false,
         },
         BillboardAnimation::Joints,
     );
@@ -946,6 +948,7 @@ fn skeleton_round_trip_with_a_resampled_and_collapsed_rig() {
                 pixel: b.epsilon,
                 epsilon: b.epsilon,
                 joints: UNLIMITED_JOINTS,
+                keep_sub_pixel_motion: false,
             },
             BillboardAnimation::Joints,
         );

@@ -664,6 +664,7 @@ fn billboard_lod(
             joints: lod_budget.joints,
             channels: lod_budget.channels,
         },
+        keep_sub_pixel_motion: level.screen_height <= IMPOSTOR_HEIGHT,
     };
     let shared = LodShared {
         tree,

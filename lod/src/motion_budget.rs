@@ -26,6 +26,11 @@ pub struct ScreenBudget {
     pub epsilon: f32,
     /// Joints and channels the LOD may have.
     pub joints: JointCap,
+    /// Keep motion under half a pixel (steps 1b and 2 skipped): an impostor-class LOD, a tree
+    /// a few dozen pixels high whose clusters sway by fractions of a pixel, which the covered
+    /// fraction of its edge pixels shows (spec §5.4, filtered); its joint budget bounds what
+    /// the motion costs either way.
+    pub keep_sub_pixel_motion: bool,
 }
 
 /// What was removed, and why (reported per LOD).
@@ -104,7 +109,9 @@ pub fn apply_budget(
     let mut dropped = Dropped::default();
     let half = 0.5 * budget.pixel;
     drop_unseen_billboards(cloud, budget, &mut dropped);
-    drop_unseen_motion(cloud, half, &mut dropped);
+    if !budget.keep_sub_pixel_motion {
+        drop_unseen_motion(cloud, half, &mut dropped);
+    }
     let worlds = sampled_worlds(&cloud.rig, &cloud.clock);
     let rest_inv: Vec<Mat4> = cloud.rig.rest_world().iter().map(|m| m.inverse()).collect();
     let rig = RigFrames {
