@@ -493,8 +493,9 @@ fn simplify_wood(wood: &WoodMesh, max_error: f32, max_triangles: usize) -> (Wood
 /// Times [`wood_within`] doubles the thickness under which branches go.
 const THIN_TRIES: usize = 4;
 
-/// The wood within `max_triangles`: branches narrower than `min_width` (half the LOD's pixel:
-/// narrower, a branch covers under half of the pixels it crosses) dropped and the rest
+/// The wood within `max_triangles`: branches narrower than `min_width` (the wood's error, or
+/// half a pixel at the far end, where narrower a branch covers under half the pixels it
+/// crosses) dropped and the rest
 /// simplified within `error` to fit ([`simplify_wood`]); where simplifying cannot reach the
 /// budget (every branch keeps a few triangles however coarse), the thinnest branches go
 /// next, the width doubled up to [`THIN_TRIES`] times: a far LOD keeps its trunk and limbs
@@ -585,13 +586,17 @@ fn billboard_lod(
         screen_height: level.screen_height,
     });
     let t0 = Instant::now();
-    // Branches narrower than half a pixel go first; what is left is simplified to its share. Triangles the wood does not need go to the foliage.
-    let (wood_lod, wood_error, thin_pieces) = wood_within(
-        wood,
-        0.5 * level.pixel,
-        level.wood_error,
-        lod_budget.wood_triangles,
-    );
+    // Branches too thin to see go first; what is left is simplified to its share. Triangles the
+    // wood does not need go to the foliage. At the far end a trunk is about a pixel wide: it
+    // stays while half a pixel wide. Nearer, branches under the wood's error go (half a pixel
+    // there costs the default chain's build time for little error: docs/experiments.md).
+    let min_width = if level.screen_height <= IMPOSTOR_HEIGHT {
+        0.5 * level.pixel
+    } else {
+        level.wood_error
+    };
+    let (wood_lod, wood_error, thin_pieces) =
+        wood_within(wood, min_width, level.wood_error, lod_budget.wood_triangles);
     let t1 = Instant::now();
     let wood_sizes = lod_image_sizes(
         tree,
