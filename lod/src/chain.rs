@@ -495,11 +495,11 @@ const THIN_TRIES: usize = 4;
 
 /// The wood within `max_triangles`: branches narrower than `min_width` (the wood's error, or
 /// half a pixel at the far end, where narrower a branch covers under half the pixels it
-/// crosses) dropped and the rest
-/// simplified within `error` to fit ([`simplify_wood`]); where simplifying cannot reach the
-/// budget (every branch keeps a few triangles however coarse), the thinnest branches go
-/// next, the width doubled up to [`THIN_TRIES`] times: a far LOD keeps its trunk and limbs
-/// and its foliage keeps its billboards. Returns the mesh, its error and the branches dropped.
+/// crosses) dropped and the rest simplified within `error` to fit ([`simplify_wood`]); where
+/// simplifying cannot reach the budget (every branch keeps a few triangles however coarse),
+/// the thinnest branches go next, the width doubled up to [`THIN_TRIES`] times: a far LOD
+/// keeps its trunk and limbs and its foliage keeps its billboards. Returns the mesh, its error
+/// and the branches dropped.
 fn wood_within(
     wood: &WoodMesh,
     min_width: f32,
@@ -590,7 +590,8 @@ fn billboard_lod(
     // wood does not need go to the foliage. At the far end a trunk is about a pixel wide: it
     // stays while half a pixel wide. Nearer, branches under the wood's error go (half a pixel
     // there costs the default chain's build time for little error: docs/experiments.md).
-    let min_width = if level.screen_height <= IMPOSTOR_HEIGHT {
+    let impostor = level.screen_height <= IMPOSTOR_HEIGHT;
+    let min_width = if impostor {
         0.5 * level.pixel
     } else {
         level.wood_error
@@ -608,7 +609,7 @@ fn billboard_lod(
     let mut params = cloud_params(req, level, k);
     let atlas_bytes = lod_budget.texture_bytes.saturating_sub(wood_texture_bytes);
     params.bake.max_atlas = params.bake.max_atlas.min(atlas_side_for_bytes(atlas_bytes));
-    let texels_per_billboard = if level.screen_height <= IMPOSTOR_HEIGHT {
+    let texels_per_billboard = if impostor {
         params.bake.padding = params.bake.padding.min(IMPOSTOR_PADDING);
         IMPOSTOR_TEXELS_PER_BILLBOARD
     } else {
@@ -669,7 +670,7 @@ fn billboard_lod(
             joints: lod_budget.joints,
             channels: lod_budget.channels,
         },
-        keep_sub_pixel_motion: level.screen_height <= IMPOSTOR_HEIGHT,
+        keep_sub_pixel_motion: impostor,
     };
     let shared = LodShared {
         tree,
