@@ -14,6 +14,7 @@ use frond_scene::{Bounds, Length, Part, Rig, SampleOptions, Sampled, Tree, sampl
 
 use crate::contract::{AnimatedBillboardCloud, CardFoliage, LoopClock};
 
+use crate::cost_budget::is_impostor_class;
 pub use crate::cost_budget::{
     ATLAS_TEXELS_PER_SQUARED_PIXEL, IMPOSTOR_HEIGHT, IMPOSTOR_JOINTS, IMPOSTOR_TEXTURE_BYTES,
     LodBudget, MAX_JOINTS, TRIANGLES_PER_SQUARED_PIXEL, impostor_triangles, joints_for_screen,
@@ -294,7 +295,7 @@ impl Spent {
             texture_bytes: self.texture_bytes.min(4 * texels),
             alpha_tested_area: self.alpha_tested_area,
         };
-        if h <= IMPOSTOR_HEIGHT {
+        if is_impostor_class(h) {
             budget.triangles = budget
                 .triangles
                 .min(impostor_triangles(self.input_triangles));
@@ -590,7 +591,7 @@ fn billboard_lod(
     // wood does not need go to the foliage. At the far end a trunk is about a pixel wide: it
     // stays while half a pixel wide. Nearer, branches under the wood's error go (half a pixel
     // there costs the default chain's build time for little error: docs/experiments.md).
-    let impostor = level.screen_height <= IMPOSTOR_HEIGHT;
+    let impostor = is_impostor_class(level.screen_height);
     let min_width = if impostor {
         0.5 * level.pixel
     } else {

@@ -22,7 +22,7 @@ use crate::contract::{
     AnimatedBillboard, AnimatedBillboardCloud, BillboardTexture, LoopClock, RigidMotion,
     input_textured_mesh,
 };
-use crate::cost_budget::IMPOSTOR_HEIGHT;
+use crate::cost_budget::is_impostor_class;
 use crate::error::LodError;
 pub use crate::method_api::BuildTimings;
 use crate::method_api::{BuildContext, Foliage, MethodName, MethodOutput};
@@ -138,7 +138,7 @@ pub fn build_animated_cloud(
     // The atlas's bytes at its largest side, normal atlas included: what the LOD's texture
     // budget gave the foliage.
     let budget_bytes = atlas_bytes(bake_params.max_atlas);
-    if copied_bytes > budget_bytes / 2 || ctx.level.screen_height <= IMPOSTOR_HEIGHT {
+    if copied_bytes > budget_bytes / 2 || is_impostor_class(ctx.level.screen_height) {
         // The input's textures would take most of the budget (a far LOD whose quads are single
         // cards), or an impostor-class LOD would draw them besides its atlas (its budget is two
         // draw calls, wood and foliage): every quad is baked instead, at the atlas's density.
@@ -246,7 +246,7 @@ pub fn build_animated_cloud(
 /// averages many leaves, so what their planes lose seen from the side shows as a thinner
 /// tree. Nearer LODs keep each billboard's own rule (their billboards hold few leaves each).
 fn view_coverage_views(ctx: &BuildContext) -> Option<CoverageViews> {
-    (ctx.level.screen_height <= IMPOSTOR_HEIGHT).then(|| CoverageViews {
+    is_impostor_class(ctx.level.screen_height).then(|| CoverageViews {
         views_per_ring: 5,
         elevations_deg: vec![0.0, 30.0],
         pixel: ctx.level.pixel,
@@ -417,7 +417,7 @@ fn budgeted_search(
     }
     let mut fits: Option<(f32, Vec<(TriangleSoup, PlaneSearch)>)> = None;
     let mut last = first;
-    let widest = if ctx.level.screen_height <= IMPOSTOR_HEIGHT {
+    let widest = if is_impostor_class(ctx.level.screen_height) {
         IMPOSTOR_MAX_WIDENING * epsilon
     } else {
         ctx.scale

@@ -35,6 +35,12 @@ pub const TRIANGLES_PER_SQUARED_PIXEL: f32 = 2.0;
 /// budget ([`impostor_triangles`], [`IMPOSTOR_JOINTS`], [`IMPOSTOR_TEXTURE_BYTES`]).
 pub const IMPOSTOR_HEIGHT: f32 = 32.0;
 
+/// Whether a LOD `screen_height` pixels high is impostor-class ([`IMPOSTOR_HEIGHT`] or less):
+/// the far end, with its own budget, method and bake.
+pub fn is_impostor_class(screen_height: f32) -> bool {
+    screen_height <= IMPOSTOR_HEIGHT
+}
+
 /// Skin joints of an impostor-class LOD: within every engine's cheapest skinning path (mobile
 /// GPUs' 8-bone palettes), and the number of motion clusters its foliage is given.
 pub const IMPOSTOR_JOINTS: usize = 8;

@@ -1,6 +1,6 @@
 //! `auto`: a fixed rule that picks a method per LOD, by its screen height, what the tree's
 //! foliage is and how the files animate. An impostor-class LOD (the far end,
-//! [`IMPOSTOR_HEIGHT`] and below) gets `spectral-axis-phase`: the foliage clustered by its FFT
+//! [`IMPOSTOR_HEIGHT`](crate::cost_budget::IMPOSTOR_HEIGHT) and below) gets `spectral-axis-phase`: the foliage clustered by its FFT
 //! motion into at most the LOD's joint budget of clusters, each one baked billboard cloud with
 //! one motion (spec animated-billboard-clouds §4.11–4.14). There a leaf card is a fraction of
 //! a pixel, and a baked texel averages the many leaves a thinned card set would drop
@@ -19,7 +19,7 @@
 
 use std::sync::Arc;
 
-use crate::cost_budget::IMPOSTOR_HEIGHT;
+use crate::cost_budget::is_impostor_class;
 use crate::method_api::{
     ClusteringMethod, MethodChoice, MethodError, MethodName, MethodPlugin, OptionUse, PickContext,
 };
@@ -87,7 +87,7 @@ impl AutoPick {
 
 /// The rule for the LOD of `lod`: the pick, and the reason written to the report.
 pub fn rule(lod: &PickContext) -> (AutoPick, &'static str) {
-    if lod.screen_height <= IMPOSTOR_HEIGHT {
+    if is_impostor_class(lod.screen_height) {
         (
             AutoPick::SpectralAxisPhase,
             "auto: impostor-class LOD -> spectral-axis-phase (the foliage clustered by its FFT \

@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::cloud_build::{Driver, FoliageCluster, build_animated_cloud, sampled_worlds};
 use crate::contract::{AnimatedBillboardCloud, RigidMotion, SpectralMotion};
-use crate::cost_budget::{IMPOSTOR_HEIGHT, IMPOSTOR_JOINTS};
+use crate::cost_budget::{IMPOSTOR_JOINTS, is_impostor_class};
 use crate::error::LodError;
 use crate::method_api::{
     BuildContext, BuildTimings, ClusteringMethod, Foliage, MethodError, MethodName, MethodOutput,
@@ -182,11 +182,11 @@ impl SpectralOptions {
     /// height, the zone size from the options or [`crate::DEFAULT_ZONE_FRACTION`] of the
     /// diagonal (the LOD's ε when larger), the skeleton depth as frequency bins.
     ///
-    /// At an impostor-class LOD ([`IMPOSTOR_HEIGHT`]) every cluster gets one motion, and k
+    /// At an impostor-class LOD ([`is_impostor_class`]) every cluster gets one motion, and k
     /// defaults to the LOD's joint budget less the one that carries the wood: each cluster
     /// is then one joint (the far end's design; a shared bone would add joints).
     pub fn params(&self, ctx: &BuildContext) -> SpectralParams {
-        let impostor = ctx.level.screen_height <= IMPOSTOR_HEIGHT;
+        let impostor = is_impostor_class(ctx.level.screen_height);
         let default_k = if impostor {
             ctx.max_joints
                 .unwrap_or(IMPOSTOR_JOINTS)
