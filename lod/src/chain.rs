@@ -494,26 +494,34 @@ fn simplify_wood(wood: &WoodMesh, max_error: f32, max_triangles: usize) -> (Wood
 /// Times [`wood_within`] doubles the thickness under which branches go.
 const THIN_TRIES: usize = 4;
 
+/// A LOD's wood: the mesh, the error it was simplified with, how many branches were dropped,
+/// and the width under which they were.
+struct WoodLod {
+    mesh: WoodMesh,
+    error: f32,
+    thin_pieces: usize,
+    min_width: f32,
+}
+
 /// The wood within `max_triangles`: branches narrower than `min_width` (the wood's error, or
 /// half a pixel at the far end, where narrower a branch covers under half the pixels it
 /// crosses) dropped and the rest simplified within `error` to fit ([`simplify_wood`]); where
 /// simplifying cannot reach the budget (every branch keeps a few triangles however coarse),
 /// the thinnest branches go next, the width doubled up to [`THIN_TRIES`] times: a far LOD
-/// keeps its trunk and limbs and its foliage keeps its billboards. Returns the mesh, its error
-/// and the branches dropped.
-fn wood_within(
-    wood: &WoodMesh,
-    min_width: f32,
-    error: f32,
-    max_triangles: usize,
-) -> (WoodMesh, f32, usize) {
+/// keeps its trunk and limbs and its foliage keeps its billboards.
+fn wood_within(wood: &WoodMesh, min_width: f32, error: f32, max_triangles: usize) -> WoodLod {
     let mut thickness = min_width;
     let mut doublings = 0;
     loop {
         let (kept, thin) = wood.without_thin_pieces(thickness);
         let (mesh, e) = simplify_wood(&kept, error, max_triangles);
         if doublings == THIN_TRIES || mesh.triangles() <= max_triangles || kept.triangles() == 0 {
-            return (mesh, e, thin);
+            return WoodLod {
+                mesh,
+                error: e,
+                thin_pieces: thin,
+                min_width: thickness,
+            };
         }
         thickness *= 2.0;
         doublings += 1;
@@ -526,37 +534,40 @@ const WOOD_REFINE_FLOOR: f32 = 8.0;
 /// Bisection steps of [`refine_wood`]'s error.
 const WOOD_REFINE_STEPS: usize = 6;
 
-/// `wood` at the finest error between `floor` and `current`'s (mesh, error, thin pieces
-/// dropped) that fits in `max_triangles`, found by bisection of the error's logarithm; branches
-/// narrower than the error are re-admitted. A near LOD whose cards need fewer triangles than
-/// it may draw spends them on its branches.
-fn refine_wood(
-    wood: &WoodMesh,
-    current: (WoodMesh, f32, usize),
-    floor: f32,
-    max_triangles: usize,
-) -> (WoodMesh, f32, usize) {
+/// `wood` at the finest error between `floor` and `current`'s that fits in `max_triangles`,
+/// found by bisection of the error's logarithm; branches narrower than the error are
+/// re-admitted, and none wider than `current`'s width goes (a far LOD's half-pixel trunk
+/// stays, though it is narrower than the wood's error). A near LOD whose cards need fewer
+/// triangles than it may draw spends them on its branches.
+fn refine_wood(wood: &WoodMesh, current: WoodLod, floor: f32, max_triangles: usize) -> WoodLod {
     let mut best = current;
-    if best.0.triangles() > max_triangles || !(floor > 0.0 && best.1 > floor) {
+    if best.mesh.triangles() > max_triangles || !(floor > 0.0 && best.error > floor) {
         return best;
     }
+    let min_width = best.min_width;
     let at = |error: f32| {
-        let (kept, thin) = wood.without_thin_pieces(error);
-        (kept.simplify(error).0, error, thin)
+        let width = error.min(min_width);
+        let (kept, thin) = wood.without_thin_pieces(width);
+        WoodLod {
+            mesh: kept.simplify(error).0,
+            error,
+            thin_pieces: thin,
+            min_width: width,
+        }
     };
     // The floor first: often everything fits.
     let finest = at(floor);
-    if finest.0.triangles() <= max_triangles {
+    if finest.mesh.triangles() <= max_triangles {
         return finest;
     }
-    let (mut lo, mut hi) = (floor.ln(), best.1.ln());
+    let (mut lo, mut hi) = (floor.ln(), best.error.ln());
     for _ in 0..WOOD_REFINE_STEPS {
         let tried = at((0.5 * (lo + hi)).exp());
-        if tried.0.triangles() <= max_triangles {
-            hi = tried.1.ln();
+        if tried.mesh.triangles() <= max_triangles {
+            hi = tried.error.ln();
             best = tried;
         } else {
-            lo = tried.1.ln();
+            lo = tried.error.ln();
         }
     }
     best
@@ -597,16 +608,16 @@ fn billboard_lod(
     } else {
         level.wood_error
     };
-    let (wood_lod, wood_error, thin_pieces) =
-        wood_within(wood, min_width, level.wood_error, lod_budget.wood_triangles);
+    let wood_lod = wood_within(wood, min_width, level.wood_error, lod_budget.wood_triangles);
     let t1 = Instant::now();
     let wood_sizes = lod_image_sizes(
         tree,
-        std::slice::from_ref(&wood_lod),
+        std::slice::from_ref(&wood_lod.mesh),
         Some(wood),
         level.texels_per_unit,
     );
-    let wood_texture_bytes = parts_image_bytes(tree, std::slice::from_ref(&wood_lod), &wood_sizes);
+    let wood_texture_bytes =
+        parts_image_bytes(tree, std::slice::from_ref(&wood_lod.mesh), &wood_sizes);
     let mut params = cloud_params(req, level, k);
     let atlas_bytes = lod_budget.texture_bytes.saturating_sub(wood_texture_bytes);
     params.bake.max_atlas = params.bake.max_atlas.min(atlas_side_for_bytes(atlas_bytes));
@@ -617,12 +628,15 @@ fn billboard_lod(
         TEXELS_PER_BILLBOARD
     };
     // Two triangles per billboard, and room in the atlas for each (a small texture, padded).
-    let max_billboards = (lod_budget.triangles.saturating_sub(wood_lod.triangles()) / 2)
-        .min(atlas_bytes / 4 / texels_per_billboard);
+    let max_billboards = (lod_budget
+        .triangles
+        .saturating_sub(wood_lod.mesh.triangles())
+        / 2)
+    .min(atlas_bytes / 4 / texels_per_billboard);
     tracing::debug!(
         "LOD{}: wood {} triangles ({} B of texture), at most {max_billboards} billboards",
         k + 1,
-        wood_lod.triangles(),
+        wood_lod.mesh.triangles(),
         wood_texture_bytes
     );
     let ctx = BuildContext {
@@ -636,7 +650,9 @@ fn billboard_lod(
         scale: tree.bounds.diagonal(),
         seed: req.seed.wrapping_add(k as u64),
         max_billboards: Some(max_billboards.max(1)),
-        max_foliage_triangles: Some(lod_budget.triangles.saturating_sub(wood_lod.triangles())),
+        max_foliage_triangles: Some(
+            (lod_budget.triangles).saturating_sub(wood_lod.mesh.triangles()),
+        ),
         max_alpha_tested_area: Some(lod_budget.alpha_tested_area),
         max_joints: Some(lod_budget.joints),
     };
@@ -648,12 +664,12 @@ fn billboard_lod(
     };
     let room = lod_budget.triangles.saturating_sub(foliage_triangles);
     let t2 = Instant::now();
-    let (wood_lod, wood_error, thin_pieces) = refine_wood(
-        wood,
-        (wood_lod, wood_error, thin_pieces),
-        level.wood_error / WOOD_REFINE_FLOOR,
-        room,
-    );
+    let WoodLod {
+        mesh: wood_lod,
+        error: wood_error,
+        thin_pieces,
+        ..
+    } = refine_wood(wood, wood_lod, level.wood_error / WOOD_REFINE_FLOOR, room);
     let mut e = LodEntry::new(method.name(), reason);
     e.screen_height = Some(level.screen_height);
     e.pixel = Some(level.pixel);
@@ -873,20 +889,60 @@ mod tests {
         assert!(start < wood.triangles());
         // Room for half again as many triangles: a finer error, within the room.
         let room = start + start / 2;
-        let (refined, error, _) =
-            refine_wood(&wood, (mesh.clone(), coarse, thin), coarse / 64.0, room);
-        assert!(error < coarse, "{error}");
-        assert!(refined.triangles() > start && refined.triangles() <= room);
+        let at_coarse = |mesh: WoodMesh| WoodLod {
+            mesh,
+            error: coarse,
+            thin_pieces: thin,
+            min_width: coarse,
+        };
+        let refined = refine_wood(&wood, at_coarse(mesh.clone()), coarse / 64.0, room);
+        assert!(refined.error < coarse, "{}", refined.error);
+        assert!(refined.mesh.triangles() > start && refined.mesh.triangles() <= room);
         // No room: unchanged.
-        let (same, same_error, _) = refine_wood(&wood, (mesh, coarse, thin), coarse / 64.0, start);
-        assert_eq!((same.triangles(), same_error), (start, coarse));
+        let same = refine_wood(&wood, at_coarse(mesh), coarse / 64.0, start);
+        assert_eq!((same.mesh.triangles(), same.error), (start, coarse));
         // Room for everything: the floor.
-        let (_, finest, _) = refine_wood(
+        let finest = refine_wood(
             &wood,
-            (kept.simplify(coarse).0, coarse, thin),
+            at_coarse(kept.simplify(coarse).0),
             coarse / 64.0,
             usize::MAX,
-        );
+        )
+        .error;
         assert_eq!(finest, coarse / 64.0);
+    }
+
+    #[test]
+    fn refining_keeps_the_branches_a_far_lod_kept() {
+        // The sample seen 20 px tall: branches half a pixel wide stay, though the wood's error
+        // is a pixel; refining into a little room must not trade them for nothing.
+        let tree = import(&frond_testdata::sample(), &ImportOptions::default()).expect("sample");
+        let wood = WoodMesh::from_tree(&tree);
+        let pixel = tree.height() / 20.0;
+        let far = wood_within(&wood, 0.5 * pixel, pixel, 64);
+        let kept = far.mesh.pieces().len();
+        assert!(kept > 0 && far.mesh.triangles() <= 64, "{kept} pieces");
+        let thinner_than_error = wood.without_thin_pieces(pixel).0.pieces().len();
+        assert!(
+            kept > thinner_than_error,
+            "{kept} pieces, {thinner_than_error} a pixel wide"
+        );
+        for room in [
+            far.mesh.triangles(),
+            far.mesh.triangles() + 8,
+            4 * far.mesh.triangles(),
+        ] {
+            let start = WoodLod {
+                mesh: far.mesh.clone(),
+                ..far
+            };
+            let refined = refine_wood(&wood, start, pixel / WOOD_REFINE_FLOOR, room);
+            assert!(refined.mesh.triangles() <= room.max(far.mesh.triangles()));
+            assert!(
+                refined.mesh.pieces().len() >= kept,
+                "room {room}: {} pieces of {kept}",
+                refined.mesh.pieces().len()
+            );
+        }
     }
 }
