@@ -7,7 +7,8 @@
 //! and normal textures present, at the file's image sizes), and nothing printed as an error.
 //! Then Godot renders the posed tree (the clip paused at time 0 and at 0.325 of the period) with
 //! `frond render`'s camera, and its silhouettes are compared with frond's renders of the same file
-//! at the same times.
+//! at the same times. Lit by Godot's light, every LOD's mean colour stays within 0.02 of LOD0's
+//! (`check_lit_colour`).
 //!
 //! The Godot side is `tests/godot/run.sh` (the project, editor plugin and scripts are in
 //! `tests/godot/project/`); it prints one JSON line per file. Skips (one `skipped:` line) when
@@ -632,6 +633,7 @@ fn check_chain<'a>(
         );
         print_measured(file, &measured);
     }
+    check_lit_colour(lods, results);
     let chain_len = report_of(&lods[0]).lods.len();
     describe_combined(
         combined_file,
@@ -640,7 +642,101 @@ fn check_chain<'a>(
     );
 }
 
-/// The shared Blender-exported pine's default chain, where present.
+/// The most the mean lit colour of a LOD may differ from LOD0's in Godot's frames (linear RGB,
+/// 0..1): the bound of docs/metrics.md's colour shift, which frond's own lit render holds too.
+const MAX_GODOT_COLOUR_SHIFT: f64 = 0.02;
+
+/// Every LOD after the first of `lods` (LOD0, the input, first) shades like LOD0 in Godot: in
+/// each frame Godot rendered (lit by its directional and ambient light, as imported), the mean
+/// linear colour of the pixels both cover differs by at most [`MAX_GODOT_COLOUR_SHIFT`], as
+/// frond's colour shift measures it (the signed difference averaged over those pixels, then
+/// over the channels). A lighter or darker LOD is a visible pop when the engine swaps it in.
+fn check_lit_colour(lods: &[PathBuf], results: &HashMap<String, Value>) {
+    let frames = |file: &PathBuf| -> Vec<(f64, String)> {
+        let result = &results[file.to_str().expect("utf-8")];
+        (result["renders"].as_array().expect("renders").iter())
+            .map(|r| {
+                let time = r["time"].as_f64().expect("time");
+                (time, r["png"].as_str().expect("png").to_string())
+            })
+            .collect()
+    };
+    let reference = frames(&lods[0]);
+    for file in &lods[1..] {
+        for ((time, png), (_, lod0_png)) in frames(file).iter().zip(&reference) {
+            let shift = lit_colour_shift(
+                &LitFrame::godot(Path::new(lod0_png)),
+                &LitFrame::godot(Path::new(png)),
+            );
+            // The chain's folder too: the sample's two chains name their LODs alike.
+            let name = file
+                .iter()
+                .rev()
+                .take(2)
+                .collect::<Vec<_>>()
+                .into_iter()
+                .rev()
+                .collect::<PathBuf>()
+                .display()
+                .to_string();
+            eprintln!("{name} at {time} s: lit colour shift from LOD0 in Godot {shift:.4}");
+            assert!(
+                shift <= MAX_GODOT_COLOUR_SHIFT,
+                "{name} at {time} s: Godot's lit colour shifts {shift:.4} from LOD0's"
+            );
+        }
+    }
+}
+
+/// A Godot frame's covered pixels (not the magenta background) and their linear colour.
+struct LitFrame {
+    covered: Vec<bool>,
+    linear: Vec<[f64; 3]>,
+}
+
+impl LitFrame {
+    fn godot(png: &Path) -> LitFrame {
+        let silhouette = Silhouette::godot(png);
+        let image = image::open(png).expect("Godot's PNG").to_rgb8();
+        let linear = image
+            .pixels()
+            .map(|p| p.0.map(|v| srgb_to_linear(f64::from(v) / 255.0)))
+            .collect();
+        LitFrame {
+            covered: silhouette.covered,
+            linear,
+        }
+    }
+}
+
+/// The sRGB transfer function undone.
+fn srgb_to_linear(v: f64) -> f64 {
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// `|mean(a − b)|` over the pixels both frames cover, averaged over the channels; 0 when they
+/// share none.
+fn lit_colour_shift(a: &LitFrame, b: &LitFrame) -> f64 {
+    assert_eq!(a.covered.len(), b.covered.len(), "frame sizes");
+    let (mut sum, mut shared) = (0.0, 0usize);
+    for i in 0..a.covered.len() {
+        if a.covered[i] && b.covered[i] {
+            sum += (0..3).map(|c| a.linear[i][c] - b.linear[i][c]).sum::<f64>() / 3.0;
+            shared += 1;
+        }
+    }
+    if shared == 0 {
+        0.0
+    } else {
+        (sum / shared as f64).abs()
+    }
+}
+
+/// The shared Blender-exported pine's default chain and far end, where present.
 #[test]
 fn godot_imports_and_renders_the_pine_chain() {
     let tree = frond_testdata::require_tree!("pine_medium_blender.glb");
@@ -648,7 +744,12 @@ fn godot_imports_and_renders_the_pine_chain() {
         return;
     }
     let dir = tempfile::tempdir().expect("temp dir");
-    let (report, lods) = chain(&tree, &dir.path().join("chain"), &[]);
+    // The default chain and its far end, as for the sample.
+    let (report, lods) = chain(
+        &tree,
+        &dir.path().join("chain"),
+        &["--lods", "600,200,60,20"],
+    );
     let combined_file = combined(&dir.path().join("chain"), &report);
     let mut files = lods.clone();
     files.push(combined_file.clone());

@@ -197,7 +197,11 @@ fn taps(from: u32, to: u32) -> Vec<Taps> {
 }
 
 /// `rgba` resampled from `from` to `to` texels with a triangle filter over premultiplied alpha
-/// (so transparent texels' colour does not bleed into the edges), streaming: output rows in
+/// (so transparent texels' colour does not bleed into the edges), streaming. A texel left with
+/// no alpha at all keeps the plain mean of the input's colour there: the colour an input
+/// stores under its transparent texels (often the leaf's, bled outwards) is what an engine's
+/// bilinear filter and mip chain blend into the edges, and black there would darken every
+/// leaf seen from afar. Streaming: output rows in
 /// order, each blending the source rows it needs, which are resampled horizontally once each
 /// and kept in a window while later rows need them. Memory: the window and the output, never
 /// a full-size float copy.
@@ -210,7 +214,7 @@ pub fn resample(rgba: &[u8], from: [u32; 2], to: [u32; 2]) -> RgbaImage {
     let (sw, ow) = (from[0] as usize, to[0] as usize);
     let mut out = vec![0u8; ow * to[1] as usize * 4];
     let mut window = RowWindow::default();
-    let mut acc = vec![0f32; ow * 4];
+    let mut acc = vec![0f32; ow * TEXEL_SUMS];
     for (t, row_out) in ys.iter().zip(out.chunks_exact_mut(ow * 4)) {
         window.drop_before(t.first);
         acc.fill(0.0);
@@ -257,17 +261,23 @@ impl RowWindow {
     }
 }
 
-/// One source row (RGBA8) premultiplied and resampled to the output's width (RGBA floats).
+/// Floats a resampled texel sums: premultiplied RGBA, then the plain RGB.
+const TEXEL_SUMS: usize = 7;
+
+/// One source row (RGBA8) resampled to the output's width: per texel, premultiplied RGBA and
+/// plain RGB ([`TEXEL_SUMS`] floats).
 fn horizontal(row: &[u8], xs: &[Taps]) -> Vec<f32> {
-    let mut out = Vec::with_capacity(xs.len() * 4);
+    let mut out = Vec::with_capacity(xs.len() * TEXEL_SUMS);
     for t in xs {
-        let mut px = [0f32; 4];
+        let mut px = [0f32; TEXEL_SUMS];
         for (i, &w) in t.weights.iter().enumerate() {
             let p = &row[(t.first + i) * 4..(t.first + i) * 4 + 4];
             let a = f32::from(p[3]) / 255.0;
-            px[0] += w * f32::from(p[0]) / 255.0 * a;
-            px[1] += w * f32::from(p[1]) / 255.0 * a;
-            px[2] += w * f32::from(p[2]) / 255.0 * a;
+            for c in 0..3 {
+                let v = f32::from(p[c]) / 255.0;
+                px[c] += w * v * a;
+                px[4 + c] += w * v;
+            }
             px[3] += w * a;
         }
         out.extend_from_slice(&px);
@@ -275,15 +285,16 @@ fn horizontal(row: &[u8], xs: &[Taps]) -> Vec<f32> {
     out
 }
 
-/// Premultiplied float texels back to straight-alpha RGBA8.
+/// Resampled texels back to straight-alpha RGBA8: the premultiplied colour over alpha, or the
+/// plain colour where no alpha reached the texel.
 fn unpremultiply(acc: &[f32], out: &mut [u8]) {
-    for (p, q) in acc.chunks_exact(4).zip(out.chunks_exact_mut(4)) {
+    for (p, q) in acc.chunks_exact(TEXEL_SUMS).zip(out.chunks_exact_mut(4)) {
         let a = p[3].clamp(0.0, 1.0);
-        let c = |v: f32| {
-            let v = if a > 0.0 { v / a } else { 0.0 };
+        let c = |k: usize| {
+            let v = if a > 0.0 { p[k] / a } else { p[4 + k] };
             (v.clamp(0.0, 1.0) * 255.0).round() as u8
         };
-        q.copy_from_slice(&[c(p[0]), c(p[1]), c(p[2]), (a * 255.0).round() as u8]);
+        q.copy_from_slice(&[c(0), c(1), c(2), (a * 255.0).round() as u8]);
     }
 }
 
@@ -316,6 +327,33 @@ fn keep_coverage(full: &[u8], small: &mut [u8], cutoff: f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn transparent_texels_keep_the_colour_the_input_stores_under_them() {
+        // An opaque red square in the middle of transparent texels whose colour is green (a
+        // leaf's colour bled outwards, as exporters do): shrunk, the texels no alpha reaches
+        // stay green, not black, and the square stays red.
+        let n = 64;
+        let image: Vec<u8> = (0..n * n)
+            .flat_map(|i| {
+                let (x, y) = (i % n, i / n);
+                if (24..40).contains(&x) && (24..40).contains(&y) {
+                    [255, 0, 0, 255]
+                } else {
+                    [40, 160, 60, 0]
+                }
+            })
+            .collect();
+        let small = resample(&image, [64, 64], [16, 16]);
+        assert_eq!(small.get_pixel(0, 0).0, [40, 160, 60, 0]);
+        assert_eq!(small.get_pixel(15, 15).0, [40, 160, 60, 0]);
+        let centre = small.get_pixel(8, 8).0;
+        assert_eq!(centre, [255, 0, 0, 255]);
+        // Every texel with any alpha is the square's red.
+        for p in small.pixels().filter(|p| p.0[3] > 0) {
+            assert_eq!([p.0[0], p.0[1], p.0[2]], [255, 0, 0], "{:?}", p.0);
+        }
+    }
 
     #[test]
     fn resampling_keeps_flat_colour_and_averages_with_premultiplied_alpha() {
