@@ -58,19 +58,23 @@ pub fn figure(src: &str, size: [u32; 2], caption: &str, zoom: bool) -> String {
 }
 
 /// The text of `markup` (HTML this crate built, its text already escaped) with its tags
-/// removed: a caption's words as an image's `alt` attribute.
+/// removed: a caption's words as an image's `alt` attribute. A tag parts words as a space
+/// would (a legend's swatch stands between its entries), and runs of spaces close up.
 fn text_of(markup: &str) -> String {
-    let mut text = String::with_capacity(markup.len());
+    let mut spaced = String::with_capacity(markup.len());
     let mut in_tag = false;
     for c in markup.chars() {
         match c {
-            '<' => in_tag = true,
+            '<' => {
+                in_tag = true;
+                spaced.push(' ');
+            }
             '>' if in_tag => in_tag = false,
-            c if !in_tag => text.push(c),
+            c if !in_tag => spaced.push(c),
             _ => {}
         }
     }
-    text
+    spaced.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
 #[cfg(test)]
@@ -80,12 +84,13 @@ mod tests {
     #[test]
     fn a_figure_alt_is_its_caption_without_tags() {
         let caption = format!(
-            "Difference: <span class=\"legend\"><span style=\"x\"></span>missing</span> {}",
+            "Difference: <span class=\"legend\"><span style=\"x\"></span>missing 2 px<span \
+             style=\"y\"></span>extra 1 px</span> of {}",
             esc("LOD0's \"a\"")
         );
         let f = figure("d.png", [2, 3], &caption, true);
         assert!(
-            f.contains("alt=\"Difference: missing LOD0&#39;s &quot;a&quot;\""),
+            f.contains("alt=\"Difference: missing 2 px extra 1 px of LOD0&#39;s &quot;a&quot;\""),
             "{f}"
         );
         assert!(f.contains(&format!("<figcaption>{caption}</figcaption>")));
