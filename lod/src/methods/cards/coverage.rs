@@ -3,9 +3,11 @@
 //! views at the LOD's pixel size; a card whose pixels other cards also cover adds
 //! nothing to the tree's silhouette, so thinning drops, one at a time, the card that covers the
 //! fewest pixels no other card covers ([`CardCoverage::thin`]). The survivors are then grown by
-//! the one scale that makes their coverage closest to the input's ([`CardCoverage::best_scale`]):
-//! the same measure as the coverage metric (pixels covered by exactly one of the two),
-//! over these views.
+//! the smallest scale at which they cover as much of these views as all the cards did
+//! ([`CardCoverage::coverage_keeping_scale`]): a thinned LOD keeps the crown's coverage. The
+//! scale closest to the input's sample by sample in these rest-pose views stays near 1, which
+//! leaves far LODs thinner than the input and worse by the coverage metric, whose moving
+//! leaves never sit where the rest pose put them (docs/experiments.md, card scale).
 //!
 //! The rasteriser is written here: the greedy needs, per sample, how many cards cover it and
 //! which one when only one does (a count and an XOR of card indices), which no rasteriser crate
@@ -231,12 +233,14 @@ impl AlphaMap {
     }
 }
 
-/// Halvings of the bracket around the best coarse scale ([`CardCoverage::best_scale`]).
-const REFINE_STEPS: usize = 3;
+/// Halvings of [`CardCoverage::coverage_keeping_scale`]'s bracket: the scale to within 1/32 of
+/// its range.
+const COVERAGE_BISECTIONS: usize = 5;
 
-/// The coarse scale search is refined when the step after the best differs by at most this
-/// fraction of the best's count ([`CardCoverage::best_scale`]).
-const FLAT: f64 = 0.1;
+/// Samples a view's mask covers.
+fn covered(mask: &[bool]) -> usize {
+    mask.iter().filter(|c| **c).count()
+}
 
 /// The input's cards seen from the views, with the samples' cover counts.
 pub struct CardCoverage {
@@ -502,59 +506,35 @@ impl CardCoverage {
         keep
     }
 
-    /// Of `candidates` scales (ascending), the one whose kept cards, each scaled about its
-    /// centre, cover samples closest to all cards' coverage ([`CardCoverage::differing`]),
-    /// searched upwards until the count rises, then, where the count is nearly flat there,
-    /// refined `REFINE_STEPS` times by halving the bracket around it (the coarse steps are a
-    /// quarter of the range apart, wide enough to step over the best scale of a dense crown at
-    /// a far size); ties go to the smaller scale.
-    pub fn best_scale(&self, keep: &[bool], candidates: &[f32]) -> f32 {
+    /// The smallest scale in `1..=most` at which the cards `keep` marks, each scaled about its
+    /// centre, cover as many samples of the views as all the cards do: thinning keeps the
+    /// crown's coverage. Found by bisection ([`COVERAGE_BISECTIONS`] halvings; the covered
+    /// count grows with the scale); `most` when even that covers less.
+    pub fn coverage_keeping_scale(&self, keep: &[bool], most: f32) -> f32 {
         let original = self
             .original
             .get_or_init(|| self.masks(&vec![true; self.cards.len()], 1.0));
-        let mut best = (u64::MAX, 1.0);
-        let mut at = 0;
-        let mut rise = None;
-        for (i, &s) in candidates.iter().enumerate() {
-            let differing = self.differing(original, keep, s);
-            if differing >= best.0 {
-                // Growing the cards first fills the holes thinning left, then covers what the
-                // input left open: the count falls, then rises, so the first rise ends it.
-                rise = Some(differing);
-                break;
-            }
-            best = (differing, s);
-            at = i;
-        }
-        // Refined only where the count is nearly flat around the best step (the next one
-        // within [`FLAT`] of it), so that the minimum may lie between steps: a far crown's
-        // (oak_dense at 60 px: 1,446 against 1,459 samples at scales 1 and 1.46, best 1.2).
-        // Near sizes rise steeply from scale 1 and keep it without the extra passes.
-        let flat = rise.is_none_or(|r| (r - best.0) as f64 <= FLAT * best.0 as f64);
-        let (true, Some(&lo), Some(&hi)) = (
-            flat,
-            candidates.get(at.saturating_sub(1)),
-            candidates.get(at + 1).or(candidates.get(at)),
-        ) else {
-            return best.1;
+        let target: usize = original.iter().map(|m| covered(m)).sum();
+        let covers = |scale: f32| {
+            self.masks(keep, scale)
+                .iter()
+                .map(|m| covered(m))
+                .sum::<usize>()
         };
-        let top = candidates.last().copied().unwrap_or(1.0);
-        let mut half = 0.5 * (hi - lo).max(0.0);
-        for _ in 0..REFINE_STEPS {
-            half *= 0.5;
-            let centre = best.1;
-            for s in [centre - half, centre + half] {
-                // Within the candidates' range: the largest is a budget (overdraw), not a step.
-                if s < 1.0 || s > top || half <= 0.0 {
-                    continue;
-                }
-                let differing = self.differing(original, keep, s);
-                if differing < best.0 || (differing == best.0 && s < best.1) {
-                    best = (differing, s);
-                }
+        if most.is_nan() || most <= 1.0 || covers(1.0) >= target {
+            return 1.0;
+        }
+        // `hi` stays `most` unless a smaller scale covers the target.
+        let (mut lo, mut hi) = (1.0f32, most);
+        for _ in 0..COVERAGE_BISECTIONS {
+            let mid = 0.5 * (lo + hi);
+            if covers(mid) >= target {
+                hi = mid;
+            } else {
+                lo = mid;
             }
         }
-        best.1
+        hi
     }
 
     /// Every view's coverage by the cards `keep` marks, scaled by `scale`.
@@ -950,9 +930,36 @@ mod tests {
         let coverage =
             CardCoverage::new(&tree, &foliage, &pieces, &tree.bounds, tree.height() / 60.0);
         let keep = vec![true; pieces.len()];
-        assert_eq!(coverage.best_scale(&keep, &[1.0, 1.2, 1.5]), 1.0);
+        assert_eq!(coverage.coverage_keeping_scale(&keep, 1.5), 1.0);
         // Growing every card covers samples the input leaves open.
         let original = coverage.masks(&keep, 1.0);
         assert!(coverage.differing(&original, &keep, 1.5) > 0);
+    }
+
+    #[test]
+    fn thinned_cards_grow_until_they_cover_what_all_covered() {
+        let (tree, foliage, pieces) = sample();
+        let coverage =
+            CardCoverage::new(&tree, &foliage, &pieces, &tree.bounds, tree.height() / 60.0);
+        let covers = |keep: &[bool], scale: f32| -> usize {
+            coverage.masks(keep, scale).iter().map(|m| covered(m)).sum()
+        };
+        let all = covers(&vec![true; pieces.len()], 1.0);
+        // Every other card kept: the crown thins at scale 1.
+        let keep: Vec<bool> = (0..pieces.len()).map(|c| c % 2 == 0).collect();
+        assert!(covers(&keep, 1.0) < all);
+        // Room to double every side: more than keeping the leaf area (√2) takes, where the
+        // kept cards overlap.
+        let most = 2.0;
+        let scale = coverage.coverage_keeping_scale(&keep, most);
+        assert!(scale > 1.0 && scale <= most, "{scale}");
+        // It covers what all the cards covered, and is the smallest that does (to the
+        // bisection's step).
+        assert!(covers(&keep, scale) >= all);
+        let step = (most - 1.0) / (1 << COVERAGE_BISECTIONS) as f32;
+        assert!(covers(&keep, scale - step) < all, "{scale}");
+        // Held to the overdraw budget: no more than `most`.
+        let tight = 1.0 + 0.25 * (scale - 1.0);
+        assert_eq!(coverage.coverage_keeping_scale(&keep, tight), tight);
     }
 }

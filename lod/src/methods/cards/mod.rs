@@ -119,15 +119,12 @@ pub fn is_card_foliage(tree: &Tree) -> bool {
     10 * cards >= 9 * pieces.len()
 }
 
-/// Scales tried for the kept cards, from 1 to `√(all cards' area / kept area)` (the scale that
-/// keeps the leaf area): where cards overlap, growing them by the full ratio covers pixels the
-/// input left open.
-const SCALE_STEPS: usize = 5;
-
 /// Keeps the cards of `foliage` that matter most to its silhouette at `pixel` world units per
 /// pixel, at most `max_triangles` triangles of them (at least one card; see
-/// [`CardCoverage::thin`]), each scaled about its centre by the scale whose coverage is
-/// closest to the input's ([`CardCoverage::best_scale`]). `seed` orders cards that are equally
+/// [`CardCoverage::thin`]), each scaled about its centre by the smallest scale at which they
+/// cover what all the cards covered ([`CardCoverage::coverage_keeping_scale`]), at most
+/// `√(all cards' area / kept area)` (the leaf area kept) within the overdraw budget. `seed`
+/// orders cards that are equally
 /// redundant. Returns the cards (over no rig yet) and what thinning did.
 pub fn thin_cards(
     tree: &Tree,
@@ -172,10 +169,7 @@ pub fn thin_cards(
         } else {
             1.0
         };
-        let steps: Vec<f32> = (0..SCALE_STEPS)
-            .map(|k| 1.0 + (most - 1.0) * k as f32 / (SCALE_STEPS - 1) as f32)
-            .collect();
-        coverage.best_scale(&keep, &steps)
+        coverage.coverage_keeping_scale(&keep, most)
     };
     tracing::debug!(
         "cards: {} of {} kept in {:.2} s, scale {scale} chosen in {:.2} s",
