@@ -508,7 +508,7 @@ impl CardCoverage {
 
     /// The smallest scale in `1..=most` at which the cards `keep` marks, each scaled about its
     /// centre, cover as many samples of the views as all the cards do: thinning keeps the
-    /// crown's coverage. Found by bisection ([`COVERAGE_BISECTIONS`] halvings; the covered
+    /// crown's coverage. Found by bisection (`COVERAGE_BISECTIONS` halvings; the covered
     /// count grows with the scale); `most` when even that covers less.
     pub fn coverage_keeping_scale(&self, keep: &[bool], most: f32) -> f32 {
         let original = self
