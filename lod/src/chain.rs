@@ -628,11 +628,10 @@ fn billboard_lod(
         TEXELS_PER_BILLBOARD
     };
     // Two triangles per billboard, and room in the atlas for each (a small texture, padded).
-    let max_billboards = (lod_budget
+    let foliage_room = lod_budget
         .triangles
-        .saturating_sub(wood_lod.mesh.triangles())
-        / 2)
-    .min(atlas_bytes / 4 / texels_per_billboard);
+        .saturating_sub(wood_lod.mesh.triangles());
+    let max_billboards = (foliage_room / 2).min(atlas_bytes / 4 / texels_per_billboard);
     tracing::debug!(
         "LOD{}: wood {} triangles ({} B of texture), at most {max_billboards} billboards",
         k + 1,
@@ -650,9 +649,7 @@ fn billboard_lod(
         scale: tree.bounds.diagonal(),
         seed: req.seed.wrapping_add(k as u64),
         max_billboards: Some(max_billboards.max(1)),
-        max_foliage_triangles: Some(
-            (lod_budget.triangles).saturating_sub(wood_lod.mesh.triangles()),
-        ),
+        max_foliage_triangles: Some(foliage_room),
         max_alpha_tested_area: Some(lod_budget.alpha_tested_area),
         max_joints: Some(lod_budget.joints),
     };
