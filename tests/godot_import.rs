@@ -224,6 +224,13 @@ fn godot_errors(result: &Value) -> Vec<String> {
         .collect()
 }
 
+/// Whether a pixel of Godot's frame shows the tree: it is not the magenta background (1, 0, 1).
+/// Alpha scissor, no MSAA: a pixel is background or tree, the margin only absorbs rounding.
+fn godot_covers(rgb: [u8; 3]) -> bool {
+    let [r, g, b] = rgb.map(i32::from);
+    (255 - r) + g + (255 - b) > 48
+}
+
 /// A silhouette: which pixels of a frame show the tree.
 struct Silhouette {
     width: u32,
@@ -232,17 +239,10 @@ struct Silhouette {
 }
 
 impl Silhouette {
-    /// Godot's frame: every pixel that is not the magenta background (1, 0, 1). Alpha scissor,
-    /// no MSAA: a pixel is background or tree, the margin only absorbs rounding.
+    /// Godot's frame: the pixels that show the tree ([`godot_covers`]).
     fn godot(png: &Path) -> Silhouette {
         let image = image::open(png).expect("Godot's PNG").to_rgb8();
-        let covered = image
-            .pixels()
-            .map(|p| {
-                let [r, g, b] = p.0.map(i32::from);
-                (255 - r) + g + (255 - b) > 48
-            })
-            .collect();
+        let covered = image.pixels().map(|p| godot_covers(p.0)).collect();
         Silhouette {
             width: image.width(),
             height: image.height(),
@@ -696,15 +696,12 @@ struct LitFrame {
 
 impl LitFrame {
     fn godot(png: &Path) -> LitFrame {
-        let silhouette = Silhouette::godot(png);
         let image = image::open(png).expect("Godot's PNG").to_rgb8();
-        let linear = image
-            .pixels()
-            .map(|p| p.0.map(|v| srgb_to_linear(f64::from(v) / 255.0)))
-            .collect();
         LitFrame {
-            covered: silhouette.covered,
-            linear,
+            covered: image.pixels().map(|p| godot_covers(p.0)).collect(),
+            linear: (image.pixels())
+                .map(|p| p.0.map(|v| srgb_to_linear(f64::from(v) / 255.0)))
+                .collect(),
         }
     }
 }
