@@ -5,8 +5,14 @@
 //! A LOD's joints are the rig nodes its wood vertices and billboards follow, one joint per
 //! distinct own motion of a billboard, and one static joint for what follows nothing (what
 //! `frond-export` writes, counted by [`count`]). Two merges lower that count:
-//! - **collapse** a rig node into its nearest surviving ancestor: everything it carried (wood
-//!   vertices, billboards) becomes rigid with that ancestor;
+//! - **collapse** a rig node: everything it carried (wood vertices, billboards) becomes rigid
+//!   with a surviving node, its nearest surviving ancestor or, when all it carries is rigid
+//!   with it, whichever of the surviving joints nearest it moves most like it. The points are
+//!   placed where they sit relative to that node over the loop (the rigid placement that best
+//!   fits their motion, least squares over the loop's samples), not where they sit at rest: a
+//!   bough that leans with the wind all loop keeps its lean, and a twig whose sibling sways as
+//!   it does follows the sibling rather than the branch both grow from. The rig keeps its
+//!   hierarchy; only what the node carried moves;
 //! - **attach** a group of billboards sharing one own motion to the surviving node whose motion
 //!   fits theirs best (a rigid re-fit of the quad in that node's frame): the skeleton's motions
 //!   are the shared motions own motions cluster onto, and need no channel of their own.
@@ -25,6 +31,7 @@ use frond_scene::rigid_fit::rigid_fit;
 use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{Rig, Tree};
 use glam::{Affine3A, Mat4, Vec3};
+use rayon::prelude::*;
 use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::contract::{AnimatedBillboardCloud, RigidMotion};
@@ -222,6 +229,10 @@ pub fn fit_to_node(
     (worst, q)
 }
 
+/// How many surviving joints, nearest first, a collapsing node's points may move to besides
+/// its surviving parent.
+const NEAREST_JOINTS: usize = 16;
+
 /// Axis-aligned box of carried points (empty: nothing carried).
 #[derive(Clone, Copy, Debug)]
 struct Box3 {
@@ -244,6 +255,19 @@ impl Box3 {
     }
     fn is_empty(&self) -> bool {
         self.lo.x > self.hi.x
+    }
+    fn centre(&self) -> Vec3 {
+        0.5 * (self.lo + self.hi)
+    }
+    /// The box around this one's corners moved by `t` (empty stays empty).
+    fn placed(&self, t: Affine3A) -> Box3 {
+        let mut b = Box3::EMPTY;
+        if !self.is_empty() {
+            for c in self.corners() {
+                b.add(t.transform_point3(c));
+            }
+        }
+        b
     }
     fn corners(&self) -> [Vec3; 8] {
         std::array::from_fn(|k| {
@@ -274,6 +298,12 @@ struct Merger<'a> {
     carried: Vec<Box3>,
     /// Whether each node is a joint (carries something directly).
     joint: Vec<bool>,
+    /// Whether everything each node carries is rigid with it (no billboard with an own motion
+    /// relative to it), so that a collapse may re-place it.
+    rigid: Vec<bool>,
+    /// Placement each collapsed node's points took in its target's rest frame (identity while
+    /// it survives).
+    placement: Vec<Affine3A>,
     groups: Vec<Vec<usize>>,
     attached: Vec<Option<(Option<usize>, Affine3A)>>,
     /// Something follows the world (the static joint is written).
@@ -294,18 +324,28 @@ impl Merger<'_> {
         None
     }
 
-    /// Nearest surviving strict ancestor of `n` (None: the world).
+    /// Nearest surviving strict ancestor of `n` in the rig (None: the world).
     fn surviving_parent(&self, n: usize) -> Option<usize> {
-        self.resolve(self.rig.nodes[n].parent)
+        let mut p = self.rig.nodes[n].parent;
+        while let Some(c) = p {
+            if self.target[c] == Some(c) {
+                return Some(c);
+            }
+            p = self.rig.nodes[c].parent;
+        }
+        None
     }
 
-    /// Error of collapsing surviving node `n` into its surviving parent.
-    fn collapse_error(&self, n: usize) -> f32 {
+    /// Error of collapsing surviving node `n`, and where its points go: into its surviving
+    /// parent as they are, or, when everything it carries is rigid with it, into the surviving
+    /// joint (its parent or any other) whose motion, at the rigid placement that fits best,
+    /// strays least from theirs.
+    fn collapse_error(&self, n: usize) -> (f32, Attachment) {
+        let p = self.surviving_parent(n);
         let b = &self.carried[n];
         if b.is_empty() {
-            return 0.0;
+            return (0.0, (p, Affine3A::IDENTITY));
         }
-        let p = self.surviving_parent(n);
         let pts = b.corners();
         let mut worst = 0.0f32;
         for s in 0..self.frames.worlds.len() {
@@ -314,7 +354,58 @@ impl Merger<'_> {
                 worst = worst.max(a.transform_point3(*x).distance(c.transform_point3(*x)));
             }
         }
-        worst
+        let mut best = (worst, (p, Affine3A::IDENTITY));
+        if !self.rigid[n] {
+            return best;
+        }
+        let target = |s: usize, x: Vec3| self.frames.carry(Some(n), s).transform_point3(x);
+        let mut candidates = self.nearest_joints(n);
+        candidates.push(p);
+        let fits: Vec<(f32, Attachment)> = candidates
+            .into_par_iter()
+            .map(|c| {
+                let (e, q) = fit_to_node(self.frames, c, &pts, &target);
+                (e, (c, q))
+            })
+            .collect();
+        for f in fits {
+            if f.0 < best.0 || (f.0 == best.0 && f.1.0 < best.1.0) {
+                best = f;
+            }
+        }
+        best
+    }
+
+    /// The surviving joints other than `n` whose carried points lie nearest `n`'s (box
+    /// centres at rest), at most [`NEAREST_JOINTS`]: the nodes whose motion can fit `n`'s,
+    /// since a tree's motion varies smoothly through its crown.
+    fn nearest_joints(&self, n: usize) -> Vec<Option<usize>> {
+        let centre = self.carried[n].centre();
+        let mut near: Vec<(f32, usize)> = (0..self.target.len())
+            .filter(|&c| c != n && self.joint[c] && self.target[c] == Some(c))
+            .filter(|&c| !self.carried[c].is_empty())
+            .map(|c| (self.carried[c].centre().distance_squared(centre), c))
+            .collect();
+        let k = NEAREST_JOINTS.min(near.len());
+        if k < near.len() {
+            near.select_nth_unstable_by(k, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            near.truncate(k);
+        }
+        near.into_iter().map(|(_, c)| Some(c)).collect()
+    }
+
+    /// Where a point carried by rig node `n` at rest goes with the collapses made: the
+    /// placements met on the way to the node it resolves to, composed.
+    fn placement_of(&self, mut n: Option<usize>) -> Affine3A {
+        let mut t = Affine3A::IDENTITY;
+        while let Some(c) = n {
+            if self.target[c] == Some(c) {
+                break;
+            }
+            t = self.placement[c] * t;
+            n = self.target[c];
+        }
+        t
     }
 
     /// The joints and channels with the merges so far (see [`count`]).
@@ -439,6 +530,8 @@ pub fn apply_joint_budget(
         target: (0..n).map(Some).collect(),
         carried: carrying.carried,
         joint: carrying.joint,
+        rigid: carrying.rigid,
+        placement: vec![Affine3A::IDENTITY; n],
         attached: vec![None; groups.len()],
         groups,
         static_used: carrying.static_used,
@@ -455,6 +548,8 @@ struct Carrying {
     carried: Vec<Box3>,
     /// Whether each node is a joint (carries something directly).
     joint: Vec<bool>,
+    /// Whether each node carries only what is rigid with it.
+    rigid: Vec<bool>,
     /// Something follows the world (the static joint is written).
     static_used: bool,
 }
@@ -493,6 +588,7 @@ impl Carrying {
         Carrying {
             carried,
             joint,
+            rigid: vec![true; n],
             static_used,
         }
     }
@@ -512,6 +608,7 @@ impl Carrying {
                         self.carried[f].add(c);
                     }
                     self.joint[f] |= mode != BillboardAnimation::Vat;
+                    self.rigid[f] &= b.motion.is_none();
                 }
                 None => self.static_used |= mode != BillboardAnimation::Vat,
             }
@@ -547,7 +644,7 @@ fn error_key(e: f32) -> u32 {
     }
 }
 
-/// Where an attached motion group goes: the node it follows (None: the world) and its
+/// Where a merge puts the points it moves: the node they follow (None: the world) and their
 /// placement in that node's rest frame.
 type Attachment = (Option<usize>, Affine3A);
 
@@ -579,13 +676,14 @@ impl Merger<'_> {
             if !over && e >= half {
                 break;
             }
-            match (m, choice) {
-                (Merge::Collapse(i), _) => self.collapse(i, e < half, &mut heap, &mut merges),
-                (Merge::Attach(g), Some(to)) => {
-                    self.attach(cloud, g, to, &mut heap);
+            match m {
+                Merge::Collapse(i) => {
+                    self.collapse(i, choice, e < half, &mut heap, &mut merges);
+                }
+                Merge::Attach(g) => {
+                    self.attach(cloud, g, choice, &mut heap);
                     merges.motions_attached += 1;
                 }
-                (Merge::Attach(_), None) => continue,
             }
             merges.max_error = merges.max_error.max(e);
             current = self.count(cloud);
@@ -600,7 +698,7 @@ impl Merger<'_> {
         for i in 0..self.target.len() {
             if self.joint[i] {
                 heap.push(Reverse((
-                    error_key(self.collapse_error(i)),
+                    error_key(self.collapse_error(i).0),
                     Merge::Collapse(i),
                 )));
             }
@@ -612,26 +710,22 @@ impl Merger<'_> {
         heap
     }
 
-    /// The error of merge `m` now, with where an attachment would go; None when the merge no
-    /// longer applies (its node was collapsed or is no joint, its group already attached).
-    fn current_error(
-        &self,
-        cloud: &AnimatedBillboardCloud,
-        m: Merge,
-    ) -> Option<(f32, Option<Attachment>)> {
+    /// The error of merge `m` now, with where it would put what it moves; None when the merge
+    /// no longer applies (its node was collapsed or is no joint, its group already attached).
+    fn current_error(&self, cloud: &AnimatedBillboardCloud, m: Merge) -> Option<(f32, Attachment)> {
         match m {
             Merge::Collapse(i) => {
                 if self.target[i] != Some(i) || !self.joint[i] {
                     return None;
                 }
-                Some((self.collapse_error(i), None))
+                Some(self.collapse_error(i))
             }
             Merge::Attach(g) => {
                 if self.attached[g].is_some() {
                     return None;
                 }
                 let (e, c, q) = self.attach_choice(cloud, g);
-                Some((e, Some((c, q))))
+                Some((e, (c, q)))
             }
         }
     }
@@ -641,29 +735,32 @@ impl Merger<'_> {
         if !self.joint[n] {
             self.joint[n] = true;
             heap.push(Reverse((
-                error_key(self.collapse_error(n)),
+                error_key(self.collapse_error(n).0),
                 Merge::Collapse(n),
             )));
         }
     }
 
-    /// Collapses node `i` into its surviving parent (the world when none), which takes over
-    /// what it carried; `unseen` when the error is under half a pixel.
+    /// Collapses node `i` into the node of `to` (the world when none), which takes over what
+    /// it carried at `to`'s placement; `unseen` when the error is under half a pixel.
     fn collapse(
         &mut self,
         i: usize,
+        to: Attachment,
         unseen: bool,
         heap: &mut MergeQueue,
         merges: &mut JointMerges,
     ) {
-        let p = self.surviving_parent(i);
+        let (p, placement) = to;
         self.target[i] = p;
-        let b = self.carried[i];
+        self.placement[i] = placement;
+        let b = self.carried[i].placed(placement);
         if p.is_none() && !b.is_empty() {
             self.static_used = true;
         }
         if let Some(p) = p {
             self.carried[p].union(&b);
+            self.rigid[p] &= self.rigid[i];
             self.make_joint(p, heap);
         }
         self.joint[i] = false;
@@ -701,7 +798,8 @@ impl Merger<'_> {
     }
 }
 
-/// Writes the merges into the billboards and the wood's skin.
+/// Writes the merges into the billboards and the wood's skin: what follows a collapsed node
+/// is moved to its placement in the node it resolves to and follows that node.
 fn apply(merger: &Merger, cloud: &mut AnimatedBillboardCloud, wood: &mut WoodMesh) {
     for (g, members) in merger.groups.iter().enumerate() {
         if let Some((c, q)) = merger.attached[g] {
@@ -714,8 +812,12 @@ fn apply(merger: &Merger, cloud: &mut AnimatedBillboardCloud, wood: &mut WoodMes
         }
     }
     for b in &mut cloud.billboards {
+        if b.motion.is_none() {
+            b.quad = b.quad.transformed(merger.placement_of(b.follows));
+        }
         b.follows = merger.resolve(b.follows);
     }
+    place_wood(merger, wood);
     for (bones, weights) in wood.bones.iter_mut().zip(wood.weights.iter_mut()) {
         let mut merged: Vec<(u32, f32)> = Vec::with_capacity(4);
         for (b, w) in bones.iter().zip(weights.iter()) {
@@ -740,6 +842,210 @@ fn apply(merger: &Merger, cloud: &mut AnimatedBillboardCloud, wood: &mut WoodMes
             let (b, w) = merged.get(k).copied().unwrap_or((first, 0.0));
             bones[k] = b;
             weights[k] = w;
+        }
+    }
+}
+
+/// Moves each wood vertex (and card corner) to the blend of its bones' placements by weight,
+/// as linear blend skinning blends their motions, so a vertex shared by a collapsed node and a
+/// surviving one stays between the two (no crack where a bough meets its branch).
+fn place_wood(merger: &Merger, wood: &mut WoodMesh) {
+    let n = merger.target.len();
+    let placements: Vec<Affine3A> = (0..n).map(|i| merger.placement_of(Some(i))).collect();
+    let moved = |b: u32| {
+        placements
+            .get(b as usize)
+            .filter(|_| b != NO_BONE)
+            .copied()
+            .unwrap_or(Affine3A::IDENTITY)
+    };
+    for (v, (bones, weights)) in wood.bones.iter().zip(&wood.weights).enumerate() {
+        if bones.iter().all(|&b| moved(b) == Affine3A::IDENTITY) {
+            continue;
+        }
+        let (mut p, mut nrm) = (Vec3::ZERO, Vec3::ZERO);
+        for (b, w) in bones.iter().zip(weights) {
+            let t = moved(*b);
+            p += *w * t.transform_point3(wood.positions[v]);
+            if let Some(n0) = wood.normals.get(v) {
+                nrm += *w * t.transform_vector3(*n0);
+            }
+        }
+        wood.positions[v] = p;
+        if let Some(n0) = wood.normals.get_mut(v) {
+            *n0 = nrm.try_normalize().unwrap_or(*n0);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contract::LoopClock;
+    use frond_scene::rig::{Channel, Clip, Interpolation, Node, Property, Trs};
+    use frond_scene::wood::WoodPrimitive;
+    use frond_scene::{Bounds, Vertices};
+    use glam::{Quat, Vec4};
+
+    /// A static root with `children` at (0, 1, 0), each turning about z through `angles`
+    /// (radians) at times 0, ½ and 1 of a one-second clip.
+    fn rig(children: &[[f32; 3]]) -> Rig {
+        let node = |name: &str, parent: Option<usize>, children: Vec<usize>, at: Vec3| Node {
+            name: name.into(),
+            parent,
+            children,
+            rest: Trs {
+                translation: at,
+                ..Trs::IDENTITY
+            },
+            bone: None,
+            extras: None,
+        };
+        let mut nodes = vec![node(
+            "root",
+            None,
+            (1..=children.len()).collect(),
+            Vec3::ZERO,
+        )];
+        let mut channels = Vec::new();
+        for (i, angles) in children.iter().enumerate() {
+            nodes.push(node(&format!("c{i}"), Some(0), Vec::new(), Vec3::Y));
+            channels.push(Channel {
+                node: i + 1,
+                property: Property::Rotation,
+                interpolation: Interpolation::Linear,
+                times: vec![0.0, 0.5, 1.0],
+                values: angles
+                    .iter()
+                    .map(|&a| Vec4::from(Quat::from_rotation_z(a)))
+                    .collect(),
+            });
+        }
+        Rig {
+            order: (0..nodes.len()).collect(),
+            nodes,
+            clips: vec![Clip {
+                name: "wind".into(),
+                start: 0.0,
+                end: 1.0,
+                channels,
+            }],
+        }
+    }
+
+    /// A small triangle near `at` for each `(node, at)`, skinned wholly to that node.
+    fn wood(pieces: &[(u32, Vec3)]) -> WoodMesh {
+        let mut w = WoodMesh::default();
+        for (k, &(node, at)) in pieces.iter().enumerate() {
+            for d in [Vec3::ZERO, 0.1 * Vec3::X, 0.1 * Vec3::Y] {
+                w.positions.push(at + d);
+                w.normals.push(Vec3::Z);
+                w.uvs.push(glam::Vec2::ZERO);
+                w.bones.push([node; 4]);
+                w.weights.push([1.0, 0.0, 0.0, 0.0]);
+            }
+            let base = 3 * k as u32;
+            w.primitives.push(WoodPrimitive {
+                material: 0,
+                indices: vec![base, base + 1, base + 2],
+            });
+        }
+        w
+    }
+
+    /// Runs the joint budget on `wood` over `rig` with `joints`, half a pixel being `half`.
+    fn budget(rig: Rig, wood: &mut WoodMesh, joints: usize, half: f32) -> JointMerges {
+        let clock = LoopClock {
+            clip: Some(0),
+            start: 0.0,
+            period: 1.0,
+            samples: 8,
+        };
+        let tree = Tree {
+            source: "test.glb".into(),
+            rig: rig.clone(),
+            bones: Vec::new(),
+            bindings: Vec::new(),
+            vertices: Vertices::default(),
+            triangles: Vec::new(),
+            materials: Vec::new(),
+            textures: Vec::new(),
+            source_textures: Vec::new(),
+            images: Vec::new(),
+            classification: Vec::new(),
+            foliage_reassigned: 0,
+            warnings: Vec::new(),
+            bounds: Bounds::of([]),
+        };
+        let mut cloud = AnimatedBillboardCloud {
+            method: "cards".into(),
+            epsilon: half,
+            billboards: Vec::new(),
+            atlas: Default::default(),
+            texels_per_unit: 0.0,
+            density_reduced: false,
+            rig,
+            rig_resampled: false,
+            clock: clock.clone(),
+            playable_clips: vec![0],
+        };
+        let worlds = crate::cloud_build::sampled_worlds(&cloud.rig, &clock);
+        let rest_inv: Vec<Mat4> = cloud.rig.rest_world().iter().map(|m| m.inverse()).collect();
+        let frames = RigFrames {
+            worlds: &worlds,
+            rest_inv: &rest_inv,
+        };
+        let cap = JointCap {
+            joints,
+            channels: usize::MAX,
+        };
+        apply_joint_budget(
+            &mut cloud,
+            wood,
+            &tree,
+            &frames,
+            cap,
+            half,
+            BillboardAnimation::Joints,
+        )
+    }
+
+    #[test]
+    fn a_collapsed_node_keeps_the_lean_it_holds_all_loop() {
+        // The child leans 0.5 rad all loop: following the static root at rest would misplace
+        // its wood by about half a unit in every frame; placed where it leans, by nothing.
+        let lean = [0.5, 0.5, 0.5];
+        let at = Vec3::new(0.0, 2.0, 0.0);
+        let mut w = wood(&[(1, at)]);
+        let merges = budget(rig(&[lean]), &mut w, usize::MAX, 0.01);
+        assert_eq!(merges.nodes_collapsed_unseen, 2, "{merges:?}");
+        assert!(merges.max_error < 1e-4, "{merges:?}");
+        let leaned = Vec3::Y + Quat::from_rotation_z(0.5) * (at - Vec3::Y);
+        assert!(
+            w.positions[0].distance(leaned) < 1e-4,
+            "{:?}",
+            w.positions[0]
+        );
+        let normal = Quat::from_rotation_z(0.5) * Vec3::Z;
+        assert!(w.normals[0].distance(normal) < 1e-4);
+        assert_eq!(w.bones[0][0], NO_BONE, "static after the collapse");
+    }
+
+    #[test]
+    fn a_collapsed_node_follows_the_joint_that_moves_like_it() {
+        // Two twigs on one pivot sway alike; one joint is allowed. The root does not move, so
+        // following it would put the collapsed twig's wood off by its sway; the other twig
+        // carries it exactly.
+        let sway = [0.0, 0.4, 0.0];
+        let mut w = wood(&[(1, Vec3::new(0.0, 2.0, 0.0)), (2, Vec3::new(0.3, 2.0, 0.0))]);
+        let before = w.positions.clone();
+        let merges = budget(rig(&[sway, sway]), &mut w, 1, 0.01);
+        assert_eq!(merges.nodes_collapsed_unseen, 1, "{merges:?}");
+        assert!(merges.max_error < 1e-4, "{merges:?}");
+        let followed: Vec<u32> = w.bones.iter().map(|b| b[0]).collect();
+        assert!(followed.iter().all(|&b| b == followed[0] && b != NO_BONE));
+        for (p, q) in w.positions.iter().zip(&before) {
+            assert!(p.distance(*q) < 1e-4, "{p} moved from {q}");
         }
     }
 }
