@@ -230,7 +230,13 @@ fn the_far_end_of_auto_is_an_animated_cloud_of_fft_clusters() {
             error.coverage,
             error.coverage_ratio
         );
-        assert!(ratio > 0.0 && ratio.is_finite(), "it moves: {ratio}");
+        // It moves like the tree: the far end keeps its clusters' sub-pixel sway, which the
+        // covered fraction of its edge pixels shows.
+        assert!(
+            (0.7..=1.3).contains(&ratio),
+            "{}: its coverage changes {ratio:.3}× as much as LOD0's over the loop",
+            far.file
+        );
     }
 }
 

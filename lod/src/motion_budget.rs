@@ -26,11 +26,30 @@ pub struct ScreenBudget {
     pub epsilon: f32,
     /// Joints and channels the LOD may have.
     pub joints: JointCap,
-    /// Keep motion under half a pixel (steps 1b and 2 skipped): an impostor-class LOD, a tree
-    /// a few dozen pixels high whose clusters sway by fractions of a pixel, which the covered
-    /// fraction of its edge pixels shows (spec §5.4, filtered); its joint budget bounds what
-    /// the motion costs either way.
+    /// Keep motion under half a pixel: an impostor-class LOD, a tree a few dozen pixels high
+    /// whose clusters sway by fractions of a pixel, which the covered fraction of its edge
+    /// pixels shows (spec §5.4, filtered). Steps 1b and 2 are skipped, and motion counts as
+    /// unseen, for every later merge, only under [`SUB_PIXEL_MOTION_SHOWN`] of a pixel; its
+    /// joint budget bounds what the motion costs either way.
     pub keep_sub_pixel_motion: bool,
+}
+
+/// The smallest motion, in pixels, that an impostor-class LOD keeps: an edge pixel's covered
+/// fraction changes by about the fraction of a pixel its edge moves, and a sixteenth is about
+/// what 8-bit alpha-to-coverage and 4×4 supersampling resolve.
+pub const SUB_PIXEL_MOTION_SHOWN: f32 = 1.0 / 16.0;
+
+impl ScreenBudget {
+    /// The motion no viewer sees at this LOD (world units): half a pixel, or
+    /// [`SUB_PIXEL_MOTION_SHOWN`] of one where sub-pixel motion is kept. Merges of motion
+    /// under it are made whatever the joint budget.
+    pub fn unseen_motion(&self) -> f32 {
+        if self.keep_sub_pixel_motion {
+            SUB_PIXEL_MOTION_SHOWN * self.pixel
+        } else {
+            0.5 * self.pixel
+        }
+    }
 }
 
 /// What was removed, and why (reported per LOD).
@@ -118,10 +137,11 @@ pub fn apply_budget(
         worlds: &worlds,
         rest_inv: &rest_inv,
     };
-    attach_to_bones(cloud, tree, &rig, half, &mut dropped);
-    share_motions(cloud, half, &mut dropped);
+    let unseen = budget.unseen_motion();
+    attach_to_bones(cloud, tree, &rig, unseen, &mut dropped);
+    share_motions(cloud, unseen, &mut dropped);
     rebind_to_ancestors(cloud, sampled, &rig, budget, &mut dropped);
-    dropped.joints = apply_joint_budget(cloud, wood, tree, &rig, budget.joints, half, animation);
+    dropped.joints = apply_joint_budget(cloud, wood, tree, &rig, budget.joints, unseen, animation);
     let keep: Vec<usize> = wood
         .used_bones()
         .into_iter()
@@ -306,9 +326,10 @@ fn rebind_to_ancestors(
     dropped: &mut Dropped,
 ) {
     let worlds = rig.worlds;
-    let half = 0.5 * budget.pixel;
+    let half = budget.unseen_motion();
     // 3. Bone-bound billboards move to the highest ancestor (or the world) that carries them
-    //    within half a pixel and keeps their triangles' centres within ε of the plane.
+    //    within half a pixel (the far end: a sixteenth) and keeps their triangles' centres
+    //    within ε of the plane.
     let centre_of: std::collections::HashMap<usize, usize> = sampled
         .foliage
         .iter()
