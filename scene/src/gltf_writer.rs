@@ -167,6 +167,24 @@ pub struct GltfBuilder {
     compress: bool,
 }
 
+/// JSON numbers for single-precision values, each written as the shortest decimal that reads
+/// back as the same `f32` (`0.38`, not the `0.3799999952316284` of its double): a reader
+/// parsing it as a float gets the value exactly, and the file is smaller by the digits a
+/// double would add. A non-finite value is `null`, as serde_json writes it.
+fn f32_numbers(v: &[f32]) -> Value {
+    Value::Array(
+        v.iter()
+            .map(|x| {
+                format!("{x}")
+                    .parse::<f64>()
+                    .ok()
+                    .and_then(serde_json::Number::from_f64)
+                    .map_or(Value::Null, Value::Number)
+            })
+            .collect(),
+    )
+}
+
 fn f32s_to_bytes(v: &[f32]) -> impl Iterator<Item = u8> + '_ {
     v.iter().flat_map(|x| x.to_le_bytes())
 }
@@ -342,13 +360,13 @@ impl GltfBuilder {
         let mut n = Map::new();
         n.insert("name".into(), json!(d.name));
         if let Some(t) = d.translation {
-            n.insert("translation".into(), json!(t));
+            n.insert("translation".into(), f32_numbers(&t));
         }
         if let Some(r) = d.rotation {
-            n.insert("rotation".into(), json!(r));
+            n.insert("rotation".into(), f32_numbers(&r));
         }
         if let Some(s) = d.scale {
-            n.insert("scale".into(), json!(s));
+            n.insert("scale".into(), f32_numbers(&s));
         }
         if let Some(m) = d.mesh {
             n.insert("mesh".into(), json!(m));
@@ -953,6 +971,32 @@ pub fn encode_png(width: u32, height: u32, rgba: &[u8]) -> Result<Vec<u8>, image
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn node_transforms_read_back_as_the_same_floats_in_their_shortest_digits() {
+        let values = [
+            0.38f32,
+            -0.0035507511,
+            11.916187,
+            1.0,
+            1e-10,
+            3.4e38,
+            f32::MIN_POSITIVE,
+            -0.47000188,
+        ];
+        let text = serde_json::to_string(&f32_numbers(&values)).expect("json");
+        let back: Vec<f64> = serde_json::from_str(&text).expect("numbers");
+        for (v, b) in values.iter().zip(&back) {
+            assert_eq!(*b as f32, *v, "{text}");
+        }
+        assert!(
+            text.starts_with("[0.38,-0.0035507511,11.916187,1.0,"),
+            "{text}"
+        );
+        let double = serde_json::to_string(&json!(values)).expect("json");
+        assert!(text.len() < double.len(), "{text} against {double}");
+        assert_eq!(f32_numbers(&[f32::NAN]), json!([null]));
+    }
 
     #[test]
     fn byte_weights_sum_to_255_and_round_to_the_nearest() {
