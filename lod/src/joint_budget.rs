@@ -600,6 +600,11 @@ impl Carrying {
         let per_motion = mode == BillboardAnimation::Joints;
         for b in &cloud.billboards {
             if per_motion && b.motion.is_some() {
+                // The billboard is its own joint, parented on its base node; its motion is
+                // relative to that node's frame, which only the node's ancestors share.
+                if let Some(f) = b.follows {
+                    self.rigid[f] = false;
+                }
                 continue;
             }
             match b.follows {
@@ -881,7 +886,8 @@ fn place_wood(merger: &Merger, wood: &mut WoodMesh) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contract::LoopClock;
+    use crate::contract::{AnimatedBillboard, BillboardTexture, LoopClock};
+    use frond_billboard::{Plane, Quad};
     use frond_scene::rig::{Channel, Clip, Interpolation, Node, Property, Trs};
     use frond_scene::wood::WoodPrimitive;
     use frond_scene::{Bounds, Vertices};
@@ -955,6 +961,18 @@ mod tests {
 
     /// Runs the joint budget on `wood` over `rig` with `joints`, half a pixel being `half`.
     fn budget(rig: Rig, wood: &mut WoodMesh, joints: usize, half: f32) -> JointMerges {
+        budget_with(rig, wood, Vec::new(), joints, half).0
+    }
+
+    /// [`budget`] with `billboards` in the cloud (each billboard its own joint, `Joints`
+    /// mode); also the cloud as the budget left it.
+    fn budget_with(
+        rig: Rig,
+        wood: &mut WoodMesh,
+        billboards: Vec<AnimatedBillboard>,
+        joints: usize,
+        half: f32,
+    ) -> (JointMerges, AnimatedBillboardCloud) {
         let clock = LoopClock {
             clip: Some(0),
             start: 0.0,
@@ -980,7 +998,7 @@ mod tests {
         let mut cloud = AnimatedBillboardCloud {
             method: "cards".into(),
             epsilon: half,
-            billboards: Vec::new(),
+            billboards,
             atlas: Default::default(),
             texels_per_unit: 0.0,
             density_reduced: false,
@@ -999,7 +1017,7 @@ mod tests {
             joints,
             channels: usize::MAX,
         };
-        apply_joint_budget(
+        let merges = apply_joint_budget(
             &mut cloud,
             wood,
             &tree,
@@ -1007,7 +1025,8 @@ mod tests {
             cap,
             half,
             BillboardAnimation::Joints,
-        )
+        );
+        (merges, cloud)
     }
 
     #[test]
@@ -1047,5 +1066,46 @@ mod tests {
         for (p, q) in w.positions.iter().zip(&before) {
             assert!(p.distance(*q) < 1e-4, "{p} moved from {q}");
         }
+    }
+    #[test]
+    fn the_base_of_a_billboard_group_with_its_own_motion_stays_where_the_motion_is_relative_to() {
+        // Two twigs sway alike, so either could carry the other's wood exactly. Twig 2 is also
+        // the base of a billboard whose own motion is relative to twig 2's frame: were twig 2
+        // collapsed sideways into twig 1, the billboard would ride twig 1's frame with no
+        // placement. Twig 1 collapses into twig 2 instead, and the billboard keeps its base.
+        let sway = [0.0, 0.4, 0.0];
+        let mut w = wood(&[(1, Vec3::new(0.0, 2.0, 0.0)), (2, Vec3::new(0.3, 2.0, 0.0))]);
+        let plane = Plane {
+            normal: Vec3::Z,
+            offset: 0.0,
+        };
+        let shake = (0..8)
+            .map(|s| Affine3A::from_translation(Vec3::X * 0.5 * (s as f32 * 0.8).sin()))
+            .collect();
+        let billboard = AnimatedBillboard {
+            quad: Quad {
+                plane,
+                center: Vec3::new(0.1, 2.2, 0.0),
+                axis_u: Vec3::X,
+                axis_v: Vec3::Y,
+                half_size: glam::Vec2::splat(0.1),
+            },
+            uv: [glam::Vec2::ZERO; 4],
+            texture: BillboardTexture::Atlas,
+            follows: Some(2),
+            motion: Some(RigidMotion::Sampled(shake)),
+            triangles: Vec::new(),
+        };
+        let (merges, cloud) = budget_with(
+            rig(&[sway, sway]),
+            &mut w,
+            vec![billboard],
+            usize::MAX,
+            0.01,
+        );
+        assert_eq!(merges.nodes_collapsed_unseen, 1, "{merges:?}");
+        assert!(w.bones.iter().all(|b| b[0] == 2), "{:?}", w.bones);
+        assert_eq!(cloud.billboards[0].follows, Some(2));
+        assert!(cloud.billboards[0].motion.is_some());
     }
 }
