@@ -7,7 +7,8 @@
 //! `frond-export` writes, counted by [`count`]). Two merges lower that count:
 //! - **collapse** a rig node: everything it carried (wood vertices, billboards) becomes rigid
 //!   with a surviving node, its nearest surviving ancestor or, when all it carries is rigid
-//!   with it, whichever of the surviving joints nearest it moves most like it. The points are
+//!   with it (no billboard with an own motion relative to its frame, in any animation mode),
+//!   whichever of the surviving joints nearest it moves most like it. The points are
 //!   placed where they sit relative to that node over the loop (the rigid placement that best
 //!   fits their motion, least squares over the loop's samples), not where they sit at rest: a
 //!   bough that leans with the wind all loop keeps its lean, and a twig whose sibling sways as

@@ -21,6 +21,7 @@ use basis_universal::sys;
 use basis_universal::{
     BasisTextureFormat, ColorSpace, Compressor, CompressorParams, Transcoder, UASTC_QUALITY_MIN,
 };
+use rayon::prelude::*;
 
 /// KTX2 file identifier (KTX 2.0 spec §3.1).
 const IDENTIFIER: [u8; 12] = [
@@ -90,7 +91,7 @@ pub fn gpu_bytes(width: u32, height: u32, levels: u32) -> u64 {
 /// transfer, perceptual encoding); otherwise linear (normal maps). `alpha`: the texels carry
 /// alpha (an RGBA channel layout), else RGB.
 ///
-/// Deterministic: UASTC blocks are encoded one by one, whatever the encoder's thread count.
+/// Deterministic: UASTC blocks are encoded one by one, whatever the thread count.
 pub fn encode_uastc(levels: &[Level], srgb: bool, alpha: bool) -> Result<Vec<u8>, Ktx2Error> {
     let blocks = uastc_blocks(levels, srgb)?;
     Ok(uastc_container(
@@ -104,6 +105,11 @@ pub fn encode_uastc(levels: &[Level], srgb: bool, alpha: bool) -> Result<Vec<u8>
 
 /// The UASTC blocks of each level of `levels` (see [`encode_uastc`]), 16 bytes a 4×4 block,
 /// rows of blocks top to bottom.
+///
+/// Each level is encoded in strips of [`STRIP_ROWS`] texel rows, the strips in parallel, each
+/// by an encoder of its own on the calling thread ([`image_blocks`]): UASTC encodes every
+/// block on its own, so a strip of whole block rows gives the level's blocks for those rows,
+/// and the strips' blocks, concatenated, are the level's.
 pub fn uastc_blocks(levels: &[Level], srgb: bool) -> Result<Vec<Vec<u8>>, Ktx2Error> {
     let Some((w0, h0, _)) = levels.first() else {
         return Err(Ktx2Error::Encode("no levels".into()));
@@ -119,6 +125,40 @@ pub fn uastc_blocks(levels: &[Level], srgb: bool) -> Result<Vec<Vec<u8>>, Ktx2Er
             )));
         }
     }
+    let strips: Vec<(usize, u32, u32)> = levels
+        .iter()
+        .enumerate()
+        .flat_map(|(l, (_, h, _))| {
+            (0..h.div_ceil(STRIP_ROWS))
+                .map(move |s| (l, s * STRIP_ROWS, (h - s * STRIP_ROWS).min(STRIP_ROWS)))
+        })
+        .collect();
+    let encoded: Vec<(usize, Vec<u8>)> = strips
+        .into_par_iter()
+        .map(|(l, y0, rows)| {
+            let (w, _, rgba) = &levels[l];
+            let row_bytes = *w as usize * 4;
+            let texels = &rgba[y0 as usize * row_bytes..(y0 + rows) as usize * row_bytes];
+            image_blocks(*w, rows, texels, srgb).map(|b| (l, b))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut blocks = vec![Vec::new(); levels.len()];
+    for (l, b) in encoded {
+        blocks[l].extend_from_slice(&b);
+    }
+    Ok(blocks)
+}
+
+/// Texel rows of the strips a level is encoded in ([`uastc_blocks`]): whole rows of 4×4
+/// blocks, enough texels a strip that an encoder's set-up is a small part of its time.
+const STRIP_ROWS: u32 = 64;
+
+/// The UASTC blocks of one `w`×`h` RGBA8 image, by an encoder that runs on the calling
+/// thread alone. Why not the encoder's own threads: its job pool's destructor raises its stop
+/// flag without the lock its workers wait under, so a worker can miss the wake-up and the
+/// destructor wait for it forever (`basisu::job_pool::~job_pool`, basis_universal 1.16 as
+/// `basis-universal-sys` 0.3.1 vendors it); the caller's strips run in parallel instead.
+fn image_blocks(w: u32, h: u32, rgba: &[u8], srgb: bool) -> Result<Vec<u8>, Ktx2Error> {
     let mut params = CompressorParams::new();
     params.set_basis_format(BasisTextureFormat::UASTC4x4);
     params.set_uastc_quality_level(UASTC_QUALITY_MIN);
@@ -129,16 +169,10 @@ pub fn uastc_blocks(levels: &[Level], srgb: bool) -> Result<Vec<Vec<u8>>, Ktx2Er
     });
     params.set_generate_mipmaps(false);
     params.set_print_status_to_stdout(false);
-    params.source_image_mut(0).init(&levels[0].2, *w0, *h0, 4);
-    for (l, (w, h, rgba)) in levels.iter().enumerate().skip(1) {
-        params
-            .source_mipmap_image_mut(0, (l - 1) as u32)
-            .init(rgba, *w, *h, 4);
-    }
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as u32;
-    let mut compressor = Compressor::new(threads);
-    // SAFETY: the parameters were checked above (one source image, its mip levels of the sizes
-    // the encoder derives, RGBA8 of the stated sizes).
+    params.source_image_mut(0).init(rgba, w, h, 4);
+    // One thread: no job pool thread is started (see above).
+    let mut compressor = Compressor::new(1);
+    // SAFETY: one source image of `w`×`h` RGBA8 texels (the caller's strip of a checked level).
     unsafe {
         if !compressor.init(&params) {
             return Err(Ktx2Error::Encode(
@@ -151,26 +185,22 @@ pub fn uastc_blocks(levels: &[Level], srgb: bool) -> Result<Vec<Vec<u8>>, Ktx2Er
     }
     let basis = compressor.basis_file();
     let transcoder = Transcoder::new();
-    let count = transcoder.image_level_count(basis, 0);
-    if count as usize != levels.len() {
+    let info = transcoder
+        .image_level_info(basis, 0, 0)
+        .ok_or_else(|| Ktx2Error::Encode(format!("a {w}×{h} image's level missing")))?;
+    let start = info.m_rgb_file_ofs as usize;
+    let end = start + info.m_rgb_file_len as usize;
+    let data = basis
+        .get(start..end)
+        .ok_or_else(|| Ktx2Error::Encode("level out of the encoder's file".into()))?;
+    let expected = w.div_ceil(4) as usize * h.div_ceil(4) as usize * BLOCK_BYTES as usize;
+    if data.len() != expected {
         return Err(Ktx2Error::Encode(format!(
-            "{count} levels encoded of {}",
-            levels.len()
+            "{} bytes of blocks for a {w}×{h} image, {expected} expected",
+            data.len()
         )));
     }
-    let mut blocks = Vec::with_capacity(levels.len());
-    for l in 0..count {
-        let info = transcoder
-            .image_level_info(basis, 0, l)
-            .ok_or_else(|| Ktx2Error::Encode(format!("level {l} missing")))?;
-        let start = info.m_rgb_file_ofs as usize;
-        let end = start + info.m_rgb_file_len as usize;
-        let data = basis
-            .get(start..end)
-            .ok_or_else(|| Ktx2Error::Encode(format!("level {l} out of the encoder's file")))?;
-        blocks.push(data.to_vec());
-    }
-    Ok(blocks)
+    Ok(data.to_vec())
 }
 
 /// Packs UASTC levels (level 0 first) as a KTX2 file (KTX 2.0 spec §3): header, level index,
@@ -449,6 +479,38 @@ mod tests {
         }
         // The same input gives the same bytes.
         assert_eq!(file, encode_uastc(&levels, true, true).expect("encodes"));
+    }
+
+    #[test]
+    fn strips_encode_to_the_blocks_of_the_whole_image() {
+        // Over two strips, a last block row cut short (150 rows), texels that vary in every
+        // channel, alpha included: the strips' blocks, concatenated, are the image's.
+        let (w, h) = (40u32, 2 * STRIP_ROWS + 22);
+        let rgba: Vec<u8> = (0..w * h)
+            .flat_map(|i| {
+                let (x, y) = (i % w, i / w);
+                [
+                    (x * 6) as u8,
+                    (y * 3) as u8,
+                    ((x * y) % 251) as u8,
+                    if (x + y) % 7 < 3 { 0 } else { 255 },
+                ]
+            })
+            .collect();
+        let whole = image_blocks(w, h, &rgba, true).expect("encodes");
+        let strips = uastc_blocks(&[(w, h, rgba.clone())], true).expect("encodes");
+        assert_eq!(strips.len(), 1);
+        assert_eq!(whole.len(), 10 * h.div_ceil(4) as usize * 16);
+        assert!(
+            strips[0] == whole,
+            "strip blocks differ from the whole image's"
+        );
+        // A chain's levels each come out whole too.
+        let chain = chain();
+        let blocks = uastc_blocks(&chain, true).expect("encodes");
+        for ((lw, lh, texels), b) in chain.iter().zip(&blocks) {
+            assert!(*b == image_blocks(*lw, *lh, texels, true).expect("encodes"));
+        }
     }
 
     #[test]
