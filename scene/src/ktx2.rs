@@ -106,8 +106,8 @@ pub fn encode_uastc(levels: &[Level], srgb: bool, alpha: bool) -> Result<Vec<u8>
 /// The UASTC blocks of each level of `levels` (see [`encode_uastc`]), 16 bytes a 4×4 block,
 /// rows of blocks top to bottom.
 ///
-/// Each level is encoded in strips of [`STRIP_ROWS`] texel rows, the strips in parallel, each
-/// by an encoder of its own on the calling thread ([`image_blocks`]): UASTC encodes every
+/// Each level is encoded in strips of `STRIP_ROWS` texel rows, the strips in parallel, each
+/// by an encoder of its own on the calling thread (`image_blocks`): UASTC encodes every
 /// block on its own, so a strip of whole block rows gives the level's blocks for those rows,
 /// and the strips' blocks, concatenated, are the level's.
 pub fn uastc_blocks(levels: &[Level], srgb: bool) -> Result<Vec<Vec<u8>>, Ktx2Error> {
