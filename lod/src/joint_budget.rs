@@ -1068,6 +1068,7 @@ mod tests {
             assert!(p.distance(*q) < 1e-4, "{p} moved from {q}");
         }
     }
+
     #[test]
     fn the_base_of_a_billboard_group_with_its_own_motion_stays_where_the_motion_is_relative_to() {
         // Two twigs sway alike, so either could carry the other's wood exactly. Twig 2 is also

@@ -483,7 +483,7 @@ mod tests {
 
     #[test]
     fn strips_encode_to_the_blocks_of_the_whole_image() {
-        // Over two strips, a last block row cut short (150 rows), texels that vary in every
+        // Over three strips, a last block row cut short (150 rows), texels that vary in every
         // channel, alpha included: the strips' blocks, concatenated, are the image's.
         let (w, h) = (40u32, 2 * STRIP_ROWS + 22);
         let rgba: Vec<u8> = (0..w * h)
