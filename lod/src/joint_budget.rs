@@ -500,17 +500,17 @@ impl Merger<'_> {
 
 /// Merges motion in `cloud` (billboards and rig with the tree's node indices, as after the
 /// motion budget's steps) and `wood` (bones as rig node indices) until the LOD has at most
-/// `cap` joints and channels, applying every merge under `half` world units (half a pixel) on
-/// the way. `frames` is the cloud rig's motion at the loop's samples; `mode` says how the
-/// billboards are written (own motions are attached to nodes only when they are joints).
-/// Returns what it merged.
+/// `cap` joints and channels, applying every merge under `unseen` world units on the way (the
+/// motion no viewer sees, [`crate::motion_budget::ScreenBudget::unseen_motion`]). `frames` is
+/// the cloud rig's motion at the loop's samples; `mode` says how the billboards are written
+/// (own motions are attached to nodes only when they are joints). Returns what it merged.
 pub fn apply_joint_budget(
     cloud: &mut AnimatedBillboardCloud,
     wood: &mut WoodMesh,
     tree: &Tree,
     frames: &RigFrames,
     cap: JointCap,
-    half: f32,
+    unseen: f32,
     mode: BillboardAnimation,
 ) -> JointMerges {
     let n = cloud.rig.nodes.len();
@@ -538,7 +538,7 @@ pub fn apply_joint_budget(
         static_used: carrying.static_used,
         channels,
     };
-    let merges = merger.merge_within(cloud, cap, half);
+    let merges = merger.merge_within(cloud, cap, unseen);
     apply(&merger, cloud, wood);
     merges
 }
@@ -655,20 +655,20 @@ fn error_key(e: f32) -> u32 {
 type Attachment = (Option<usize>, Affine3A);
 
 impl Merger<'_> {
-    /// Applies merges smallest error first: every one under `half`, then more while the count
+    /// Applies merges smallest error first: every one under `unseen`, then more while the count
     /// is over `cap`. Returns what was merged.
     fn merge_within(
         &mut self,
         cloud: &AnimatedBillboardCloud,
         cap: JointCap,
-        half: f32,
+        unseen: f32,
     ) -> JointMerges {
         let mut merges = JointMerges::default();
         let mut heap = self.initial_queue(cloud);
         let mut current = self.count(cloud);
         while let Some(Reverse((k, m))) = heap.pop() {
             let over = current.joints > cap.joints || current.channels > cap.channels;
-            if !over && f32::from_bits(k) >= half {
+            if !over && f32::from_bits(k) >= unseen {
                 break;
             }
             // Recompute: earlier merges may have grown this one's error.
@@ -679,12 +679,12 @@ impl Merger<'_> {
                 heap.push(Reverse((error_key(e), m)));
                 continue;
             }
-            if !over && e >= half {
+            if !over && e >= unseen {
                 break;
             }
             match m {
                 Merge::Collapse(i) => {
-                    self.collapse(i, choice, e < half, &mut heap, &mut merges);
+                    self.collapse(i, choice, e < unseen, &mut heap, &mut merges);
                 }
                 Merge::Attach(g) => {
                     self.attach(cloud, g, choice, &mut heap);
@@ -748,7 +748,8 @@ impl Merger<'_> {
     }
 
     /// Collapses node `i` into the node of `to` (the world when none), which takes over what
-    /// it carried at `to`'s placement; `unseen` when the error is under half a pixel.
+    /// it carried at `to`'s placement; `unseen` when the error is under the motion no viewer
+    /// sees.
     fn collapse(
         &mut self,
         i: usize,

@@ -229,11 +229,12 @@ fn attach_to_bones(
     cloud: &mut AnimatedBillboardCloud,
     tree: &Tree,
     rig: &RigFrames,
-    half: f32,
+    unseen: f32,
     dropped: &mut Dropped,
 ) {
     let worlds = rig.worlds;
-    // 2a. Own motion within half a pixel of a bone's: follow the bone.
+    // 2a. Own motion within `unseen` (half a pixel; the far end: a sixteenth) of a bone's:
+    //     follow the bone.
     let nodes = &cloud.rig.nodes;
     let attach: Vec<Option<(usize, Affine3A)>> = cloud
         .billboards
@@ -267,7 +268,7 @@ fn attach_to_bones(
             candidates
                 .into_iter()
                 .map(|c| (fit(c), c))
-                .filter(|((d, _), _)| *d < half)
+                .filter(|((d, _), _)| *d < unseen)
                 .min_by(|a, b| a.0.0.total_cmp(&b.0.0).then(a.1.cmp(&b.1)))
                 .map(|((_, q), c)| (c, q))
         })
@@ -283,8 +284,8 @@ fn attach_to_bones(
 }
 
 /// Step 2b: motions within half a pixel of an earlier billboard's are shared.
-fn share_motions(cloud: &mut AnimatedBillboardCloud, half: f32, dropped: &mut Dropped) {
-    // 2b. Motions within half a pixel of an earlier one are shared (greedy, in billboard
+fn share_motions(cloud: &mut AnimatedBillboardCloud, unseen: f32, dropped: &mut Dropped) {
+    // 2b. Motions within `unseen` of an earlier one are shared (greedy, in billboard
     //     order, so the result does not depend on threads).
     let mut reps: Vec<usize> = Vec::new();
     for i in 0..cloud.billboards.len() {
@@ -302,7 +303,7 @@ fn share_motions(cloud: &mut AnimatedBillboardCloud, half: f32, dropped: &mut Dr
                         && (0..n).all(|s| {
                             let (a, b) = (own.at(s, n), m.at(s, n));
                             corners.iter().all(|c| {
-                                a.transform_point3(*c).distance(b.transform_point3(*c)) < half
+                                a.transform_point3(*c).distance(b.transform_point3(*c)) < unseen
                             })
                         })
                 })
@@ -326,7 +327,7 @@ fn rebind_to_ancestors(
     dropped: &mut Dropped,
 ) {
     let worlds = rig.worlds;
-    let half = budget.unseen_motion();
+    let unseen = budget.unseen_motion();
     // 3. Bone-bound billboards move to the highest ancestor (or the world) that carries them
     //    within half a pixel (the far end: a sixteenth) and keeps their triangles' centres
     //    within ε of the plane.
@@ -355,7 +356,7 @@ fn rebind_to_ancestors(
                     let c = rig.carry(cand, s);
                     if corners
                         .iter()
-                        .any(|p| a.transform_point3(*p).distance(c.transform_point3(*p)) >= half)
+                        .any(|p| a.transform_point3(*p).distance(c.transform_point3(*p)) >= unseen)
                     {
                         return false;
                     }
