@@ -404,6 +404,77 @@ fn preview_bytes_do_not_depend_on_the_run_or_the_thread_count() {
     assert_eq!(pa, pb, "the pictures, byte for byte");
 }
 
+/// `frond lod` draws LOD0's pictures while it writes the files, the others while it measures:
+/// its pictures are the bytes the library's one-shot [`frond_preview::lod_pictures`] draws from
+/// the written files read back, and LOD0's pictures drawn for other sizes are drawn again.
+#[test]
+fn lod0_pictures_drawn_early_are_the_pictures_drawn_at_once() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let out = tmp.path().join("out");
+    let report = sample_run(&out, &["--no-measure"]);
+    let import = |path: &Path| {
+        frond_scene::import(
+            path,
+            &frond_scene::ImportOptions {
+                allow_empty: true,
+                ..Default::default()
+            },
+        )
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    };
+    let input = import(&root().join("samples/sapling.glb"));
+    let read_back: Vec<_> = (report.lods.iter().skip(1))
+        .map(|e| import(&out.join(&e.file)))
+        .collect();
+    let lods: Vec<&frond_scene::Tree> = std::iter::once(&input).chain(&read_back).collect();
+    let combined = std::fs::read(out.join(&report.combined)).expect("combined file");
+    let renderer = frond_render::Renderer::new().expect("renderer");
+    let req = frond_preview::LodPreviewRequest {
+        report: &report,
+        lods: &lods,
+        combined: &combined,
+        resolution: report.switching.as_ref().expect("switch values").resolution,
+        // `frond lod`'s flip-book frames.
+        flip_frames: 6,
+        viewer: None,
+    };
+    let written = |files: Vec<(String, Vec<u8>)>| {
+        let pictures: Vec<(String, Vec<u8>)> = (files.into_iter())
+            .filter(|(rel, _)| rel.starts_with("sapling_preview/"))
+            .collect();
+        for (rel, bytes) in &pictures {
+            assert_eq!(
+                &std::fs::read(out.join(rel)).expect("written picture"),
+                bytes,
+                "{rel}"
+            );
+        }
+        pictures.len()
+    };
+    let at_once = frond_preview::lod_pictures(&renderer, &req).expect("pictures");
+    let page = frond_preview::lod_page(&req, at_once).expect("page");
+    assert!(
+        written(page.files) >= 10,
+        "stills, differences and flip-books"
+    );
+    // LOD0's drawn for other sizes than the report's: drawn again, the same bytes.
+    let mut other = frond_preview::Lod0Request {
+        input: &input,
+        name: &report.name,
+        clip: report.clip.as_deref(),
+        period: report.period,
+        screen_heights: report.lods.iter().map(|e| e.screen_height).collect(),
+        fov_deg: report.switching.as_ref().expect("switch values").fov_deg,
+        resolution: req.resolution,
+        flip_frames: 6,
+    };
+    other.screen_heights[1] = other.screen_heights[1].map(|h| 0.5 * h);
+    let lod0 = frond_preview::lod0_pictures(&renderer, &other).expect("LOD0's pictures");
+    let after = frond_preview::lod_pictures_after(&renderer, &req, lod0).expect("pictures");
+    let page = frond_preview::lod_page(&req, after).expect("page");
+    assert!(written(page.files) >= 10);
+}
+
 #[test]
 fn no_preview_writes_no_page() {
     let tmp = tempfile::tempdir().expect("tmp");

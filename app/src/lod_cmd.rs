@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use frond_export::textures::sanitize;
 use frond_export::{AnimationMode, ChainFileOptions, chain_files, msft_coverages};
-use frond_lod::chain::chain_levels;
+use frond_lod::chain::{Chain, chain_levels};
 use frond_lod::report::MeasuredError;
 use frond_lod::report::report_name;
 use frond_lod::{ChainRequest, LOD_REPORT_SCHEMA_VERSION, LodReport, ReportTimings, build_chain};
@@ -116,57 +116,40 @@ pub fn run_lod(
     })?;
     prepared.with_context(|| format!("{path}: rendering the input to measure the LODs"))?;
     progress("writing files");
-    let written = chain_files(tree, &chain, &file_options(tree, req, &name))
-        .map_err(|(what, e)| anyhow::Error::new(e).context(format!("{path}: {what}")))?;
-    let t_written = Instant::now();
-    let total = (t_written - t_start).as_secs_f64();
-    let mut report = LodReport {
-        schema_version: LOD_REPORT_SCHEMA_VERSION,
-        input: path,
-        name: name.clone(),
-        clip: chain.sampled.clip.clone(),
+    // LOD0's preview pictures need nothing the files give: drawn while the files are written
+    // and read back, on the core that leaves idle.
+    let lod0_request = frond_preview::Lod0Request {
+        input: tree,
+        name: &name,
+        clip: chain.sampled.clip.as_deref(),
         period: chain.sampled.period,
-        samples: chain.sampled.samples(),
-        seed: req.chain.seed,
-        pixel_error: req.chain.pixel_error,
-        animation: req.animation.report_name(),
-        tree_height: tree.height(),
-        switching: None,
-        lods: written.entries,
-        combined: written.combined,
-        files: written.files.iter().map(|(p, _)| p.clone()).collect(),
-        warnings: tree.warnings.clone(),
-        timings_s: ReportTimings {
-            sample: chain.t_sample,
-            build: chain.t_build,
-            // From the build's end and the input's renders' (the later), to the files.
-            export: (t_written - t_joined).as_secs_f64(),
-            total,
-            ..Default::default()
+        screen_heights: std::iter::once(None)
+            .chain(levels.iter().map(|l| Some(l.screen_height)))
+            .collect(),
+        fov_deg: req.fov,
+        resolution: req.resolution,
+        flip_frames: PREVIEW_FLIP_FRAMES,
+    };
+    let (files, lod0_pictures) = rayon::join(
+        || {
+            let times = (t_start, t_joined, measure.is_some().then_some(t_prepare));
+            write_and_read_back(tree, req, &chain, &name, &mut set, times)
         },
-    };
-    if measure.is_some() {
-        // Seconds drawing the input's renders for the measure, alongside the build.
-        report.timings_s.measure_input = Some(t_prepare);
-    }
-    report.files.push(report_name(&name));
-    fill_switching(tree, req, &mut report);
-    for (rel, bytes) in &written.files {
-        set.stage(rel, bytes)?;
-    }
-    read_back_costs(&set, &mut report)?;
-    let read_back = if req.measure.is_some() || req.preview {
-        read_back_lods(&set, &report)?
-    } else {
-        Vec::new()
-    };
+        || {
+            req.preview.then(|| {
+                frond_preview::lod0_pictures(renderer, &lod0_request)
+                    .with_context(|| format!("{path}: rendering the preview page"))
+            })
+        },
+    );
+    let (written_files, mut report, read_back) = files?;
+    let lod0_pictures = lod0_pictures.transpose()?;
     // LOD0 is the input itself (its file passes the input through): not read again.
     let lods: Vec<&Tree> = std::iter::once(tree).chain(&read_back).collect();
     // The preview's pictures do not depend on the measured errors (its page's text does):
     // they are rendered while the LODs are measured, from the report as it stands.
     let snapshot = req.preview.then(|| report.clone());
-    let combined = written
-        .files
+    let combined = written_files
         .iter()
         .find(|(rel, _)| *rel == report.combined)
         .map(|(_, bytes)| bytes.as_slice())
@@ -192,7 +175,7 @@ pub fn run_lod(
         &mut measure,
         &lods,
         &mut report,
-        snapshot.as_ref(),
+        snapshot.as_ref().zip(lod0_pictures),
         &preview_request,
     )?;
     if let Some(pictures) = pictures {
@@ -209,6 +192,68 @@ pub fn run_lod(
     let json = serde_json::to_vec_pretty(&report).context("serialising the report")?;
     set.commit(&json)?;
     Ok(report)
+}
+
+/// The chain's files as written (relative path, bytes), the report as far as they give it and
+/// the LODs read back ([`write_and_read_back`]).
+type WrittenChain = (Vec<(String, Vec<u8>)>, LodReport, Vec<Tree>);
+
+/// Writes the chain's files into `set` and reads them back: the files, the report as far as
+/// they give it (their costs, the switch values) and the LODs read back (when the measure or
+/// the preview needs them). `times`: the run's start, the build's end and the seconds of the
+/// input's renders for the measure (when measured).
+fn write_and_read_back(
+    tree: &Tree,
+    req: &LodRequest,
+    chain: &Chain,
+    name: &str,
+    set: &mut OutputSet,
+    (t_start, t_joined, t_prepare): (Instant, Instant, Option<f64>),
+) -> Result<WrittenChain> {
+    let path = tree.source.display().to_string();
+    let written = chain_files(tree, chain, &file_options(tree, req, name))
+        .map_err(|(what, e)| anyhow::Error::new(e).context(format!("{path}: {what}")))?;
+    let t_written = Instant::now();
+    let total = (t_written - t_start).as_secs_f64();
+    let mut report = LodReport {
+        schema_version: LOD_REPORT_SCHEMA_VERSION,
+        input: path,
+        name: name.to_string(),
+        clip: chain.sampled.clip.clone(),
+        period: chain.sampled.period,
+        samples: chain.sampled.samples(),
+        seed: req.chain.seed,
+        pixel_error: req.chain.pixel_error,
+        animation: req.animation.report_name(),
+        tree_height: tree.height(),
+        switching: None,
+        lods: written.entries,
+        combined: written.combined,
+        files: written.files.iter().map(|(p, _)| p.clone()).collect(),
+        warnings: tree.warnings.clone(),
+        timings_s: ReportTimings {
+            sample: chain.t_sample,
+            build: chain.t_build,
+            // From the build's end and the input's renders' (the later), to the files.
+            export: (t_written - t_joined).as_secs_f64(),
+            total,
+            ..Default::default()
+        },
+    };
+    // Seconds drawing the input's renders for the measure, alongside the build.
+    report.timings_s.measure_input = t_prepare;
+    report.files.push(report_name(name));
+    fill_switching(tree, req, &mut report);
+    for (rel, bytes) in &written.files {
+        set.stage(rel, bytes)?;
+    }
+    read_back_costs(set, &mut report)?;
+    let read_back = if req.measure.is_some() || req.preview {
+        read_back_lods(set, &report)?
+    } else {
+        Vec::new()
+    };
+    Ok((written.files, report, read_back))
 }
 
 /// How the chain's files are written, as the request asks.
@@ -248,7 +293,7 @@ fn measure_and_draw<'a, 'r>(
     measure: &mut Option<EvalContext<'r>>,
     lods: &[&Tree],
     report: &mut LodReport,
-    snapshot: Option<&'a LodReport>,
+    snapshot: Option<(&'a LodReport, frond_preview::Lod0Pictures)>,
     preview_request: &(dyn Fn(&'a LodReport) -> frond_preview::LodPreviewRequest<'a> + Sync),
 ) -> Result<Option<Result<frond_preview::lod_page::LodPreviewPictures>>> {
     let input_path = tree.source.display().to_string();
@@ -267,8 +312,8 @@ fn measure_and_draw<'a, 'r>(
             Ok(())
         },
         || {
-            snapshot.map(|snapshot| {
-                frond_preview::lod_pictures(renderer, &preview_request(snapshot))
+            snapshot.map(|(snapshot, lod0)| {
+                frond_preview::lod_pictures_after(renderer, &preview_request(snapshot), lod0)
                     .with_context(|| format!("{input_path}: rendering the preview page"))
             })
         },

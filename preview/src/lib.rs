@@ -21,6 +21,7 @@ pub mod viewer;
 
 pub use error::PreviewError;
 pub use lod_page::{
-    LodPreviewPictures, LodPreviewRequest, PreviewFiles, lod_page, lod_pictures, preview_name,
+    Lod0Pictures, Lod0Request, LodPreviewPictures, LodPreviewRequest, PreviewFiles, lod_page,
+    lod_pictures, lod_pictures_after, lod0_pictures, preview_name,
 };
 pub use viewer::{VIEWER_DIR, viewer_files};

@@ -10,7 +10,7 @@ use frond_lod::report::MeasuredError;
 use frond_lod::switching::SwitchValues;
 use frond_lod::{LodEntry, LodReport};
 use frond_metrics::{DEFAULT_FOV_DEG, candidate_clip, samples_per_side};
-use frond_render::{DrawScene, Frame, PosedTree, Renderer, TreeParts};
+use frond_render::{Frame, PosedTree, Renderer, TreeParts};
 use frond_scene::{FileCost, Tree};
 
 use crate::error::PreviewError;
@@ -95,6 +95,136 @@ pub struct LodPreviewPictures {
     seconds: f64,
 }
 
+/// What LOD0's pictures for the page of a `frond lod` run are drawn from: all known once the
+/// chain is built, before its files are written ([`lod0_pictures`]).
+pub struct Lod0Request<'a> {
+    /// LOD0, the input (its rest bounds frame every picture's camera).
+    pub input: &'a Tree,
+    /// The run's tree name (the report's `name`): the pictures' folder is `<name>_preview`.
+    pub name: &'a str,
+    /// The run's clip (the report's `clip`).
+    pub clip: Option<&'a str>,
+    /// The loop's period in seconds (the report's `period`).
+    pub period: f32,
+    /// Each LOD's screen height in the report's order, LOD0's first (None where a LOD has
+    /// none).
+    pub screen_heights: Vec<Option<f32>>,
+    /// The switch values' field of view, degrees.
+    pub fov_deg: f32,
+    /// The switch values' image height (`--resolution`).
+    pub resolution: f32,
+    /// Frames of the wind flip-books.
+    pub flip_frames: u32,
+}
+
+impl<'a> Lod0Request<'a> {
+    /// The request of `req`'s LOD0 pictures, from its report.
+    fn of(req: &LodPreviewRequest<'a>) -> Result<Lod0Request<'a>, PreviewError> {
+        let report = req.report;
+        let Some(&input) = req.lods.first() else {
+            return Err(PreviewError::LodCount {
+                report: report.lods.len(),
+                given: 0,
+            });
+        };
+        let (fov_deg, resolution) = report
+            .switching
+            .map_or((DEFAULT_FOV_DEG, req.resolution), |v| {
+                (v.fov_deg, v.resolution)
+            });
+        Ok(Lod0Request {
+            input,
+            name: &report.name,
+            clip: report.clip.as_deref(),
+            period: report.period,
+            screen_heights: report.lods.iter().map(|e| e.screen_height).collect(),
+            fov_deg,
+            resolution,
+            flip_frames: req.flip_frames,
+        })
+    }
+
+    /// The height LOD `k`'s pictures are drawn at: its screen height; LOD0's, the first LOD's.
+    fn height(&self, k: usize) -> f32 {
+        let lod0 = (self.screen_heights.iter().find_map(|h| *h)).unwrap_or(LOD0_HEIGHT);
+        self.screen_heights[k].unwrap_or(lod0)
+    }
+
+    /// The pictures' view of the run.
+    fn view(&self) -> PageView<'a> {
+        PageView {
+            input: self.input,
+            dir: format!("{}_preview", self.name),
+            clip: self.clip.map(str::to_string),
+            period: self.period,
+            fov_deg: self.fov_deg,
+            resolution: self.resolution,
+            flip_frames: self.flip_frames,
+        }
+    }
+}
+
+/// LOD0's pictures for the page of a `frond lod` run ([`lod0_pictures`]): its own still and
+/// flip-book, and its still at every LOD's size, the reference each LOD is compared with.
+pub struct Lod0Pictures {
+    pictures: LodPictures,
+    /// LOD0's still at LOD `k`'s size, for each `k` (the first: its own).
+    references: Vec<FilteredStill>,
+    /// The screen heights they were drawn for ([`Lod0Request::screen_heights`]).
+    screen_heights: Vec<Option<f32>>,
+    seconds: f64,
+}
+
+/// Renders LOD0's pictures for the page of a `frond lod` run: they need nothing the chain's
+/// files give, so `frond lod` draws them while it writes and reads back the files, on the
+/// cores that leaves idle ([`lod_pictures_after`] draws the rest). Deterministic.
+pub fn lod0_pictures(renderer: &Renderer, req: &Lod0Request) -> Result<Lod0Pictures, PreviewError> {
+    let t0 = Instant::now();
+    let view = req.view();
+    let lod0 = req.input;
+    // LOD0 at the start of its clip: the reference every LOD's still is compared with.
+    let (clip0, start0) = clip_start(lod0, view.clip.as_deref());
+    let mut posed = PosedTree::new(lod0, clip0, start0, TreeParts::All);
+    let drawer = Drawer::new(lod0, posed.scene())?;
+    let (pictures, still) = lod_pictures_of(
+        renderer,
+        &view,
+        LodToDraw {
+            tree: lod0,
+            k: 0,
+            h: req.height(0),
+            atlas: None,
+        },
+        &mut posed,
+        &drawer,
+        None,
+    )?;
+    // LOD0's still at each LOD's size: the one just drawn where the size is its own (the same
+    // pose, camera and size: the same picture).
+    let mut references = vec![still];
+    for k in 1..req.screen_heights.len() {
+        let (camera, size) = preview_view(lod0, req.height(k), view.fov_deg, view.resolution)?;
+        let samples = supersampling(req.height(k), size, renderer.max_dimension());
+        let same = |f: &&FilteredStill| {
+            (f.width, f.height, f.samples_per_side) == (size.0, size.1, samples)
+        };
+        let still = match references.iter().find(same) {
+            Some(still) => still.clone(),
+            None => {
+                posed.pose(clip0, start0);
+                drawer.still(posed.scene(), &camera, size, samples, "still")?
+            }
+        };
+        references.push(still);
+    }
+    Ok(Lod0Pictures {
+        pictures,
+        references,
+        screen_heights: req.screen_heights.clone(),
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
 /// Renders the pictures of the page of a `frond lod` run: what they show does not depend on
 /// the measured errors (only the page's text does), so `frond lod` renders them while it
 /// measures, from a report whose errors are not filled yet, and [`lod_page`] writes the page
@@ -102,6 +232,18 @@ pub struct LodPreviewPictures {
 pub fn lod_pictures(
     renderer: &Renderer,
     req: &LodPreviewRequest,
+) -> Result<LodPreviewPictures, PreviewError> {
+    let lod0 = lod0_pictures(renderer, &Lod0Request::of(req)?)?;
+    lod_pictures_after(renderer, req, lod0)
+}
+
+/// [`lod_pictures`] with LOD0's drawn already ([`lod0_pictures`], for the same run): the
+/// other LODs' pictures, one LOD at a time (the renderer spreads each frame over the threads).
+/// LOD0's are drawn again if they were drawn for other sizes than `req`'s report gives.
+pub fn lod_pictures_after(
+    renderer: &Renderer,
+    req: &LodPreviewRequest,
+    lod0: Lod0Pictures,
 ) -> Result<LodPreviewPictures, PreviewError> {
     let t0 = Instant::now();
     let report = req.report;
@@ -111,43 +253,46 @@ pub fn lod_pictures(
             given: req.lods.len(),
         });
     }
-    let dir = format!("{}_preview", report.name);
-    let Some(&lod0) = req.lods.first() else {
-        return Err(PreviewError::LodCount {
-            report: 0,
-            given: 0,
-        });
+    let lod0_req = Lod0Request::of(req)?;
+    let lod0 = if lod0.screen_heights == lod0_req.screen_heights {
+        lod0
+    } else {
+        lod0_pictures(renderer, &lod0_req)?
     };
-    // LOD0 at the start of its clip: the reference every LOD's still is compared with.
-    let (clip0, start0) = clip_start(lod0, report.clip.as_deref());
-    let reference = PosedTree::new(lod0, clip0, start0, TreeParts::All);
-    let drawer0 = Drawer::new(lod0, reference.scene())?;
-    let lod0_height = report
-        .lods
-        .iter()
-        .find_map(|e| e.screen_height)
-        .unwrap_or(LOD0_HEIGHT);
-    // One LOD's pictures at a time: the renderer spreads each frame over the threads. LOD0's
-    // still is the reference of the LODs drawn at its size (the same pose, camera and size:
-    // the same picture), rendered once.
+    let view = lod0_req.view();
+    let Lod0Pictures {
+        pictures: mut first,
+        references,
+        seconds,
+        ..
+    } = lod0;
+    // LOD0 is the input, with no atlas of its own; drawn if a report ever gives it one.
+    if let Some(a) = report.lods[0].atlas
+        && let Some(picture) = atlas_png(req.lods[0], a, ATLAS_SIDE)?
+    {
+        first
+            .files
+            .push((format!("{}/lod0_atlas.png", view.dir), picture.png));
+        first.atlas = Some(picture.size);
+    }
     let mut pictures: Vec<LodPictures> = Vec::with_capacity(req.lods.len());
-    let mut lod0_still: Option<FilteredStill> = None;
-    for k in 0..req.lods.len() {
-        let h = report.lods[k].screen_height.unwrap_or(lod0_height);
-        let reference = Reference {
-            scene: reference.scene(),
-            still: lod0_still.as_ref(),
-            drawer: &drawer0,
+    pictures.push(first);
+    for (k, (&tree, reference)) in req.lods.iter().zip(&references).enumerate().skip(1) {
+        let (clip, start) = clip_start(tree, view.clip.as_deref());
+        let mut posed = PosedTree::new(tree, clip, start, TreeParts::All);
+        let drawer = Drawer::new(tree, posed.scene())?;
+        let lod = LodToDraw {
+            tree,
+            k,
+            h: lod0_req.height(k),
+            atlas: report.lods[k].atlas,
         };
-        let (p, still) = lod_pictures_of(renderer, req, reference, k, h, &dir)?;
-        if k == 0 {
-            lod0_still = Some(still);
-        }
+        let (p, _) = lod_pictures_of(renderer, &view, lod, &mut posed, &drawer, Some(reference))?;
         pictures.push(p);
     }
     Ok(LodPreviewPictures {
         pictures,
-        seconds: t0.elapsed().as_secs_f64(),
+        seconds: seconds + t0.elapsed().as_secs_f64(),
     })
 }
 
@@ -216,34 +361,42 @@ pub fn lod_page(
     })
 }
 
-/// LOD `k`'s still at `h` pixels (and LOD0's at the same size, with the difference, for k > 0),
-/// its flip-book and its atlas.
-fn lod_pictures_of(
-    renderer: &Renderer,
-    req: &LodPreviewRequest,
-    reference: Reference,
+/// How a run's pictures are seen: the camera's framing of LOD0 and the loop they play.
+struct PageView<'a> {
+    input: &'a Tree,
+    /// The pictures' folder.
+    dir: String,
+    clip: Option<String>,
+    period: f32,
+    fov_deg: f32,
+    resolution: f32,
+    flip_frames: u32,
+}
+
+/// One LOD to draw: LOD `k`, `tree`, at `h` pixels, with its atlas's size.
+struct LodToDraw<'a> {
+    tree: &'a Tree,
     k: usize,
     h: f32,
-    dir: &str,
+    atlas: Option<[u32; 2]>,
+}
+
+/// LOD `k`'s still at `h` pixels (and LOD0's at the same size, `reference`, with the
+/// difference, for k > 0), its flip-book and its atlas, drawn with `drawer` from `posed` (the
+/// LOD at the start of its clip).
+fn lod_pictures_of(
+    renderer: &Renderer,
+    view: &PageView,
+    lod: LodToDraw,
+    posed: &mut PosedTree,
+    drawer: &Drawer,
+    reference: Option<&FilteredStill>,
 ) -> Result<(LodPictures, FilteredStill), PreviewError> {
-    let report = req.report;
-    let tree = req.lods[k];
-    let (clip, start) = clip_start(tree, report.clip.as_deref());
-    let (fov, resolution) = report
-        .switching
-        .map_or((DEFAULT_FOV_DEG, req.resolution), |v| {
-            (v.fov_deg, v.resolution)
-        });
-    let (camera, size) = preview_view(req.lods[0], h, fov, resolution)?;
+    let LodToDraw { tree, k, h, atlas } = lod;
+    let dir = &view.dir;
+    let (clip, start) = clip_start(tree, view.clip.as_deref());
+    let (camera, size) = preview_view(view.input, h, view.fov_deg, view.resolution)?;
     let camera = &camera;
-    let mut posed = PosedTree::new(tree, clip, start, TreeParts::All);
-    let own;
-    let drawer = if k == 0 {
-        reference.drawer
-    } else {
-        own = Drawer::new(tree, posed.scene())?;
-        &own
-    };
     // Each pixel K×K samples as the coverage metric takes them: the stills are what a player
     // sees, their difference is judged as the metric judges.
     let samples = supersampling(h, size, renderer.max_dimension());
@@ -251,21 +404,7 @@ fn lod_pictures_of(
     let mut files = Vec::new();
     let mut diff = PixelDifference::default();
     let rect;
-    if k > 0 {
-        let rendered;
-        let reference = match reference
-            .still
-            .filter(|f| (f.width, f.height, f.samples_per_side) == (size.0, size.1, samples))
-        {
-            Some(still) => still,
-            None => {
-                rendered =
-                    reference
-                        .drawer
-                        .still(reference.scene, camera, size, samples, "still")?;
-                &rendered
-            }
-        };
+    if let Some(reference) = reference {
         rect = still.covered_box(Some(reference), 2);
         let (rgba, d) = difference(reference, &still);
         diff = d;
@@ -299,8 +438,13 @@ fn lod_pictures_of(
             "a still",
         )?,
     ));
-    let (flip_camera, flip_size) = preview_view(req.lods[0], h.min(FLIP_HEIGHT), fov, resolution)?;
-    let n = flip_frames(req.flip_frames, tree.triangles.len());
+    let (flip_camera, flip_size) = preview_view(
+        view.input,
+        h.min(FLIP_HEIGHT),
+        view.fov_deg,
+        view.resolution,
+    )?;
+    let n = flip_frames(view.flip_frames, tree.triangles.len());
     let flip_k = samples_within(
         flip_size,
         samples_per_side(h.min(FLIP_HEIGHT)),
@@ -308,22 +452,22 @@ fn lod_pictures_of(
     );
     let frames: Vec<Frame> = (0..n)
         .map(|i| {
-            let t = start + report.period * i as f32 / n as f32;
+            let t = start + view.period * i as f32 / n as f32;
             let scene = posed.pose(clip, t);
             drawer.frame(scene, &flip_camera, flip_size, flip_k, "flip-book frame")
         })
         .collect::<Result<_, _>>()?;
-    let delay = (1000.0 * report.period / n as f32)
+    let delay = (1000.0 * view.period / n as f32)
         .round()
         .clamp(10.0, 2000.0) as u16;
     let flip = apng(&frames, delay, "a flip-book")?;
     files.push((format!("{dir}/lod{k}_wind.png"), flip.png));
-    let mut atlas = None;
-    if let Some(a) = report.lods[k].atlas
+    let mut atlas_size = None;
+    if let Some(a) = atlas
         && let Some(picture) = atlas_png(tree, a, ATLAS_SIDE)?
     {
         files.push((format!("{dir}/lod{k}_atlas.png"), picture.png));
-        atlas = Some(picture.size);
+        atlas_size = Some(picture.size);
     }
     let pictures = LodPictures {
         files,
@@ -332,7 +476,7 @@ fn lod_pictures_of(
         samples_per_side: samples,
         flip: flip.size,
         flip_frames: n,
-        atlas,
+        atlas: atlas_size,
         difference: diff,
     };
     Ok((pictures, still))
@@ -343,16 +487,6 @@ fn lod_pictures_of(
 fn flip_frames(asked: u32, triangles: usize) -> u32 {
     let affordable = (FLIP_TRIANGLE_FRAMES / triangles.max(1)).min(u32::MAX as usize) as u32;
     asked.min(affordable.max(MIN_FLIP_FRAMES)).max(1)
-}
-
-/// What LOD `k > 0` is compared with: LOD0's scene at the start of its clip, and its still
-/// when already rendered (at LOD0's own size: reused where LOD `k` is drawn at that size).
-#[derive(Clone, Copy)]
-struct Reference<'a> {
-    scene: &'a DrawScene,
-    still: Option<&'a FilteredStill>,
-    /// LOD0's drawer (its textures prepared once).
-    drawer: &'a Drawer<'a>,
 }
 
 /// The LOD's clip of the run's clip `name` (as `frond eval` picks it) and the time it starts.
