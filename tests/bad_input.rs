@@ -1,7 +1,7 @@
 //! Bad input: a one-line error naming the file and the problem, exit code 1, no panic, and no
 //! output file left behind.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -12,7 +12,7 @@
 //! 600 px LOD to half the input's triangles, which merges cards into shared planes whatever ε
 //! says (0.030 and 0.077 then: merging, not baking).
 
-mod common;
+use crate::common;
 
 use common::*;
 

@@ -3,7 +3,7 @@
 //! 1 % of the cell, and its mean colour within 2 of 255 per channel. Measured on the bundled
 //! sample and two shared trees, each at a 5 % and a 1 % ε (large and small billboards).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -2,7 +2,7 @@
 //! batch never shows a partial tree and its rerun does only the missing trees, broken inputs
 //! are isolated, manifests, presets, --eval and staleness.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

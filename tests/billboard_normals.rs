@@ -2,7 +2,7 @@
 //! `normalTexture` (tangent space, half the colour atlas's side), or crown-shaped vertex
 //! normals, or one flat normal a quad; read back from the written files.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

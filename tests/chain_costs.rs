@@ -6,7 +6,7 @@
 //! them, joints, animated channels, draw calls, materials, decoded texture bytes and file
 //! bytes).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,6 +1,6 @@
 //! `frond cloud` end to end: files, `<name>_cloud_stats.json` keys, validity, determinism, bad arguments.
 
-mod common;
+use crate::common;
 
 use common::*;
 use frond_app::cloud_cmd::CloudReport;

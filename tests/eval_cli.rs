@@ -3,7 +3,7 @@
 //! within its ε and has a coverage error at every screen height, foreign candidates get the
 //! image metrics and a reason for the rest, bad input fails cleanly.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -10,7 +10,7 @@
 //! (The file is named `frond_…` so that this test process counts as a live frond run for the
 //! concurrent-run check, which looks at `/proc/<pid>/comm`.)
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};

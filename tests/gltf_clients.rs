@@ -1,7 +1,7 @@
 //! Real glTF clients agree with us: the Khronos validator accepts what we write, and a
 //! gltfpack-quantized tree (KHR_mesh_quantization, KHR_texture_transform) reads back the same.
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

@@ -37,7 +37,7 @@
 //!   no MSFT_lod), and Godot merges skins and extracted materials with equal contents or names
 //!   across the LODs; it is imported and described but only checked for loading.
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

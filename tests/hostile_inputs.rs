@@ -4,7 +4,7 @@
 //! accepted costs memory in proportion (at most 4 × the decoded texture bytes + 500 MB); names
 //! from a file reach HTML, terminals and spreadsheets inert.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::time::Duration;

@@ -4,7 +4,7 @@
 //! its leaves' outline as the input does at its design size. Checked on the sample and, when
 //! present, on oak_medium and pine_medium_blender, reading the written files.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,7 +1,7 @@
 //! The importer's warnings reach `frond inspect --json` (under `warnings[]`, one line each,
 //! naming what they are about), and its refusals reach the command line as one-line errors.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

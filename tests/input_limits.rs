@@ -3,7 +3,7 @@
 //! and `batch`; decoded-texture and input-size budgets with errors that name the limit and the
 //! option that raises it.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

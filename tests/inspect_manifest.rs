@@ -1,7 +1,7 @@
 //! `frond inspect --json` on every shared tree agrees with MANIFEST.json (skipped, with one line,
 //! where the shared trees are absent); the text report and material overrides on fixtures.
 
-mod common;
+use crate::common;
 
 use common::*;
 use frond_app::inspect::InspectReport;

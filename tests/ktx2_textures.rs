@@ -3,7 +3,7 @@
 //! alpha-tested coverage per level; the files validate, carry `KHR_texture_basisu` as the
 //! extension asks, and LOD0 keeps the input's own images.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -3,7 +3,7 @@
 //! per-bone ε property, VAT decoding back to motion, skeleton LODs whose foliage stays on its
 //! branches, determinism and bad arguments.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

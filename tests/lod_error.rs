@@ -4,7 +4,7 @@
 //! about a LOD over `--max-error` and writes it all the same; the card LODs of the sample stay
 //! within the errors their coverage-driven thinning reaches.
 
-mod common;
+use crate::common;
 
 use common::*;
 use frond_lod::report::LOD_REPORT_SCHEMA_VERSION;

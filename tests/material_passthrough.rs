@@ -8,7 +8,7 @@
 //! metallic-roughness and emissive maps with non-default factors, a MIRRORED_REPEAT sampler,
 //! `KHR_materials_emissive_strength` and extras. Everything is read back from the written files.
 
-mod common;
+use crate::common;
 
 use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};

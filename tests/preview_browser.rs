@@ -10,7 +10,7 @@
 //! Skips (one `skipped:` line) when Chromium, Node or puppeteer-core (in `tools/node_modules`)
 //! is not installed; `.ci/run` installs them.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

@@ -6,7 +6,7 @@
 //! write the same bytes.
 //! (`tests/preview_browser.rs` opens the page in Chromium.)
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeSet;
 use std::io::{Read, Write};

@@ -1,7 +1,7 @@
 //! Rendering real exporters' trees (the `tests/fixtures/` ez-tree bush and Blender round trip;
 //! the shared pines where present): frames are plausible and the wind visibly moves the foliage.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -3,7 +3,7 @@
 //! the Pareto front, identical numbers whatever the thread count, and a run that outlives its
 //! limit recorded as a failure while the sweep goes on.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::path::Path;

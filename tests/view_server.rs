@@ -3,8 +3,6 @@
 //! cost little and never keep a new client waiting past a second; a foreign `Host` is turned
 //! away; answers carry no absolute path; running out of file descriptors does not stop it.
 
-mod common;
-
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::os::unix::process::CommandExt;
