@@ -1,5 +1,5 @@
 //! Heavy quality checks of billboard clouds, in the optimised run of the heavy cases that
-//! `.ci/run` makes (`FROND_HEAVY_TESTS=1 cargo test --release --test suite --
+//! `.ci/run` makes (`FROND_HEAVY_TESTS=1 cargo test --release --test frond_tests --
 //! cloud_quality::heavy_ --nocapture` prints their figures); a plain `cargo test` skips them with one line each. They
 //! use the shared trees (`FROND_TEST_TREES`) and skip with one line where those are absent.
 

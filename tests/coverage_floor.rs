@@ -141,7 +141,7 @@ fn heavy_shared_trees_through_the_lod_path_with_nothing_removed_score_the_floor(
 }
 
 /// The floor at 20 px on every shared tree: not met on five of them, ignored until the far
-/// end's textures keep it; `cargo test --test suite coverage_floor -- --ignored` runs it.
+/// end's textures keep it; `cargo test --test frond_tests coverage_floor -- --ignored` runs it.
 #[test]
 #[ignore = "blocked: at 20 px with nothing removed oak_dense scores 0.064, oak_large 0.032, \
             oak_medium_blendedleaves 0.036 and the pines 0.085 against the 0.03 floor"]

@@ -4,7 +4,7 @@
 //! re-wrapped as valid GLB containers, or truncated. Every result must be
 //! `Ok` or a clean `Err`: never a panic. A short run is part of the tests; a long one is a heavy
 //! case in `.ci/run`'s optimised run (`FROND_HEAVY_TESTS=1 FROND_FUZZ_RUNS=20000 cargo test
-//! --release --test suite -- fuzz_import::heavy_` for a longer one by hand).
+//! --release --test frond_tests -- fuzz_import::heavy_` for a longer one by hand).
 
 use crate::common;
 

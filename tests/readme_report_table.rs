@@ -6,7 +6,7 @@
 use std::path::Path;
 
 /// The markers around the generated table in README.md.
-const BEGIN: &str = "<!-- report-schema: generated from lod/src/report.rs; FROND_BLESS=1 cargo test --test suite readme_report_table rewrites it -->";
+const BEGIN: &str = "<!-- report-schema: generated from lod/src/report.rs; FROND_BLESS=1 cargo test --test frond_tests readme_report_table rewrites it -->";
 const END: &str = "<!-- /report-schema -->";
 
 /// Each public field of `pub struct NAME { ... }` in `source` with its doc comment, joined into
@@ -88,7 +88,7 @@ fn the_readme_report_table_is_the_schemas_docs() {
     assert_eq!(
         have, want,
         "README.md's report table differs from lod/src/report.rs's docs: run \
-         FROND_BLESS=1 cargo test --test suite readme_report_table"
+         FROND_BLESS=1 cargo test --test frond_tests readme_report_table"
     );
     // Every field of both structs is listed.
     for (field, doc) in fields(&source, "LodReport")

@@ -1,7 +1,8 @@
 //! frond's integration tests (`tests/*.rs`), one test binary: each file is a module of it,
-//! named as the file, its tests `<file>::<test>` (`cargo test --test suite <file>::` runs one
+//! named as the file, its tests `<file>::<test>` (`cargo test --test frond_tests <file>::` runs one
 //! file's). One binary compiles and links the workspace's code once where a binary per file
-//! did it once per file, most of the suite's build. `common` holds their shared helpers.
+//! did it once per file, most of the suite's build. `common` holds their shared helpers. Its
+//! name has `frond` in it: `frond_output_set` plays a live frond run with this process.
 
 mod bad_input;
 mod bake_fidelity;
