@@ -150,6 +150,19 @@ impl<'a> Lod0Request<'a> {
         self.screen_heights[k].unwrap_or(lod0)
     }
 
+    /// Everything the pictures depend on besides the input: two requests with the same key
+    /// draw the same pictures.
+    fn key(&self) -> Lod0Key {
+        (
+            self.name.to_string(),
+            self.clip.map(str::to_string),
+            self.period,
+            self.screen_heights.clone(),
+            [self.fov_deg, self.resolution],
+            self.flip_frames,
+        )
+    }
+
     /// The pictures' view of the run.
     fn view(&self) -> PageView<'a> {
         PageView {
@@ -164,14 +177,18 @@ impl<'a> Lod0Request<'a> {
     }
 }
 
+/// [`Lod0Request::key`]: name, clip, period, screen heights, field of view and resolution,
+/// flip-book frames.
+type Lod0Key = (String, Option<String>, f32, Vec<Option<f32>>, [f32; 2], u32);
+
 /// LOD0's pictures for the page of a `frond lod` run ([`lod0_pictures`]): its own still and
 /// flip-book, and its still at every LOD's size, the reference each LOD is compared with.
 pub struct Lod0Pictures {
     pictures: LodPictures,
     /// LOD0's still at LOD `k`'s size, for each `k` (the first: its own).
     references: Vec<FilteredStill>,
-    /// The screen heights they were drawn for ([`Lod0Request::screen_heights`]).
-    screen_heights: Vec<Option<f32>>,
+    /// What they were drawn for ([`Lod0Request::key`]).
+    key: Lod0Key,
     seconds: f64,
 }
 
@@ -220,7 +237,7 @@ pub fn lod0_pictures(renderer: &Renderer, req: &Lod0Request) -> Result<Lod0Pictu
     Ok(Lod0Pictures {
         pictures,
         references,
-        screen_heights: req.screen_heights.clone(),
+        key: req.key(),
         seconds: t0.elapsed().as_secs_f64(),
     })
 }
@@ -239,7 +256,8 @@ pub fn lod_pictures(
 
 /// [`lod_pictures`] with LOD0's drawn already ([`lod0_pictures`], for the same run): the
 /// other LODs' pictures, one LOD at a time (the renderer spreads each frame over the threads).
-/// LOD0's are drawn again if they were drawn for other sizes than `req`'s report gives.
+/// LOD0's are drawn again if they were drawn for another run than `req`'s report gives
+/// (other sizes, clip, loop, view or flip-book frames).
 pub fn lod_pictures_after(
     renderer: &Renderer,
     req: &LodPreviewRequest,
@@ -254,7 +272,7 @@ pub fn lod_pictures_after(
         });
     }
     let lod0_req = Lod0Request::of(req)?;
-    let lod0 = if lod0.screen_heights == lod0_req.screen_heights {
+    let lod0 = if lod0.key == lod0_req.key() {
         lod0
     } else {
         lod0_pictures(renderer, &lod0_req)?
