@@ -516,7 +516,11 @@ fn read_back_costs(set: &OutputSet, report: &mut LodReport) -> Result<()> {
             .filter(|_| leaf_area > 0.0)
             .map(|c| c.alpha_tested_area / leaf_area);
     }
-    for w in report.cost_increases() {
+    for w in report
+        .cost_increases()
+        .into_iter()
+        .chain(report.budget_excesses())
+    {
         tracing::warn!("{w}");
         report.warnings.push(w);
     }

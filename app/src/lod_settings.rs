@@ -100,6 +100,17 @@ named_enum! {
 }
 
 named_enum! {
+    /// How the far end (impostor-class LODs) draws its billboards' alpha.
+    FarAlpha {
+        /// Alpha-tested (glTF MASK): the bake keeps the leaves' coverage by threshold, for an
+        /// engine that draws it with alpha-to-coverage.
+        Mask = "mask",
+        /// Each texel's alpha is the fraction of it covered, drawn blended (glTF BLEND).
+        Blend = "blend",
+    }
+}
+
+named_enum! {
     /// Which rasteriser bakes the billboard atlases.
     BakeRasteriser {
         /// frond's CPU bake rasteriser: the same atlas on every machine.
@@ -444,6 +455,9 @@ pub struct LodSettings {
     pub max_atlas: u32,
     /// Dilated texels around each billboard texture.
     pub padding: u32,
+    /// How the far end draws its billboards' alpha.
+    #[serde(default = "default_far_alpha")]
+    pub far_alpha: FarAlpha,
     /// Add MSFT_lod (with MSFT_screencoverage) to the combined file.
     pub msft_lod: bool,
     /// Write textures as files next to the GLBs.
@@ -460,6 +474,14 @@ pub struct LodSettings {
     pub vat_space: VatSpace,
     /// An engine's conventions, applied by [`crate::engine_preset::with_preset`].
     pub preset: Option<Engine>,
+}
+
+/// The far end's alpha by default: alpha-tested, as every LOD before it.
+pub const DEFAULT_FAR_ALPHA: FarAlpha = FarAlpha::Mask;
+
+/// [`DEFAULT_FAR_ALPHA`], for settings written before the far end's alpha was one.
+fn default_far_alpha() -> FarAlpha {
+    DEFAULT_FAR_ALPHA
 }
 
 impl LodSettings {
@@ -487,6 +509,7 @@ impl LodSettings {
             build: BuildSettings::default(),
             max_atlas: 4096,
             padding: 2,
+            far_alpha: DEFAULT_FAR_ALPHA,
             msft_lod: false,
             external_textures: false,
             textures: Textures::Png,
@@ -576,6 +599,7 @@ impl LodSettings {
                 supersample: build.supersample,
                 padding: self.padding,
                 rasteriser: build.bake_rasteriser.rasteriser(),
+                far_blend: self.far_alpha == FarAlpha::Blend,
             },
         })
     }

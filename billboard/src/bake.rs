@@ -40,6 +40,7 @@ use crate::soup::TriangleSoup;
 pub use baked::{Atlas, BakeError, BakedCloud, Cell};
 pub use params::{BakeParams, BakeRasteriser, MAX_ATLAS_SIDE, MAX_SUPERSAMPLE};
 
+use coverage::covered_fractions;
 use coverage::preserve_coverage;
 pub use coverage::{MAX_FORESHORTENING, foreshortening};
 use cpu_raster::{BakeTextures, bake_textures, render_atlas_cpu};
@@ -120,7 +121,14 @@ pub fn bake_cloud(
     )?;
     let rendered = start.elapsed();
     let mut grown = Vec::new();
-    if params.preserve_coverage {
+    if params.covered_fraction {
+        let scales: Vec<f64> = quads
+            .iter()
+            .zip(members)
+            .map(|(q, tris)| foreshortening(soup, q, tris) * params.coverage_gain)
+            .collect();
+        grown = covered_fractions(&mut samples, &cells, &scales, ss * ss);
+    } else if params.preserve_coverage {
         let scales: Vec<f64> = quads
             .iter()
             .zip(members)
@@ -132,14 +140,18 @@ pub fn bake_cloud(
             &scales,
             ss * ss,
             cutoff_samples(params),
-        );
+        )
+        .into_iter()
+        .map(|i| (i, 255))
+        .collect();
     }
 
     let mut atlas = finish_cells(samples, &cells, quads, params.padding);
-    // Grown texels pass the alpha test with the colour and normal dilation gave them.
-    for i in grown {
-        atlas.color[4 * i + 3] = 255;
-        atlas.normal[4 * i + 3] = 255;
+    atlas.blended = params.covered_fraction;
+    // Grown texels cover what their cell lacks with the colour and normal dilation gave them.
+    for (i, alpha) in grown {
+        atlas.color[4 * i + 3] = alpha;
+        atlas.normal[4 * i + 3] = alpha;
     }
     let uv_rects = cells.iter().map(|c| uv_rect(c, width, height)).collect();
     let texture_bytes = atlas.color.len() + atlas.normal.len();
@@ -303,6 +315,50 @@ mod tests {
         );
         assert_eq!(f(&[2]), coverage::MAX_FORESHORTENING, "edge-on: capped");
         assert_eq!(f(&[]), 1.0);
+    }
+
+    #[test]
+    fn covered_fractions_keep_each_cells_scaled_coverage() {
+        // A 8x8 cell whose texels are covered 4, 8 and 16 of 16 samples in turn (every third
+        // texel uncovered): alpha is the covered fraction at scale 1; at scale 1.5 the full
+        // texels saturate and the others grow until the cell's alpha sums to 1.5 times its
+        // coverage; at scale 4 every covered texel is opaque and the rest grows beside them.
+        let cells = [Cell {
+            x: 0,
+            y: 0,
+            width: 8,
+            height: 8,
+        }];
+        let fill = || {
+            let mut d = Downsampled::new(8, 8);
+            for (i, n) in d.samples.iter_mut().enumerate() {
+                *n = [4, 8, 16, 0][i % 4];
+            }
+            d
+        };
+        let alpha_sum = |d: &Downsampled, grown: &[(usize, u8)]| -> f64 {
+            let own: f64 = (d.color.chunks_exact(4)).map(|p| f64::from(p[3])).sum();
+            (own + grown.iter().map(|&(_, a)| f64::from(a)).sum::<f64>()) / 255.0
+        };
+        let coverage: f64 = fill().samples.iter().map(|&n| f64::from(n) / 16.0).sum();
+        for scale in [1.0, 1.5, 4.0] {
+            let mut d = fill();
+            let grown = covered_fractions(&mut d, &cells, &[scale], 16);
+            let want = (scale * coverage).min(64.0);
+            let got = alpha_sum(&d, &grown);
+            assert!(
+                (got - want).abs() <= 0.02 * want,
+                "scale {scale}: {got} of {want}"
+            );
+            assert_eq!(grown.is_empty(), scale < 4.0, "scale {scale}");
+            for (i, &n) in d.samples.iter().enumerate() {
+                let a = d.color[i * 4 + 3];
+                assert_eq!(a == 0, n == 0, "texel {i}");
+                if scale == 1.0 {
+                    assert_eq!(a, (f64::from(n) / 16.0 * 255.0).round() as u8);
+                }
+            }
+        }
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use frond_render::{DrawMaterial, DrawTexture, Renderer};
+use frond_render::{DrawAlpha, DrawMaterial, DrawTexture, Renderer};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -247,7 +247,7 @@ impl BillboardCloud {
                 base_color: [1.0; 4],
                 texture: Some(0),
                 normal_texture: None,
-                alpha_cutoff: Some(0.5),
+                alpha: DrawAlpha::Mask(0.5),
                 double_sided: true,
             }],
             textures: vec![DrawTexture {

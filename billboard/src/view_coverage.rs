@@ -11,7 +11,8 @@
 //! the billboards' coverage scaled to undo it ([`BakeParams::coverage_gain`](crate::BakeParams::coverage_gain)).
 
 use frond_render::{
-    Camera, DrawMaterial, DrawMesh, DrawScene, DrawTexture, Projection, RenderError, Renderer,
+    Camera, DrawAlpha, DrawMaterial, DrawMesh, DrawScene, DrawTexture, Projection, RenderError,
+    Renderer,
 };
 use frond_render::{SoftwareTextures, render_coverage};
 use glam::{Mat4, Vec3};
@@ -48,7 +49,8 @@ pub const MAX_COVERAGE_GAIN: f64 = 2.0;
 
 /// The covered samples of `soup` (drawn with `materials` and `textures`, alpha-tested as
 /// their materials say) and of the baked cloud (`quads` with `baked`'s atlas, alpha-tested at
-/// 0.5, double-sided), summed over `views`: `(leaves, cloud)`.
+/// 0.5 or blended as its atlas says, double-sided), summed over `views`: `(leaves, cloud)`
+/// (blended layers count their alpha).
 pub fn view_coverage(
     soup: &TriangleSoup,
     materials: &[DrawMaterial],
@@ -56,11 +58,11 @@ pub fn view_coverage(
     quads: &[Quad],
     baked: &BakedCloud,
     views: &CoverageViews,
-) -> Result<(u64, u64), RenderError> {
+) -> Result<(f64, f64), RenderError> {
     let leaves = soup_scene(soup, materials, textures);
     let cloud = cloud_scene(quads, baked);
     let Some((lo, hi)) = leaves.bounds() else {
-        return Ok((0, 0));
+        return Ok((0.0, 0.0));
     };
     let cameras = cameras(lo, hi, views);
     let leaves = covered_samples(&leaves, &cameras)?;
@@ -100,15 +102,11 @@ pub fn bake_keeping_view_coverage(
     for _ in 0..MAX_BAKES {
         let baked = bake(&params)?;
         let cloud = covered_samples(&cloud_scene(quads, &baked), &cameras)?;
-        let ratio = if leaves > 0 {
-            cloud as f64 / leaves as f64
-        } else {
-            1.0
-        };
+        let ratio = if leaves > 0.0 { cloud / leaves } else { 1.0 };
         let better = best
             .as_ref()
             .is_none_or(|(_, r)| (ratio.ln()).abs() < r.ln().abs());
-        let done = (ratio - 1.0).abs() <= VIEW_COVERAGE_TOLERANCE || cloud == 0;
+        let done = (ratio - 1.0).abs() <= VIEW_COVERAGE_TOLERANCE || cloud == 0.0;
         if better {
             best = Some((baked, ratio));
         }
@@ -149,14 +147,17 @@ fn cameras(lo: Vec3, hi: Vec3, views: &CoverageViews) -> Vec<(Mat4, u32, u32)> {
         .collect()
 }
 
-/// The covered samples of `scene` summed over `cameras` (in parallel, summed in order).
-fn covered_samples(scene: &DrawScene, cameras: &[(Mat4, u32, u32)]) -> Result<u64, RenderError> {
+/// The covered samples of `scene` summed over `cameras` (in parallel, summed in order;
+/// integers, exact, where nothing is blended).
+fn covered_samples(scene: &DrawScene, cameras: &[(Mat4, u32, u32)]) -> Result<f64, RenderError> {
     let textures = SoftwareTextures::new(scene, false)?;
-    let counts: Vec<u64> = cameras
+    let counts: Vec<f64> = cameras
         .par_iter()
         .map(|&(view_proj, side, k)| {
             let image = render_coverage(scene, &textures, view_proj, side, side, k)?;
-            Ok(image.samples.iter().map(|&n| u64::from(n)).sum())
+            Ok((0..image.samples.len())
+                .map(|i| f64::from(image.covered_samples(i)))
+                .sum())
         })
         .collect::<Result<_, RenderError>>()?;
     Ok(counts.iter().sum())
@@ -194,7 +195,7 @@ fn soup_scene(
 }
 
 /// The baked quads as a scene: one double-sided mesh on the colour atlas, alpha-tested at
-/// half coverage as the written files draw it.
+/// half coverage or blended ([`Atlas::blended`](crate::Atlas::blended)) as the written files draw it.
 fn cloud_scene(quads: &[Quad], baked: &BakedCloud) -> DrawScene {
     let mut mesh = DrawMesh::default();
     let mut uvs = Vec::with_capacity(4 * quads.len());
@@ -210,7 +211,11 @@ fn cloud_scene(quads: &[Quad], baked: &BakedCloud) -> DrawScene {
         meshes: vec![mesh],
         materials: vec![DrawMaterial {
             texture: Some(0),
-            alpha_cutoff: Some(0.5),
+            alpha: if baked.atlas.blended {
+                DrawAlpha::Blend
+            } else {
+                DrawAlpha::Mask(0.5)
+            },
             double_sided: true,
             ..DrawMaterial::opaque([1.0; 4])
         }],

@@ -5,7 +5,7 @@
 use frond_billboard::{
     BakeError, BakeParams, BakedCloud, Plane, Quad, TriangleSoup, bake_cloud, pack,
 };
-use frond_render::{DrawMaterial, DrawTexture, Renderer};
+use frond_render::{DrawAlpha, DrawMaterial, DrawTexture, Renderer};
 use glam::{Vec2, Vec3};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -87,7 +87,7 @@ fn params(texels_per_unit: f32) -> BakeParams {
 fn textured(texture: usize) -> DrawMaterial {
     DrawMaterial {
         texture: Some(texture),
-        alpha_cutoff: Some(0.5),
+        alpha: DrawAlpha::Mask(0.5),
         ..DrawMaterial::default()
     }
 }
@@ -700,7 +700,7 @@ fn heavy_timing_200_and_2000_quads() {
     eprintln!("adapter: {}", r.adapter_info());
     let material = DrawMaterial {
         texture: Some(0),
-        alpha_cutoff: Some(0.5),
+        alpha: DrawAlpha::Mask(0.5),
         double_sided: true,
         ..DrawMaterial::default()
     };

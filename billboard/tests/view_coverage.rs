@@ -7,7 +7,7 @@ use frond_billboard::view_coverage::{
     CoverageViews, MAX_BAKES, VIEW_COVERAGE_TOLERANCE, bake_keeping_view_coverage, view_coverage,
 };
 use frond_billboard::{BakeParams, Plane, Quad, TriangleSoup};
-use frond_render::{DrawMaterial, DrawTexture, Renderer};
+use frond_render::{DrawAlpha, DrawMaterial, DrawTexture, Renderer};
 use glam::{Vec2, Vec3};
 
 fn renderer() -> Renderer {
@@ -20,7 +20,7 @@ fn renderer() -> Renderer {
 /// An opaque white leaf material (no texture, alpha-tested at half).
 fn leaf() -> DrawMaterial {
     DrawMaterial {
-        alpha_cutoff: Some(0.5),
+        alpha: DrawAlpha::Mask(0.5),
         double_sided: true,
         ..DrawMaterial::default()
     }
@@ -109,8 +109,8 @@ fn a_billboard_holding_its_leaf_covers_what_the_leaf_covers_from_every_view() {
     assert!((ratio - 1.0).abs() <= VIEW_COVERAGE_TOLERANCE, "{ratio}");
     let (leaves, cloud) =
         view_coverage(&soup, &[leaf()], &textures, &quads, &baked, &views()).expect("views");
-    assert!(leaves > 0);
-    assert_eq!(cloud as f64 / leaves as f64, ratio);
+    assert!(leaves > 0.0);
+    assert_eq!(cloud / leaves, ratio);
     // Without views: one bake, no ratio.
     let (_, none) = bake(&soup, &quads, &members, false);
     assert_eq!(none, None);
@@ -132,7 +132,7 @@ fn leaves_standing_across_their_billboard_are_matched_by_baking_again() {
     let (once, _) = bake(&soup, &quads, &members, false);
     let (leaves, cloud) =
         view_coverage(&soup, &[leaf()], &textures, &quads, &once, &views()).expect("views");
-    let first = cloud as f64 / leaves as f64;
+    let first = cloud / leaves;
     let (_, ratio) = bake(&soup, &quads, &members, true);
     let ratio = ratio.expect("views given");
     eprintln!("one bake covers {first:.3} of the leaves, {MAX_BAKES} at most {ratio:.3}");
@@ -144,4 +144,49 @@ fn leaves_standing_across_their_billboard_are_matched_by_baking_again() {
         (ratio - 1.0).abs() < (first - 1.0).abs() / 2.0,
         "baking again halves the miss at least: {first} -> {ratio}"
     );
+}
+
+/// Covered-fraction texels (the blended far end): leaves smaller than a texel, scattered over
+/// their billboard, leave most texels partly covered; the atlas then holds fractional alphas
+/// (not only 0 and 255), is marked blended, and after baking again covers the leaves' area
+/// from the rings within the tolerance, drawn blended.
+#[test]
+fn covered_fraction_texels_keep_sub_texel_leaves_area_from_the_rings() {
+    let mut soup = TriangleSoup::default();
+    for i in 0..40 {
+        let t = i as f32;
+        let at = Vec3::new((t * 1.7).sin() * 1.3, (t * 2.3).cos() * 1.3, 0.0);
+        push_leaf(&mut soup, at, 0.03, (t * 0.9).sin() * 0.8);
+    }
+    let quads = [quad_z(Vec3::ZERO, 1.5)];
+    let members = [(0..soup.positions.len()).collect::<Vec<_>>()];
+    let blended = BakeParams {
+        covered_fraction: true,
+        ..params()
+    };
+    let (baked, ratio) = bake_keeping_view_coverage(
+        &renderer(),
+        &soup,
+        &[leaf()],
+        &[],
+        &quads,
+        &members,
+        &blended,
+        Some(&views()),
+    )
+    .expect("bake");
+    assert!(baked.atlas.blended);
+    let alphas: Vec<u8> = baked.atlas.color.chunks_exact(4).map(|p| p[3]).collect();
+    let partial = alphas.iter().filter(|&&a| a > 0 && a < 255).count();
+    let covered = alphas.iter().filter(|&&a| a > 0).count();
+    assert!(
+        partial * 2 > covered,
+        "{partial} of {covered} texels partly covered"
+    );
+    let ratio = ratio.expect("views given");
+    assert!((ratio - 1.0).abs() <= VIEW_COVERAGE_TOLERANCE, "{ratio}");
+    let textures: [DrawTexture; 0] = [];
+    let (leaves, cloud) =
+        view_coverage(&soup, &[leaf()], &textures, &quads, &baked, &views()).expect("views");
+    assert_eq!(cloud / leaves, ratio);
 }

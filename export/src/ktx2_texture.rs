@@ -32,8 +32,11 @@ pub enum TextureFormat {
 /// What a map holds, which decides its mip chain and transfer function.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MapKind {
-    /// sRGB colour with alpha (base colour, emissive).
+    /// sRGB colour with alpha (base colour, emissive); mips keep an alpha test's coverage.
     Colour,
+    /// sRGB colour whose alpha is each texel's covered fraction, drawn blended (a far LOD's
+    /// billboard atlas, glTF `BLEND`): mips are plain area averages, alpha not rescaled.
+    Covered,
     /// Linear data (normals, occlusion, metal/roughness).
     Linear,
 }
@@ -73,11 +76,11 @@ pub fn ktx2_bytes(
     };
     let levels = match kind {
         MapKind::Colour => frond_render::mip_chain(w4, h4, &base),
+        MapKind::Covered => frond_render::blend_mip_chain(w4, h4, &base),
         MapKind::Linear => frond_render::linear_mip_chain(w4, h4, base),
     };
-    let alpha = kind == MapKind::Colour;
-    encode_uastc(&levels, kind == MapKind::Colour, alpha)
-        .map_err(|e| ExportError::Ktx2(format!("{name}: {e}")))
+    let colour = kind != MapKind::Linear;
+    encode_uastc(&levels, colour, colour).map_err(|e| ExportError::Ktx2(format!("{name}: {e}")))
 }
 
 #[cfg(test)]

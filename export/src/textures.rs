@@ -204,8 +204,10 @@ impl TextureSink {
         ))
     }
 
-    /// The billboards' material: the colour atlas, alpha-tested at 0.5, double-sided, rough;
-    /// with `normals`, the baked normal atlas at half its side as the `normalTexture`.
+    /// The billboards' material: the colour atlas, alpha-tested at 0.5 (or blended, its
+    /// alpha the covered fraction, where the atlas is [`blended`](frond_billboard::Atlas::blended)),
+    /// double-sided, rough; with `normals`, the baked normal atlas at half its side as the
+    /// `normalTexture`.
     pub fn billboard_material(
         &mut self,
         doc: &mut GltfBuilder,
@@ -213,13 +215,18 @@ impl TextureSink {
         atlas: &frond_billboard::Atlas,
         normals: bool,
     ) -> Result<usize, ExportError> {
-        let tex = self.add_rgba(
+        let tex = self.add_map(
             doc,
             &format!("{name}_atlas"),
             atlas.width,
             atlas.height,
             &atlas.color,
             true,
+            if atlas.blended {
+                MapKind::Covered
+            } else {
+                MapKind::Colour
+            },
         )?;
         let normal = if normals {
             let (w, h, rgba) = half_normal_map(atlas.width, atlas.height, &atlas.normal);
@@ -240,7 +247,11 @@ impl TextureSink {
             base_color: [1.0; 4],
             base_color_texture: Some(tex),
             normal_texture: normal,
-            alpha: WriteAlpha::Mask(0.5),
+            alpha: if atlas.blended {
+                WriteAlpha::Blend
+            } else {
+                WriteAlpha::Mask(0.5)
+            },
             double_sided: true,
             metallic: 0.0,
             roughness: 1.0,

@@ -48,6 +48,10 @@ pub struct CloudOptions {
     pub padding: u32,
     /// The rasteriser that draws the atlases.
     pub rasteriser: frond_billboard::BakeRasteriser,
+    /// Impostor-class LODs (the far end) bake each texel's covered fraction as its alpha and
+    /// are drawn blended (glTF `BLEND`, [`frond_billboard::BakeParams::covered_fraction`]);
+    /// false: alpha-tested, their bake keeping coverage by threshold.
+    pub far_blend: bool,
 }
 
 /// What a chain is built for.
@@ -236,7 +240,7 @@ pub fn build_chain(
             card_foliage,
         )
         .map_err(|e| (Some(k + 1), e))?;
-        spent = spent.after(tree, &lod, req.animation);
+        spent = spent.after(&lod, req.animation);
         lods.push(lod);
     }
     let t_built = Instant::now();
@@ -249,7 +253,9 @@ pub fn build_chain(
     })
 }
 
-/// What the previous LOD cost: no later LOD may cost more (the monotone rule).
+/// What the previous LOD cost: no later LOD may cost more in what each drawn instance pays
+/// (the monotone rule); and what the input spent on what all instances of a species share,
+/// texture and drawn area, which bounds every LOD's own budget.
 #[derive(Clone, Copy, Debug)]
 struct Spent {
     /// LOD0's share of wood in its triangles: each LOD's triangle budget is split so.
@@ -257,10 +263,10 @@ struct Spent {
     /// The input's triangles: an impostor-class LOD's budget is a share of them.
     input_triangles: usize,
     triangles: usize,
-    /// Decoded bytes of every texture the LOD draws with (atlas and wood maps).
-    texture_bytes: usize,
-    /// Alpha-tested area (world units²): overdraw.
-    alpha_tested_area: f64,
+    /// Decoded bytes of every texture the input draws with: no LOD's images exceed them.
+    input_texture_bytes: usize,
+    /// The input's alpha-tested or blended area (world units²): no LOD draws more.
+    input_drawn_area: f64,
     animation: AnimationCount,
 }
 
@@ -273,8 +279,8 @@ impl Spent {
             wood_share: lod0.entry.wood_triangles as f64 / lod0.entry.triangles.max(1) as f64,
             input_triangles: lod0.entry.triangles,
             triangles: lod0.entry.triangles,
-            texture_bytes: parts_image_bytes(tree, &lod0.parts, &lod0.image_sizes),
-            alpha_tested_area: alpha_tested_area(tree, lod0),
+            input_texture_bytes: parts_image_bytes(tree, &lod0.parts, &lod0.image_sizes),
+            input_drawn_area: alpha_tested_area(tree, lod0),
             animation,
         }
     }
@@ -292,8 +298,8 @@ impl Spent {
             wood_triangles: (triangles as f64 * self.wood_share).floor() as usize,
             joints: self.animation.joints.min(joints_for_screen(h)),
             channels: self.animation.channels,
-            texture_bytes: self.texture_bytes.min(4 * texels),
-            alpha_tested_area: self.alpha_tested_area,
+            texture_bytes: self.input_texture_bytes.min(4 * texels),
+            alpha_tested_area: self.input_drawn_area,
         };
         if is_impostor_class(h) {
             budget.triangles = budget
@@ -301,22 +307,21 @@ impl Spent {
                 .min(impostor_triangles(self.input_triangles));
             budget.wood_triangles = (budget.triangles as f64 * self.wood_share).floor() as usize;
             budget.joints = budget.joints.min(IMPOSTOR_JOINTS);
-            // The far end's own texture budget, within the LOD before it: more than a texel
-            // per pixel where 16 per H² would give fewer (alpha-tested coverage needs them).
-            budget.texture_bytes = self.texture_bytes.min(IMPOSTOR_TEXTURE_BYTES);
+            // The far end's own texture budget: its texels hold covered fractions at two a
+            // pixel, more than 16 per H² would give.
+            budget.texture_bytes = self.input_texture_bytes.min(IMPOSTOR_TEXTURE_BYTES);
         }
         budget
     }
 
     /// What has been spent once `lod` is built.
-    fn after(&self, tree: &Tree, lod: &ChainLod, animation: BillboardAnimation) -> Spent {
+    fn after(&self, lod: &ChainLod, animation: BillboardAnimation) -> Spent {
         let mut next = Spent {
             wood_share: self.wood_share,
             input_triangles: self.input_triangles,
             triangles: lod.entry.triangles,
-            texture_bytes: lod.entry.texture_bytes,
-            // A LOD over its predecessor's does not raise the bar for the next.
-            alpha_tested_area: self.alpha_tested_area.min(alpha_tested_area(tree, lod)),
+            input_texture_bytes: self.input_texture_bytes,
+            input_drawn_area: self.input_drawn_area,
             animation: self.animation,
         };
         let n = match (lod.cloud(), lod.parts.first()) {
@@ -431,8 +436,10 @@ fn cloud_params(req: &ChainRequest, level: &LodLevel, k: usize) -> CloudParams {
     };
     params.bake.texels_per_unit = level.texels_per_unit;
     params.bake.max_atlas = o.max_atlas;
-    // Far LODs bake sparse foliage into few texels: keep its coverage (see BakeParams).
+    // Far LODs bake sparse foliage into few texels: keep its coverage (see BakeParams), as
+    // covered fractions drawn blended at the far end where asked.
     params.bake.preserve_coverage = true;
+    params.bake.covered_fraction = o.far_blend && is_impostor_class(level.screen_height);
     params.bake.supersample = o.supersample;
     params.bake.padding = o.padding;
     params.bake.rasteriser = o.rasteriser;

@@ -46,8 +46,15 @@ pub fn is_impostor_class(screen_height: f32) -> bool {
 pub const IMPOSTOR_JOINTS: usize = 8;
 
 /// Decoded texture bytes of an impostor-class LOD over all its images (colour and normal
-/// atlases, bark): 64 KiB counted with a full mip chain (4/3), so 48 KiB of level 0.
-pub const IMPOSTOR_TEXTURE_BYTES: usize = 64 * 1024 * 3 / 4;
+/// atlases, bark): 256 KiB counted with a full mip chain (4/3), so 192 KiB of level 0. Every
+/// instance of a species shares its far LOD's images, so they are no per-instance cost: the
+/// budget buys [`IMPOSTOR_TEXELS_PER_PIXEL`] texels a pixel over the crown's billboards.
+pub const IMPOSTOR_TEXTURE_BYTES: usize = 256 * 1024 * 3 / 4;
+
+/// Billboard texels per screen pixel, each axis, of an impostor-class LOD: two, at which a
+/// texel grid resampled at a random offset keeps a crown's covered fraction per pixel (the
+/// far end's texels hold covered fractions; one texel a pixel blurs each leaf over four).
+pub const IMPOSTOR_TEXELS_PER_PIXEL: f32 = 2.0;
 
 /// Triangles of an impostor-class LOD of a tree of `input_triangles`: 1 % of them, at least 64
 /// (a trunk and a few dozen billboards), at most 512 (a crown this far is a few hundred pixels,

@@ -5,6 +5,8 @@
 
 use serde::Serialize;
 
+use crate::cost_budget::{IMPOSTOR_TEXELS_PER_PIXEL, is_impostor_class};
+
 /// Why the LODs cannot be sized; each variant names the value to change.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SizingError {
@@ -69,6 +71,20 @@ pub fn screen_height_at(height: f32, distance: f32, fov_deg: f32, resolution: f3
     height / distance * pc
 }
 
+/// Billboard texels per screen pixel (each axis) of a LOD `screen_height` pixels high: one,
+/// and at the far end ([`is_impostor_class`]) [`IMPOSTOR_TEXELS_PER_PIXEL`], where almost
+/// every pixel of a crown is partly covered and a texel's covered fraction needs finer
+/// texels than the pixel to follow the leaves' outline when the billboard is resampled at a
+/// random offset (spec animated-billboard-clouds §2.4; docs/experiments.md, "The far end
+/// under its budget").
+pub fn texels_per_pixel(screen_height: f32) -> f32 {
+    if is_impostor_class(screen_height) {
+        IMPOSTOR_TEXELS_PER_PIXEL
+    } else {
+        1.0
+    }
+}
+
 /// The LOD levels for `screen_heights` (pixels) of a tree `tree_height` high, with an error
 /// budget of `budget_px` pixels; `epsilon` overrides the derived ε.
 pub fn lod_levels(
@@ -111,7 +127,7 @@ pub fn lod_levels(
                 screen_height: h,
                 pixel,
                 epsilon: eps,
-                texels_per_unit: 1.0 / pixel,
+                texels_per_unit: texels_per_pixel(h) / pixel,
                 wood_error: budget_px * pixel,
             })
         })

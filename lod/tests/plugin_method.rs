@@ -84,6 +84,7 @@ fn a_method_registered_by_one_line_is_parsed_built_and_reported() {
         samples: 8,
         clip: None,
         cloud: CloudOptions {
+            far_blend: false,
             planes: 20,
             view_penalty: None,
             increased_density: false,

@@ -43,6 +43,31 @@ use thiserror::Error;
 
 use crate::framing::{Framing, framing, validate_camera_params};
 
+/// One image's covered samples per pixel: those an opaque or alpha-tested surface covers,
+/// and what blended layers add ([`frond_render::CoverageImage::blended`]: empty when nothing
+/// blended was drawn).
+#[derive(Clone, Copy)]
+struct Pixels<'a> {
+    samples: &'a [u16],
+    blended: &'a [f32],
+}
+
+impl Pixels<'_> {
+    /// Pixel `p`'s covered samples (an integer where nothing blended covers it).
+    #[inline]
+    fn at(&self, p: usize) -> f64 {
+        let n = f64::from(self.samples[p]);
+        match self.blended.get(p) {
+            Some(&b) => n + f64::from(b),
+            None => n,
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.samples.len()
+    }
+}
+
 /// Background colour of the metric renders; coverage does not depend on it.
 const BACKGROUND: [f32; 4] = [0.0; 4];
 
@@ -199,24 +224,22 @@ struct LoopChange {
 impl LoopChange {
     /// Adds one view's frames (`frames[f]` the original's and the simplified model's covered
     /// samples of frame `f`, in loop order).
-    fn add_view(&mut self, frames: &[(&[u16], &[u16])]) {
+    fn add_view(&mut self, frames: &[(Pixels<'_>, Pixels<'_>)]) {
         if frames.len() < 2 {
             return;
         }
         for (f, (o, s)) in frames.iter().enumerate() {
             let (o2, s2) = frames[(f + 1) % frames.len()];
-            let covered: u64 = o.iter().map(|&n| u64::from(n)).sum();
-            if covered == 0 {
+            let covered: f64 = (0..o.len()).map(|p| o.at(p)).sum();
+            if covered == 0.0 {
                 continue;
             }
-            let changed = |a: &[u16], b: &[u16]| -> u64 {
-                a.iter()
-                    .zip(b)
-                    .map(|(&x, &y)| u64::from(x.abs_diff(y)))
-                    .sum()
+            // Sums of integers where nothing is blended: exact, in any order.
+            let changed = |a: &Pixels<'_>, b: &Pixels<'_>| -> f64 {
+                (0..a.len()).map(|p| (a.at(p) - b.at(p)).abs()).sum()
             };
-            self.original += changed(o, o2) as f64 / covered as f64;
-            self.simplified += changed(s, s2) as f64 / covered as f64;
+            self.original += changed(o, &o2) / covered;
+            self.simplified += changed(s, &s2) / covered;
             self.frames += 1;
         }
     }
@@ -335,15 +358,15 @@ pub fn coverage_error(
         let (a, _) = o.render(chunk)?;
         let (b, _) = s.render(chunk)?;
         for (&(d, f), (a, b)) in chunk.iter().zip(a.iter().zip(&b)) {
-            let pair = pair_sums((&a.0, &a.1), (&b.0, &b.1), samples);
-            if pair.original == 0 {
+            let pair = pair_sums((a.pixels(), &a.colour), (b.pixels(), &b.colour), samples);
+            if pair.original == 0.0 {
                 return Err(MetricError::NothingCovered { view: d, frame: f });
             }
             sums.push(pair);
         }
         for (a, b) in a.chunks(frames).zip(b.chunks(frames)) {
-            let view: Vec<(&[u16], &[u16])> = (a.iter().zip(b))
-                .map(|(a, b)| (a.0.as_slice(), b.0.as_slice()))
+            let view: Vec<(Pixels<'_>, Pixels<'_>)> = (a.iter().zip(b))
+                .map(|(a, b)| (a.pixels(), b.pixels()))
                 .collect();
             change.add_view(&view);
         }
@@ -384,6 +407,9 @@ pub struct CoverageImages {
     pub samples_per_pixel: u32,
     /// View-major (`d · frames + f`): each pixel's covered samples.
     samples: Vec<Vec<u16>>,
+    /// The same pairs: what blended layers add to each pixel's covered samples (empty
+    /// vectors where nothing blended was drawn).
+    blended: Vec<Vec<f32>>,
     /// The same pairs: mean linear RGB of each pixel's covered samples (empty vectors when
     /// drawn without colour, [`CoverageParams::colour`]).
     colour: Vec<Vec<[f32; 3]>>,
@@ -395,11 +421,19 @@ pub struct CoverageImages {
 impl CoverageImages {
     /// Pair `pair`'s (view-major) covered fraction of each pixel, 0..1, row by row from the top.
     pub fn fractions(&self, pair: usize) -> Vec<f32> {
-        let n = self.samples_per_pixel as f32;
-        self.samples[pair]
-            .iter()
-            .map(|&c| f32::from(c) / n)
+        let n = f64::from(self.samples_per_pixel);
+        let pixels = self.pixels(pair);
+        (0..pixels.len())
+            .map(|p| (pixels.at(p) / n) as f32)
             .collect()
+    }
+
+    /// Pair `pair`'s covered samples per pixel.
+    fn pixels(&self, pair: usize) -> Pixels<'_> {
+        Pixels {
+            samples: &self.samples[pair],
+            blended: &self.blended[pair],
+        }
     }
 }
 
@@ -424,16 +458,19 @@ pub fn coverage_images(
         .collect();
     let (rendered, first_depth_complexity) =
         Drawing::new(renderer, scenes, &framing, params)?.render(&pairs)?;
-    let (mut samples, mut colour) = (Vec::new(), Vec::new());
-    for (counts, rgb) in rendered {
-        if counts.len() != expected {
+    let (mut samples, mut blended, mut colour) = (Vec::new(), Vec::new(), Vec::new());
+    for image in rendered {
+        if image.samples.len() != expected
+            || !(image.blended.is_empty() || image.blended.len() == expected)
+        {
             return Err(MetricError::MaskSize {
-                len: counts.len(),
+                len: image.samples.len().max(image.blended.len()),
                 expected,
             });
         }
-        samples.push(counts);
-        colour.push(rgb);
+        samples.push(image.samples);
+        blended.push(image.blended);
+        colour.push(image.colour);
     }
     Ok(CoverageImages {
         width: framing.width,
@@ -442,13 +479,27 @@ pub fn coverage_images(
         frames: scenes.len(),
         samples_per_pixel: framing.supersample * framing.supersample,
         samples,
+        blended,
         colour,
         first_depth_complexity,
     })
 }
 
-/// One pair's image: each pixel's covered samples and their mean colour.
-type PairImage = (Vec<u16>, Vec<[f32; 3]>);
+/// One pair's image: each pixel's covered samples (counted, and blended), their mean colour.
+struct PairImage {
+    samples: Vec<u16>,
+    blended: Vec<f32>,
+    colour: Vec<[f32; 3]>,
+}
+
+impl PairImage {
+    fn pixels(&self) -> Pixels<'_> {
+        Pixels {
+            samples: &self.samples,
+            blended: &self.blended,
+        }
+    }
+}
 
 /// One model's frames ready to be drawn from the metric's views: by the CPU rasteriser with
 /// their textures' mip chains prepared once (a model's frames share them), or by wgpu.
@@ -524,7 +575,12 @@ impl<'a> Drawing<'a> {
                 } else {
                     (render_coverage(scene, textures, view_proj, w, h, k)?, None)
                 };
-                Ok(((image.samples, image.colour), depth))
+                let pair = PairImage {
+                    samples: image.samples,
+                    blended: image.blended,
+                    colour: image.colour,
+                };
+                Ok((pair, depth))
             })
             .collect::<Result<_, MetricError>>()?;
         let first_depth = images.iter().find_map(|(_, d)| *d);
@@ -554,22 +610,19 @@ pub fn compare_images(
         for &f in frames {
             let i = d * original.frames + f;
             let pair = pair_sums(
-                (&original.samples[i], &original.colour[i]),
-                (&simplified.samples[i], &simplified.colour[i]),
+                (original.pixels(i), &original.colour[i]),
+                (simplified.pixels(i), &simplified.colour[i]),
                 original.samples_per_pixel,
             );
-            if pair.original == 0 {
+            if pair.original == 0.0 {
                 return Err(MetricError::NothingCovered { view: d, frame: f });
             }
             pairs.push(pair);
         }
-        let view: Vec<(&[u16], &[u16])> = (frames.iter())
+        let view: Vec<(Pixels<'_>, Pixels<'_>)> = (frames.iter())
             .map(|&f| {
                 let i = d * original.frames + f;
-                (
-                    original.samples[i].as_slice(),
-                    simplified.samples[i].as_slice(),
-                )
+                (original.pixels(i), simplified.pixels(i))
             })
             .collect();
         change.add_view(&view);
@@ -582,21 +635,22 @@ pub fn compare_images(
     ))
 }
 
-/// The sums of one (view, frame) pair, in samples (exact integers) and weighted colour.
+/// The sums of one (view, frame) pair, in samples (exact integers where nothing blended is
+/// drawn: sums of integers in `f64`) and weighted colour.
 #[derive(Clone, Copy, Debug, Default)]
 struct PairSums {
     /// `Σ n_o`: the original's covered samples.
-    original: u64,
+    original: f64,
     /// `Σ n_s`.
-    simplified: u64,
+    simplified: f64,
     /// `Σ |n_o − n_s|`.
-    differing: u64,
+    differing: f64,
     /// Pixels the original covers (at least half of their samples).
     original_pixels: u64,
     /// Pixels covered by exactly one of the two, by that rule.
     differing_pixels: u64,
     /// `Σ min(n_o, n_s)` over the pixels whose colour is compared.
-    shared: u64,
+    shared: f64,
     /// `Σ min(n_o, n_s) · |c_o − c_s|` (mean of the three channels).
     colour: f64,
     /// `Σ min(n_o, n_s) · (c_o − c_s)` (mean of the three channels).
@@ -606,30 +660,30 @@ struct PairSums {
 /// The sums of one pair's two images (covered samples and colour per pixel, `samples` a
 /// pixel).
 fn pair_sums(
-    (o, o_rgb): (&[u16], &[[f32; 3]]),
-    (s, s_rgb): (&[u16], &[[f32; 3]]),
+    (o, o_rgb): (Pixels<'_>, &[[f32; 3]]),
+    (s, s_rgb): (Pixels<'_>, &[[f32; 3]]),
     samples: u32,
 ) -> PairSums {
     // Images drawn without colour have none to compare.
     let with_colour = o_rgb.len() == o.len() && s_rgb.len() == s.len();
-    let half = samples;
+    let half = f64::from(samples);
     let mut sums = PairSums::default();
-    for (p, (&no, &ns)) in o.iter().zip(s).enumerate() {
-        let (no, ns) = (u64::from(no), u64::from(ns));
+    for p in 0..o.len().min(s.len()) {
+        let (no, ns) = (o.at(p), s.at(p));
         sums.original += no;
         sums.simplified += ns;
-        sums.differing += no.abs_diff(ns);
-        let (bo, bs) = (2 * no >= u64::from(half), 2 * ns >= u64::from(half));
+        sums.differing += (no - ns).abs();
+        let (bo, bs) = (2.0 * no >= half, 2.0 * ns >= half);
         sums.original_pixels += u64::from(bo);
         sums.differing_pixels += u64::from(bo != bs);
         let w = no.min(ns);
-        if with_colour && w > 0 {
+        if with_colour && w > 0.0 {
             let (a, b) = (o_rgb[p], s_rgb[p]);
             let d: f32 = (0..3).map(|c| (a[c] - b[c]).abs()).sum();
             let sd: f32 = (0..3).map(|c| a[c] - b[c]).sum();
             sums.shared += w;
-            sums.colour += w as f64 * f64::from(d) / 3.0;
-            sums.signed += w as f64 * f64::from(sd) / 3.0;
+            sums.colour += w * f64::from(d) / 3.0;
+            sums.signed += w * f64::from(sd) / 3.0;
         }
     }
     sums
@@ -643,28 +697,24 @@ fn report_of(
     samples_per_pixel: u32,
     change: LoopChange,
 ) -> CoverageReport {
-    let per_pair: Vec<f64> = (pairs.iter())
-        .map(|p| p.differing as f64 / p.original as f64)
-        .collect();
-    let ratio_per_pair: Vec<f64> = (pairs.iter())
-        .map(|p| p.simplified as f64 / p.original as f64)
-        .collect();
+    let per_pair: Vec<f64> = (pairs.iter()).map(|p| p.differing / p.original).collect();
+    let ratio_per_pair: Vec<f64> = (pairs.iter()).map(|p| p.simplified / p.original).collect();
     let per_view = per_pair
         .chunks(frames.max(1))
         .map(|c| c.iter().sum::<f64>() / c.len() as f64)
         .collect();
     let colour_per_pair: Vec<f64> = (pairs.iter())
         .map(|p| {
-            if p.shared > 0 {
-                p.colour / p.shared as f64
+            if p.shared > 0.0 {
+                p.colour / p.shared
             } else {
                 f64::NAN
             }
         })
         .collect();
     let shifts: Vec<f64> = (pairs.iter())
-        .filter(|p| p.shared > 0)
-        .map(|p| (p.signed / p.shared as f64).abs())
+        .filter(|p| p.shared > 0.0)
+        .map(|p| (p.signed / p.shared).abs())
         .collect();
     let coloured: Vec<f64> = colour_per_pair
         .iter()
@@ -683,7 +733,7 @@ fn report_of(
         per_view,
         ratio: mean_or_nan(&ratio_per_pair),
         original_coverage: (pairs.iter())
-            .map(|p| p.original as f64 / f64::from(samples_per_pixel))
+            .map(|p| p.original / f64::from(samples_per_pixel))
             .collect(),
         binary: BinaryCoverage {
             mean: mean_or_nan(&kept),
@@ -807,7 +857,11 @@ fn gpu_image(
                 }
             }
         });
-    Ok((samples, colour))
+    Ok(PairImage {
+        samples,
+        blended: Vec::new(),
+        colour,
+    })
 }
 
 fn validate(
@@ -865,6 +919,7 @@ mod tests {
             frames: 1,
             samples_per_pixel: 4,
             samples: vec![counts],
+            blended: vec![vec![]],
             colour: vec![vec![]],
             first_depth_complexity: None,
         };
@@ -903,6 +958,7 @@ mod tests {
             frames: 1,
             samples_per_pixel: 4,
             samples: vec![counts],
+            blended: vec![vec![]],
             colour: vec![rgb],
             first_depth_complexity: None,
         };

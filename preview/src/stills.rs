@@ -75,8 +75,9 @@ pub struct FilteredStill {
     pub height: u32,
     /// Samples per pixel side, `K`.
     pub samples_per_side: u32,
-    /// Covered samples of each pixel, row-major, top row first (at most `K²`).
-    pub covered: Vec<u32>,
+    /// Covered samples of each pixel, row-major, top row first (at most `K²`; blended layers
+    /// count their alpha, so a sample may be partly covered).
+    pub covered: Vec<f32>,
     /// `width * height * 4` bytes of sRGB RGBA8, straight alpha: per pixel the mean colour of
     /// its covered samples (averaged in linear light), alpha the covered fraction.
     pub rgba: Vec<u8>,
@@ -94,10 +95,12 @@ impl FilteredStill {
     /// The still of a coverage `image` of `size` pixels at `k × k` samples drawn with colour.
     fn of_image(image: &CoverageImage, size: (u32, u32), k: u32) -> FilteredStill {
         let n = f64::from(k * k);
-        let covered: Vec<u32> = image.samples.iter().map(|&c| u32::from(c)).collect();
+        let covered: Vec<f32> = (0..image.samples.len())
+            .map(|i| image.covered_samples(i))
+            .collect();
         let mut rgba = vec![0u8; 4 * covered.len()];
         for ((px, &c), rgb) in rgba.chunks_exact_mut(4).zip(&covered).zip(&image.colour) {
-            if c > 0 {
+            if c > 0.0 {
                 for (o, v) in px.iter_mut().zip(rgb) {
                     *o = frond_render::linear_to_srgb(*v);
                 }
@@ -117,7 +120,8 @@ impl FilteredStill {
     /// all, grown by `pad` pixels within the image ([`covered_rect`]).
     pub fn covered_box(&self, other: Option<&FilteredStill>, pad: u32) -> [u32; 4] {
         covered_rect(self.width, self.height, pad, |i| {
-            self.covered[i] > 0 || other.is_some_and(|o| o.covered.get(i).is_some_and(|&c| c > 0))
+            self.covered[i] > 0.0
+                || other.is_some_and(|o| o.covered.get(i).is_some_and(|&c| c > 0.0))
         })
     }
 }
@@ -200,14 +204,16 @@ impl<'a> Drawer<'a> {
         let (coverage, colour) = (coverage?, colour?);
         let n = f64::from(k * k);
         let (w, h) = (size.0 as usize, size.1 as usize);
-        let covered: Vec<u32> = coverage.samples.iter().map(|&c| u32::from(c)).collect();
+        let covered: Vec<f32> = (0..coverage.samples.len())
+            .map(|i| coverage.covered_samples(i))
+            .collect();
         let mut rgba = vec![0u8; 4 * covered.len()];
         rgba.par_chunks_mut(4 * w.max(1))
             .enumerate()
             .for_each(|(y, row)| {
                 for (x, px) in row.chunks_exact_mut(4).enumerate() {
                     let c = covered[y * w + x];
-                    if c == 0 {
+                    if c <= 0.0 {
                         continue;
                     }
                     if let Some(rgb) = pixel_colour(&colour, x, y, (w, h)) {
@@ -241,7 +247,7 @@ impl<'a> Drawer<'a> {
         Ok(Frame {
             width: size.0,
             height: size.1,
-            coverage: still.covered.iter().map(|&c| c > 0).collect(),
+            coverage: still.covered.iter().map(|&c| c > 0.0).collect(),
             rgba: still.rgba,
         })
     }
@@ -540,7 +546,7 @@ mod tests {
             width: covered.len() as u32,
             height: 1,
             samples_per_side: 2,
-            covered: covered.to_vec(),
+            covered: covered.iter().map(|&c| c as f32).collect(),
             rgba: covered
                 .iter()
                 .flat_map(|&c| {
@@ -609,11 +615,12 @@ mod tests {
             height: 1,
             samples_per_pixel: 4,
             samples: vec![3, 0],
+            blended: vec![],
             colour: vec![[2.0 / 3.0; 3], [0.0; 3]],
         };
         let s = FilteredStill::of_image(&image, (2, 1), 2);
         assert_eq!((s.width, s.height, s.samples_per_side), (2, 1, 2));
-        assert_eq!(s.covered, vec![3, 0]);
+        assert_eq!(s.covered, vec![3.0, 0.0]);
         assert_eq!(s.fraction(0), 0.75);
         // Two thirds of white in linear light is sRGB 213, not the byte mean 170.
         let grey = frond_render::linear_to_srgb(2.0 / 3.0);

@@ -790,7 +790,7 @@ impl Region {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{DrawMaterial, DrawMesh, DrawTexture};
+    use crate::scene::{DrawAlpha, DrawMaterial, DrawMesh, DrawTexture};
     use crate::software::bands::Bands;
 
     /// A triangle pair over NDC `[x0, x1] × [-1, 1]` at depth `z` with normal `n`, counter-
@@ -938,7 +938,7 @@ mod tests {
         // A 2×1 texture, clamped at its edges: left texel opaque white, right texel clear.
         // The near quad shows the far one through its clear half.
         let cut = DrawMaterial {
-            alpha_cutoff: Some(0.5),
+            alpha: DrawAlpha::Mask(0.5),
             texture: Some(0),
             double_sided: true,
             wrap: [frond_scene::Wrap::ClampToEdge; 2],
@@ -1056,7 +1056,7 @@ mod tests {
             })
             .collect();
         let material = |cutoff, wrap| DrawMaterial {
-            alpha_cutoff: Some(cutoff),
+            alpha: DrawAlpha::Mask(cutoff),
             texture: Some(0),
             double_sided: true,
             wrap: [wrap; 2],
@@ -1157,7 +1157,7 @@ mod tests {
             })
             .collect();
         let cut = DrawMaterial {
-            alpha_cutoff: Some(0.5),
+            alpha: DrawAlpha::Mask(0.5),
             texture: Some(0),
             double_sided: true,
             ..DrawMaterial::opaque([0.9, 0.8, 1.0, 1.0])

@@ -59,9 +59,12 @@ pub use bake_raster::{BakeImage, BakeScratch, BakeTarget, CoveredPixel, render_b
 pub use camera::{Camera, Projection};
 pub use error::RenderError;
 pub use frame::Frame;
-pub use pipeline::{LIGHT_DIRECTION, alpha_mip_chain, linear_mip_chain, mip_chain};
+pub use pipeline::{
+    LIGHT_DIRECTION, alpha_mip_chain, blend_alpha_mip_chain, blend_mip_chain, linear_mip_chain,
+    mip_chain,
+};
 pub use renderer::{Output, Renderer};
-pub use scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
+pub use scene::{DrawAlpha, DrawMaterial, DrawMesh, DrawScene, DrawTexture};
 pub use software::{
     CoverageImage, Lighting, MAX_SUPERSAMPLE, SoftwareTextures, depth_complexity, render_coverage,
     render_coverage_with_depth,

@@ -322,27 +322,41 @@ fn preserve_coverage(data: &[u8], stride: usize, target: f32) -> Vec<u8> {
 /// alpha-tested coverage (`preserve_coverage`). Public so that CPU models of what the
 /// renderer shows (card thinning's coverage) sample the same levels.
 pub fn mip_chain(width: u32, height: u32, rgba: &[u8]) -> Vec<(u32, u32, Vec<u8>)> {
-    chain(width, height, rgba, 4, downsample)
+    chain(width, height, rgba, 4, downsample, true)
+}
+
+/// The mip chain of a blended (glTF BLEND) RGBA8 sRGB image: [`mip_chain`]'s box filter with
+/// alpha averaged and not rescaled. A blended texel's alpha is the fraction of it covered, so
+/// the mean of four is the fraction of the larger texel covered, at every level.
+pub fn blend_mip_chain(width: u32, height: u32, rgba: &[u8]) -> Vec<(u32, u32, Vec<u8>)> {
+    chain(width, height, rgba, 4, downsample, false)
 }
 
 /// The alpha of every level of [`mip_chain`], computed from the image's alpha alone (one byte
 /// a texel): the same bytes as the chain's alpha channel, without its colour work (the colour levels of
 /// a large leaf map are slow to make, and a coverage render reads none of them).
 pub fn alpha_mip_chain(width: u32, height: u32, alpha: &[u8]) -> Vec<(u32, u32, Vec<u8>)> {
-    chain(width, height, alpha, 1, downsample_alpha)
+    chain(width, height, alpha, 1, downsample_alpha, true)
+}
+
+/// The alpha of every level of [`blend_mip_chain`], from the image's alpha alone.
+pub fn blend_alpha_mip_chain(width: u32, height: u32, alpha: &[u8]) -> Vec<(u32, u32, Vec<u8>)> {
+    chain(width, height, alpha, 1, downsample_alpha, false)
 }
 
 /// One mip level: width, height, texels.
 type Level = (u32, u32, Vec<u8>);
 
-/// The coverage-preserving chain of texels of `stride` bytes (alpha last), each level from the
-/// previous one's plain `down`sample.
+/// The chain of texels of `stride` bytes (alpha last), each level from the previous one's
+/// plain `down`sample: alpha rescaled to keep level 0's alpha-tested coverage where
+/// `preserve`, averaged as it is otherwise (blended alpha).
 fn chain(
     width: u32,
     height: u32,
     data: &[u8],
     stride: usize,
     down: fn(u32, u32, &[u8]) -> Level,
+    preserve: bool,
 ) -> Vec<Level> {
     let levels = 32 - width.max(height).max(1).leading_zeros();
     let coverage0 = alpha_coverage(data, stride);
@@ -350,7 +364,12 @@ fn chain(
     let (mut w, mut h, mut level) = (width, height, data.to_vec());
     for _ in 1..levels {
         (w, h, level) = down(w, h, &level);
-        out.push((w, h, preserve_coverage(&level, stride, coverage0)));
+        let kept = if preserve {
+            preserve_coverage(&level, stride, coverage0)
+        } else {
+            level.clone()
+        };
+        out.push((w, h, kept));
     }
     out
 }

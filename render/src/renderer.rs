@@ -425,7 +425,7 @@ impl Renderer {
             };
             let uniform = MaterialUniform {
                 base_color: material.base_color,
-                params: [material.alpha_cutoff.unwrap_or(-1.0), 0.0, 0.0, 0.0],
+                params: [material.alpha.test_cutoff().unwrap_or(-1.0), 0.0, 0.0, 0.0],
             };
             let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("frond-render material"),

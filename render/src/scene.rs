@@ -30,8 +30,44 @@ impl DrawTexture {
     }
 }
 
+/// How a material's alpha is drawn (glTF `alphaMode`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DrawAlpha {
+    /// Alpha is ignored: every fragment covers its sample (glTF OPAQUE).
+    Opaque,
+    /// Alpha test: fragments with alpha below the cutoff are discarded (glTF MASK).
+    Mask(f32),
+    /// Alpha blending (glTF BLEND): a fragment of alpha α covers α of its sample, and layers
+    /// composite as `1 − Π(1 − αᵢ)`, whatever their order. The CPU coverage rasteriser draws
+    /// it so, with plain box-filtered mips (a texel's alpha is a covered fraction, whose area
+    /// average is the covered fraction of the larger texel); renders that cannot blend (the
+    /// wgpu path, the bake) test it at ½ ([`DrawAlpha::test_cutoff`]).
+    Blend,
+}
+
+impl DrawAlpha {
+    /// The alpha test of a renderer that draws every surface opaque or alpha-tested: a MASK
+    /// material's cutoff, ½ for BLEND (the coverage a blended texel of alpha ½ or more rounds
+    /// to), none for OPAQUE.
+    pub fn test_cutoff(self) -> Option<f32> {
+        match self {
+            DrawAlpha::Opaque => None,
+            DrawAlpha::Mask(cutoff) => Some(cutoff),
+            DrawAlpha::Blend => Some(0.5),
+        }
+    }
+
+    /// The alpha test's cutoff of a MASK material; none for OPAQUE and BLEND.
+    pub fn mask_cutoff(self) -> Option<f32> {
+        match self {
+            DrawAlpha::Mask(cutoff) => Some(cutoff),
+            DrawAlpha::Opaque | DrawAlpha::Blend => None,
+        }
+    }
+}
+
 /// A metallic-roughness-free subset of a glTF material: base colour, optional base
-/// colour texture, alpha mode (OPAQUE or MASK) and culling.
+/// colour texture, alpha mode (OPAQUE, MASK or BLEND) and culling.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DrawMaterial {
     /// Linear RGBA factor multiplied with the texture sample.
@@ -42,9 +78,8 @@ pub struct DrawMaterial {
     /// linear RGB, +Y along the mesh's bitangent), applied by the CPU rasteriser to meshes with
     /// [`DrawMesh::tangents`] and sampled with the same UVs as `texture`.
     pub normal_texture: Option<usize>,
-    /// `Some(cutoff)`: alpha test (glTF MASK), fragments with alpha < cutoff are
-    /// discarded. `None`: opaque, alpha is ignored.
-    pub alpha_cutoff: Option<f32>,
+    /// How alpha is drawn: ignored, tested or blended.
+    pub alpha: DrawAlpha,
     /// Draw both faces; otherwise back faces (clockwise on screen) are culled.
     pub double_sided: bool,
     /// How the texture wraps outside [0, 1] along u and v (the glTF sampler's modes).
@@ -58,7 +93,7 @@ impl DrawMaterial {
             base_color,
             texture: None,
             normal_texture: None,
-            alpha_cutoff: None,
+            alpha: DrawAlpha::Opaque,
             double_sided: false,
             wrap: [Wrap::Repeat; 2],
         }

@@ -6,7 +6,7 @@ use frond_scene::skinning::{palettes, skin_into, skin_normals, skin_tangents};
 use frond_scene::{AlphaMode, Part, Tree};
 use glam::{Vec3, Vec4};
 
-use crate::scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
+use crate::scene::{DrawAlpha, DrawMaterial, DrawMesh, DrawScene, DrawTexture};
 
 /// Which triangles of the tree to draw.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -238,10 +238,10 @@ fn materials_and_textures(
             base_color: m.base_color,
             texture: m.base_color_texture,
             normal_texture: m.normal_texture.filter(|_| mapped),
-            alpha_cutoff: match m.alpha_mode {
-                AlphaMode::Opaque => None,
-                AlphaMode::Mask => Some(m.alpha_cutoff),
-                AlphaMode::Blend => Some(0.5),
+            alpha: match m.alpha_mode {
+                AlphaMode::Opaque => DrawAlpha::Opaque,
+                AlphaMode::Mask => DrawAlpha::Mask(m.alpha_cutoff),
+                AlphaMode::Blend => DrawAlpha::Blend,
             },
             double_sided: m.double_sided,
         })

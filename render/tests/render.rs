@@ -3,7 +3,8 @@
 //! Each test creates one `Renderer` and fails (never skips) when no adapter exists.
 
 use frond_render::{
-    Camera, DrawMaterial, DrawMesh, DrawScene, DrawTexture, Frame, Projection, RenderError,
+    Camera, DrawAlpha, DrawMaterial, DrawMesh, DrawScene, DrawTexture, Frame, Projection,
+    RenderError,
 };
 use frond_scene::Wrap;
 use glam::Vec3;
@@ -118,7 +119,7 @@ fn alpha_mask_cuts_out_the_transparent_half() {
         base_color: [1.0; 4],
         texture: Some(0),
         normal_texture: None,
-        alpha_cutoff: Some(0.5),
+        alpha: DrawAlpha::Mask(0.5),
         double_sided: true,
     };
     let mut s = DrawScene {
@@ -148,7 +149,7 @@ fn alpha_mask_cuts_out_the_transparent_half() {
     );
 
     // The same texture on an opaque material ignores alpha.
-    s.materials[0].alpha_cutoff = None;
+    s.materials[0].alpha = DrawAlpha::Opaque;
     let frame = r
         .render(&s, &ortho(0.0, 1.0), 64, 64, [0.0; 4])
         .expect("render");
@@ -175,7 +176,7 @@ fn wrap_modes_decide_what_lies_outside_the_texture() {
                 base_color: [1.0; 4],
                 texture: Some(0),
                 normal_texture: None,
-                alpha_cutoff: Some(0.5),
+                alpha: DrawAlpha::Mask(0.5),
                 double_sided: true,
                 wrap,
             }],
@@ -581,7 +582,7 @@ fn heavy_timing_100k_triangles() {
             base_color: [1.0; 4],
             texture: Some(0),
             normal_texture: None,
-            alpha_cutoff: Some(0.5),
+            alpha: DrawAlpha::Mask(0.5),
             double_sided: true,
         }],
         textures: vec![DrawTexture {

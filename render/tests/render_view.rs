@@ -3,7 +3,8 @@
 //! Runs on whatever adapter the machine has (llvmpipe in CI) and fails when none exists.
 
 use frond_render::{
-    Camera, DrawMaterial, DrawMesh, DrawScene, DrawTexture, Frame, Output, Projection, RenderError,
+    Camera, DrawAlpha, DrawMaterial, DrawMesh, DrawScene, DrawTexture, Frame, Output, Projection,
+    RenderError,
 };
 use glam::camera::rh::{proj::directx, view};
 use glam::{Mat4, Vec3};
@@ -199,7 +200,7 @@ fn normal_output_keeps_the_alpha_test() {
         meshes: vec![rect_z([-2.0, -1.0], [2.0, 3.0], -1.0)],
         materials: vec![DrawMaterial {
             texture: Some(0),
-            alpha_cutoff: Some(0.5),
+            alpha: DrawAlpha::Mask(0.5),
             ..DrawMaterial::default()
         }],
         textures: vec![DrawTexture {
@@ -275,7 +276,7 @@ fn mipmapped_renders_keep_coverage_when_minified_and_change_nothing_magnified() 
         rect_z([-2.0, -1.0], [2.0, 3.0], -1.0),
         DrawMaterial {
             texture: Some(0),
-            alpha_cutoff: Some(0.5),
+            alpha: DrawAlpha::Mask(0.5),
             double_sided: true,
             ..DrawMaterial::default()
         },

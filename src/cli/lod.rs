@@ -8,7 +8,7 @@ use anyhow::Result;
 use crate::cli::args::{BuildArgs, ImportArgs, RunArgs};
 use crate::cli::progress::{Spinner, print_json};
 use crate::cli::values::{
-    AnimationArg, EngineArg, MethodArg, NormalsArg, TexturesArg, VatSpaceArg,
+    AnimationArg, EngineArg, FarAlphaArg, MethodArg, NormalsArg, TexturesArg, VatSpaceArg,
 };
 use frond_app::lod_cmd::run_lod;
 use frond_app::lod_settings::{DEFAULT_MAX_ERROR, LodSettings, MethodChoice};
@@ -99,6 +99,11 @@ pub struct LodArgs {
     /// first mip level, which is all a LOD shown near its own size uses.
     #[arg(long, default_value_t = 2)]
     pub padding: u32,
+    /// How the far end (LODs of 32 px or less) draws its billboards' alpha: mask
+    /// (alpha-tested, coverage kept by threshold) or blend (each texel's alpha the fraction of
+    /// it covered, glTF BLEND).
+    #[arg(long, value_enum, default_value_t = FarAlphaArg::Mask)]
+    pub far_alpha: FarAlphaArg,
     /// Add MSFT_lod (with MSFT_screencoverage) to the combined file.
     #[arg(long)]
     pub msft_lod: bool,
@@ -166,6 +171,7 @@ impl LodArgs {
             build: self.build.settings(),
             max_atlas: self.max_atlas,
             padding: self.padding,
+            far_alpha: self.far_alpha.into(),
             msft_lod: self.msft_lod,
             external_textures: self.external_textures,
             textures: self.textures.into(),

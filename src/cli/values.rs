@@ -5,7 +5,7 @@ use clap::ValueEnum;
 use clap::builder::PossibleValue;
 use frond_app::eval_cmd::Lighting;
 use frond_app::lod_settings::{
-    Animation, BakeRasteriser, Engine, MethodChoice, Normals, Textures, VatSpace,
+    Animation, BakeRasteriser, Engine, FarAlpha, MethodChoice, Normals, Textures, VatSpace,
 };
 use frond_render::TreeParts;
 use frond_scene::generator::Preset;
@@ -74,6 +74,26 @@ impl From<TexturesArg> for Textures {
             TexturesArg::Png => Textures::Png,
             TexturesArg::Ktx2 => Textures::Ktx2,
             TexturesArg::Ktx2Png => Textures::Ktx2Png,
+        }
+    }
+}
+
+/// A `--far-alpha` value: how the far end draws its billboards' alpha.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum FarAlphaArg {
+    /// Alpha-tested (glTF MASK), coverage kept by threshold: for engines that draw it with
+    /// alpha-to-coverage.
+    #[default]
+    Mask,
+    /// Each texel's alpha the fraction of it covered, drawn blended (glTF BLEND).
+    Blend,
+}
+
+impl From<FarAlphaArg> for FarAlpha {
+    fn from(a: FarAlphaArg) -> FarAlpha {
+        match a {
+            FarAlphaArg::Mask => FarAlpha::Mask,
+            FarAlphaArg::Blend => FarAlpha::Blend,
         }
     }
 }

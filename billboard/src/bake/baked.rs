@@ -14,7 +14,8 @@ pub struct Atlas {
     pub height: u32,
     /// `width * height * 4` bytes: sRGB colour with straight alpha. Alpha grows with the
     /// covered fraction of the texel and is >= 128 exactly when that fraction reaches
-    /// [`BakeParams::alpha_cutoff`](crate::BakeParams::alpha_cutoff); uncovered texels have alpha 0 and the colour of the
+    /// [`BakeParams::alpha_cutoff`](crate::BakeParams::alpha_cutoff) (or, [`Atlas::blended`], is that fraction);
+    /// uncovered texels have alpha 0 and the colour of the
     /// nearest covered texel of their quad (dilation, improved-billboard-cloud §4 item 6).
     pub color: Vec<u8>,
     /// `width * height * 4` bytes, linear: a tangent-space normal map in glTF's
@@ -24,6 +25,9 @@ pub struct Atlas {
     /// leaves' normals wherever the billboard turns; alpha as in `color` (dilated the same
     /// way).
     pub normal: Vec<u8>,
+    /// Each texel's alpha is the fraction of it covered ([`BakeParams::covered_fraction`](crate::BakeParams::covered_fraction)):
+    /// drawn blended (glTF `BLEND`), its mips plain area averages. Otherwise alpha-tested at ½.
+    pub blended: bool,
 }
 
 /// Where one quad's texture lies in the atlas, in texels (its padding ring surrounds it).

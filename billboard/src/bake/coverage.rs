@@ -44,6 +44,91 @@ pub(super) fn preserve_coverage(
     grown
 }
 
+/// Sets each covered texel's alpha to the fraction of it covered, scaled so that each cell
+/// keeps its summed coverage times its `scales` entry ([`BakeParams::covered_fraction`](crate::BakeParams::covered_fraction)):
+/// `α = min(1, s'·n/total)` with `s'` the scale at which the cell's alphas sum to `scale·Σn/total`
+/// (bisected; `s' = scale` while no texel saturates). Where even every covered texel opaque
+/// falls short, the rest is spread over uncovered texels beside them ([`grown_texels`]),
+/// returned with their alpha for after dilation. Blended alpha composes as coverage does, and
+/// box-filtered mips keep it at every level.
+pub(super) fn covered_fractions(
+    out: &mut Downsampled,
+    cells: &[Cell],
+    scales: &[f64],
+    total: u32,
+) -> Vec<(usize, u8)> {
+    let w = out.width as usize;
+    let total = f64::from(total.max(1));
+    let rects: Vec<[usize; 4]> = (cells.iter())
+        .map(|c| padded_rect(c, 0, out.width, out.height))
+        .collect();
+    // Per cell: its covered texels' fractions and the scale that keeps their sum.
+    let plans: Vec<(f64, f64)> = (rects.par_iter().zip(scales))
+        .map(|(&[x0, x1, y0, y1], &scale)| {
+            let fractions: Vec<f64> = (y0..y1)
+                .flat_map(|y| (x0..x1).map(move |x| y * w + x))
+                .map(|i| f64::from(out.samples[i]) / total)
+                .filter(|&f| f > 0.0)
+                .collect();
+            let want = scale * fractions.iter().sum::<f64>();
+            (
+                fitted_scale(&fractions, scale, want),
+                want - fractions.len() as f64,
+            )
+        })
+        .collect();
+    let grown: Vec<(usize, u8)> = (plans.par_iter().zip(&rects))
+        .filter(|((_, short), _)| *short >= 0.5)
+        .flat_map_iter(|(&(_, short), &rect)| {
+            let texels = grown_texels(out, rect, short.ceil() as usize);
+            let alpha = round_alpha(short / texels.len().max(1) as f64);
+            texels.into_iter().map(move |i| (i, alpha))
+        })
+        .collect();
+    for (&[x0, x1, y0, y1], &(s, _)) in rects.iter().zip(&plans) {
+        for y in y0..y1 {
+            for i in (x0..x1).map(|x| y * w + x) {
+                let n = out.samples[i];
+                if n > 0 {
+                    let alpha = round_alpha(s * f64::from(n) / total).max(1);
+                    out.color[i * 4 + 3] = alpha;
+                    out.normal[i * 4 + 3] = alpha;
+                }
+            }
+        }
+    }
+    grown
+}
+
+/// The scale `s ≥ scale` at which `Σ min(1, s·f)` over `fractions` reaches `want` (its
+/// largest useful value, where every fraction saturates, when it cannot).
+fn fitted_scale(fractions: &[f64], scale: f64, want: f64) -> f64 {
+    let sum = |s: f64| fractions.iter().map(|&f| (s * f).min(1.0)).sum::<f64>();
+    let least = fractions.iter().copied().fold(f64::INFINITY, f64::min);
+    if fractions.is_empty() || sum(scale) >= want {
+        return scale;
+    }
+    let mut hi = (1.0 / least).max(scale);
+    if sum(hi) <= want {
+        return hi;
+    }
+    let mut lo = scale;
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if sum(mid) < want {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
+}
+
+/// A fraction 0..1 as an alpha byte, rounded.
+fn round_alpha(f: f64) -> u8 {
+    (f.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
 /// How a cell's alpha is re-thresholded: its texels with at least `threshold` covered samples
 /// pass, and `grow` uncovered ones beside them ([`grown_texels`]) when its coverage asks for
 /// more texels than its leaves touch.

@@ -70,6 +70,7 @@ pub(super) fn finish_cells(
         height: d.height,
         color: d.color,
         normal: d.normal,
+        blended: false,
     }
 }
 

@@ -42,6 +42,12 @@ pub struct BakeParams {
     /// finds so that the cloud covers as much as its leaves seen from around them. 1 keeps
     /// each quad's own rule.
     pub coverage_gain: f64,
+    /// Each texel's alpha is the fraction of it covered, scaled as `preserve_coverage`
+    /// scales each quad's coverage (the whole cell's covered area kept, a texel's alpha
+    /// at most 1): for a far LOD drawn blended (glTF
+    /// `BLEND`), where almost every pixel of a crown is partly covered and an alpha-tested texel
+    /// covers all of a pixel or none ([`Atlas::blended`](crate::Atlas::blended)). Off: alpha-tested bytes.
+    pub covered_fraction: bool,
     /// Which rasteriser draws the atlas: the CPU bake rasteriser (default: the same atlas on
     /// every machine) or the wgpu renderer (a GPU, when there is one).
     pub rasteriser: BakeRasteriser,
@@ -74,6 +80,7 @@ impl Default for BakeParams {
             max_side: 1024,
             preserve_coverage: false,
             coverage_gain: 1.0,
+            covered_fraction: false,
             rasteriser: BakeRasteriser::Cpu,
         }
     }

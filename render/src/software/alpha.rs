@@ -119,13 +119,20 @@ impl AlphaCutoff {
         passes_cutoff(alpha * self.scale, self.cutoff)
     }
 
-    /// Each material's test of `scene` (its base colour's alpha the scale), `None` for a
-    /// material without one.
+    /// Each material's test of `scene` (its base colour's alpha the scale) in a render that
+    /// tests every surface (the bake: a blended material tested at ½,
+    /// [`DrawAlpha::test_cutoff`](crate::DrawAlpha::test_cutoff)), `None` for an opaque one.
     pub(crate) fn of_materials(scene: &DrawScene) -> Vec<Option<AlphaCutoff>> {
-        scene
-            .materials
-            .iter()
-            .map(|m| m.alpha_cutoff.map(|c| AlphaCutoff::new(m.base_color[3], c)))
+        (scene.materials.iter())
+            .map(|m| (m.alpha.test_cutoff()).map(|c| AlphaCutoff::new(m.base_color[3], c)))
+            .collect()
+    }
+
+    /// Each MASK material's test of `scene`, `None` for opaque and blended ones: what a
+    /// coverage render tests (it blends BLEND materials, [`crate::DrawAlpha::Blend`]).
+    pub(crate) fn of_masks(scene: &DrawScene) -> Vec<Option<AlphaCutoff>> {
+        (scene.materials.iter())
+            .map(|m| (m.alpha.mask_cutoff()).map(|c| AlphaCutoff::new(m.base_color[3], c)))
             .collect()
     }
 }

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use super::alpha::{AlphaBounds, AlphaCutoff, footprint_quads};
 use super::sampling::{Levels, LinearLevel, Trilinear, bilerp, bilinear_rgb, footprint};
 use super::setup::Setup;
-use super::textures::SoftwareTextures;
+use super::textures::{SoftwareTextures, Use};
 use crate::error::RenderError;
 use crate::sample_lanes::{LaneFilter, LaneLevel, LaneTest, TriangleLanes};
 use crate::scene::DrawTexture;
@@ -32,7 +32,11 @@ impl SoftwareTextures {
     ) -> Result<SoftwareTextures, RenderError> {
         let n = textures.len();
         let used = (0..n)
-            .map(|i| used.get(i).copied().unwrap_or(false))
+            .map(|i| match used.get(i).copied().unwrap_or(false) {
+                // The bake tests every material's alpha (a blended one at ½).
+                true => Use::Tested,
+                false => Use::None,
+            })
             .collect();
         let mut prepared = Self::prepare(textures, used, vec![false; n], true)?;
         // The bake's alpha test reads one level's alpha channel: kept alone (the eight-sample

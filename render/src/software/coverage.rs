@@ -20,25 +20,38 @@ pub struct CoverageImage {
     pub height: u32,
     /// Samples of each pixel (`supersample²`).
     pub samples_per_pixel: u32,
-    /// `width · height` counts: how many of the pixel's samples are covered (passed the alpha
-    /// test of something drawn there).
+    /// `width · height` counts: how many of the pixel's samples are covered (something
+    /// opaque drawn there, or passing its alpha test).
     pub samples: Vec<u16>,
+    /// `width · height` sums: the coverage blended surfaces ([`DrawAlpha::Blend`](crate::DrawAlpha::Blend)) add
+    /// to the pixel, in samples: over its samples that `samples` does not count,
+    /// `Σ 1 − Π(1 − αᵢ)` of the blended layers over each. Empty when the scene draws no
+    /// blended material.
+    pub blended: Vec<f32>,
     /// `width · height` mean linear RGB of the pixel's covered samples (zero where none is);
     /// empty unless colour was asked for ([`SoftwareTextures::new`]).
     pub colour: Vec<[f32; 3]>,
 }
 
 impl CoverageImage {
-    /// The fraction of pixel `i`'s samples covered, 0..1: what MSAA, alpha-to-coverage or a
-    /// distant eye shows of it.
-    pub fn covered_fraction(&self, i: usize) -> f32 {
-        f32::from(self.samples[i]) / self.samples_per_pixel as f32
+    /// Pixel `i`'s covered samples: those counted, and what blended layers add.
+    pub fn covered_samples(&self, i: usize) -> f32 {
+        f32::from(self.samples[i]) + self.blended.get(i).copied().unwrap_or(0.0)
     }
 
-    /// Whether at least half of pixel `i`'s samples are covered (spec
-    /// animated-billboard-clouds §5.4's binary pixel).
+    /// The fraction of pixel `i` covered, 0..1: what MSAA, alpha-to-coverage or a distant
+    /// eye shows of it (blended layers counting their alpha).
+    pub fn covered_fraction(&self, i: usize) -> f32 {
+        self.covered_samples(i) / self.samples_per_pixel as f32
+    }
+
+    /// Whether at least half of pixel `i` is covered (spec animated-billboard-clouds §5.4's
+    /// binary pixel).
     pub fn is_covered(&self, i: usize) -> bool {
-        2 * u32::from(self.samples[i]) >= self.samples_per_pixel
+        match self.blended.get(i) {
+            None => 2 * u32::from(self.samples[i]) >= self.samples_per_pixel,
+            Some(_) => 2.0 * self.covered_samples(i) >= self.samples_per_pixel as f32,
+        }
     }
 }
 
@@ -129,11 +142,13 @@ pub(super) fn rasterise(
         height,
         samples_per_pixel: ss * ss,
         samples: Vec::with_capacity(width as usize * height as usize),
+        blended: Vec::new(),
         colour: Vec::new(),
     };
     let mut covered_samples = 0;
     for band in resolved {
         image.samples.extend(band.samples);
+        image.blended.extend(band.blended);
         image.colour.extend(band.colour);
         covered_samples += band.covered_samples;
     }
@@ -149,7 +164,7 @@ mod tests {
 
     use super::*;
     use crate::pipeline::LIGHT_DIRECTION;
-    use crate::scene::{DrawMaterial, DrawTexture};
+    use crate::scene::{DrawAlpha, DrawMaterial, DrawTexture};
     use crate::software::shading::Lighting;
     use crate::software::test_scenes::{count, leaf_alpha, quad};
 
@@ -282,6 +297,100 @@ mod tests {
         assert_eq!(d, 0.0);
     }
 
+    /// The mean covered fraction of `image`'s pixels.
+    fn mean_fraction(image: &CoverageImage) -> f32 {
+        let n = image.samples.len();
+        (0..n).map(|i| image.covered_fraction(i)).sum::<f32>() / n as f32
+    }
+
+    fn blended(alpha: f32) -> DrawMaterial {
+        DrawMaterial {
+            alpha: DrawAlpha::Blend,
+            ..DrawMaterial::opaque([1.0, 0.0, 0.0, alpha])
+        }
+    }
+
+    #[test]
+    fn a_blended_quad_covers_its_alpha_and_overlapping_layers_compose() {
+        // One 30 % quad over the whole image: every pixel 30 % covered, none by the binary
+        // rule; its colour is its own.
+        let mut scene = DrawScene {
+            meshes: vec![quad(-1.0, 1.0, 0.5, false, 0)],
+            materials: vec![blended(0.3)],
+            textures: vec![],
+        };
+        let one = render(&scene, true, 4);
+        assert!((0..1200).all(|i| (one.covered_fraction(i) - 0.3).abs() < 0.005));
+        assert_eq!((count(&one), one.samples.iter().sum::<u16>()), (0, 0));
+        assert!(one.colour.iter().all(|c| *c == [1.0, 0.0, 0.0]));
+        // Two 50 % quads, in either order: 1 − ½ · ½ = 75 %.
+        scene.materials = vec![blended(0.5)];
+        scene.meshes = vec![
+            quad(-1.0, 1.0, 0.5, false, 0),
+            quad(-1.0, 1.0, 0.3, false, 0),
+        ];
+        let two = render(&scene, false, 4);
+        assert!(
+            (mean_fraction(&two) - 0.75).abs() < 0.005,
+            "{}",
+            mean_fraction(&two)
+        );
+        assert_eq!(count(&two), 1200);
+        // An opaque quad covers its half whatever is blended over or behind it, and the
+        // blended quad alone the other half.
+        scene
+            .materials
+            .push(DrawMaterial::opaque([0.0, 0.0, 1.0, 1.0]));
+        scene.meshes = vec![
+            quad(-1.0, 1.0, 0.5, false, 0),
+            quad(-1.0, 0.0, 0.7, false, 1),
+        ];
+        let over = render(&scene, true, 4);
+        for x in [0, 19, 20, 39] {
+            let expected = if x < 20 { 1.0 } else { 0.5 };
+            assert!(
+                (over.covered_fraction(x) - expected).abs() < 0.005,
+                "pixel {x}"
+            );
+        }
+        assert_eq!(over.colour[0], [0.0, 0.0, 1.0], "the opaque quad's colour");
+    }
+
+    #[test]
+    fn a_blended_texture_is_minified_as_its_area_average() {
+        // A 64×64 texture of alternating clear and opaque columns, drawn over the whole
+        // image at 40×30 pixels of one sample: every sample reads a level whose texels
+        // average half covered, so the quad covers half of the image. Alpha-tested, the
+        // same texture keeps its coverage by the test's rule instead (every pixel or none).
+        let rgba: Vec<u8> = (0..64 * 64)
+            .flat_map(|i| [255, 255, 255, if i % 2 == 0 { 255 } else { 0 }])
+            .collect();
+        let material = |alpha| DrawMaterial {
+            texture: Some(0),
+            alpha,
+            double_sided: true,
+            ..DrawMaterial::opaque([1.0; 4])
+        };
+        let mut scene = DrawScene {
+            meshes: vec![quad(-1.0, 1.0, 0.5, false, 0)],
+            materials: vec![material(DrawAlpha::Blend)],
+            textures: vec![DrawTexture {
+                width: 64,
+                height: 64,
+                rgba,
+            }],
+        };
+        let blend = render(&scene, false, 1);
+        assert!(
+            (mean_fraction(&blend) - 0.5).abs() < 0.01,
+            "{}",
+            mean_fraction(&blend)
+        );
+        scene.materials = vec![material(DrawAlpha::Mask(0.5))];
+        let mask = render(&scene, false, 1);
+        assert!((0..1200).all(|i| [0.0, 1.0].contains(&mask.covered_fraction(i))));
+    }
+
     #[test]
     fn back_faces_are_culled_unless_double_sided() {
         let mut scene = DrawScene {
@@ -308,7 +417,7 @@ mod tests {
             materials: vec![
                 DrawMaterial {
                     texture: Some(0),
-                    alpha_cutoff: Some(0.5),
+                    alpha: DrawAlpha::Mask(0.5),
                     ..DrawMaterial::opaque([1.0; 4])
                 },
                 DrawMaterial::opaque([0.0, 0.0, 1.0, 1.0]),
@@ -384,7 +493,7 @@ mod tests {
             meshes: vec![quad(-0.9, 0.8, 0.4, false, 0)],
             materials: vec![DrawMaterial {
                 texture: Some(0),
-                alpha_cutoff: Some(0.5),
+                alpha: DrawAlpha::Mask(0.5),
                 ..DrawMaterial::opaque([1.0; 4])
             }],
             textures: vec![DrawTexture {

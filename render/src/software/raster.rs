@@ -13,7 +13,7 @@ use super::spans::RowSpan;
 use super::textures::SoftwareTextures;
 use crate::pipeline::LIGHT_DIRECTION;
 use crate::sample_lanes::{self, LaneFilter, LaneLevel, LaneTest, TriangleLanes};
-use crate::scene::DrawScene;
+use crate::scene::{DrawAlpha, DrawScene};
 use crate::srgb::SRGB_LINEAR;
 use crate::uv_hull::{HullLevels, TriangleHull, narrowed};
 
@@ -42,6 +42,9 @@ impl Shortcuts {
 pub(super) struct Band {
     /// Per pixel of the band, top row first: how many of its samples are covered.
     pub(super) samples: Vec<u16>,
+    /// Per pixel, the coverage blended surfaces add to its samples that nothing covers
+    /// (scenes with a blended material; empty otherwise): `Σ 1 − Π(1 − αᵢ)` over them.
+    pub(super) blended: Vec<f32>,
     /// Per pixel, the mean colour of its covered samples (colour renders; empty otherwise).
     pub(super) colour: Vec<[f32; 3]>,
     /// The band's covered samples.
@@ -54,8 +57,13 @@ pub(super) struct Raster<'a> {
     scene: &'a DrawScene,
     /// Its textures, prepared.
     textures: &'a SoftwareTextures,
-    /// Per material, its alpha test.
+    /// Per material, its alpha test (MASK materials).
     cutoffs: Vec<Option<AlphaCutoff>>,
+    /// Per material, whether it is blended ([`DrawAlpha::Blend`]): its samples are drawn
+    /// by [`Raster::blend_triangle`].
+    blended: Vec<bool>,
+    /// Whether any material is blended: the bands keep each sample's transmittance.
+    any_blended: bool,
     /// Coverage renders test eight samples at once ([`sample_lanes`]) where the machine can.
     lanes: bool,
     /// Per material, the octagons of its texture's levels where its alpha test can pass
@@ -92,7 +100,10 @@ impl<'a> Raster<'a> {
             covered_rows,
         }: Shortcuts,
     ) -> Raster<'a> {
-        let cutoffs = AlphaCutoff::of_materials(scene);
+        let cutoffs = AlphaCutoff::of_masks(scene);
+        let blended: Vec<bool> = (scene.materials.iter())
+            .map(|m| m.alpha == DrawAlpha::Blend)
+            .collect();
         // The octagons are fitted to alpha-only levels: coverage renders'.
         let hulls = if hulls && !textures.colour {
             HullLevels::of_materials(scene, textures, &cutoffs)
@@ -103,6 +114,8 @@ impl<'a> Raster<'a> {
             scene,
             textures,
             cutoffs,
+            any_blended: blended.contains(&true),
+            blended,
             hulls,
             covered_rows: covered_rows && !textures.colour,
             lanes: lanes && sample_lanes::available(),
@@ -144,9 +157,10 @@ impl<'a> Raster<'a> {
         for &ti in bin {
             self.draw_triangle(&mut band, ti);
         }
-        let (samples, colour) = self.resolve(y1 - y0, &band.covered, &band.rgb);
+        let (samples, blended, colour) = self.resolve(y1 - y0, &band);
         Band {
             samples,
+            blended,
             colour,
             covered_samples: band.covered.iter().map(|w| u64::from(w.count_ones())).sum(),
         }
@@ -158,6 +172,10 @@ impl<'a> Raster<'a> {
     #[inline(always)]
     fn draw_triangle(&self, band: &mut BandBuffers, ti: u32) {
         let t = &self.triangles[ti as usize];
+        if self.any_blended && self.blended[t.material as usize] {
+            self.blend_triangle(band, ti);
+            return;
+        }
         // A row whose bounds are covered already is skipped before its span is found, and a
         // triangle with no other row is not drawn (nor its mip level found).
         let bounds_words = self.bounds_words(t);
@@ -193,6 +211,53 @@ impl<'a> Raster<'a> {
                 self.lanes_span(band, &surface, lanes, &span, [first, last]);
             } else {
                 self.scalar_span(band, t, &surface, &span, [first, last]);
+            }
+        }
+    }
+
+    /// Blended triangle `ti` drawn into `band`: each sample inside it that nothing opaque or
+    /// alpha-tested covers keeps `1 − α` of what still showed through it (`trans`), α the
+    /// filtered alpha of its texture (box-filtered levels) times the base colour's; in colour
+    /// renders its colour adds to the sample's weighted by what it shows, `α · trans` before
+    /// it. Coverage does not depend on the order (`1 − Π(1 − αᵢ)`); colour does, and is
+    /// mixed in draw order. Not inlined: the alpha-tested loop does not carry it.
+    #[inline(never)]
+    fn blend_triangle(&self, band: &mut BandBuffers, ti: u32) {
+        let t = &self.triangles[ti as usize];
+        let colour = self.textures.colour;
+        let t = &if colour { *t } else { self.with_lod(t) };
+        let surface = self.surface(ti, t);
+        let (stride, scale) = (if colour { 4 } else { 1 }, surface.material.base_color[3]);
+        let walk = t.row_walk();
+        for sy in t.rows(band.y0, band.y1) {
+            let Some(span) = t.row_span(&walk, sy) else {
+                continue;
+            };
+            let row = sy - band.y0;
+            for x in span.first..=span.last {
+                if band.covered[row * band.words + x / 64] >> (x % 64) & 1 == 1 {
+                    continue;
+                }
+                let b = span.weights_at(x);
+                if b[0] < 0.0 || b[1] < 0.0 || b[2] < 0.0 {
+                    continue;
+                }
+                let (uv, q) = t.uv(b);
+                let wrap = surface.material.wrap;
+                let texel =
+                    (surface.texture).map_or(1.0, |l| l.alpha(uv, surface.lod, wrap, stride));
+                // A NaN alpha covers nothing.
+                let alpha = match texel * scale {
+                    a if a > 0.0 => a.min(1.0),
+                    _ => continue,
+                };
+                let s = row * self.width + x;
+                if colour {
+                    let lighting = self.textures.lighting;
+                    let c = surface.colour(b, q, uv, lighting, band.light, band.linear);
+                    band.blend_rgb[s] += c * (alpha * band.trans[s]);
+                }
+                band.trans[s] *= 1.0 - alpha;
             }
         }
     }
@@ -454,9 +519,11 @@ impl<'a> Raster<'a> {
         })
     }
 
-    /// Pixels of a band of `rows` sample rows (`covered`: bits, 64 to a word, rows padded to
-    /// whole words): how many of their samples are covered, and the mean colour of those.
-    fn resolve(&self, rows: usize, covered: &[u64], rgb: &[Vec3]) -> (Vec<u16>, Vec<[f32; 3]>) {
+    /// Pixels of a band of `rows` sample rows: how many of their samples are covered, the
+    /// coverage blended surfaces add (scenes with one), and the mean colour of what covers
+    /// them (each sample weighted by its coverage).
+    fn resolve(&self, rows: usize, band: &BandBuffers) -> (Vec<u16>, Vec<f32>, Vec<[f32; 3]>) {
+        let (covered, rgb) = (&band.covered, &band.rgb);
         let ss = self.ss;
         let words = self.width.div_ceil(64);
         let (w, h) = (self.width / ss, rows / ss);
@@ -469,8 +536,23 @@ impl<'a> Raster<'a> {
                 *count += bits_set(row, px * ss, ss) as u16;
             }
         }
+        let is_covered = |x: usize, y: usize| covered[y * words + x / 64] >> (x % 64) & 1 == 1;
+        let blended = if band.trans.is_empty() {
+            Vec::new()
+        } else {
+            let mut blended = vec![0f32; w * h];
+            for (p, value) in blended.iter_mut().enumerate() {
+                let (px, py) = (p % w, p / w);
+                for y in py * ss..(py + 1) * ss {
+                    for x in (px * ss..(px + 1) * ss).filter(|&x| !is_covered(x, y)) {
+                        *value += 1.0 - band.trans[y * self.width + x];
+                    }
+                }
+            }
+            blended
+        };
         if rgb.is_empty() {
-            return (samples, Vec::new());
+            return (samples, blended, Vec::new());
         }
         let mut colour = Vec::with_capacity(w * h);
         for py in 0..h {
@@ -478,21 +560,24 @@ impl<'a> Raster<'a> {
                 let mut sum = Vec3::ZERO;
                 for y in py * ss..(py + 1) * ss {
                     for x in px * ss..(px + 1) * ss {
-                        if covered[y * words + x / 64] >> (x % 64) & 1 == 1 {
+                        if is_covered(x, y) {
                             sum += rgb[y * self.width + x];
+                        } else if !band.blend_rgb.is_empty() {
+                            sum += band.blend_rgb[y * self.width + x];
                         }
                     }
                 }
-                let count = samples[py * w + px];
-                let mean = if count > 0 {
-                    sum / f32::from(count)
+                let p = py * w + px;
+                let weight = f32::from(samples[p]) + blended.get(p).copied().unwrap_or(0.0);
+                let mean = if weight > 0.0 {
+                    sum / weight
                 } else {
                     Vec3::ZERO
                 };
                 colour.push(mean.to_array());
             }
         }
-        (samples, colour)
+        (samples, blended, colour)
     }
 }
 
@@ -531,6 +616,12 @@ struct BandBuffers {
     depth: Vec<f32>,
     /// Per sample, the colour drawn there (colour renders; empty otherwise).
     rgb: Vec<Vec3>,
+    /// Per sample, the fraction of it that blended surfaces leave showing, `Π(1 − αᵢ)`
+    /// (scenes with a blended material; empty otherwise).
+    trans: Vec<f32>,
+    /// Per sample, the blended surfaces' colour, each weighted by what it shows (colour
+    /// renders of scenes with a blended material; empty otherwise).
+    blend_rgb: Vec<Vec3>,
     /// sRGB to linear light, a byte's value.
     linear: &'static [f32; 256],
     /// The light's direction ([`LIGHT_DIRECTION`]).
@@ -557,6 +648,16 @@ impl BandBuffers {
                 Vec::new()
             },
             rgb: if colour {
+                vec![Vec3::ZERO; n]
+            } else {
+                Vec::new()
+            },
+            trans: if raster.any_blended {
+                vec![1.0; n]
+            } else {
+                Vec::new()
+            },
+            blend_rgb: if colour && raster.any_blended {
                 vec![Vec3::ZERO; n]
             } else {
                 Vec::new()

@@ -8,7 +8,7 @@ use super::alpha::passes_cutoff;
 use super::coverage::CoverageImage;
 use super::sampling::{Levels, Trilinear};
 use crate::camera::{Camera, Projection};
-use crate::scene::{DrawMaterial, DrawMesh, DrawScene, DrawTexture};
+use crate::scene::{DrawAlpha, DrawMaterial, DrawMesh, DrawScene, DrawTexture};
 
 /// A quad over NDC `[x0, x1] × [-1, 1]` at depth `z`, counter-clockwise (front) unless
 /// `flip`, with texture coordinates over the whole texture.
@@ -66,7 +66,7 @@ pub(super) fn random_cards(cards: usize, seed: u64) -> (DrawScene, Mat4) {
     let mut materials: Vec<DrawMaterial> = (0..9)
         .map(|m| DrawMaterial {
             texture: Some(0),
-            alpha_cutoff: Some([0.3, 0.5, 0.8][m % 3]),
+            alpha: DrawAlpha::Mask([0.3, 0.5, 0.8][m % 3]),
             base_color: [1.0, 1.0, 1.0, [1.0, 0.7, 1.3][m / 3]],
             double_sided: true,
             wrap: [wraps[m % 3], wraps[m / 3]],

@@ -7,8 +7,34 @@ use super::alpha::AlphaBounds;
 use super::sampling::{Levels, LinearLevel};
 use super::shading::Lighting;
 use crate::error::RenderError;
-use crate::pipeline::{alpha_mip_chain, linear_mip_chain, mip_chain};
-use crate::scene::{DrawScene, DrawTexture};
+use crate::pipeline::{
+    alpha_mip_chain, blend_alpha_mip_chain, blend_mip_chain, linear_mip_chain, mip_chain,
+};
+use crate::scene::{DrawAlpha, DrawScene, DrawTexture};
+
+/// How a scene's drawn materials use a texture, which decides its mip chain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Use {
+    /// No drawn material samples it: not prepared.
+    None,
+    /// An opaque or alpha-tested material samples it: the coverage-preserving chain
+    /// ([`mip_chain`]), which keeps what the alpha test passes at every level.
+    Tested,
+    /// Only blended materials sample it: the box-filtered chain ([`blend_mip_chain`]), whose
+    /// alpha stays each texel's covered fraction.
+    Blended,
+}
+
+impl Use {
+    /// This use with one more material sampling the texture, `blended` or not (a texture an
+    /// alpha test also reads keeps the test's chain).
+    fn with(self, blended: bool) -> Use {
+        match (self, blended) {
+            (Use::None | Use::Blended, true) => Use::Blended,
+            _ => Use::Tested,
+        }
+    }
+}
 
 /// Largest texture side accepted (as the wgpu path's limit on common adapters).
 pub(crate) const MAX_TEXTURE_SIDE: u32 = 16384;
@@ -50,14 +76,15 @@ impl SoftwareTextures {
     /// Prepares the textures of `scene` that its drawn meshes' materials sample; `colour`:
     /// also draw colour, which needs the RGB of every level and a depth test per sample.
     pub fn new(scene: &DrawScene, colour: bool) -> Result<SoftwareTextures, RenderError> {
-        let mut used = vec![false; scene.textures.len()];
+        let mut used = vec![Use::None; scene.textures.len()];
         let mut normal_map = vec![false; scene.textures.len()];
         for mesh in scene.meshes.iter().filter(|m| !m.indices.is_empty()) {
             let material = scene.materials.get(mesh.material);
-            if let Some(t) = material.and_then(|m| m.texture)
+            if let Some(m) = material
+                && let Some(t) = m.texture
                 && let Some(u) = used.get_mut(t)
             {
-                *u = true;
+                *u = u.with(m.alpha == DrawAlpha::Blend);
             }
             if colour
                 && mesh.tangents.is_some()
@@ -75,11 +102,11 @@ impl SoftwareTextures {
         self.textures.get(texture).is_some_and(|l| !l.0.is_empty())
     }
 
-    /// The mip chains of the `used` textures (colour or alpha alone) and of the `normal_map`
-    /// ones (linear).
+    /// The mip chains of the `used` textures (colour or alpha alone; coverage-preserving
+    /// unless only blended materials draw with them) and of the `normal_map` ones (linear).
     pub(super) fn prepare(
         source: &[DrawTexture],
-        used: Vec<bool>,
+        used: Vec<Use>,
         normal_map: Vec<bool>,
         colour: bool,
     ) -> Result<SoftwareTextures, RenderError> {
@@ -106,13 +133,13 @@ impl SoftwareTextures {
                         ),
                     });
                 }
-                Ok(Levels(if !used {
-                    Vec::new()
-                } else if colour {
-                    mip_chain(t.width, t.height, &t.rgba)
-                } else {
-                    let alpha: Vec<u8> = t.rgba.chunks_exact(4).map(|p| p[3]).collect();
-                    alpha_mip_chain(t.width, t.height, &alpha)
+                let alpha = || t.rgba.chunks_exact(4).map(|p| p[3]).collect::<Vec<u8>>();
+                Ok(Levels(match (used, colour) {
+                    (Use::None, _) => Vec::new(),
+                    (Use::Tested, true) => mip_chain(t.width, t.height, &t.rgba),
+                    (Use::Tested, false) => alpha_mip_chain(t.width, t.height, &alpha()),
+                    (Use::Blended, true) => blend_mip_chain(t.width, t.height, &t.rgba),
+                    (Use::Blended, false) => blend_alpha_mip_chain(t.width, t.height, &alpha()),
                 }))
             })
             .collect::<Result<_, _>>()?;
