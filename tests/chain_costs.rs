@@ -14,7 +14,7 @@ use crate::common;
 use std::path::Path;
 
 use common::*;
-use frond_scene::{FileCost, InputLimits, file_cost};
+use frond_scene::{AlphaMode, FileCost, ImportOptions, InputLimits, file_cost, import};
 
 /// The files' costs of the default chain of `tree` written into `out`, LOD0 first.
 fn chain_costs(tree: &Path, out: &Path, extra: &[&str]) -> Vec<(String, FileCost)> {
@@ -292,4 +292,53 @@ fn heavy_oak_dense_far_lods_fit_their_targets() {
     );
     assert!(lod3.file_bytes <= 1 << 20, "{}", lod3.file_bytes);
     assert!(lod3.alpha_tested_area <= 2.0 * input.alpha_tested_area);
+}
+
+/// `--far-alpha blend`: the far end's billboards are written with a `BLEND` material whose
+/// atlas alpha is each texel's covered fraction (the sapling's leaves span several texels, so
+/// many are wholly covered, and a tenth at least partly), while `mask` writes the same LOD
+/// alpha-tested; both measure a coverage ratio within 0.9–1.1 with the metric drawing each as
+/// engines do, and both keep the far end's budget.
+#[test]
+fn the_blended_far_end_writes_covered_fractions_as_blend() {
+    let tree = root().join("samples/sapling.glb");
+    let input = file_cost(&tree, &InputLimits::default()).expect("input cost");
+    for (mode, alpha_mode) in [("blend", AlphaMode::Blend), ("mask", AlphaMode::Mask)] {
+        let out = tempfile::tempdir().expect("tempdir");
+        let args = ["--lods", "60,20", "--far-alpha", mode, "--no-preview"];
+        let report = frond_lod_measured(&tree, out.path(), &args);
+        let far = report.lods.last().expect("the far LOD");
+        let file = out.path().join(&far.file);
+        let lod = import(&file, &ImportOptions::default()).expect("the far LOD imports");
+        let billboards = (lod.materials.iter())
+            .find(|m| m.name.ends_with("_billboards"))
+            .expect("the billboards' material");
+        assert_eq!(billboards.alpha_mode, alpha_mode, "{mode}");
+        let atlas = &lod.textures[billboards.base_color_texture.expect("an atlas")];
+        let alphas: Vec<u8> = atlas.rgba.chunks_exact(4).map(|p| p[3]).collect();
+        let covered = alphas.iter().filter(|&&a| a > 0).count();
+        let partial = alphas.iter().filter(|&&a| a > 0 && a < 255).count();
+        eprintln!(
+            "{mode}: {} of {covered} covered texels partly covered, error {:?}",
+            partial, far.error
+        );
+        if alpha_mode == AlphaMode::Blend {
+            assert!(10 * partial > covered, "{partial} of {covered}");
+        }
+        let error = far.error.as_ref().expect("measured");
+        assert!(
+            (0.9..=1.1).contains(&error.coverage_ratio),
+            "{mode}: {error:?}"
+        );
+        let costs: Vec<(String, FileCost)> = (report.lods.iter())
+            .map(|l| (l.file.clone(), l.cost.clone().expect("the report's cost")))
+            .collect();
+        assert_cheaper_each_step(&input, &costs);
+        let far_cost = &costs.last().expect("the far LOD").1;
+        assert!(far_cost.texture_decoded_bytes * 4 / 3 <= 256 * 1024);
+        assert!(
+            far_cost.alpha_tested_area > 0.0,
+            "a blended quad counts as drawn area"
+        );
+    }
 }

@@ -31,8 +31,19 @@ fn the_report_gives_each_lods_error_as_frond_eval_measures_it() {
     let out = tempfile::tempdir().expect("tempdir");
     let report = measured_chain(out.path(), "200,60", "0.15");
     assert_eq!(report.schema_version, LOD_REPORT_SCHEMA_VERSION);
-    assert_eq!(LOD_REPORT_SCHEMA_VERSION, 2);
+    assert_eq!(LOD_REPORT_SCHEMA_VERSION, 3);
     let lods = &report.lods;
+    // The chain's texture memory counts each image once: at most every file's images added
+    // up, at least the largest file's.
+    let memory = report.texture_memory.expect("the chain's texture memory");
+    let decoded: Vec<u64> = (lods.iter())
+        .map(|l| l.cost.as_ref().expect("cost").texture_decoded_bytes)
+        .collect();
+    let largest = decoded.iter().copied().max().unwrap_or(0);
+    assert!(
+        (largest..=decoded.iter().sum()).contains(&memory.decoded_bytes),
+        "{memory:?} against {decoded:?}"
+    );
     assert_eq!(lods.len(), 3);
     assert!(lods[0].error.is_none(), "LOD0 is the input");
     // The input's renders, drawn beside the build, are timed apart; the export's time is its own.

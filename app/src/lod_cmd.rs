@@ -228,6 +228,7 @@ fn write_and_read_back(
         tree_height: tree.height(),
         switching: None,
         lods: written.entries,
+        texture_memory: None,
         combined: written.combined,
         files: written.files.iter().map(|(p, _)| p.clone()).collect(),
         warnings: tree.warnings.clone(),
@@ -516,6 +517,9 @@ fn read_back_costs(set: &OutputSet, report: &mut LodReport) -> Result<()> {
             .filter(|_| leaf_area > 0.0)
             .map(|c| c.alpha_tested_area / leaf_area);
     }
+    report.texture_memory = Some(frond_lod::TextureMemory::of(
+        report.lods.iter().filter_map(|l| l.cost.as_ref()),
+    ));
     for w in report
         .cost_increases()
         .into_iter()

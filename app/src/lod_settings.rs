@@ -408,6 +408,15 @@ impl BuildSettings {
 /// a tenth of the covered area missing or extra at the LOD's own size, the far end's target.
 pub const DEFAULT_MAX_ERROR: f32 = 0.10;
 
+/// The screen heights (pixels) of the LODs `frond lod` and `frond sweep` build by default, one
+/// each, nearest first: 600 px (a tree close by), 200 and 60 px. The far end (32 px or less)
+/// is asked for with `--lods`, until its error meets the far end's target on every tree.
+pub const DEFAULT_LODS: [f32; 3] = [600.0, 200.0, 60.0];
+
+/// [`DEFAULT_LODS`] as `--lods` is written (the command line's default; a test holds the two
+/// equal).
+pub const DEFAULT_LODS_TEXT: &str = "600,200,60";
+
 /// Everything one `frond lod` run is asked.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LodSettings {
@@ -476,12 +485,16 @@ pub struct LodSettings {
     pub preset: Option<Engine>,
 }
 
-/// The far end's alpha by default: alpha-tested, as every LOD before it.
+/// The far end's alpha by default: alpha-tested. Blended covered fractions score a lower
+/// coverage error at the far end, but their coverage changes less over the loop than the
+/// alpha-tested bake's, below the far end's target on most trees, so the default waits on
+/// the far end's motion (docs/experiments.md, "Covered fractions at the far end").
 pub const DEFAULT_FAR_ALPHA: FarAlpha = FarAlpha::Mask;
 
-/// [`DEFAULT_FAR_ALPHA`], for settings written before the far end's alpha was one.
+/// [`DEFAULT_FAR_ALPHA`], for settings written before the far end's alpha was a setting
+/// (they were built alpha-tested).
 fn default_far_alpha() -> FarAlpha {
-    DEFAULT_FAR_ALPHA
+    FarAlpha::Mask
 }
 
 impl LodSettings {
@@ -492,7 +505,7 @@ impl LodSettings {
             output: output.to_path_buf(),
             read: ReadSettings::default(),
             method: MethodChoice::AUTO,
-            lods: vec![600.0, 200.0, 60.0],
+            lods: DEFAULT_LODS.to_vec(),
             distances: None,
             fov: 60.0,
             resolution: 1080.0,
@@ -608,6 +621,14 @@ impl LodSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_default_lods_text_is_the_default_lods() {
+        let parsed: Vec<f32> = (DEFAULT_LODS_TEXT.split(','))
+            .map(|h| h.parse().expect("a number"))
+            .collect();
+        assert_eq!(parsed, DEFAULT_LODS);
+    }
 
     #[test]
     fn settings_round_trip_through_their_request_file() {

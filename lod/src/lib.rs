@@ -38,6 +38,7 @@ pub use method_api::{
 pub use methods::{METHOD_NAMES, REGISTRY};
 pub use report::{
     DroppedReport, LOD_REPORT_SCHEMA_VERSION, LodEntry, LodReport, LodTimings, ReportTimings,
+    TextureMemory,
 };
 pub use screen_budget::{LodLevel, lod_levels, screen_height_at};
 

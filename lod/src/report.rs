@@ -322,7 +322,37 @@ pub struct ReportTimings {
 }
 
 /// The version of `<name>_report.json`'s layout: raised whenever a field changes meaning.
-pub const LOD_REPORT_SCHEMA_VERSION: u32 = 2;
+pub const LOD_REPORT_SCHEMA_VERSION: u32 = 3;
+
+/// What a chain's images cost all the instances of a species together: every image a drawn
+/// primitive of some LOD's file uses (LOD0 included, the combined file left out), images
+/// identical in bytes counted once. Texture memory is shared, so it is judged for the chain
+/// as a whole and each LOD against its own budget, not against the LOD before it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TextureMemory {
+    /// Distinct images.
+    pub images: usize,
+    /// Their bytes decoded as RGBA8, without mips.
+    pub decoded_bytes: u64,
+    /// Their bytes on the GPU, mips included ([`frond_scene::ImageCost::gpu_bytes`]).
+    pub gpu_bytes: u64,
+}
+
+impl TextureMemory {
+    /// The texture memory of `costs` (each LOD file's, read back).
+    pub fn of<'a>(costs: impl IntoIterator<Item = &'a frond_scene::FileCost>) -> TextureMemory {
+        let mut seen = std::collections::BTreeSet::new();
+        let mut memory = TextureMemory::default();
+        for image in costs.into_iter().flat_map(|c| &c.images) {
+            if image.used && seen.insert(image.sha256.as_str()) {
+                memory.images += 1;
+                memory.decoded_bytes += image.decoded_bytes;
+                memory.gpu_bytes += image.gpu_bytes;
+            }
+        }
+        memory
+    }
+}
 
 /// `<name>_report.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -352,6 +382,10 @@ pub struct LodReport {
     pub switching: Option<SwitchView>,
     /// LOD0 (the input) first, then each LOD nearest first.
     pub lods: Vec<LodEntry>,
+    /// The chain's texture memory over every LOD's file, each image once
+    /// ([`TextureMemory`]); absent before the files are read back.
+    #[serde(default)]
+    pub texture_memory: Option<TextureMemory>,
     /// The file holding every LOD.
     pub combined: String,
     /// Every file of the set, relative to the output folder, this report last.
@@ -496,6 +530,7 @@ mod tests {
             tree_height: 1.0,
             switching: None,
             lods: vec![lod("t_LOD0.glb", input), lod("t_LOD1.glb", cheaper)],
+            texture_memory: None,
             combined: String::new(),
             files: Vec::new(),
             warnings: Vec::new(),
@@ -531,6 +566,38 @@ mod tests {
             lines[0].contains("t_LOD1.glb decodes 101 bytes of texture, over its budget of 100")
         );
         assert!(lines[1].contains("t_LOD2.glb draws 3 units²"), "{lines:?}");
+    }
+
+    #[test]
+    fn texture_memory_counts_each_used_image_once() {
+        let image = |sha: &str, bytes: u64, used: bool| frond_scene::ImageCost {
+            decoded_bytes: bytes,
+            gpu_bytes: bytes * 4 / 3,
+            used,
+            sha256: sha.into(),
+            ..Default::default()
+        };
+        let lod0 = FileCost {
+            images: vec![image("bark", 300, true), image("leaves", 600, true)],
+            ..Default::default()
+        };
+        // The same bark in the next file, an atlas of its own, and an image nothing draws.
+        let lod1 = FileCost {
+            images: vec![
+                image("bark", 300, true),
+                image("atlas", 90, true),
+                image("unused", 5000, false),
+            ],
+            ..Default::default()
+        };
+        assert_eq!(
+            TextureMemory::of([&lod0, &lod1]),
+            TextureMemory {
+                images: 3,
+                decoded_bytes: 990,
+                gpu_bytes: 400 + 800 + 120,
+            }
+        );
     }
 
     #[test]
@@ -643,6 +710,11 @@ mod tests {
                 sphere_radius: 1.7,
             }),
             lods: vec![lod0, spectral, cards, other],
+            texture_memory: Some(TextureMemory {
+                images: 2,
+                decoded_bytes: 4096,
+                gpu_bytes: 5460,
+            }),
             combined: "t_lods.glb".into(),
             files: vec!["t_LOD0.glb".into(), "t_report.json".into()],
             warnings: vec!["a warning".into()],

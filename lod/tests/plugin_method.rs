@@ -115,6 +115,7 @@ fn a_method_registered_by_one_line_is_parsed_built_and_reported() {
         tree_height: tree.height(),
         switching: None,
         lods: chain.lods.iter().map(|l| l.entry.clone()).collect(),
+        texture_memory: None,
         combined: String::new(),
         files: Vec::new(),
         warnings: Vec::new(),

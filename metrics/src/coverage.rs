@@ -830,36 +830,49 @@ fn gpu_image(
     let big_w = w * k;
     let linear = &*frond_render::SRGB_LINEAR;
     let mut samples = vec![0u16; w * h];
+    let mut blended = vec![0.0f32; w * h];
     let mut colour = vec![[0.0f32; 3]; w * h];
     // Rows are independent: resolve them in parallel (each pixel's sum is in a fixed order).
+    // A sample is covered where its coverage is 255; blended layers compose to less, which
+    // counts as that fraction of a sample, its colour blended over the clear (black)
+    // background: weighted by its coverage already.
     samples
         .par_chunks_mut(w)
+        .zip(blended.par_chunks_mut(w))
         .zip(colour.par_chunks_mut(w))
         .enumerate()
-        .for_each(|(y, (count_row, colour_row))| {
+        .for_each(|(y, ((count_row, blend_row), colour_row))| {
             for x in 0..w {
-                let (mut covered, mut sum) = (0u16, [0.0f32; 3]);
+                let (mut covered, mut part, mut sum) = (0u16, 0.0f32, [0.0f32; 3]);
                 for dy in 0..k {
                     let row = (y * k + dy) * big_w + x * k;
                     for i in row..row + k {
-                        if frame.coverage.get(i).copied().unwrap_or(false) {
-                            covered += 1;
-                            for (c, v) in sum.iter_mut().enumerate() {
-                                *v += linear
-                                    [usize::from(frame.rgba.get(i * 4 + c).copied().unwrap_or(0))];
-                            }
+                        match frame.coverage_alpha.get(i).copied().unwrap_or(0) {
+                            0 => continue,
+                            255 => covered += 1,
+                            a => part += f32::from(a) / 255.0,
+                        }
+                        for (c, v) in sum.iter_mut().enumerate() {
+                            *v += linear
+                                [usize::from(frame.rgba.get(i * 4 + c).copied().unwrap_or(0))];
                         }
                     }
                 }
                 count_row[x] = covered;
-                if covered > 0 {
-                    colour_row[x] = sum.map(|v| v / f32::from(covered));
+                blend_row[x] = part;
+                let weight = f32::from(covered) + part;
+                if weight > 0.0 {
+                    colour_row[x] = sum.map(|v| v / weight);
                 }
             }
         });
+    // A render without blended layers keeps whole samples alone.
+    if blended.iter().all(|&b| b == 0.0) {
+        blended.clear();
+    }
     Ok(PairImage {
         samples,
-        blended: Vec::new(),
+        blended,
         colour,
     })
 }

@@ -244,10 +244,14 @@ impl<'a> Drawer<'a> {
         let k = k.max(1);
         let image = self.coverage(scene, camera, (size, k, true), what)?;
         let still = FilteredStill::of_image(&image, size, k);
+        let n = (k * k) as f32;
         Ok(Frame {
             width: size.0,
             height: size.1,
             coverage: still.covered.iter().map(|&c| c > 0.0).collect(),
+            coverage_alpha: (still.covered.iter())
+                .map(|&c| (c / n * 255.0).round().clamp(0.0, 255.0) as u8)
+                .collect(),
             rgba: still.rgba,
         })
     }
@@ -536,6 +540,7 @@ mod tests {
                 .flat_map(|&c| if c { [90, 120, 60, 255] } else { [0; 4] })
                 .collect(),
             coverage: coverage.to_vec(),
+            coverage_alpha: coverage.iter().map(|&c| if c { 255 } else { 0 }).collect(),
         }
     }
 

@@ -11,8 +11,13 @@ pub struct Frame {
     /// `width * height * 4` bytes, row-major, top row first, sRGB-encoded RGBA8.
     /// Covered pixels have alpha 255; uncovered ones hold the background colour.
     pub rgba: Vec<u8>,
-    /// `width * height` flags, true where some fragment passed the alpha test.
+    /// `width * height` flags, true where some fragment passed the alpha test (or blended
+    /// layers compose to at least ½).
     pub coverage: Vec<bool>,
+    /// `width * height` coverage values: 255 where something opaque or alpha-tested covers the
+    /// pixel, blended layers' composed `1 − Π(1 − α)` in 0..255 elsewhere (a render without
+    /// blended materials holds 0 and 255 alone).
+    pub coverage_alpha: Vec<u8>,
 }
 
 impl Frame {
@@ -73,6 +78,7 @@ mod tests {
             height: 1,
             rgba: vec![1, 2, 3, 4, 5, 6, 7, 8],
             coverage: vec![false, true],
+            coverage_alpha: vec![0, 255],
         };
         assert_eq!(frame.pixel(1, 0), [5, 6, 7, 8]);
         assert_eq!(frame.get_pixel(2, 0), None);

@@ -34,7 +34,7 @@ pub(crate) struct Globals {
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct MaterialUniform {
     pub base_color: [f32; 4],
-    /// x: alpha cutoff, negative for opaque.
+    /// x: alpha cutoff, negative for opaque and blended; y: 1 for blended (glTF BLEND).
     pub params: [f32; 4],
 }
 
@@ -48,6 +48,12 @@ pub(crate) struct Pipelines {
     pub normal_culled: wgpu::RenderPipeline,
     /// Normal output, both faces drawn.
     pub normal_double_sided: wgpu::RenderPipeline,
+    /// Colour output of blended materials ([`crate::DrawAlpha::Blend`]), back faces culled:
+    /// colour blended over what is behind, coverage composed as `1 − Π(1 − α)`, no depth
+    /// written (as engines draw transparent surfaces).
+    pub blend_culled: wgpu::RenderPipeline,
+    /// Colour output of blended materials, both faces drawn.
+    pub blend_double_sided: wgpu::RenderPipeline,
     /// One sampler per pair of wrap modes (u, v), indexed by [`wrap_index`]; linear filtering
     /// with mipmaps.
     pub samplers: Vec<wgpu::Sampler>,
@@ -111,16 +117,25 @@ impl Pipelines {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &attributes,
         })];
-        let targets = |format: wgpu::TextureFormat| {
+        // A blended fragment's coverage α composes over the target's: α + c·(1 − α).
+        let composed = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let targets = |format: wgpu::TextureFormat, blended: bool| {
             [
                 Some(wgpu::ColorTargetState {
                     format,
-                    blend: None,
+                    blend: blended.then_some(wgpu::BlendState::ALPHA_BLENDING),
                     write_mask: wgpu::ColorWrites::ALL,
                 }),
                 Some(wgpu::ColorTargetState {
                     format: COVERAGE_FORMAT,
-                    blend: None,
+                    blend: blended.then_some(wgpu::BlendState {
+                        color: composed,
+                        alpha: composed,
+                    }),
                     write_mask: wgpu::ColorWrites::ALL,
                 }),
             ]
@@ -128,7 +143,7 @@ impl Pipelines {
         let make = |label: &str,
                     cull_mode: Option<wgpu::Face>,
                     fragment_entry: &str,
-                    format: wgpu::TextureFormat| {
+                    (format, blended): (wgpu::TextureFormat, bool)| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&layout),
@@ -146,7 +161,7 @@ impl Pipelines {
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
+                    depth_write_enabled: Some(!blended),
                     depth_compare: Some(wgpu::CompareFunction::Less),
                     stencil: Default::default(),
                     bias: Default::default(),
@@ -156,27 +171,24 @@ impl Pipelines {
                     module: &shader,
                     entry_point: Some(fragment_entry),
                     compilation_options: Default::default(),
-                    targets: &targets(format),
+                    targets: &targets(format, blended),
                 }),
                 multiview_mask: None,
                 cache: None,
             })
         };
         let back = Some(wgpu::Face::Back);
-        let culled = make("frond-render culled", back, "fs_main", COLOR_FORMAT);
-        let double_sided = make("frond-render double-sided", None, "fs_main", COLOR_FORMAT);
-        let normal_culled = make(
-            "frond-render normal culled",
-            back,
-            "fs_normal",
-            NORMAL_FORMAT,
+        let (colour, normal, blend) = (
+            (COLOR_FORMAT, false),
+            (NORMAL_FORMAT, false),
+            (COLOR_FORMAT, true),
         );
-        let normal_double_sided = make(
-            "frond-render normal double-sided",
-            None,
-            "fs_normal",
-            NORMAL_FORMAT,
-        );
+        let culled = make("frond-render culled", back, "fs_main", colour);
+        let double_sided = make("frond-render double-sided", None, "fs_main", colour);
+        let normal_culled = make("frond-render normal culled", back, "fs_normal", normal);
+        let normal_double_sided = make("frond-render normal double", None, "fs_normal", normal);
+        let blend_culled = make("frond-render blend culled", back, "fs_main", blend);
+        let blend_double_sided = make("frond-render blend double", None, "fs_main", blend);
 
         let samplers = WRAPS
             .iter()
@@ -194,7 +206,15 @@ impl Pipelines {
                 })
             })
             .collect();
-        let white = upload_texture(device, queue, "frond-render white", 1, 1, &[255; 4], false);
+        let white = upload_texture(
+            device,
+            queue,
+            "frond-render white",
+            1,
+            1,
+            &[255; 4],
+            Mips::None,
+        );
 
         Pipelines {
             globals_layout,
@@ -203,6 +223,8 @@ impl Pipelines {
             double_sided,
             normal_culled,
             normal_double_sided,
+            blend_culled,
+            blend_double_sided,
             samplers,
             white,
         }
@@ -401,8 +423,19 @@ pub fn linear_mip_chain(width: u32, height: u32, rgba: Vec<u8>) -> Vec<Level> {
     out
 }
 
-/// Uploads a validated RGBA8 sRGB image as a sampled texture; with `mipmaps`, with a full
-/// coverage-preserving mip chain ([`mip_chain`]).
+/// The mip levels a texture is uploaded with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub(crate) enum Mips {
+    /// Level 0 alone.
+    None,
+    /// The coverage-preserving chain an alpha test reads ([`mip_chain`]).
+    Tested,
+    /// The box-filtered chain a blended material reads ([`blend_mip_chain`]).
+    Blended,
+}
+
+/// Uploads a validated RGBA8 sRGB image as a sampled texture with the mip levels `mips` asks
+/// for.
 pub(crate) fn upload_texture(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -410,12 +443,12 @@ pub(crate) fn upload_texture(
     width: u32,
     height: u32,
     rgba: &[u8],
-    mipmaps: bool,
+    mips: Mips,
 ) -> wgpu::TextureView {
-    let levels = if mipmaps {
-        32 - width.max(height).max(1).leading_zeros()
-    } else {
+    let levels = if mips == Mips::None {
         1
+    } else {
+        32 - width.max(height).max(1).leading_zeros()
     };
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
@@ -431,10 +464,10 @@ pub(crate) fn upload_texture(
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    let chain = if mipmaps {
-        mip_chain(width, height, rgba)
-    } else {
-        vec![(width, height, rgba.to_vec())]
+    let chain = match mips {
+        Mips::None => vec![(width, height, rgba.to_vec())],
+        Mips::Tested => mip_chain(width, height, rgba),
+        Mips::Blended => blend_mip_chain(width, height, rgba),
     };
     for (level, (w, h, upload)) in chain.iter().enumerate() {
         queue.write_texture(

@@ -11,10 +11,10 @@ use crate::error::RenderError;
 use crate::frame::Frame;
 use crate::pipeline::{
     self, COLOR_FORMAT, COVERAGE_FORMAT, DEPTH_FORMAT, Globals, LIGHT_DIRECTION, MaterialUniform,
-    NORMAL_FORMAT, Pipelines,
+    Mips, NORMAL_FORMAT, Pipelines,
 };
 use crate::readback::{self, Readback};
-use crate::scene::DrawScene;
+use crate::scene::{DrawAlpha, DrawScene};
 
 /// Where and how one render draws: matrix, image size, clear colour and output kind.
 struct Target {
@@ -54,7 +54,7 @@ pub struct Renderer {
     info: String,
     /// Uploaded textures by (content hash, mip-mapped): baking draws the same source textures
     /// in hundreds of tiles, and building a mip chain each time dominated its cost.
-    texture_cache: std::sync::Mutex<std::collections::HashMap<(u64, bool), wgpu::TextureView>>,
+    texture_cache: std::sync::Mutex<std::collections::HashMap<(u64, Mips), wgpu::TextureView>>,
 }
 
 /// Textures kept uploaded at most; the cache is emptied when it would grow past this.
@@ -290,7 +290,8 @@ impl Renderer {
             width,
             height,
             rgba,
-            coverage: coverage.into_iter().map(|c| c >= 128).collect(),
+            coverage: coverage.iter().map(|&c| c >= 128).collect(),
+            coverage_alpha: coverage,
         })
     }
 
@@ -319,7 +320,7 @@ impl Renderer {
         };
         let attachments = Attachments::new(device, width, height, color_format);
         let globals_group = self.globals_group(view_proj);
-        let material_groups = self.material_groups(scene, batches, mipmaps);
+        let material_groups = self.material_groups(scene, batches, mipmaps, output);
         let gpu_batches = upload_batches(device, batches);
 
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -328,13 +329,23 @@ impl Renderer {
         {
             let mut pass = attachments.begin_pass(&mut encoder, background);
             pass.set_bind_group(0, &globals_group, &[]);
-            draw_batches(
-                &mut pass,
-                scene,
-                &gpu_batches,
-                &material_groups,
-                [culled, double_sided],
-            );
+            // Blended surfaces after the rest, as engines draw transparent ones; a normal
+            // render tests them at ½ with the rest.
+            let blended =
+                |m: usize| output == Output::Color && scene.materials[m].alpha == DrawAlpha::Blend;
+            for (pipelines, pass_blended) in [
+                ([culled, double_sided], false),
+                ([&p.blend_culled, &p.blend_double_sided], true),
+            ] {
+                draw_batches(
+                    &mut pass,
+                    scene,
+                    &gpu_batches,
+                    &material_groups,
+                    pipelines,
+                    |m| blended(m) == pass_blended,
+                );
+            }
         }
         let readbacks = [
             Readback::record(device, &mut encoder, &attachments.color, 4),
@@ -369,12 +380,12 @@ impl Renderer {
     }
 
     /// The uploaded view of `tex`, from the cache when the same pixels were uploaded before.
-    fn cached_texture(&self, tex: &crate::scene::DrawTexture, mipmaps: bool) -> wgpu::TextureView {
+    fn cached_texture(&self, tex: &crate::scene::DrawTexture, mips: Mips) -> wgpu::TextureView {
         use std::hash::{BuildHasher, Hash, Hasher};
         let mut h = foldhash::quality::FixedState::with_seed(0).build_hasher();
         (tex.width, tex.height).hash(&mut h);
         tex.rgba.hash(&mut h);
-        let key = (h.finish(), mipmaps);
+        let key = (h.finish(), mips);
         let mut cache = match self.texture_cache.lock() {
             Ok(c) => c,
             Err(poisoned) => poisoned.into_inner(),
@@ -389,7 +400,7 @@ impl Renderer {
             tex.width,
             tex.height,
             &tex.rgba,
-            mipmaps,
+            mips,
         );
         if cache.len() >= TEXTURE_CACHE_LIMIT {
             cache.clear();
@@ -405,6 +416,7 @@ impl Renderer {
         scene: &DrawScene,
         batches: &[Batch],
         mipmaps: bool,
+        output: Output,
     ) -> BTreeMap<usize, wgpu::BindGroup> {
         let device = &self.gpu.device;
         let p = &self.pipelines;
@@ -412,20 +424,33 @@ impl Renderer {
             .iter()
             .flat_map(|b| b.draws.iter().map(|d| d.material))
             .collect();
-        let mut textures: BTreeMap<usize, wgpu::TextureView> = BTreeMap::new();
+        let mut textures: BTreeMap<(usize, Mips), wgpu::TextureView> = BTreeMap::new();
         let mut groups = BTreeMap::new();
         for m in used {
             let material = &scene.materials[m];
+            // A blended material's colour render blends, its mips box-filtered; a normal
+            // render tests it at ½ as every renderer that cannot blend does.
+            let blended = output == Output::Color && material.alpha == DrawAlpha::Blend;
+            let mips = match (mipmaps, blended) {
+                (false, _) => Mips::None,
+                (true, false) => Mips::Tested,
+                (true, true) => Mips::Blended,
+            };
             let view = match material.texture {
-                Some(t) => textures.entry(t).or_insert_with(|| {
+                Some(t) => textures.entry((t, mips)).or_insert_with(|| {
                     let tex = &scene.textures[t];
-                    self.cached_texture(tex, mipmaps)
+                    self.cached_texture(tex, mips)
                 }),
                 None => &p.white,
             };
+            let params = if blended {
+                [-1.0, 1.0, 0.0, 0.0]
+            } else {
+                [material.alpha.test_cutoff().unwrap_or(-1.0), 0.0, 0.0, 0.0]
+            };
             let uniform = MaterialUniform {
                 base_color: material.base_color,
-                params: [material.alpha.test_cutoff().unwrap_or(-1.0), 0.0, 0.0, 0.0],
+                params,
             };
             let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("frond-render material"),
@@ -589,20 +614,21 @@ fn upload_batches<'b>(
         .collect()
 }
 
-/// Every draw of the uploaded `batches` recorded into `pass`, each with its material's bind
-/// group (`material_groups`) and the pipeline of its sidedness (`[culled, double_sided]`);
-/// a draw whose material has no group is skipped.
+/// Every draw of the uploaded `batches` whose material `drawn` accepts recorded into `pass`,
+/// each with its material's bind group (`material_groups`) and the pipeline of its sidedness
+/// (`[culled, double_sided]`); a draw whose material has no group is skipped.
 fn draw_batches(
     pass: &mut wgpu::RenderPass<'_>,
     scene: &DrawScene,
     batches: &[(wgpu::Buffer, wgpu::Buffer, &Batch)],
     material_groups: &BTreeMap<usize, wgpu::BindGroup>,
     [culled, double_sided]: [&wgpu::RenderPipeline; 2],
+    drawn: impl Fn(usize) -> bool,
 ) {
     for (vertices, indices, batch) in batches {
         pass.set_vertex_buffer(0, vertices.slice(..));
         pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-        for draw in &batch.draws {
+        for draw in batch.draws.iter().filter(|d| drawn(d.material)) {
             let Some(group) = material_groups.get(&draw.material) else {
                 continue;
             };

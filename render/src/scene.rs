@@ -40,8 +40,9 @@ pub enum DrawAlpha {
     /// Alpha blending (glTF BLEND): a fragment of alpha α covers α of its sample, and layers
     /// composite as `1 − Π(1 − αᵢ)`, whatever their order. The CPU coverage rasteriser draws
     /// it so, with plain box-filtered mips (a texel's alpha is a covered fraction, whose area
-    /// average is the covered fraction of the larger texel); renders that cannot blend (the
-    /// wgpu path, the bake) test it at ½ ([`DrawAlpha::test_cutoff`]).
+    /// average is the covered fraction of the larger texel), and so does the wgpu path's
+    /// colour render (after the rest, no depth written); renders that cannot blend (the bake,
+    /// normal renders) test it at ½ ([`DrawAlpha::test_cutoff`]).
     Blend,
 }
 

@@ -9,7 +9,7 @@ struct Globals {
 
 struct Material {
     base_color: vec4<f32>,
-    // x: alpha cutoff, negative for opaque materials.
+    // x: alpha cutoff, negative for opaque and blended materials; y: 1 for blended ones.
     params: vec4<f32>,
 };
 
@@ -59,6 +59,14 @@ fn fs_main(in: VertexOut) -> FragmentOut {
         shade = 0.6 + 0.4 * abs(dot(normalize(n), globals.light_dir.xyz));
     }
     var out: FragmentOut;
+    if (material.params.y > 0.5) {
+        // Blended (glTF BLEND): the pipeline composes colour and coverage over the target's,
+        // coverage as a + c * (1 - a).
+        let a = clamp(color.a, 0.0, 1.0);
+        out.color = vec4<f32>(color.rgb * shade, a);
+        out.coverage = vec4<f32>(a, 0.0, 0.0, a);
+        return out;
+    }
     // Opaque and alpha-tested surfaces are written fully opaque (glTF MASK semantics).
     out.color = vec4<f32>(color.rgb * shade, 1.0);
     out.coverage = vec4<f32>(1.0, 0.0, 0.0, 1.0);

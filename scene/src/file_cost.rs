@@ -107,6 +107,11 @@ pub struct ImageCost {
     pub gpu_bytes: u64,
     /// Whether a material of a drawn primitive uses it (only those count in the totals).
     pub used: bool,
+    /// SHA-256 of its stored bytes, hex: images identical in bytes (a LOD's leaf map in every
+    /// file of a chain) are one image to an engine that shares them. Empty in costs written
+    /// before it.
+    #[serde(default)]
+    pub sha256: String,
 }
 
 /// The cost of the file at `path`, read within `limits`.
@@ -496,7 +501,21 @@ fn image_cost(src: &GltfSource, index: usize, used: bool) -> Result<ImageCost> {
         levels,
         gpu_bytes,
         used,
+        sha256: sha256_hex(&bytes),
     })
+}
+
+/// The SHA-256 of `bytes` in lowercase hex.
+fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    use std::fmt::Write;
+    let digest = Sha256::digest(bytes);
+    let mut hex = String::with_capacity(2 * digest.len());
+    for b in digest {
+        // Writing to a String cannot fail.
+        let _ = write!(hex, "{b:02x}");
+    }
+    hex
 }
 
 /// RGBA8 bytes of a `width`×`height` image with its full mip chain.

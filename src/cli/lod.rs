@@ -11,7 +11,9 @@ use crate::cli::values::{
     AnimationArg, EngineArg, FarAlphaArg, MethodArg, NormalsArg, TexturesArg, VatSpaceArg,
 };
 use frond_app::lod_cmd::run_lod;
-use frond_app::lod_settings::{DEFAULT_MAX_ERROR, LodSettings, MethodChoice};
+use frond_app::lod_settings::{
+    DEFAULT_FAR_ALPHA, DEFAULT_LODS_TEXT, DEFAULT_MAX_ERROR, LodSettings, MethodChoice,
+};
 use frond_render::Renderer;
 use frond_scene::Length;
 
@@ -33,7 +35,7 @@ pub struct LodArgs {
     #[arg(long, value_enum, default_value_t = MethodArg(MethodChoice::AUTO))]
     pub method: MethodArg,
     /// Screen heights in pixels the whole tree covers, one LOD each, nearest first.
-    #[arg(long, value_delimiter = ',', default_value = "600,200,60")]
+    #[arg(long, value_delimiter = ',', default_value = DEFAULT_LODS_TEXT)]
     pub lods: Vec<f32>,
     /// LODs by viewing distance instead (world units), with --fov and --resolution.
     #[arg(long, value_delimiter = ',', conflicts_with = "lods")]
@@ -102,7 +104,7 @@ pub struct LodArgs {
     /// How the far end (LODs of 32 px or less) draws its billboards' alpha: mask
     /// (alpha-tested, coverage kept by threshold) or blend (each texel's alpha the fraction of
     /// it covered, glTF BLEND).
-    #[arg(long, value_enum, default_value_t = FarAlphaArg::Mask)]
+    #[arg(long, value_enum, default_value_t = FarAlphaArg::from(DEFAULT_FAR_ALPHA))]
     pub far_alpha: FarAlphaArg,
     /// Add MSFT_lod (with MSFT_screencoverage) to the combined file.
     #[arg(long)]

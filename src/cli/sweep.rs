@@ -10,7 +10,7 @@ use crate::cli::args::{BuildArgs, ImportArgs};
 use crate::cli::progress::{Progress, print_json};
 use crate::cli::values::MethodArg;
 use frond_app::eval_cmd::EvalRequest;
-use frond_app::lod_settings::{LodSettings, Sampling};
+use frond_app::lod_settings::{DEFAULT_LODS_TEXT, LodSettings, Sampling};
 use frond_app::sweep::grid::{Grid, parse_epsilons};
 use frond_app::sweep::{SweepRequest, run_sweep};
 use frond_render::Renderer;
@@ -33,7 +33,7 @@ pub struct SweepArgs {
     )]
     pub method: Vec<MethodArg>,
     /// Screen heights (pixels), one LOD each; ε follows the screen-space rule.
-    #[arg(long, value_delimiter = ',', default_value = "600,200,60")]
+    #[arg(long, value_delimiter = ',', default_value = DEFAULT_LODS_TEXT)]
     pub lods: Vec<f32>,
     /// Fixed ε instead of screen heights: a range "A..B" (with --steps) or a list "A,B,C";
     /// each a length or a percentage of the bounding-box diagonal.

@@ -98,6 +98,15 @@ impl From<FarAlphaArg> for FarAlpha {
     }
 }
 
+impl From<FarAlpha> for FarAlphaArg {
+    fn from(a: FarAlpha) -> FarAlphaArg {
+        match a {
+            FarAlpha::Mask => FarAlphaArg::Mask,
+            FarAlpha::Blend => FarAlphaArg::Blend,
+        }
+    }
+}
+
 /// A `--billboard-normals` value: how baked billboards are lit.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
 pub enum NormalsArg {

@@ -79,7 +79,8 @@ pub fn render_coverage(
 /// The depth complexity of `scene` seen through `view_proj` at `width`×`height` pixels of
 /// `supersample`² samples: fragments rasterised (every sample inside a drawn triangle, before
 /// the alpha test discards any: each one runs the fragment shader, since alpha-tested surfaces
-/// defeat early depth rejection) per covered sample; 0 when nothing is covered. The overdraw an
+/// defeat early depth rejection, and blended ones write no depth) per covered sample, a
+/// blended layer's sample counting its coverage; 0 when nothing is covered. The overdraw an
 /// engine pays for alpha-tested foliage, whatever the draw order. The fragments are counted as
 /// the drawn triangles' area in samples (after depth clipping and culling; a part outside the
 /// image's sides counts too), which the samples inside them match up to their edges: counting
@@ -112,10 +113,13 @@ pub fn render_coverage_with_depth(
         [width, height, supersample],
         Shortcuts::ALL,
     )?;
-    let depth = if covered == 0 {
+    // Blended layers cover their alpha of a sample (none where nothing is blended).
+    let blended: f64 = image.blended.iter().map(|&b| f64::from(b)).sum();
+    let covered = covered as f64 + blended;
+    let depth = if covered == 0.0 {
         0.0
     } else {
-        fragments / covered as f64
+        fragments / covered
     };
     Ok((image, depth))
 }
