@@ -330,6 +330,10 @@ fn the_blended_far_end_writes_covered_fractions_as_blend() {
             (0.9..=1.1).contains(&error.coverage_ratio),
             "{mode}: {error:?}"
         );
+        // The far end is judged against its own target, the 60 px LOD against --max-error.
+        assert_eq!(error.max_error, frond_lod::chain::IMPOSTOR_MAX_ERROR);
+        let near = report.lods[1].error.as_ref().expect("measured");
+        assert_eq!(near.max_error, f64::from(0.10f32), "{near:?}");
         let costs: Vec<(String, FileCost)> = (report.lods.iter())
             .map(|l| (l.file.clone(), l.cost.clone().expect("the report's cost")))
             .collect();

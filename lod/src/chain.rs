@@ -14,10 +14,10 @@ use frond_scene::{Bounds, Length, Part, Rig, SampleOptions, Sampled, Tree, sampl
 
 use crate::contract::{AnimatedBillboardCloud, CardFoliage, LoopClock};
 
-use crate::cost_budget::is_impostor_class;
 pub use crate::cost_budget::{
-    ATLAS_TEXELS_PER_SQUARED_PIXEL, IMPOSTOR_HEIGHT, IMPOSTOR_JOINTS, IMPOSTOR_TEXTURE_BYTES,
-    LodBudget, MAX_JOINTS, TRIANGLES_PER_SQUARED_PIXEL, impostor_triangles, joints_for_screen,
+    ATLAS_TEXELS_PER_SQUARED_PIXEL, IMPOSTOR_HEIGHT, IMPOSTOR_JOINTS, IMPOSTOR_MAX_ERROR,
+    IMPOSTOR_TEXTURE_BYTES, LodBudget, MAX_JOINTS, TRIANGLES_PER_SQUARED_PIXEL, impostor_triangles,
+    is_impostor_class, joints_for_screen,
 };
 use crate::error::LodError;
 use crate::joint_budget::{AnimationCount, BillboardAnimation, JointCap, count};

@@ -41,6 +41,12 @@ pub fn is_impostor_class(screen_height: f32) -> bool {
     screen_height <= IMPOSTOR_HEIGHT
 }
 
+/// The coverage error an impostor-class LOD is judged against, whatever `--max-error` says of
+/// the nearer ones: at the far end almost every pixel of a crown is partly covered, and even a
+/// view-aligned impostor resampled through a texel grid misses part of each (spec
+/// animated-billboard-clouds §5.4, filtered).
+pub const IMPOSTOR_MAX_ERROR: f64 = 0.15;
+
 /// Skin joints of an impostor-class LOD: within every engine's cheapest skinning path (mobile
 /// GPUs' 8-bone palettes), and the number of motion clusters its foliage is given.
 pub const IMPOSTOR_JOINTS: usize = 8;

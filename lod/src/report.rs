@@ -237,7 +237,8 @@ pub struct MeasuredError {
     /// tree, 0 stands still; None with one frame or an input that does not move.
     #[serde(default)]
     pub loop_change_ratio: Option<f64>,
-    /// The target it was measured against (`--max-error`).
+    /// The target it was measured against: `--max-error`, or at the far end (an
+    /// impostor-class LOD, 32 px or less) the far end's own ([`crate::chain::IMPOSTOR_MAX_ERROR`]).
     pub max_error: f64,
     /// Whether `coverage ≤ max_error`; a LOD over its target is still written, at its budget,
     /// with a warning: budgets take precedence over the error target.
