@@ -14,6 +14,7 @@ use crate::common;
 use std::path::Path;
 
 use common::*;
+use frond_lod::report::file_bytes_without_images;
 use frond_scene::{AlphaMode, FileCost, ImportOptions, InputLimits, file_cost, import};
 
 /// The files' costs of the default chain of `tree` written into `out`, LOD0 first.
@@ -75,9 +76,6 @@ fn assert_cheaper_each_step(input: &FileCost, costs: &[(String, FileCost)]) {
             input.alpha_tested_area
         );
     }
-    let without_images = |c: &FileCost| -> u64 {
-        c.file_bytes - c.images.iter().map(|i| i.encoded_bytes).sum::<u64>()
-    };
     for w in costs.windows(2) {
         let ((pf, p), (f, c)) = (&w[0], &w[1]);
         let pairs: [(&str, u64, u64); 8] = [
@@ -94,8 +92,8 @@ fn assert_cheaper_each_step(input: &FileCost, costs: &[(String, FileCost)]) {
             ("materials", p.materials, c.materials),
             (
                 "file bytes without images",
-                without_images(p),
-                without_images(c),
+                file_bytes_without_images(p),
+                file_bytes_without_images(c),
             ),
         ];
         for (what, before, after) in pairs {

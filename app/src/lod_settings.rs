@@ -491,8 +491,8 @@ pub struct LodSettings {
 /// the far end's motion (docs/experiments.md, "Covered fractions at the far end").
 pub const DEFAULT_FAR_ALPHA: FarAlpha = FarAlpha::Mask;
 
-/// [`DEFAULT_FAR_ALPHA`], for settings written before the far end's alpha was a setting
-/// (they were built alpha-tested).
+/// The far end's alpha of settings written before it was a setting: alpha-tested, as they
+/// were built (whatever [`DEFAULT_FAR_ALPHA`] is now).
 fn default_far_alpha() -> FarAlpha {
     FarAlpha::Mask
 }

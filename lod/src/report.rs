@@ -404,7 +404,7 @@ type CostOf = fn(&frond_scene::FileCost) -> f64;
 /// warnings: what each drawn instance pays, read back from the written files. Texture and
 /// drawn area, which every instance of a species shares, are held to each LOD's own budget
 /// instead ([`LodReport::budget_excesses`]).
-pub const MONOTONE_COSTS: [(&str, CostOf); 8] = [
+const MONOTONE_COSTS: [(&str, CostOf); 8] = [
     ("triangles", |c| c.triangles as f64),
     ("vertices", |c| c.vertices as f64),
     ("joints per skin", |c| c.joints_per_skin_max as f64),

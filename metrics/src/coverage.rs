@@ -33,8 +33,8 @@
 //! pixel, would leave a far leaf a texel or two, all covered or none: its area lost.
 
 use frond_render::{
-    Camera, DrawScene, Lighting, RenderError, Renderer, SoftwareTextures, render_coverage,
-    render_coverage_with_depth,
+    Camera, CoverageImage, DrawScene, Lighting, RenderError, Renderer, SoftwareTextures,
+    render_coverage, render_coverage_with_depth,
 };
 use glam::Vec3;
 use rayon::prelude::*;
@@ -358,7 +358,11 @@ pub fn coverage_error(
         let (a, _) = o.render(chunk)?;
         let (b, _) = s.render(chunk)?;
         for (&(d, f), (a, b)) in chunk.iter().zip(a.iter().zip(&b)) {
-            let pair = pair_sums((a.pixels(), &a.colour), (b.pixels(), &b.colour), samples);
+            let pair = pair_sums(
+                (Pixels::of(a), &a.colour),
+                (Pixels::of(b), &b.colour),
+                samples,
+            );
             if pair.original == 0.0 {
                 return Err(MetricError::NothingCovered { view: d, frame: f });
             }
@@ -366,7 +370,7 @@ pub fn coverage_error(
         }
         for (a, b) in a.chunks(frames).zip(b.chunks(frames)) {
             let view: Vec<(Pixels<'_>, Pixels<'_>)> = (a.iter().zip(b))
-                .map(|(a, b)| (a.pixels(), b.pixels()))
+                .map(|(a, b)| (Pixels::of(a), Pixels::of(b)))
                 .collect();
             change.add_view(&view);
         }
@@ -485,18 +489,12 @@ pub fn coverage_images(
     })
 }
 
-/// One pair's image: each pixel's covered samples (counted, and blended), their mean colour.
-struct PairImage {
-    samples: Vec<u16>,
-    blended: Vec<f32>,
-    colour: Vec<[f32; 3]>,
-}
-
-impl PairImage {
-    fn pixels(&self) -> Pixels<'_> {
+impl<'a> Pixels<'a> {
+    /// A render's covered samples per pixel.
+    fn of(image: &'a CoverageImage) -> Pixels<'a> {
         Pixels {
-            samples: &self.samples,
-            blended: &self.blended,
+            samples: &image.samples,
+            blended: &image.blended,
         }
     }
 }
@@ -551,7 +549,7 @@ impl<'a> Drawing<'a> {
     fn render(
         &self,
         pairs: &[(usize, usize)],
-    ) -> Result<(Vec<PairImage>, Option<f64>), MetricError> {
+    ) -> Result<(Vec<CoverageImage>, Option<f64>), MetricError> {
         let framing = self.framing;
         if self.rasteriser == Rasteriser::Gpu {
             let images = (pairs.iter())
@@ -561,7 +559,7 @@ impl<'a> Drawing<'a> {
                 .collect::<Result<Vec<_>, _>>()?;
             return Ok((images, None));
         }
-        let images: Vec<(PairImage, Option<f64>)> = pairs
+        let images: Vec<(CoverageImage, Option<f64>)> = pairs
             .par_iter()
             .map(|&(d, f)| {
                 let scene = &self.scenes[f];
@@ -575,12 +573,7 @@ impl<'a> Drawing<'a> {
                 } else {
                     (render_coverage(scene, textures, view_proj, w, h, k)?, None)
                 };
-                let pair = PairImage {
-                    samples: image.samples,
-                    blended: image.blended,
-                    colour: image.colour,
-                };
-                Ok((pair, depth))
+                Ok((image, depth))
             })
             .collect::<Result<_, MetricError>>()?;
         let first_depth = images.iter().find_map(|(_, d)| *d);
@@ -817,7 +810,7 @@ fn gpu_image(
     scene: &DrawScene,
     camera: &Camera,
     framing: &Framing,
-) -> Result<PairImage, MetricError> {
+) -> Result<CoverageImage, MetricError> {
     let k = framing.supersample as usize;
     let (w, h) = (framing.width as usize, framing.height as usize);
     let frame = renderer.render_mipmapped(
@@ -870,7 +863,10 @@ fn gpu_image(
     if blended.iter().all(|&b| b == 0.0) {
         blended.clear();
     }
-    Ok(PairImage {
+    Ok(CoverageImage {
+        width: framing.width,
+        height: framing.height,
+        samples_per_pixel: (k * k) as u32,
         samples,
         blended,
         colour,

@@ -44,7 +44,7 @@ use rayon::prelude::*;
 use crate::bake_lanes::{self, LaneShading, ShadeLanes};
 use crate::error::RenderError;
 use crate::sample_lanes::{self, LaneTest, TriangleLanes};
-use crate::scene::{DrawMesh, DrawScene, validate_mesh};
+use crate::scene::{DrawAlpha, DrawMesh, DrawScene, validate_mesh};
 use crate::software::alpha::AlphaCutoff;
 use crate::software::bands::{BAND_PIXELS, MAX_SIDE, checked_target};
 use crate::software::sampling::LinearLevel;
@@ -247,7 +247,7 @@ impl<'a> BakeTarget<'a> {
                 reason: "a bake render needs textures prepared with colour".into(),
             });
         }
-        let cutoffs = AlphaCutoff::of_materials(scene);
+        let cutoffs = AlphaCutoff::of_materials(scene, DrawAlpha::test_cutoff);
         let hulls = if shortcuts.hulls {
             HullLevels::of_materials(scene, textures, &cutoffs)
         } else {
@@ -790,7 +790,7 @@ impl Region {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{DrawAlpha, DrawMaterial, DrawMesh, DrawTexture};
+    use crate::scene::{DrawMaterial, DrawMesh, DrawTexture};
     use crate::software::bands::Bands;
 
     /// A triangle pair over NDC `[x0, x1] × [-1, 1]` at depth `z` with normal `n`, counter-
@@ -1120,7 +1120,7 @@ mod tests {
         // The octagons bound most textured cards at the larger size.
         let (sw, sh) = (800, 600);
         let bands = Bands::new(&scene, &textures, Mat4::IDENTITY, [sw, sh], 4);
-        let cutoffs = AlphaCutoff::of_materials(&scene);
+        let cutoffs = AlphaCutoff::of_materials(&scene, DrawAlpha::test_cutoff);
         let hulls = HullLevels::of_materials(&scene, &textures, &cutoffs);
         let textured: Vec<_> = (bands.triangles.iter())
             .filter_map(|t| Some((t, hulls[t.material as usize].as_ref()?)))

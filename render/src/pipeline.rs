@@ -3,6 +3,7 @@
 //! fallback texture.
 
 use crate::batch::Vertex;
+use crate::scene::DrawAlpha;
 use crate::srgb::{SRGB_LINEAR, linear_to_srgb};
 use frond_scene::Wrap;
 use rayon::prelude::*;
@@ -206,15 +207,7 @@ impl Pipelines {
                 })
             })
             .collect();
-        let white = upload_texture(
-            device,
-            queue,
-            "frond-render white",
-            1,
-            1,
-            &[255; 4],
-            Mips::None,
-        );
+        let white = upload_texture(device, queue, "frond-render white", 1, 1, &[255; 4], None);
 
         Pipelines {
             globals_layout,
@@ -423,19 +416,55 @@ pub fn linear_mip_chain(width: u32, height: u32, rgba: Vec<u8>) -> Vec<Level> {
     out
 }
 
-/// The mip levels a texture is uploaded with.
+/// Which mip chain a texture is drawn with, by the CPU rasteriser and the wgpu path alike.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub(crate) enum Mips {
-    /// Level 0 alone.
-    None,
-    /// The coverage-preserving chain an alpha test reads ([`mip_chain`]).
+    /// The coverage-preserving chain an alpha test reads ([`mip_chain`]): what an opaque or
+    /// alpha-tested material samples.
     Tested,
-    /// The box-filtered chain a blended material reads ([`blend_mip_chain`]).
+    /// The box-filtered chain a blended material reads ([`blend_mip_chain`]), whose alpha
+    /// stays each texel's covered fraction.
     Blended,
 }
 
-/// Uploads a validated RGBA8 sRGB image as a sampled texture with the mip levels `mips` asks
-/// for.
+impl Mips {
+    /// The chain a material of alpha mode `alpha` reads.
+    pub(crate) fn of(alpha: DrawAlpha) -> Mips {
+        match alpha {
+            DrawAlpha::Blend => Mips::Blended,
+            DrawAlpha::Opaque | DrawAlpha::Mask(_) => Mips::Tested,
+        }
+    }
+
+    /// The chain of a texture that needs `self` once a material of alpha mode `alpha` samples
+    /// it too: blended only while every material blends (an alpha test keeps its chain).
+    pub(crate) fn with(self, alpha: DrawAlpha) -> Mips {
+        if self == Mips::Blended && Mips::of(alpha) == Mips::Blended {
+            Mips::Blended
+        } else {
+            Mips::Tested
+        }
+    }
+
+    /// This chain of an RGBA8 sRGB image.
+    pub(crate) fn rgba(self, width: u32, height: u32, rgba: &[u8]) -> Vec<Level> {
+        match self {
+            Mips::Tested => mip_chain(width, height, rgba),
+            Mips::Blended => blend_mip_chain(width, height, rgba),
+        }
+    }
+
+    /// This chain of an image's alpha alone (one byte a texel): the chain's alpha channel.
+    pub(crate) fn alpha(self, width: u32, height: u32, alpha: &[u8]) -> Vec<Level> {
+        match self {
+            Mips::Tested => alpha_mip_chain(width, height, alpha),
+            Mips::Blended => blend_alpha_mip_chain(width, height, alpha),
+        }
+    }
+}
+
+/// Uploads a validated RGBA8 sRGB image as a sampled texture with the mip chain `mips` (level 0
+/// alone when `None`).
 pub(crate) fn upload_texture(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -443,13 +472,13 @@ pub(crate) fn upload_texture(
     width: u32,
     height: u32,
     rgba: &[u8],
-    mips: Mips,
+    mips: Option<Mips>,
 ) -> wgpu::TextureView {
-    let levels = if mips == Mips::None {
-        1
-    } else {
-        32 - width.max(height).max(1).leading_zeros()
+    let chain = match mips {
+        None => vec![(width, height, rgba.to_vec())],
+        Some(mips) => mips.rgba(width, height, rgba),
     };
+    let levels = chain.len() as u32;
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
@@ -464,11 +493,6 @@ pub(crate) fn upload_texture(
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    let chain = match mips {
-        Mips::None => vec![(width, height, rgba.to_vec())],
-        Mips::Tested => mip_chain(width, height, rgba),
-        Mips::Blended => blend_mip_chain(width, height, rgba),
-    };
     for (level, (w, h, upload)) in chain.iter().enumerate() {
         queue.write_texture(
             wgpu::TexelCopyTextureInfo {

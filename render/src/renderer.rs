@@ -14,7 +14,7 @@ use crate::pipeline::{
     Mips, NORMAL_FORMAT, Pipelines,
 };
 use crate::readback::{self, Readback};
-use crate::scene::{DrawAlpha, DrawScene};
+use crate::scene::{DrawAlpha, DrawMaterial, DrawScene};
 
 /// Where and how one render draws: matrix, image size, clear colour and output kind.
 struct Target {
@@ -54,7 +54,8 @@ pub struct Renderer {
     info: String,
     /// Uploaded textures by (content hash, mip-mapped): baking draws the same source textures
     /// in hundreds of tiles, and building a mip chain each time dominated its cost.
-    texture_cache: std::sync::Mutex<std::collections::HashMap<(u64, Mips), wgpu::TextureView>>,
+    texture_cache:
+        std::sync::Mutex<std::collections::HashMap<(u64, Option<Mips>), wgpu::TextureView>>,
 }
 
 /// Textures kept uploaded at most; the cache is emptied when it would grow past this.
@@ -331,8 +332,7 @@ impl Renderer {
             pass.set_bind_group(0, &globals_group, &[]);
             // Blended surfaces after the rest, as engines draw transparent ones; a normal
             // render tests them at ½ with the rest.
-            let blended =
-                |m: usize| output == Output::Color && scene.materials[m].alpha == DrawAlpha::Blend;
+            let blended = |m: usize| draws_blended(&scene.materials[m], output);
             for (pipelines, pass_blended) in [
                 ([culled, double_sided], false),
                 ([&p.blend_culled, &p.blend_double_sided], true),
@@ -380,7 +380,11 @@ impl Renderer {
     }
 
     /// The uploaded view of `tex`, from the cache when the same pixels were uploaded before.
-    fn cached_texture(&self, tex: &crate::scene::DrawTexture, mips: Mips) -> wgpu::TextureView {
+    fn cached_texture(
+        &self,
+        tex: &crate::scene::DrawTexture,
+        mips: Option<Mips>,
+    ) -> wgpu::TextureView {
         use std::hash::{BuildHasher, Hash, Hasher};
         let mut h = foldhash::quality::FixedState::with_seed(0).build_hasher();
         (tex.width, tex.height).hash(&mut h);
@@ -424,18 +428,14 @@ impl Renderer {
             .iter()
             .flat_map(|b| b.draws.iter().map(|d| d.material))
             .collect();
-        let mut textures: BTreeMap<(usize, Mips), wgpu::TextureView> = BTreeMap::new();
+        let mut textures: BTreeMap<(usize, Option<Mips>), wgpu::TextureView> = BTreeMap::new();
         let mut groups = BTreeMap::new();
         for m in used {
             let material = &scene.materials[m];
             // A blended material's colour render blends, its mips box-filtered; a normal
             // render tests it at ½ as every renderer that cannot blend does.
-            let blended = output == Output::Color && material.alpha == DrawAlpha::Blend;
-            let mips = match (mipmaps, blended) {
-                (false, _) => Mips::None,
-                (true, false) => Mips::Tested,
-                (true, true) => Mips::Blended,
-            };
+            let blended = draws_blended(material, output);
+            let mips = mipmaps.then_some(if blended { Mips::Blended } else { Mips::Tested });
             let view = match material.texture {
                 Some(t) => textures.entry((t, mips)).or_insert_with(|| {
                     let tex = &scene.textures[t];
@@ -612,6 +612,12 @@ fn upload_batches<'b>(
             (vertices, indices, b)
         })
         .collect()
+}
+
+/// Whether a render of `output` draws `material` blended: colour renders of BLEND materials
+/// (normal renders test them at ½, [`DrawAlpha::test_cutoff`]).
+fn draws_blended(material: &DrawMaterial, output: Output) -> bool {
+    output == Output::Color && material.alpha == DrawAlpha::Blend
 }
 
 /// Every draw of the uploaded `batches` whose material `drawn` accepts recorded into `pass`,

@@ -6,7 +6,7 @@
 use frond_scene::Wrap;
 
 use super::sampling::{Levels, Trilinear, bilerp, floor_i64, footprint};
-use crate::scene::DrawScene;
+use crate::scene::{DrawAlpha, DrawScene};
 
 /// The alpha test: discarded only when `alpha < cutoff` (a NaN alpha is kept, as the renderer
 /// always kept it).
@@ -119,20 +119,16 @@ impl AlphaCutoff {
         passes_cutoff(alpha * self.scale, self.cutoff)
     }
 
-    /// Each material's test of `scene` (its base colour's alpha the scale) in a render that
-    /// tests every surface (the bake: a blended material tested at ½,
-    /// [`DrawAlpha::test_cutoff`](crate::DrawAlpha::test_cutoff)), `None` for an opaque one.
-    pub(crate) fn of_materials(scene: &DrawScene) -> Vec<Option<AlphaCutoff>> {
+    /// Each material's test of `scene` (its base colour's alpha the scale), its cutoff
+    /// chosen by `cutoff`: [`DrawAlpha::test_cutoff`] where every surface is tested (the bake:
+    /// a blended material at ½), [`DrawAlpha::mask_cutoff`] where blended materials are
+    /// blended (coverage renders); `None` for a material without one.
+    pub(crate) fn of_materials(
+        scene: &DrawScene,
+        cutoff: fn(DrawAlpha) -> Option<f32>,
+    ) -> Vec<Option<AlphaCutoff>> {
         (scene.materials.iter())
-            .map(|m| (m.alpha.test_cutoff()).map(|c| AlphaCutoff::new(m.base_color[3], c)))
-            .collect()
-    }
-
-    /// Each MASK material's test of `scene`, `None` for opaque and blended ones: what a
-    /// coverage render tests (it blends BLEND materials, [`crate::DrawAlpha::Blend`]).
-    pub(crate) fn of_masks(scene: &DrawScene) -> Vec<Option<AlphaCutoff>> {
-        (scene.materials.iter())
-            .map(|m| (m.alpha.mask_cutoff()).map(|c| AlphaCutoff::new(m.base_color[3], c)))
+            .map(|m| cutoff(m.alpha).map(|c| AlphaCutoff::new(m.base_color[3], c)))
             .collect()
     }
 }

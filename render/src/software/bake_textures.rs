@@ -9,8 +9,9 @@ use rayon::prelude::*;
 use super::alpha::{AlphaBounds, AlphaCutoff, footprint_quads};
 use super::sampling::{Levels, LinearLevel, Trilinear, bilerp, bilinear_rgb, footprint};
 use super::setup::Setup;
-use super::textures::{SoftwareTextures, Use};
+use super::textures::SoftwareTextures;
 use crate::error::RenderError;
+use crate::pipeline::Mips;
 use crate::sample_lanes::{LaneFilter, LaneLevel, LaneTest, TriangleLanes};
 use crate::scene::DrawTexture;
 use crate::srgb::SRGB_LINEAR;
@@ -32,10 +33,12 @@ impl SoftwareTextures {
     ) -> Result<SoftwareTextures, RenderError> {
         let n = textures.len();
         let used = (0..n)
-            .map(|i| match used.get(i).copied().unwrap_or(false) {
-                // The bake tests every material's alpha (a blended one at ½).
-                true => Use::Tested,
-                false => Use::None,
+            // The bake tests every material's alpha (a blended one at ½).
+            .map(|i| {
+                used.get(i)
+                    .copied()
+                    .unwrap_or(false)
+                    .then_some(Mips::Tested)
             })
             .collect();
         let mut prepared = Self::prepare(textures, used, vec![false; n], true)?;

@@ -100,7 +100,7 @@ impl<'a> Raster<'a> {
             covered_rows,
         }: Shortcuts,
     ) -> Raster<'a> {
-        let cutoffs = AlphaCutoff::of_masks(scene);
+        let cutoffs = AlphaCutoff::of_materials(scene, DrawAlpha::mask_cutoff);
         let blended: Vec<bool> = (scene.materials.iter())
             .map(|m| m.alpha == DrawAlpha::Blend)
             .collect();

@@ -7,34 +7,8 @@ use super::alpha::AlphaBounds;
 use super::sampling::{Levels, LinearLevel};
 use super::shading::Lighting;
 use crate::error::RenderError;
-use crate::pipeline::{
-    alpha_mip_chain, blend_alpha_mip_chain, blend_mip_chain, linear_mip_chain, mip_chain,
-};
-use crate::scene::{DrawAlpha, DrawScene, DrawTexture};
-
-/// How a scene's drawn materials use a texture, which decides its mip chain.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Use {
-    /// No drawn material samples it: not prepared.
-    None,
-    /// An opaque or alpha-tested material samples it: the coverage-preserving chain
-    /// ([`mip_chain`]), which keeps what the alpha test passes at every level.
-    Tested,
-    /// Only blended materials sample it: the box-filtered chain ([`blend_mip_chain`]), whose
-    /// alpha stays each texel's covered fraction.
-    Blended,
-}
-
-impl Use {
-    /// This use with one more material sampling the texture, `blended` or not (a texture an
-    /// alpha test also reads keeps the test's chain).
-    fn with(self, blended: bool) -> Use {
-        match (self, blended) {
-            (Use::None | Use::Blended, true) => Use::Blended,
-            _ => Use::Tested,
-        }
-    }
-}
+use crate::pipeline::{Mips, linear_mip_chain};
+use crate::scene::{DrawScene, DrawTexture};
 
 /// Largest texture side accepted (as the wgpu path's limit on common adapters).
 pub(crate) const MAX_TEXTURE_SIDE: u32 = 16384;
@@ -76,7 +50,7 @@ impl SoftwareTextures {
     /// Prepares the textures of `scene` that its drawn meshes' materials sample; `colour`:
     /// also draw colour, which needs the RGB of every level and a depth test per sample.
     pub fn new(scene: &DrawScene, colour: bool) -> Result<SoftwareTextures, RenderError> {
-        let mut used = vec![Use::None; scene.textures.len()];
+        let mut used: Vec<Option<Mips>> = vec![None; scene.textures.len()];
         let mut normal_map = vec![false; scene.textures.len()];
         for mesh in scene.meshes.iter().filter(|m| !m.indices.is_empty()) {
             let material = scene.materials.get(mesh.material);
@@ -84,7 +58,7 @@ impl SoftwareTextures {
                 && let Some(t) = m.texture
                 && let Some(u) = used.get_mut(t)
             {
-                *u = u.with(m.alpha == DrawAlpha::Blend);
+                *u = Some(u.map_or(Mips::of(m.alpha), |mips| mips.with(m.alpha)));
             }
             if colour
                 && mesh.tangents.is_some()
@@ -102,11 +76,11 @@ impl SoftwareTextures {
         self.textures.get(texture).is_some_and(|l| !l.0.is_empty())
     }
 
-    /// The mip chains of the `used` textures (colour or alpha alone; coverage-preserving
-    /// unless only blended materials draw with them) and of the `normal_map` ones (linear).
+    /// The mip chains of the `used` textures (colour or alpha alone; the chain each asks for,
+    /// none where it is not drawn) and of the `normal_map` ones (linear).
     pub(super) fn prepare(
         source: &[DrawTexture],
-        used: Vec<Use>,
+        used: Vec<Option<Mips>>,
         normal_map: Vec<bool>,
         colour: bool,
     ) -> Result<SoftwareTextures, RenderError> {
@@ -133,13 +107,13 @@ impl SoftwareTextures {
                         ),
                     });
                 }
-                let alpha = || t.rgba.chunks_exact(4).map(|p| p[3]).collect::<Vec<u8>>();
-                Ok(Levels(match (used, colour) {
-                    (Use::None, _) => Vec::new(),
-                    (Use::Tested, true) => mip_chain(t.width, t.height, &t.rgba),
-                    (Use::Tested, false) => alpha_mip_chain(t.width, t.height, &alpha()),
-                    (Use::Blended, true) => blend_mip_chain(t.width, t.height, &t.rgba),
-                    (Use::Blended, false) => blend_alpha_mip_chain(t.width, t.height, &alpha()),
+                Ok(Levels(match used {
+                    None => Vec::new(),
+                    Some(mips) if colour => mips.rgba(t.width, t.height, &t.rgba),
+                    Some(mips) => {
+                        let alpha: Vec<u8> = t.rgba.chunks_exact(4).map(|p| p[3]).collect();
+                        mips.alpha(t.width, t.height, &alpha)
+                    }
                 }))
             })
             .collect::<Result<_, _>>()?;
