@@ -34,5 +34,6 @@ mod preview_page;
 mod readme_report_table;
 mod render_tree;
 mod sweep_cli;
+mod threejs_coverage;
 mod threejs_play;
 mod view_server;

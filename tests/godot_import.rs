@@ -3,12 +3,14 @@
 //! `xvfb-run`), is loaded as a game loads it, and Godot's view of it is checked: one Skeleton
 //! with bones, an AnimationPlayer holding the clip at the input clip's length (looping exactly
 //! when the clip's name carries Godot 3's `-loop` / `_loop` import hint), every material as the
-//! glTF says (foliage alpha-scissored at its cutoff, double-sided foliage not culled, base colour
-//! and normal textures present, at the file's image sizes), and nothing printed as an error.
-//! Then Godot renders the posed tree (the clip paused at time 0 and at 0.325 of the period) with
-//! `frond render`'s camera, and its silhouettes are compared with frond's renders of the same file
-//! at the same times. Lit by Godot's light, every LOD's mean colour stays within 0.02 of LOD0's
-//! (`check_lit_colour`).
+//! glTF says (foliage alpha-scissored at its cutoff, or transparent where the far end is blended,
+//! double-sided foliage not culled, base colour and normal textures present, at the file's image
+//! sizes), and nothing printed as an error. Then Godot renders the posed tree (the clip paused at
+//! time 0 and at 0.325 of the period) with `frond render`'s camera, and its silhouettes are
+//! compared with frond's renders of the same file at the same times (a blended pixel counts once
+//! its alpha shows against the background: `BLENDED_SHOWS`). Lit by Godot's light, every LOD's
+//! mean colour stays within 0.02 of LOD0's (`check_lit_colour`; a blended LOD's pixels unmixed
+//! from the background with frond's alpha).
 //!
 //! The Godot side is `tests/godot/run.sh` (the project, editor plugin and scripts are in
 //! `tests/godot/project/`); it prints one JSON line per file. Skips (one `skipped:` line) when
@@ -231,6 +233,10 @@ fn godot_covers(rgb: [u8; 3]) -> bool {
     (255 - r) + g + (255 - b) > 48
 }
 
+/// The alpha (0..255) from which a blended pixel of frond's frame counts as the tree's: a leaf
+/// colour at this alpha over magenta moves [`godot_covers`]'s sum past its margin.
+const BLENDED_SHOWS: u8 = 26;
+
 /// A silhouette: which pixels of a frame show the tree.
 struct Silhouette {
     width: u32,
@@ -250,10 +256,11 @@ impl Silhouette {
         }
     }
 
-    /// frond's frame: transparent background, alpha-tested tree.
-    fn frond(png: &Path) -> Silhouette {
+    /// frond's frame: transparent background, the pixels whose alpha reaches `min_alpha`
+    /// (0..255).
+    fn frond(png: &Path, min_alpha: u8) -> Silhouette {
         let image = image::open(png).expect("frond's PNG").to_rgba8();
-        let covered = image.pixels().map(|p| p.0[3] >= 128).collect();
+        let covered = image.pixels().map(|p| p.0[3] >= min_alpha).collect();
         Silhouette {
             width: image.width(),
             height: image.height(),
@@ -409,7 +416,10 @@ fn check_lod(file: &Path, result: &Value, report: &LodReport) -> Vec<Measured> {
             .unwrap_or_else(|| panic!("{what}: Godot has no material {name}"));
         assert_eq!(godot["class"], "SpatialMaterial", "{what}: {name}");
         if foliage.contains(&name.as_str()) {
-            assert!(material.mask, "{what}: foliage material {name} is not MASK");
+            assert!(
+                material.mask || material.blend,
+                "{what}: foliage material {name} is neither MASK nor BLEND"
+            );
         }
         assert_eq!(
             godot["alpha_scissor"], material.mask,
@@ -452,6 +462,12 @@ fn check_lod(file: &Path, result: &Value, report: &LodReport) -> Vec<Measured> {
         );
     }
 
+    // A blended pixel shows the tree in Godot's frame once its alpha reaches what
+    // `godot_covers` tells from the magenta (about a tenth for a leaf's colour); an alpha-tested
+    // one is whole or nothing, and frond's frame is cut at a half.
+    let blended = gltf_materials(&json, &bin).iter().any(|m| m.blend);
+    let min_alpha = if blended { BLENDED_SHOWS } else { 128 };
+
     // The frames: Godot posed the clip and framed frond inspect's bounds.
     assert_eq!(result["camera"]["bounds_from"], "frond", "{what}: {result}");
     let renders = result["renders"].as_array().expect("renders");
@@ -465,8 +481,10 @@ fn check_lod(file: &Path, result: &Value, report: &LodReport) -> Vec<Measured> {
             assert_eq!(render["saved"], true, "{what}: {render}");
             let godot_png = render["png"].as_str().expect("png");
             let sampled_png = render["png_frond_sampling"].as_str().expect("png");
-            let frond =
-                Silhouette::frond(Path::new(&godot_png.replace(".godot.png", ".frond.png")));
+            let frond = Silhouette::frond(
+                Path::new(&godot_png.replace(".godot.png", ".frond.png")),
+                min_alpha,
+            );
             assert!(frond.area() > 1000, "{what}: frond's frame is empty");
             // Sampled alike, the silhouettes agree to a few pixels at a key (time 0): measured
             // IoU 0.993-1.000, area ratio 0.999-1.002, extents within 1 px (sapling chains,
@@ -521,9 +539,10 @@ fn describe_combined(file: &Path, result: &Value, lods: usize) {
     let errors = godot_errors(result);
     let render = &result["renders"][0];
     let (iou, ratio, edge) = match render["png_frond_sampling"].as_str() {
-        Some(png) => Silhouette::godot(Path::new(png)).compare(&Silhouette::frond(Path::new(
-            &png.replace(".godot_frondsampling.png", ".frond.png"),
-        ))),
+        Some(png) => Silhouette::godot(Path::new(png)).compare(&Silhouette::frond(
+            Path::new(&png.replace(".godot_frondsampling.png", ".frond.png")),
+            128,
+        )),
         None => (f64::NAN, f64::NAN, -1),
     };
     eprintln!(
@@ -588,7 +607,7 @@ fn godot_imports_and_renders_the_sample_chains() {
     let (report, lods) = chain(
         &input,
         &dir.path().join("cards"),
-        &["--lods", "600,200,60,20"],
+        &["--lods", "600,200,60,20", "--far-alpha", "blend"],
     );
     assert_eq!(
         report.lods[4].method.name(),
@@ -663,11 +682,16 @@ fn check_lit_colour(lods: &[PathBuf], results: &HashMap<String, Value>) {
     };
     let reference = frames(&lods[0]);
     for file in &lods[1..] {
+        let (json, bin) = glb(file);
+        let blended = gltf_materials(&json, &bin).iter().any(|m| m.blend);
         for ((time, png), (_, lod0_png)) in frames(file).iter().zip(&reference) {
-            let shift = lit_colour_shift(
-                &LitFrame::godot(Path::new(lod0_png)),
-                &LitFrame::godot(Path::new(png)),
-            );
+            let frame = if blended {
+                let frond_png = png.replace(".godot.png", ".frond.png");
+                LitFrame::godot_blended(Path::new(png), Path::new(&frond_png))
+            } else {
+                LitFrame::godot(Path::new(png))
+            };
+            let shift = lit_colour_shift(&LitFrame::godot(Path::new(lod0_png)), &frame);
             // The chain's folder too: the sample's two chains name their LODs alike.
             let name = file
                 .iter()
@@ -703,6 +727,31 @@ impl LitFrame {
                 .map(|p| p.0.map(|v| srgb_to_linear(f64::from(v) / 255.0)))
                 .collect(),
         }
+    }
+}
+
+impl LitFrame {
+    /// A Godot frame of a blended LOD: each pixel's colour over the magenta background unmixed
+    /// with the alpha frond's frame of the same view gives it (`frond_png`, as Godot blends: in
+    /// linear light), kept where that alpha is at least a half so the background's share stays
+    /// small.
+    fn godot_blended(png: &Path, frond_png: &Path) -> LitFrame {
+        let image = image::open(png).expect("Godot's PNG").to_rgb8();
+        let frond = image::open(frond_png).expect("frond's PNG").to_rgba8();
+        assert_eq!(image.dimensions(), frond.dimensions(), "frame sizes");
+        let background = [1.0, 0.0, 1.0];
+        let (covered, linear) = (image.pixels().zip(frond.pixels()))
+            .map(|(p, f)| {
+                let alpha = f64::from(f.0[3]) / 255.0;
+                let shown = godot_covers(p.0) && alpha >= 0.5;
+                let c = p.0.map(|v| srgb_to_linear(f64::from(v) / 255.0));
+                let unmixed = std::array::from_fn(|k| {
+                    ((c[k] - (1.0 - alpha) * background[k]) / alpha).clamp(0.0, 1.0)
+                });
+                (shown, if shown { unmixed } else { [0.0; 3] })
+            })
+            .unzip();
+        LitFrame { covered, linear }
     }
 }
 
@@ -745,7 +794,7 @@ fn godot_imports_and_renders_the_pine_chain() {
     let (report, lods) = chain(
         &tree,
         &dir.path().join("chain"),
-        &["--lods", "600,200,60,20"],
+        &["--lods", "600,200,60,20", "--far-alpha", "blend"],
     );
     let combined_file = combined(&dir.path().join("chain"), &report);
     let mut files = lods.clone();
@@ -853,12 +902,15 @@ fn godot_plays_a_vat_lod_where_frond_plays_it_skinned() {
     for render in renders {
         let time = render["time"].as_f64().expect("time");
         let sampled = render["png_frond_sampling"].as_str().expect("png");
-        let frond = Silhouette::frond(Path::new(
-            &render["png"]
-                .as_str()
-                .expect("png")
-                .replace(".godot.png", ".frond.png"),
-        ));
+        let frond = Silhouette::frond(
+            Path::new(
+                &render["png"]
+                    .as_str()
+                    .expect("png")
+                    .replace(".godot.png", ".frond.png"),
+            ),
+            128,
+        );
         let godot = Silhouette::godot(Path::new(sampled));
         let (iou, ratio, edge) = godot.compare(&frond);
         eprintln!(

@@ -18,23 +18,6 @@ use std::process::Command;
 use common::*;
 use serde_json::Value;
 
-/// The Chromium to drive: `FROND_CHROMIUM`, else the first of Debian's and Google's names on
-/// `PATH`.
-fn chromium() -> Option<String> {
-    if let Ok(c) = std::env::var("FROND_CHROMIUM") {
-        return Some(c);
-    }
-    ["chromium", "chromium-browser", "google-chrome"]
-        .into_iter()
-        .find(|c| on_path(c))
-        .map(|c| {
-            std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())
-                .map(|d| d.join(c))
-                .find(|p| p.is_file())
-                .map_or_else(|| c.to_string(), |p| p.display().to_string())
-        })
-}
-
 /// The page's background (`scene.background` in live_view.js).
 const SKY: [u8; 3] = [0xdf, 0xe9, 0xf1];
 

@@ -337,6 +337,23 @@ pub fn gltf_json(path: &Path) -> serde_json::Value {
     serde_json::from_slice(json).expect("glTF JSON")
 }
 
+/// The Chromium to drive: `FROND_CHROMIUM`, else the first of Debian's and Google's names on
+/// `PATH`.
+pub fn chromium() -> Option<String> {
+    if let Ok(c) = std::env::var("FROND_CHROMIUM") {
+        return Some(c);
+    }
+    ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find(|c| on_path(c))
+        .map(|c| {
+            std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())
+                .map(|d| d.join(c))
+                .find(|p| p.is_file())
+                .map_or_else(|| c.to_string(), |p| p.display().to_string())
+        })
+}
+
 /// `name` is an executable file in a `PATH` folder.
 pub fn on_path(name: &str) -> bool {
     std::env::var_os("PATH").is_some_and(|path| {
