@@ -804,8 +804,9 @@ fn godot_imports_and_renders_the_pine_chain() {
 }
 
 /// The Godot 3 materials frond ships (`export/shaders/*_godot3.shader`: VAT, spectral motion,
-/// LOD cross-fade) compile in Godot 3's own shader compiler and GL driver (GLES3, what their
-/// `texelFetch`/`textureSize` need), each with the uniforms the sidecars feed.
+/// LOD cross-fade) and their blended variants compile in Godot 3's own shader compiler and GL
+/// driver (GLES3, what their `texelFetch`/`textureSize` need), each with the uniforms the
+/// sidecars feed.
 #[test]
 fn godot_compiles_the_shipped_godot3_shaders() {
     if skip_without_godot() {
@@ -821,6 +822,22 @@ fn godot_compiles_the_shipped_godot3_shaders() {
         .map(|name| root().join("export/shaders").join(name))
         .collect();
     assert_eq!(shaders.len(), 3, "{shaders:?}");
+    // Their blended variants, as frond writes them beside a blended far end.
+    let variants_dir = tempfile::tempdir().expect("temp dir");
+    let mut shaders = shaders;
+    for (name, text) in frond_export::shaders::blended_variants(frond_export::shaders::SHADERS)
+        .into_iter()
+        .chain(frond_export::shaders::blended_variants(
+            frond_export::shaders::SPECTRAL_SHADERS,
+        ))
+        .filter(|(name, _)| name.ends_with("_godot3.shader"))
+        .collect::<std::collections::BTreeMap<_, _>>()
+    {
+        let path = variants_dir.path().join(name);
+        std::fs::write(&path, text).expect("write a blended variant");
+        shaders.push(path);
+    }
+    assert_eq!(shaders.len(), 6, "{shaders:?}");
     let _one_at_a_time = GODOT.lock().unwrap_or_else(|e| e.into_inner());
     let run = Command::new("bash")
         .arg(root().join("tests/godot/check_shaders.sh"))

@@ -183,20 +183,10 @@ fn box_filter(big: &[u8], width: usize, height: usize) -> Vec<f64> {
     out
 }
 
-/// Builds `input`'s chain ending at a blended far LOD of `screen_height` px, renders it in
-/// three.js and in frond, and asserts they agree within [`MAX_DISAGREEMENT`].
+/// Builds `input`'s chain ending at a blended far LOD of `screen_height` px (the Godot materials'
+/// blended variants written beside it), renders it in three.js and in frond, and asserts they
+/// agree within [`MAX_DISAGREEMENT`].
 fn far_end_agrees(input: &Path, screen_height: f32) {
-    let Some(chromium) = chromium() else {
-        report_not_installed(
-            None,
-            "chromium",
-            "apt-get install chromium, as bash .ci/run does, or set FROND_CHROMIUM",
-        );
-        return;
-    };
-    let Some(tools) = node_tools() else {
-        return;
-    };
     let tmp = tempfile::tempdir().expect("tmp");
     let lods = format!("{screen_height}");
     let report = frond_lod(
@@ -214,6 +204,26 @@ fn far_end_agrees(input: &Path, screen_height: f32) {
         "{} is drawn blended",
         far.file
     );
+    for material in [
+        "frond_lod_fade_blend.gdshader",
+        "frond_lod_fade_blend_godot3.shader",
+    ] {
+        let text = std::fs::read_to_string(tmp.path().join("shaders").join(material))
+            .unwrap_or_else(|e| panic!("{material} written beside a blended far end: {e}"));
+        assert!(text.contains("ALPHA = albedo.a;"), "{material}");
+    }
+
+    let Some(chromium) = chromium() else {
+        report_not_installed(
+            None,
+            "chromium",
+            "apt-get install chromium, as bash .ci/run does, or set FROND_CHROMIUM",
+        );
+        return;
+    };
+    let Some(tools) = node_tools() else {
+        return;
+    };
 
     let views = views(&tree, screen_height);
     let three = three_fractions(&tools, &chromium, &glb, &tree, &views);

@@ -273,7 +273,8 @@ pub fn chain_files(
     files.push((combined_name.clone(), combined.glb));
     files.extend(combined.external);
     let spectral_written = motions.iter().any(|m| m.spectral.is_some());
-    files.extend(shader_files(options.animation, spectral_written));
+    let blended = (chain.lods.iter()).any(|l| l.cloud().is_some_and(|c| c.atlas.blended));
+    files.extend(shader_files(options.animation, spectral_written, blended));
     Ok(ChainFiles {
         files,
         entries,
@@ -312,16 +313,29 @@ fn lod_input<'a>(
 }
 
 /// The shaders shipped under `shaders/`: the VAT set next to VAT output, the spectral set next
-/// to spectral textures (when a LOD wrote one), the LOD cross-fade alone otherwise.
-fn shader_files(mode: AnimationMode, spectral_written: bool) -> Vec<(String, Vec<u8>)> {
+/// to spectral textures (when a LOD wrote one), the LOD cross-fade alone otherwise; with the
+/// blended variants of the set's Godot materials when a LOD is drawn blended.
+fn shader_files(
+    mode: AnimationMode,
+    spectral_written: bool,
+    blended: bool,
+) -> Vec<(String, Vec<u8>)> {
     let set = match mode {
         AnimationMode::Vat(_) => crate::shaders::SHADERS,
         AnimationMode::Spectral if spectral_written => crate::shaders::SPECTRAL_SHADERS,
         // Every chain can cross-fade its LODs: the dither ships with skinned chains too.
         _ => crate::shaders::LOD_FADE_SHADERS,
     };
-    set.iter()
-        .map(|(file, text)| (format!("shaders/{file}"), text.as_bytes().to_vec()))
+    let variants = if blended {
+        crate::shaders::blended_variants(set)
+    } else {
+        Vec::new()
+    };
+    let shipped = set
+        .iter()
+        .map(|&(file, text)| (file.to_string(), text.to_string()));
+    (shipped.chain(variants))
+        .map(|(file, text)| (format!("shaders/{file}"), text.into_bytes()))
         .collect()
 }
 

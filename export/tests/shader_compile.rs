@@ -20,7 +20,9 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use frond_export::shaders::{LOD_FADE_SHADERS, SHADERS, SPECTRAL_SHADERS, ShaderFile};
+use frond_export::shaders::{
+    LOD_FADE_SHADERS, SHADERS, SPECTRAL_SHADERS, ShaderFile, blended_variant, blended_variants,
+};
 use frond_export::vat::VatSpace;
 use glam::{Mat3, Quat, Vec3};
 
@@ -679,8 +681,15 @@ enum Godot {
     V4,
 }
 
-fn godot_files() -> Vec<(ShaderFile, Godot)> {
-    shipped()
+/// Every shipped Godot material and its blended variant
+/// ([`frond_export::shaders::blended_variant`]), with its dialect.
+fn godot_files() -> Vec<((String, String), Godot)> {
+    let shipped = shipped();
+    let mut files: Vec<(String, String)> = (shipped.iter())
+        .map(|&(n, t)| (n.to_string(), t.to_string()))
+        .collect();
+    files.extend(blended_variants(&shipped));
+    files
         .into_iter()
         .filter_map(|f| {
             if f.0.ends_with(".gdshader") {
@@ -749,8 +758,8 @@ fn godot_materials_keep_to_their_dialect() {
     let files = godot_files();
     assert_eq!(
         files.len(),
-        6,
-        "VAT, spectral and cross-fade, Godot 3 and 4"
+        12,
+        "VAT, spectral and cross-fade, Godot 3 and 4, alpha-tested and blended"
     );
     for ((name, text), version) in files {
         let code: Vec<&str> = text
@@ -820,7 +829,7 @@ fn godot_to_glsl_es(text: &str, version: Godot) -> String {
     };
     format!(
         "{ES_PREAMBLE}vec3 VERTEX;\nvec3 NORMAL;\nvec3 TANGENT;\nvec3 BINORMAL;\nvec2 UV;\n\
-         vec2 UV2;\nvec4 COLOR;\n{custom}vec4 FRAGCOORD;\nvec3 ALBEDO;\nfloat METALLIC;\n\
+         vec2 UV2;\nvec4 COLOR;\n{custom}vec4 FRAGCOORD;\nvec3 ALBEDO;\nfloat ALPHA;\nfloat METALLIC;\n\
          float ROUGHNESS;\nuniform float TIME;\nout vec4 godot_out;\n{body}\n\
          void main() {{\n    FRAGCOORD = gl_FragCoord;\n{vertex}    godot_fragment();\n    \
          godot_out = vec4(VERTEX + NORMAL + TANGENT + BINORMAL + ALBEDO,\n        \
@@ -832,7 +841,7 @@ fn godot_to_glsl_es(text: &str, version: Godot) -> String {
 fn godot_materials_compile_as_glsl_es_with_glslang() {
     eprintln!("Godot materials: no Godot compiler here; checking a GLSL ES 3.00 translation");
     for ((name, text), version) in godot_files() {
-        let glsl = godot_to_glsl_es(text, version);
+        let glsl = godot_to_glsl_es(&text, version);
         if glslang(&format!("{name} as GLSL ES"), &["-S", "frag"], &glsl).is_none() {
             return;
         }
@@ -1098,5 +1107,56 @@ fn engine_axis_conversions_turn_quaternions_like_the_imported_mesh() {
             assert!((m * gltf * scale).abs_diff_eq(baked, 1e-3), "{name} baked");
             assert!(space.point_to_gltf(baked).abs_diff_eq(gltf, 1e-5));
         }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Blended variants of the Godot materials
+
+#[test]
+fn every_godot_material_has_a_blended_variant_that_writes_alpha_and_no_depth() {
+    let shipped = shipped();
+    for &(name, text) in &shipped {
+        let godot = name.ends_with(".gdshader") || name.ends_with(".shader");
+        let variant = blended_variant((name, text));
+        assert_eq!(variant.is_some(), godot, "{name}");
+        let Some((blend_name, blend)) = variant else {
+            continue;
+        };
+        assert!(blend_name.contains("_blend"), "{blend_name}");
+        assert!(
+            !shipped.iter().any(|(n, _)| *n == blend_name),
+            "{blend_name} is a name of its own"
+        );
+        let code: String = (blend.lines())
+            .map(|l| l.split("//").next().unwrap_or(""))
+            .collect::<Vec<_>>()
+            .join("\n");
+        assert!(
+            !code.contains("alpha_scissor"),
+            "{blend_name} tests no alpha"
+        );
+        assert!(
+            code.contains("ALPHA = albedo.a;"),
+            "{blend_name} writes its alpha"
+        );
+        assert!(
+            code.contains("render_mode cull_disabled, depth_draw_never;"),
+            "{blend_name} writes no depth"
+        );
+        // The cross-fade and the motion are the alpha-tested file's, line for line.
+        let kept = |t: &str| -> Vec<String> {
+            t.lines()
+                .filter(|l| !l.starts_with("//") && !l.contains("alpha_scissor"))
+                .filter(|l| !l.contains("render_mode") && !l.contains("ALPHA ="))
+                .filter(|l| !matches!(l.trim(), "discard;" | "}"))
+                .map(str::to_string)
+                .collect()
+        };
+        assert_eq!(
+            kept(text),
+            kept(&blend),
+            "{blend_name} keeps the rest of {name}"
+        );
     }
 }
