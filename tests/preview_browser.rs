@@ -82,15 +82,7 @@ fn heavy_chromium_plays_oak_dense() {
 /// Builds `input`'s chain (not measured), serves it with `frond view`, and checks its page in
 /// Chromium, leaving the screenshots in `target/test-artefacts/<artefacts>/`.
 fn check_in_chromium(input: &Path, artefacts: &str) {
-    let Some(chromium) = chromium() else {
-        report_not_installed(
-            None,
-            "chromium",
-            "apt-get install chromium, as bash .ci/run does, or set FROND_CHROMIUM",
-        );
-        return;
-    };
-    let Some(tools) = node_tools() else {
+    let Some((chromium, tools)) = chromium_and_node_tools() else {
         return;
     };
     let tmp = tempfile::tempdir().expect("tmp");

@@ -8,7 +8,8 @@
 //! Both sides count a blended layer by its alpha and compose layers as 1 − Π(1 − αᵢ) (three.js's
 //! NormalBlending writes α + dst·(1 − α) to the alpha channel), an opaque or alpha-tested surface
 //! as whole; what may differ is only where each samples the texture (three.js at 8× reads finer
-//! mips of the same box-filtered chain) and the rasterisers' edge rules.
+//! mips of the same box-filtered chain) and the rasterisers' edge rules. The chain's `shaders/`
+//! holds the Godot materials' blended variants beside such a far end.
 //!
 //! Skips (one `skipped:` line) when Chromium, Node or the packages in `tools/node_modules` are
 //! not installed; `.ci/run` installs them.
@@ -213,15 +214,7 @@ fn far_end_agrees(input: &Path, screen_height: f32) {
         assert!(text.contains("ALPHA = albedo.a;"), "{material}");
     }
 
-    let Some(chromium) = chromium() else {
-        report_not_installed(
-            None,
-            "chromium",
-            "apt-get install chromium, as bash .ci/run does, or set FROND_CHROMIUM",
-        );
-        return;
-    };
-    let Some(tools) = node_tools() else {
+    let Some((chromium, tools)) = chromium_and_node_tools() else {
         return;
     };
 

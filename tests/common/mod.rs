@@ -354,6 +354,20 @@ pub fn chromium() -> Option<String> {
         })
 }
 
+/// [`chromium`] and the Node clients that drive it ([`node_tools`]), or `None` after one
+/// `skipped:` line for the running test when either is missing.
+pub fn chromium_and_node_tools() -> Option<(String, PathBuf)> {
+    let Some(chromium) = chromium() else {
+        report_not_installed(
+            None,
+            "chromium",
+            "apt-get install chromium, as bash .ci/run does, or set FROND_CHROMIUM",
+        );
+        return None;
+    };
+    Some((chromium, node_tools()?))
+}
+
 /// `name` is an executable file in a `PATH` folder.
 pub fn on_path(name: &str) -> bool {
     std::env::var_os("PATH").is_some_and(|path| {
