@@ -344,3 +344,34 @@ fn the_blended_far_end_writes_covered_fractions_as_blend() {
         );
     }
 }
+
+/// The far end keeps the branches at least half a pixel wide as triangles and bakes the thinner
+/// ones into its billboards (none is dropped); a nearer LOD drops its thin branches as before.
+#[test]
+fn the_far_end_bakes_the_branches_it_cannot_keep() {
+    let tree = root().join("samples/sapling.glb");
+    let out = tempfile::tempdir().expect("tempdir");
+    let args = ["--lods", "60,20", "--far-alpha", "blend", "--no-preview"];
+    let report = frond_lod_measured(&tree, out.path(), &args);
+    let (near, far) = (&report.lods[1], &report.lods[2]);
+    eprintln!(
+        "60 px: {} thin pieces dropped; 20 px: {} baked, {} dropped, {} wood triangles kept",
+        near.dropped.wood_pieces,
+        far.dropped.wood_pieces_baked,
+        far.dropped.wood_pieces,
+        far.wood_triangles
+    );
+    assert_eq!(
+        near.dropped.wood_pieces_baked, 0,
+        "only the far end bakes wood"
+    );
+    assert!(far.dropped.wood_pieces_baked > 0, "{:?}", far.dropped);
+    assert_eq!(far.dropped.wood_pieces, 0, "{:?}", far.dropped);
+    // The trunk, wider than half a pixel, stays as triangles.
+    assert!(far.wood_triangles > 0, "{}", far.wood_triangles);
+    let error = far.error.as_ref().expect("measured");
+    assert!(
+        (0.9..=1.1).contains(&error.coverage_ratio),
+        "the baked branches neither thin nor bloat the far end: {error:?}"
+    );
+}

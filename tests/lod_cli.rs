@@ -483,6 +483,7 @@ fn with_context<R>(
         max_foliage_triangles: None,
         max_alpha_tested_area: None,
         max_joints: None,
+        baked_wood: None,
     })
 }
 

@@ -57,4 +57,39 @@ impl Quad {
     pub fn area(&self) -> f32 {
         4.0 * self.half_size.x * self.half_size.y
     }
+    /// Distance from `p` to the nearest point of the rectangle (world units).
+    pub fn distance_to(&self, p: Vec3) -> f32 {
+        let d = p - self.center;
+        let (u, v) = (d.dot(self.axis_u), d.dot(self.axis_v));
+        let nearest = self.center
+            + self.axis_u * u.clamp(-self.half_size.x, self.half_size.x)
+            + self.axis_v * v.clamp(-self.half_size.y, self.half_size.y);
+        p.distance(nearest)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn distance_to_the_rectangle_is_to_its_nearest_point() {
+        let q = Quad {
+            plane: Plane {
+                normal: Vec3::Z,
+                offset: 0.0,
+            },
+            center: Vec3::ZERO,
+            axis_u: Vec3::X,
+            axis_v: Vec3::Y,
+            half_size: Vec2::new(1.0, 0.5),
+        };
+        // In front of the rectangle: the distance to the plane.
+        assert!((q.distance_to(Vec3::new(0.5, 0.2, 2.0)) - 2.0).abs() < 1e-6);
+        // Beside it in its plane: to the edge.
+        assert!((q.distance_to(Vec3::new(3.0, 0.0, 0.0)) - 2.0).abs() < 1e-6);
+        // Off a corner, out of the plane.
+        let d = q.distance_to(Vec3::new(2.0, 1.5, 1.0));
+        assert!((d - 3f32.sqrt()).abs() < 1e-6, "{d}");
+    }
 }

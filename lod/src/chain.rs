@@ -508,6 +508,8 @@ struct WoodLod {
     error: f32,
     thin_pieces: usize,
     min_width: f32,
+    /// The pieces narrower than `min_width`: at the far end baked into the billboards.
+    thin: WoodMesh,
 }
 
 /// The wood within `max_triangles`: branches narrower than `min_width` (the wood's error, or
@@ -520,14 +522,18 @@ fn wood_within(wood: &WoodMesh, min_width: f32, error: f32, max_triangles: usize
     let mut thickness = min_width;
     let mut doublings = 0;
     loop {
-        let (kept, thin) = wood.without_thin_pieces(thickness);
-        let (mesh, e) = simplify_wood(&kept, error, max_triangles);
-        if doublings == THIN_TRIES || mesh.triangles() <= max_triangles || kept.triangles() == 0 {
+        let split = wood.split_thin_pieces(thickness);
+        let (mesh, e) = simplify_wood(&split.kept, error, max_triangles);
+        if doublings == THIN_TRIES
+            || mesh.triangles() <= max_triangles
+            || split.kept.triangles() == 0
+        {
             return WoodLod {
                 mesh,
                 error: e,
-                thin_pieces: thin,
+                thin_pieces: split.thin_pieces,
                 min_width: thickness,
+                thin: split.thin,
             };
         }
         thickness *= 2.0;
@@ -543,23 +549,35 @@ const WOOD_REFINE_STEPS: usize = 6;
 
 /// `wood` at the finest error between `floor` and `current`'s that fits in `max_triangles`,
 /// found by bisection of the error's logarithm; branches narrower than the error are
-/// re-admitted, and none wider than `current`'s width goes (a far LOD's half-pixel trunk
-/// stays, though it is narrower than the wood's error). A near LOD whose cards need fewer
-/// triangles than it may draw spends them on its branches.
-fn refine_wood(wood: &WoodMesh, current: WoodLod, floor: f32, max_triangles: usize) -> WoodLod {
+/// re-admitted (unless `keep_width`: a far end whose billboards hold its thin branches
+/// already), and none wider than `current`'s width goes (a far LOD's half-pixel trunk stays,
+/// though it is narrower than the wood's error). A near LOD whose cards need fewer triangles
+/// than it may draw spends them on its branches.
+fn refine_wood(
+    wood: &WoodMesh,
+    current: WoodLod,
+    floor: f32,
+    max_triangles: usize,
+    keep_width: bool,
+) -> WoodLod {
     let mut best = current;
     if best.mesh.triangles() > max_triangles || !(floor > 0.0 && best.error > floor) {
         return best;
     }
     let min_width = best.min_width;
     let at = |error: f32| {
-        let width = error.min(min_width);
-        let (kept, thin) = wood.without_thin_pieces(width);
+        let width = if keep_width {
+            min_width
+        } else {
+            error.min(min_width)
+        };
+        let split = wood.split_thin_pieces(width);
         WoodLod {
-            mesh: kept.simplify(error).0,
+            mesh: split.kept.simplify(error).0,
             error,
-            thin_pieces: thin,
+            thin_pieces: split.thin_pieces,
             min_width: width,
+            thin: split.thin,
         }
     };
     // The floor first: often everything fits.
@@ -659,8 +677,12 @@ fn billboard_lod(
         max_foliage_triangles: Some(foliage_room),
         max_alpha_tested_area: Some(lod_budget.alpha_tested_area),
         max_joints: Some(lod_budget.joints),
+        // The far end's branches under half a pixel: baked into its billboards as the
+        // covered fraction they add, so none vanishes and none turns solid.
+        baked_wood: (impostor && wood_lod.thin.triangles() > 0).then_some(&wood_lod.thin),
     };
     let built = method.build(&ctx)?;
+    let wood_baked = ctx.baked_wood.is_some();
     // Triangles the foliage left unused go back to the wood, as a finer wood error.
     let foliage_triangles = match &built.foliage {
         Foliage::Cards(cards) => cards.mesh.triangles(),
@@ -673,7 +695,13 @@ fn billboard_lod(
         error: wood_error,
         thin_pieces,
         ..
-    } = refine_wood(wood, wood_lod, level.wood_error / WOOD_REFINE_FLOOR, room);
+    } = refine_wood(
+        wood,
+        wood_lod,
+        level.wood_error / WOOD_REFINE_FLOOR,
+        room,
+        wood_baked,
+    );
     let mut e = LodEntry::new(method.name(), reason);
     e.screen_height = Some(level.screen_height);
     e.pixel = Some(level.pixel);
@@ -683,7 +711,11 @@ fn billboard_lod(
     e.timings_s.wood = (t1 - t0 + t2.elapsed()).as_secs_f64();
     e.dropped.wood_triangles = wood.triangles() - wood_lod.triangles().min(wood.triangles());
     e.dropped.wood_error = wood_error;
-    e.dropped.wood_pieces = thin_pieces;
+    if wood_baked {
+        e.dropped.wood_pieces_baked = thin_pieces;
+    } else {
+        e.dropped.wood_pieces = thin_pieces;
+    }
     let budget = ScreenBudget {
         pixel: level.pixel,
         epsilon: level.epsilon,
@@ -898,12 +930,13 @@ mod tests {
             error: coarse,
             thin_pieces: thin,
             min_width: coarse,
+            thin: WoodMesh::default(),
         };
-        let refined = refine_wood(&wood, at_coarse(mesh.clone()), coarse / 64.0, room);
+        let refined = refine_wood(&wood, at_coarse(mesh.clone()), coarse / 64.0, room, false);
         assert!(refined.error < coarse, "{}", refined.error);
         assert!(refined.mesh.triangles() > start && refined.mesh.triangles() <= room);
         // No room: unchanged.
-        let same = refine_wood(&wood, at_coarse(mesh), coarse / 64.0, start);
+        let same = refine_wood(&wood, at_coarse(mesh), coarse / 64.0, start, false);
         assert_eq!((same.mesh.triangles(), same.error), (start, coarse));
         // Room for everything: the floor.
         let finest = refine_wood(
@@ -911,6 +944,7 @@ mod tests {
             at_coarse(kept.simplify(coarse).0),
             coarse / 64.0,
             usize::MAX,
+            false,
         )
         .error;
         assert_eq!(finest, coarse / 64.0);
@@ -938,9 +972,10 @@ mod tests {
         ] {
             let start = WoodLod {
                 mesh: far.mesh.clone(),
+                thin: far.thin.clone(),
                 ..far
             };
-            let refined = refine_wood(&wood, start, pixel / WOOD_REFINE_FLOOR, room);
+            let refined = refine_wood(&wood, start, pixel / WOOD_REFINE_FLOOR, room, false);
             assert!(refined.mesh.triangles() <= room.max(far.mesh.triangles()));
             assert!(
                 refined.mesh.pieces().len() >= kept,

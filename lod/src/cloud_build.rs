@@ -17,6 +17,7 @@ use frond_billboard::view_coverage::{CoverageViews, bake_keeping_view_coverage};
 use frond_billboard::{Plane, Quad, TriangleSoup, source_copy};
 use frond_scene::Rig;
 use frond_scene::rigid_fit::rigid_fit;
+use frond_scene::wood::WoodMesh;
 
 use crate::contract::{
     AnimatedBillboard, AnimatedBillboardCloud, BillboardTexture, LoopClock, RigidMotion,
@@ -117,6 +118,17 @@ pub fn build_animated_cloud(
     if quads.is_empty() {
         return Err(CloudError::Empty);
     }
+    let mut soup = soup;
+    if let Some(wood) = ctx.baked_wood {
+        draw_wood_on_nearest_quads(
+            &mut soup,
+            wood,
+            &mut quads,
+            &mut drawn,
+            ctx.max_alpha_tested_area,
+        );
+    }
+    let soup = soup;
     // A billboard that its own triangles tile (one leaf card) keeps the card's texture; only
     // the others are baked (the hybrid cloud).
     let mut copies = source_copies(ctx, &soup, &mut quads, &owns);
@@ -238,6 +250,93 @@ pub fn build_animated_cloud(
     };
     cloud.update_playable_clips();
     Ok((cloud, timings))
+}
+
+/// Adds `wood`'s triangles (rest pose) to `soup` and each to the `drawn` list of the quad that
+/// shows it best: the far end's branches too thin to keep as triangles, baked with the leaves
+/// as the covered fraction they add. A triangle goes to the quad nearest it, the distance
+/// divided by how squarely the quad faces it (at least [`WOOD_MIN_FACING`]), so a branch is not
+/// flattened onto a quad seen edge-on from where the branch shows; the quad grows to hold the
+/// triangle's projection, so no branch is cut at a quad's edge (a trunk below the crown
+/// extends the lowest quads), while the quads' area stays within `max_area` (the LOD's drawn
+/// area; the largest triangles grow their quads first, a triangle past it is drawn cut). The
+/// wood joins no cluster and replaces nothing: the planes, the
+/// clusters' motion and the billboards' count are the leaves' alone; each branch moves with
+/// the billboard it is drawn on.
+fn draw_wood_on_nearest_quads(
+    soup: &mut TriangleSoup,
+    wood: &WoodMesh,
+    quads: &mut [Quad],
+    drawn: &mut [Vec<usize>],
+    max_area: Option<f64>,
+) {
+    let triangles: Vec<(usize, [Vec3; 3], [Vec2; 3])> = (wood.primitives.iter())
+        .flat_map(|p| {
+            (p.indices.chunks_exact(3)).map(move |t| {
+                let corners = [t[0], t[1], t[2]].map(|i| wood.positions[i as usize]);
+                let uvs = [t[0], t[1], t[2]].map(|i| wood.uvs[i as usize]);
+                (p.material, corners, uvs)
+            })
+        })
+        .collect();
+    let shown_on = |corners: &[Vec3; 3]| -> usize {
+        let centroid = (corners[0] + corners[1] + corners[2]) / 3.0;
+        let normal = (corners[1] - corners[0])
+            .cross(corners[2] - corners[0])
+            .normalize_or_zero();
+        let score = |q: &Quad| {
+            let facing = q.plane.normal.dot(normal).abs().max(WOOD_MIN_FACING);
+            q.distance_to(centroid) / facing
+        };
+        (0..quads.len())
+            .min_by(|&a, &b| score(&quads[a]).total_cmp(&score(&quads[b])))
+            .unwrap_or(0)
+    };
+    let chosen: Vec<usize> = triangles.par_iter().map(|(_, c, _)| shown_on(c)).collect();
+    // Growth within the drawn-area budget, the largest triangles (the trunk's) first.
+    let mut area: f64 = quads.iter().map(|q| f64::from(q.area())).sum();
+    let mut by_size: Vec<usize> = (0..triangles.len()).collect();
+    let size = |t: usize| {
+        let [a, b, c] = triangles[t].1;
+        0.5 * (b - a).cross(c - a).length()
+    };
+    by_size.sort_by(|&a, &b| size(b).total_cmp(&size(a)).then(a.cmp(&b)));
+    for t in by_size {
+        let q = chosen[t];
+        let grown = grown_to_hold(&quads[q], &triangles[t].1);
+        let after = area + f64::from(grown.area() - quads[q].area());
+        if max_area.is_none_or(|max| after <= max) {
+            area = after;
+            quads[q] = grown;
+        }
+    }
+    for ((material, corners, uvs), q) in triangles.into_iter().zip(chosen) {
+        drawn[q].push(soup.len());
+        soup.positions.push(corners);
+        soup.uvs.push(uvs);
+        soup.material.push(material as u32);
+    }
+}
+
+/// How squarely a quad must face a wood triangle at least, in [`draw_wood_on_nearest_quads`]'s
+/// choice: a quad seen edge-on from the triangle's normal counts as five times as far.
+const WOOD_MIN_FACING: f32 = 0.2;
+
+/// `quad` grown in its plane to hold the projection of `points`.
+fn grown_to_hold(quad: &Quad, points: &[Vec3]) -> Quad {
+    let (mut lo, mut hi) = (-quad.half_size, quad.half_size);
+    for p in points {
+        let d = *p - quad.center;
+        let uv = Vec2::new(d.dot(quad.axis_u), d.dot(quad.axis_v));
+        lo = lo.min(uv);
+        hi = hi.max(uv);
+    }
+    let mid = 0.5 * (lo + hi);
+    Quad {
+        center: quad.center + quad.axis_u * mid.x + quad.axis_v * mid.y,
+        half_size: 0.5 * (hi - lo),
+        ..*quad
+    }
 }
 
 /// Views on the measure's rings (5 a ring at 0° and 30°, spec animated-billboard-clouds §5.4)
@@ -674,4 +773,112 @@ fn animated_billboards(
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use frond_scene::wood::WoodPrimitive;
+
+    /// A unit square quad centred at `center`, facing +Z.
+    fn quad_at(center: Vec3) -> Quad {
+        Quad {
+            plane: Plane {
+                normal: Vec3::Z,
+                offset: center.z,
+            },
+            center,
+            axis_u: Vec3::X,
+            axis_v: Vec3::Y,
+            half_size: Vec2::splat(0.5),
+        }
+    }
+
+    #[test]
+    fn thin_wood_is_drawn_on_the_nearest_billboard_and_replaces_nothing() {
+        let mut quads = [quad_at(Vec3::ZERO), quad_at(Vec3::new(3.0, 0.0, 0.0))];
+        // One leaf on each quad.
+        let leaf = |x: f32| {
+            [
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + 0.1, 0.0, 0.0),
+                Vec3::new(x, 0.1, 0.0),
+            ]
+        };
+        let mut soup = TriangleSoup {
+            positions: vec![leaf(0.0), leaf(3.0)],
+            uvs: vec![[Vec2::ZERO; 3]; 2],
+            material: vec![0, 0],
+        };
+        let mut drawn = vec![vec![0], vec![1]];
+        // Two twig triangles: one behind the second quad, one just past the first's edge.
+        let wood = WoodMesh {
+            positions: vec![
+                Vec3::new(2.9, 0.1, -0.4),
+                Vec3::new(3.1, 0.1, -0.4),
+                Vec3::new(3.0, 0.3, -0.4),
+                Vec3::new(0.6, 0.0, 0.1),
+                Vec3::new(0.7, 0.0, 0.1),
+                Vec3::new(0.6, 0.1, 0.1),
+            ],
+            uvs: (0..6).map(|i| Vec2::new(i as f32, 0.0)).collect(),
+            primitives: vec![WoodPrimitive {
+                material: 7,
+                indices: vec![0, 1, 2, 3, 4, 5],
+            }],
+            ..WoodMesh::default()
+        };
+        draw_wood_on_nearest_quads(&mut soup, &wood, &mut quads, &mut drawn, None);
+        assert_eq!(soup.len(), 4);
+        assert_eq!(drawn, [vec![0, 3], vec![1, 2]]);
+        assert_eq!(soup.material[2..], [7, 7]);
+        assert_eq!(soup.positions[2][0], wood.positions[0]);
+        assert_eq!(soup.uvs[3], [3.0, 4.0, 5.0].map(|u| Vec2::new(u, 0.0)));
+        // The first quad grew to hold the twig past its edge; the second held its own already.
+        assert!((quads[0].center.x - 0.1).abs() < 1e-6, "{:?}", quads[0]);
+        assert!(
+            (quads[0].half_size - Vec2::new(0.6, 0.5))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        assert_eq!(quads[1], quad_at(Vec3::new(3.0, 0.0, 0.0)));
+        // With no drawn area to spare, the twig is drawn (cut at the edge) and nothing grows.
+        let mut tight = [quad_at(Vec3::ZERO), quad_at(Vec3::new(3.0, 0.0, 0.0))];
+        let (mut soup, mut drawn) = (TriangleSoup::default(), vec![Vec::new(), Vec::new()]);
+        draw_wood_on_nearest_quads(&mut soup, &wood, &mut tight, &mut drawn, Some(2.0));
+        assert_eq!(drawn, [vec![1], vec![0]]);
+        assert_eq!(tight[0], quad_at(Vec3::ZERO));
+    }
+
+    #[test]
+    fn a_branch_goes_to_the_quad_that_faces_it_not_the_one_seen_edge_on() {
+        // A quad facing +Z at the origin and one facing +X a little further away.
+        let mut facing_x = quad_at(Vec3::new(0.0, 0.0, -0.6));
+        facing_x.plane = Plane {
+            normal: Vec3::X,
+            offset: 0.0,
+        };
+        facing_x.axis_u = -Vec3::Z;
+        let mut quads = [quad_at(Vec3::ZERO), facing_x];
+        let mut soup = TriangleSoup::default();
+        let mut drawn = vec![Vec::new(), Vec::new()];
+        // A triangle facing +X, 0.1 in front of the first quad (seen edge-on from +X) and 0.2
+        // beside the second's edge (facing it).
+        let wood = WoodMesh {
+            positions: vec![
+                Vec3::new(0.0, 0.0, 0.2),
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(0.0, 0.2, 0.1),
+            ],
+            uvs: vec![Vec2::ZERO; 3],
+            primitives: vec![WoodPrimitive {
+                material: 1,
+                indices: vec![0, 1, 2],
+            }],
+            ..WoodMesh::default()
+        };
+        draw_wood_on_nearest_quads(&mut soup, &wood, &mut quads, &mut drawn, None);
+        assert_eq!(drawn, [vec![], vec![0]]);
+    }
 }

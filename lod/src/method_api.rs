@@ -17,6 +17,7 @@ use std::sync::{Arc, Mutex};
 
 use frond_billboard::cloud::CloudParams;
 use frond_render::Renderer;
+use frond_scene::wood::WoodMesh;
 use frond_scene::{Length, Sampled, Tree};
 use frond_skeleton::BoneDescriptionKind;
 use frond_spectral::description::SpectralKind;
@@ -131,6 +132,10 @@ pub struct BuildContext<'a> {
     /// Most skin joints the LOD may have: spectral clustering gives the far end one cluster
     /// per joint but the wood's.
     pub max_joints: Option<usize>,
+    /// Wood the LOD's billboards draw besides the foliage (rest pose): the far end's branches
+    /// too thin to keep as triangles, baked as the covered fraction they add. Never moved or
+    /// clustered: each triangle is drawn onto the billboard nearest it.
+    pub baked_wood: Option<&'a WoodMesh>,
 }
 
 /// A method's own part of a LOD's report entry: an entry key (`spectral`, `skeleton`,

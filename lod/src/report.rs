@@ -278,6 +278,11 @@ pub struct DroppedReport {
     pub wood_triangles: usize,
     /// Wood pieces (branch tubes) dropped for being narrower than `wood_error`.
     pub wood_pieces: usize,
+    /// Wood pieces the far end took out of its triangles for being narrower than half a
+    /// pixel and baked into its billboards instead (their triangles count in
+    /// `wood_triangles`, but they are drawn).
+    #[serde(default)]
+    pub wood_pieces_baked: usize,
     /// The wood's simplification error (world units).
     pub wood_error: f32,
     /// Input clips not written, with the reason.

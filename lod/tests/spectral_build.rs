@@ -87,6 +87,7 @@ fn build(
         max_foliage_triangles: None,
         max_alpha_tested_area: None,
         max_joints: None,
+        baked_wood: None,
     };
     build_spectral_cloud(&ctx, sp).expect("spectral cloud")
 }

@@ -99,6 +99,17 @@ pub struct WoodMesh {
     pub primitives: Vec<WoodPrimitive>,
 }
 
+/// A wood mesh split at a thickness ([`WoodMesh::split_thin_pieces`]).
+#[derive(Clone, Debug)]
+pub struct ThinSplit {
+    /// The pieces at least as thick as the split's thickness.
+    pub kept: WoodMesh,
+    /// The thinner pieces.
+    pub thin: WoodMesh,
+    /// How many pieces are in `thin`.
+    pub thin_pieces: usize,
+}
+
 /// The triangles of one material.
 #[derive(Clone, Debug)]
 pub struct WoodPrimitive {
@@ -399,17 +410,25 @@ impl WoodMesh {
     /// tree). A far LOD drops branches narrower than a pixel this way: simplification cannot
     /// collapse a closed tube, and a sub-pixel branch only aliases.
     pub fn without_thin_pieces(&self, min_thickness: f32) -> (WoodMesh, usize) {
-        let pieces = self.pieces();
-        let mut primitives: Vec<WoodPrimitive> = self
-            .primitives
-            .iter()
-            .map(|p| WoodPrimitive {
-                material: p.material,
-                indices: Vec::new(),
-            })
-            .collect();
-        let mut dropped = 0;
-        for piece in &pieces {
+        let split = self.split_thin_pieces(min_thickness);
+        (split.kept, split.thin_pieces)
+    }
+
+    /// The mesh split at `min_thickness` as [`WoodMesh::without_thin_pieces`] splits it: the
+    /// pieces kept, and the thin ones as a mesh of their own (what a far LOD bakes into its
+    /// billboards instead of dropping).
+    pub fn split_thin_pieces(&self, min_thickness: f32) -> ThinSplit {
+        let empty = || -> Vec<WoodPrimitive> {
+            (self.primitives.iter())
+                .map(|p| WoodPrimitive {
+                    material: p.material,
+                    indices: Vec::new(),
+                })
+                .collect()
+        };
+        let (mut kept, mut thin) = (empty(), empty());
+        let mut thin_pieces = 0;
+        for piece in &self.pieces() {
             let corners = |&(p, t): &(usize, usize)| {
                 let i = &self.primitives[p].indices[3 * t..3 * t + 3];
                 [0, 1, 2].map(|k| self.positions[i[k] as usize])
@@ -427,18 +446,27 @@ impl WoodMesh {
             } else {
                 0.0
             };
-            if thickness < min_thickness {
-                dropped += 1;
-                continue;
-            }
+            let to = if thickness < min_thickness {
+                thin_pieces += 1;
+                &mut thin
+            } else {
+                &mut kept
+            };
             for &(p, t) in piece {
-                primitives[p]
+                to[p]
                     .indices
                     .extend_from_slice(&self.primitives[p].indices[3 * t..3 * t + 3]);
             }
         }
-        primitives.retain(|p| !p.indices.is_empty());
-        (self.with_primitives(primitives.into_iter()), dropped)
+        let mesh = |mut primitives: Vec<WoodPrimitive>| {
+            primitives.retain(|p| !p.indices.is_empty());
+            self.with_primitives(primitives.into_iter())
+        };
+        ThinSplit {
+            kept: mesh(kept),
+            thin: mesh(thin),
+            thin_pieces,
+        }
     }
 
     /// Number of triangles over all primitives.
@@ -1177,6 +1205,22 @@ mod tests {
         assert_eq!(none, 0);
         let (empty, both) = m.without_thin_pieces(0.5);
         assert_eq!((empty.triangles(), both), (0, 2));
+        // Split, the thin pieces are a mesh of their own: the twig, whole.
+        let split = m.split_thin_pieces(0.1);
+        assert_eq!(split.thin_pieces, 1);
+        assert_eq!(split.kept.triangles(), kept.triangles());
+        assert_eq!(split.thin.triangles(), 7 * 6 * 2, "the twig's triangles");
+        assert!(
+            split
+                .thin
+                .positions
+                .iter()
+                .all(|p| (p.x - 1.0).abs() <= 0.01 + 1e-6)
+        );
+        assert_eq!(
+            split.kept.triangles() + split.thin.triangles(),
+            m.triangles()
+        );
     }
 
     /// Largest distance from the original's vertices to the simplified surface.
