@@ -174,6 +174,12 @@ impl RigidMotion {
         }
     }
 
+    /// The transforms at every one of `n` uniform samples of the loop ([`Self::at`]), for a
+    /// caller that reads them many times (a spectral motion is a cosine series to evaluate).
+    pub fn samples(&self, n: usize) -> Vec<Affine3A> {
+        (0..n).map(|s| self.at(s, n)).collect()
+    }
+
     /// Number of samples it carries.
     pub fn len(&self) -> usize {
         match self {

@@ -481,11 +481,11 @@ impl Merger<'_> {
         }
         let base = first.follows;
         let ns = self.frames.worlds.len();
-        let target = |s: usize, x: Vec3| {
-            self.frames
-                .carry(base, s)
-                .transform_point3(m.at(s, ns).transform_point3(x))
-        };
+        // The group's motion and its node's, once per sample: every candidate's fit reads them
+        // at each corner, and a spectral motion is a cosine series to evaluate.
+        let own = m.samples(ns);
+        let carried: Vec<Mat4> = (0..ns).map(|s| self.frames.carry(base, s)).collect();
+        let target = |s: usize, x: Vec3| carried[s].transform_point3(own[s].transform_point3(x));
         candidates.sort_unstable();
         candidates
             .into_iter()

@@ -263,7 +263,8 @@ fn attach_to_bones(
             let ns = worlds.len();
             // Following `node` puts the quad at Q·corners in the node's rest frame, Q the rigid
             // fit of Rest·W(s)⁻¹·M(s) over the loop; the deviation is what that costs on screen.
-            let target = |s: usize, c: Vec3| m.at(s, ns).transform_point3(c);
+            let own = m.samples(ns);
+            let target = |s: usize, c: Vec3| own[s].transform_point3(c);
             let fit = |node: usize| fit_to_node(rig, Some(node), &corners, &target);
             candidates
                 .into_iter()
@@ -287,21 +288,22 @@ fn attach_to_bones(
 fn share_motions(cloud: &mut AnimatedBillboardCloud, unseen: f32, dropped: &mut Dropped) {
     // 2b. Motions within `unseen` of an earlier one are shared (greedy, in billboard
     //     order, so the result does not depend on threads).
+    // Each motion at its own samples, once: every later billboard compares against them.
+    let sampled: Vec<Option<Vec<Affine3A>>> = (cloud.billboards.par_iter())
+        .map(|b| b.motion.as_ref().map(|m| m.samples(m.len())))
+        .collect();
     let mut reps: Vec<usize> = Vec::new();
     for i in 0..cloud.billboards.len() {
-        let Some(own) = &cloud.billboards[i].motion else {
+        let Some(own) = &sampled[i] else {
             continue;
         };
         let corners = cloud.billboards[i].quad.corners();
         let follows = cloud.billboards[i].follows;
-        let n = own.len();
         let close = reps.iter().copied().find(|&r| {
-            let rb = &cloud.billboards[r];
-            rb.follows == follows
-                && rb.motion.as_ref().is_some_and(|m| {
-                    m.len() == n
-                        && (0..n).all(|s| {
-                            let (a, b) = (own.at(s, n), m.at(s, n));
+            cloud.billboards[r].follows == follows
+                && sampled[r].as_ref().is_some_and(|m| {
+                    m.len() == own.len()
+                        && own.iter().zip(m).all(|(a, b)| {
                             corners.iter().all(|c| {
                                 a.transform_point3(*c).distance(b.transform_point3(*c)) < unseen
                             })
