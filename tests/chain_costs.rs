@@ -346,7 +346,8 @@ fn the_blended_far_end_writes_covered_fractions_as_blend() {
 }
 
 /// The far end keeps the branches at least half a pixel wide as triangles and bakes the thinner
-/// ones into its billboards (none is dropped); a nearer LOD drops its thin branches as before.
+/// ones into its billboards (none is dropped); a nearer LOD, and a far end of cards, drop their
+/// thin branches as before.
 #[test]
 fn the_far_end_bakes_the_branches_it_cannot_keep() {
     let tree = root().join("samples/sapling.glb");
@@ -373,5 +374,15 @@ fn the_far_end_bakes_the_branches_it_cannot_keep() {
     assert!(
         (0.9..=1.1).contains(&error.coverage_ratio),
         "the baked branches neither thin nor bloat the far end: {error:?}"
+    );
+    // Cards draw no wood of their own: a far end of cards drops its thin branches, as said.
+    let cards_out = tempfile::tempdir().expect("tempdir");
+    let args = ["--lods", "20", "--method", "cards"];
+    let cards = frond_lod(&tree, cards_out.path(), &args);
+    let dropped = &cards.lods[1].dropped;
+    assert_eq!(dropped.wood_pieces_baked, 0, "{dropped:?}");
+    assert_eq!(
+        dropped.wood_pieces, far.dropped.wood_pieces_baked,
+        "{dropped:?}"
     );
 }

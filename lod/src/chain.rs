@@ -682,7 +682,8 @@ fn billboard_lod(
         baked_wood: (impostor && wood_lod.thin.triangles() > 0).then_some(&wood_lod.thin),
     };
     let built = method.build(&ctx)?;
-    let wood_baked = ctx.baked_wood.is_some();
+    // Only a billboard cloud draws the thin wood; cards leave it dropped.
+    let wood_baked = ctx.baked_wood.is_some() && matches!(built.foliage, Foliage::Cloud(_));
     // Triangles the foliage left unused go back to the wood, as a finer wood error.
     let foliage_triangles = match &built.foliage {
         Foliage::Cards(cards) => cards.mesh.triangles(),
