@@ -21,6 +21,21 @@ pub struct Quad {
 }
 
 impl Quad {
+    /// The rectangle facing +Z at `center` (its sides along X and Y), `half_size` its half
+    /// extents: the quad of a test scene or of a front-facing impostor.
+    pub fn facing_z(center: Vec3, half_size: Vec2) -> Quad {
+        Quad {
+            plane: Plane {
+                normal: Vec3::Z,
+                offset: center.z,
+            },
+            center,
+            axis_u: Vec3::X,
+            axis_v: Vec3::Y,
+            half_size,
+        }
+    }
+
     /// Corners in order (-u,-v), (+u,-v), (+u,+v), (-u,+v).
     pub fn corners(&self) -> [Vec3; 4] {
         let (u, v) = (
@@ -74,16 +89,7 @@ mod tests {
 
     #[test]
     fn distance_to_the_rectangle_is_to_its_nearest_point() {
-        let q = Quad {
-            plane: Plane {
-                normal: Vec3::Z,
-                offset: 0.0,
-            },
-            center: Vec3::ZERO,
-            axis_u: Vec3::X,
-            axis_v: Vec3::Y,
-            half_size: Vec2::new(1.0, 0.5),
-        };
+        let q = Quad::facing_z(Vec3::ZERO, Vec2::new(1.0, 0.5));
         // In front of the rectangle: the distance to the plane.
         assert!((q.distance_to(Vec3::new(0.5, 0.2, 2.0)) - 2.0).abs() < 1e-6);
         // Beside it in its plane: to the edge.

@@ -6,7 +6,7 @@
 use frond_billboard::view_coverage::{
     CoverageViews, MAX_BAKES, VIEW_COVERAGE_TOLERANCE, bake_keeping_view_coverage, view_coverage,
 };
-use frond_billboard::{BakeParams, Plane, Quad, TriangleSoup};
+use frond_billboard::{BakeParams, Quad, TriangleSoup};
 use frond_render::{DrawAlpha, DrawMaterial, DrawTexture, Renderer};
 use glam::{Vec2, Vec3};
 
@@ -28,16 +28,7 @@ fn leaf() -> DrawMaterial {
 
 /// A quad in the z = 0 plane, `half` wide and high, centred on `center`.
 fn quad_z(center: Vec3, half: f32) -> Quad {
-    Quad {
-        plane: Plane {
-            normal: Vec3::Z,
-            offset: center.z,
-        },
-        center,
-        axis_u: Vec3::X,
-        axis_v: Vec3::Y,
-        half_size: Vec2::splat(half),
-    }
+    Quad::facing_z(center, Vec2::splat(half))
 }
 
 /// A square leaf of side `2·half` at `center`, turned `tilt` radians about the y axis (0: in

@@ -782,16 +782,7 @@ mod tests {
 
     /// A unit square quad centred at `center`, facing +Z.
     fn quad_at(center: Vec3) -> Quad {
-        Quad {
-            plane: Plane {
-                normal: Vec3::Z,
-                offset: center.z,
-            },
-            center,
-            axis_u: Vec3::X,
-            axis_v: Vec3::Y,
-            half_size: Vec2::splat(0.5),
-        }
+        Quad::facing_z(center, Vec2::splat(0.5))
     }
 
     #[test]
