@@ -14,6 +14,7 @@ use frond_billboard::cloud::{CloudError, fit_quad};
 use frond_billboard::plane_search::{PlaneSearch, search_planes, valid_for_plane};
 use frond_billboard::quad_split::{QuadGroup, split_quads};
 use frond_billboard::view_coverage::{CoverageViews, bake_keeping_view_coverage};
+use frond_billboard::{BakeParams, BakedCloud};
 use frond_billboard::{Plane, Quad, TriangleSoup, source_copy};
 use frond_scene::Rig;
 use frond_scene::rigid_fit::rigid_fit;
@@ -56,6 +57,35 @@ pub struct FoliageCluster {
 /// One billboard of a cluster: its quad, the triangles it replaces and those drawn on it.
 type ClusterQuad = (Quad, Vec<usize>, Vec<usize>);
 
+/// Every cluster's billboards in one list, in cluster order: each quad, the triangles it
+/// replaces, those drawn on it and its cluster's driver.
+struct QuadLists {
+    quads: Vec<Quad>,
+    owns: Vec<Vec<usize>>,
+    drawn: Vec<Vec<usize>>,
+    drivers: Vec<Driver>,
+}
+
+impl QuadLists {
+    fn of(clusters: &[FoliageCluster], per_cluster: Vec<Vec<ClusterQuad>>) -> QuadLists {
+        let mut lists = QuadLists {
+            quads: Vec::new(),
+            owns: Vec::new(),
+            drawn: Vec::new(),
+            drivers: Vec::new(),
+        };
+        for (cluster, list) in clusters.iter().zip(per_cluster) {
+            for (q, own, d) in list {
+                lists.quads.push(q);
+                lists.owns.push(own);
+                lists.drawn.push(d);
+                lists.drivers.push(cluster.driver);
+            }
+        }
+        lists
+    }
+}
+
 /// The rig's world matrices at every sample of `clock`.
 pub fn sampled_worlds(rig: &Rig, clock: &LoopClock) -> Vec<Vec<Mat4>> {
     (0..clock.samples.max(1))
@@ -91,11 +121,11 @@ pub fn build_animated_cloud(
     clusters: &[FoliageCluster],
     method: &str,
 ) -> Result<(AnimatedBillboardCloud, BuildTimings), CloudError> {
-    let (renderer, tree, params) = (ctx.renderer, ctx.tree, ctx.cloud);
+    let (tree, params) = (ctx.tree, ctx.cloud);
     let clock = ctx.clock.clone();
     let mut timings = BuildTimings::default();
     let t0 = Instant::now();
-    let soup = reference_soup(ctx, &rig, &clock, clusters);
+    let mut soup = reference_soup(ctx, &rig, &clock, clusters);
     let t1 = Instant::now();
     timings.reference_pose = (t1 - t0).as_secs_f64();
 
@@ -103,22 +133,15 @@ pub fn build_animated_cloud(
     let t2 = Instant::now();
     timings.plane_search = (t2 - t1).as_secs_f64();
 
-    let mut quads = Vec::new();
-    let mut owns = Vec::new();
-    let mut drawn = Vec::new();
-    let mut drivers = Vec::new();
-    for (cluster, list) in clusters.iter().zip(per_cluster) {
-        for (q, own, d) in list {
-            quads.push(q);
-            owns.push(own);
-            drawn.push(d);
-            drivers.push(cluster.driver);
-        }
-    }
+    let QuadLists {
+        mut quads,
+        owns,
+        mut drawn,
+        drivers,
+    } = QuadLists::of(clusters, per_cluster);
     if quads.is_empty() {
         return Err(CloudError::Empty);
     }
-    let mut soup = soup;
     if let Some(wood) = ctx.baked_wood {
         draw_wood_on_nearest_quads(
             &mut soup,
@@ -128,7 +151,6 @@ pub fn build_animated_cloud(
             ctx.max_alpha_tested_area,
         );
     }
-    let soup = soup;
     // A billboard that its own triangles tile (one leaf card) keeps the card's texture; only
     // the others are baked (the hybrid cloud).
     let mut copies = source_copies(ctx, &soup, &mut quads, &owns);
@@ -165,49 +187,17 @@ pub fn build_animated_cloud(
     let baked = if bake.is_empty() {
         None
     } else {
-        // Only the foliage's materials are drawn.
-        let mut foliage = vec![false; tree.materials.len()];
-        for &m in &soup.material {
-            if let Some(f) = foliage.get_mut(m as usize) {
-                *f = true;
-            }
-        }
-        let draw = materials_scene(tree, &foliage);
         let bake_quads: Vec<Quad> = bake.iter().map(|&i| quads[i]).collect();
         let bake_drawn: Vec<Vec<usize>> = (bake.iter())
             .map(|&i| std::mem::take(&mut drawn[i]))
             .collect();
-        // The atlas budget holds as many billboards as the chain allowed for it; one that a
-        // method could not fit (too few texels even at the smallest texture per quad) doubles
-        // until it fits, and the report shows it over its texture budget.
-        let views = view_coverage_views(ctx);
-        Some(loop {
-            let baked = bake_keeping_view_coverage(
-                renderer,
-                &soup,
-                &draw.materials,
-                &draw.textures,
-                &bake_quads,
-                &bake_drawn,
-                &bake_params,
-                views.as_ref(),
-            )
-            .map(|(baked, ratio)| {
-                if let Some(ratio) = ratio {
-                    tracing::debug!(
-                        "LOD{}: view coverage {ratio:.3} of the leaves'",
-                        ctx.index + 1
-                    );
-                }
-                baked
-            });
-            match baked {
-                Err(BakeError::AtlasTooSmall { .. }) if bake_params.max_atlas < MAX_ATLAS_SIDE => {
-                    bake_params.max_atlas = (bake_params.max_atlas * 2).min(MAX_ATLAS_SIDE);
-                }
-                other => break other?,
-            }
-        })
+        Some(bake_growing_atlas(
+            ctx,
+            &soup,
+            &bake_quads,
+            &bake_drawn,
+            &mut bake_params,
+        )?)
     };
     let t3 = Instant::now();
     timings.bake = (t3 - t2).as_secs_f64();
@@ -250,6 +240,55 @@ pub fn build_animated_cloud(
     };
     cloud.update_playable_clips();
     Ok((cloud, timings))
+}
+
+/// Bakes `quads`, each with the triangles of `soup` `drawn` on it, into one atlas: only the
+/// soup's materials drawn, an impostor-class LOD's bake keeping its leaves' view coverage
+/// ([`view_coverage_views`]). The atlas budget holds as many billboards as the chain allowed
+/// for it; one that a method could not fit (too few texels even at the smallest texture per
+/// quad) doubles until it fits, and the report shows it over its texture budget.
+fn bake_growing_atlas(
+    ctx: &BuildContext,
+    soup: &TriangleSoup,
+    quads: &[Quad],
+    drawn: &[Vec<usize>],
+    params: &mut BakeParams,
+) -> Result<BakedCloud, CloudError> {
+    let mut used = vec![false; ctx.tree.materials.len()];
+    for &m in &soup.material {
+        if let Some(f) = used.get_mut(m as usize) {
+            *f = true;
+        }
+    }
+    let draw = materials_scene(ctx.tree, &used);
+    let views = view_coverage_views(ctx);
+    loop {
+        let baked = bake_keeping_view_coverage(
+            ctx.renderer,
+            soup,
+            &draw.materials,
+            &draw.textures,
+            quads,
+            drawn,
+            params,
+            views.as_ref(),
+        );
+        match baked {
+            Ok((baked, ratio)) => {
+                if let Some(ratio) = ratio {
+                    tracing::debug!(
+                        "LOD{}: view coverage {ratio:.3} of the leaves'",
+                        ctx.index + 1
+                    );
+                }
+                return Ok(baked);
+            }
+            Err(BakeError::AtlasTooSmall { .. }) if params.max_atlas < MAX_ATLAS_SIDE => {
+                params.max_atlas = (params.max_atlas * 2).min(MAX_ATLAS_SIDE);
+            }
+            Err(e) => return Err(e.into()),
+        }
+    }
 }
 
 /// Adds `wood`'s triangles (rest pose) to `soup` and each to the `drawn` list of the quad that
