@@ -508,8 +508,6 @@ struct WoodLod {
     error: f32,
     thin_pieces: usize,
     min_width: f32,
-    /// The pieces narrower than `min_width`: at the far end baked into the billboards.
-    thin: WoodMesh,
 }
 
 /// The wood within `max_triangles`: branches narrower than `min_width` (the wood's error, or
@@ -522,18 +520,14 @@ fn wood_within(wood: &WoodMesh, min_width: f32, error: f32, max_triangles: usize
     let mut thickness = min_width;
     let mut doublings = 0;
     loop {
-        let split = wood.split_thin_pieces(thickness);
-        let (mesh, e) = simplify_wood(&split.kept, error, max_triangles);
-        if doublings == THIN_TRIES
-            || mesh.triangles() <= max_triangles
-            || split.kept.triangles() == 0
-        {
+        let (kept, thin) = wood.without_thin_pieces(thickness);
+        let (mesh, e) = simplify_wood(&kept, error, max_triangles);
+        if doublings == THIN_TRIES || mesh.triangles() <= max_triangles || kept.triangles() == 0 {
             return WoodLod {
                 mesh,
                 error: e,
-                thin_pieces: split.thin_pieces,
+                thin_pieces: thin,
                 min_width: thickness,
-                thin: split.thin,
             };
         }
         thickness *= 2.0;
@@ -571,13 +565,12 @@ fn refine_wood(
         } else {
             error.min(min_width)
         };
-        let split = wood.split_thin_pieces(width);
+        let (kept, thin) = wood.without_thin_pieces(width);
         WoodLod {
-            mesh: split.kept.simplify(error).0,
+            mesh: kept.simplify(error).0,
             error,
-            thin_pieces: split.thin_pieces,
+            thin_pieces: thin,
             min_width: width,
-            thin: split.thin,
         }
     };
     // The floor first: often everything fits.
@@ -663,6 +656,11 @@ fn billboard_lod(
         wood_lod.mesh.triangles(),
         wood_texture_bytes
     );
+    // The far end's branches under half a pixel (or past the wood's share): baked into its
+    // billboards as the covered fraction they add, so none vanishes and none turns solid.
+    let baked_wood = impostor
+        .then(|| wood.split_thin_pieces(wood_lod.min_width).thin)
+        .filter(|thin| thin.triangles() > 0);
     let ctx = BuildContext {
         renderer,
         tree,
@@ -677,9 +675,7 @@ fn billboard_lod(
         max_foliage_triangles: Some(foliage_room),
         max_alpha_tested_area: Some(lod_budget.alpha_tested_area),
         max_joints: Some(lod_budget.joints),
-        // The far end's branches under half a pixel: baked into its billboards as the
-        // covered fraction they add, so none vanishes and none turns solid.
-        baked_wood: (impostor && wood_lod.thin.triangles() > 0).then_some(&wood_lod.thin),
+        baked_wood: baked_wood.as_ref(),
     };
     let built = method.build(&ctx)?;
     // Only a billboard cloud draws the thin wood; cards leave it dropped.
@@ -931,7 +927,6 @@ mod tests {
             error: coarse,
             thin_pieces: thin,
             min_width: coarse,
-            thin: WoodMesh::default(),
         };
         let refined = refine_wood(&wood, at_coarse(mesh.clone()), coarse / 64.0, room, false);
         assert!(refined.error < coarse, "{}", refined.error);
@@ -973,7 +968,6 @@ mod tests {
         ] {
             let start = WoodLod {
                 mesh: far.mesh.clone(),
-                thin: far.thin.clone(),
                 ..far
             };
             let refined = refine_wood(&wood, start, pixel / WOOD_REFINE_FLOOR, room, false);

@@ -334,12 +334,11 @@ fn draw_wood_on_nearest_quads(
     let chosen: Vec<usize> = triangles.par_iter().map(|(_, c, _)| shown_on(c)).collect();
     // Growth within the drawn-area budget, the largest triangles (the trunk's) first.
     let mut area: f64 = quads.iter().map(|q| f64::from(q.area())).sum();
+    let size: Vec<f32> = (triangles.iter())
+        .map(|(_, [a, b, c], _)| 0.5 * (*b - *a).cross(*c - *a).length())
+        .collect();
     let mut by_size: Vec<usize> = (0..triangles.len()).collect();
-    let size = |t: usize| {
-        let [a, b, c] = triangles[t].1;
-        0.5 * (b - a).cross(c - a).length()
-    };
-    by_size.sort_by(|&a, &b| size(b).total_cmp(&size(a)).then(a.cmp(&b)));
+    by_size.sort_by(|&a, &b| size[b].total_cmp(&size[a]).then(a.cmp(&b)));
     for t in by_size {
         let q = chosen[t];
         let grown = grown_to_hold(&quads[q], &triangles[t].1);

@@ -410,14 +410,29 @@ impl WoodMesh {
     /// tree). A far LOD drops branches narrower than a pixel this way: simplification cannot
     /// collapse a closed tube, and a sub-pixel branch only aliases.
     pub fn without_thin_pieces(&self, min_thickness: f32) -> (WoodMesh, usize) {
-        let split = self.split_thin_pieces(min_thickness);
-        (split.kept, split.thin_pieces)
+        let (kept, _, thin_pieces) = self.partition_by_thickness(min_thickness);
+        (self.mesh_of(kept), thin_pieces)
     }
 
     /// The mesh split at `min_thickness` as [`WoodMesh::without_thin_pieces`] splits it: the
     /// pieces kept, and the thin ones as a mesh of their own (what a far LOD bakes into its
     /// billboards instead of dropping).
     pub fn split_thin_pieces(&self, min_thickness: f32) -> ThinSplit {
+        let (kept, thin, thin_pieces) = self.partition_by_thickness(min_thickness);
+        ThinSplit {
+            kept: self.mesh_of(kept),
+            thin: self.mesh_of(thin),
+            thin_pieces,
+        }
+    }
+
+    /// The triangles of the pieces at least `min_thickness` thick and of the thinner ones, per
+    /// primitive, and how many pieces are thinner ([`WoodMesh::without_thin_pieces`] says how
+    /// thickness is estimated).
+    fn partition_by_thickness(
+        &self,
+        min_thickness: f32,
+    ) -> (Vec<WoodPrimitive>, Vec<WoodPrimitive>, usize) {
         let empty = || -> Vec<WoodPrimitive> {
             (self.primitives.iter())
                 .map(|p| WoodPrimitive {
@@ -458,15 +473,13 @@ impl WoodMesh {
                     .extend_from_slice(&self.primitives[p].indices[3 * t..3 * t + 3]);
             }
         }
-        let mesh = |mut primitives: Vec<WoodPrimitive>| {
-            primitives.retain(|p| !p.indices.is_empty());
-            self.with_primitives(primitives.into_iter())
-        };
-        ThinSplit {
-            kept: mesh(kept),
-            thin: mesh(thin),
-            thin_pieces,
-        }
+        (kept, thin, thin_pieces)
+    }
+
+    /// A mesh of `primitives` (triangles of this mesh), its vertices compacted.
+    fn mesh_of(&self, mut primitives: Vec<WoodPrimitive>) -> WoodMesh {
+        primitives.retain(|p| !p.indices.is_empty());
+        self.with_primitives(primitives.into_iter())
     }
 
     /// Number of triangles over all primitives.
