@@ -15,7 +15,13 @@ use std::path::Path;
 
 use common::*;
 use frond_lod::report::file_bytes_without_images;
-use frond_scene::{AlphaMode, FileCost, ImportOptions, InputLimits, file_cost, import};
+use frond_scene::rigid_fit::rigid_fit;
+use frond_scene::sampling::world_at;
+use frond_scene::skinning::skin_positions;
+use frond_scene::surface_distance::SurfaceBvh;
+use frond_scene::wood::WoodMesh;
+use frond_scene::{AlphaMode, FileCost, ImportOptions, InputLimits, Part, file_cost, import};
+use glam::Vec3;
 
 /// The files' costs of the default chain of `tree` written into `out`, LOD0 first.
 fn chain_costs(tree: &Path, out: &Path, extra: &[&str]) -> Vec<(String, FileCost)> {
@@ -124,6 +130,12 @@ fn check(tree: &Path, name: &str) {
         input.triangles
     );
     assert_cheaper_each_step(&input, &costs);
+    assert_cards_bend_little(out.path(), &costs);
+    let (branches, dropped) = assert_no_visible_branch_dropped(tree, out.path());
+    eprintln!(
+        "{name}: {branches} (LOD, branch) pairs at least half a pixel wide, {dropped} dropped \
+         within the wood's share"
+    );
     for (file, c) in &costs {
         eprintln!(
             "{file}: {} triangles, {} joints, {} channels, {} B texture, {} B file",
@@ -385,4 +397,186 @@ fn the_far_end_bakes_the_branches_it_cannot_keep() {
         dropped.wood_pieces, far.dropped.wood_pieces_baked,
         "{dropped:?}"
     );
+}
+
+/// Times over the first clip a card's bend is read at.
+const BEND_TIMES: usize = 16;
+
+/// How far the cards of `file` bend when posed: over its cards (foliage pieces of at most four
+/// triangles, connected by shared vertices), the farthest a corner strays from the card's best
+/// rigid motion at [`BEND_TIMES`] times of the first clip, as a fraction of the card's rest
+/// diagonal; and how many cards there are. Read back from the file, as an engine skins it.
+fn worst_card_bend(file: &Path) -> (f32, usize) {
+    let tree = import(file, &ImportOptions::default()).expect("the LOD reads back");
+    let cards = foliage_cards(&tree);
+    let Some(clip) = tree.rig.clips.first() else {
+        return (0.0, cards.len());
+    };
+    let rest = skin_positions(&tree, &world_at(&tree, None, 0.0));
+    let posed: Vec<Vec<Vec3>> = (0..BEND_TIMES)
+        .map(|k| {
+            let t = clip.start + clip.duration() * k as f32 / BEND_TIMES as f32;
+            skin_positions(&tree, &world_at(&tree, Some(0), t))
+        })
+        .collect();
+    let mut worst = 0.0f32;
+    for card in &cards {
+        let from: Vec<Vec3> = card.iter().map(|&v| rest[v]).collect();
+        let diagonal = frond_scene::Bounds::of(from.iter().copied()).diagonal();
+        if diagonal <= 0.0 {
+            continue;
+        }
+        for p in &posed {
+            let to: Vec<Vec3> = card.iter().map(|&v| p[v]).collect();
+            let m = rigid_fit(&from, &to);
+            for (a, b) in from.iter().zip(&to) {
+                worst = worst.max(m.transform_point3(*a).distance(*b) / diagonal);
+            }
+        }
+    }
+    (worst, cards.len())
+}
+
+/// The vertices of each card of `tree`: its foliage triangles in pieces over shared vertices,
+/// those of at most four triangles.
+fn foliage_cards(tree: &frond_scene::Tree) -> Vec<Vec<usize>> {
+    let mut parent: Vec<usize> = (0..tree.vertices.len()).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    let foliage: Vec<&frond_scene::Triangle> = tree
+        .triangles
+        .iter()
+        .filter(|t| t.part == frond_scene::Part::Foliage && !t.degenerate)
+        .collect();
+    for t in &foliage {
+        let a = find(&mut parent, t.v[0] as usize);
+        for &v in &t.v[1..] {
+            let b = find(&mut parent, v as usize);
+            parent[b] = a;
+        }
+    }
+    let mut pieces: std::collections::BTreeMap<usize, (usize, Vec<usize>)> = Default::default();
+    for t in &foliage {
+        let root = find(&mut parent, t.v[0] as usize);
+        let piece = pieces.entry(root).or_default();
+        piece.0 += 1;
+        for &v in &t.v {
+            if !piece.1.contains(&(v as usize)) {
+                piece.1.push(v as usize);
+            }
+        }
+    }
+    pieces
+        .into_values()
+        .filter(|(triangles, _)| *triangles <= 4)
+        .map(|(_, vs)| vs)
+        .collect()
+}
+
+/// Every LOD's cards stay cards when posed: no corner strays more than a tenth of its card's
+/// diagonal from the card's best rigid motion, unless the input's own cards bend that much
+/// (then no more than they do).
+fn assert_cards_bend_little(out: &Path, costs: &[(String, FileCost)]) {
+    let (input_bend, _) = worst_card_bend(&out.join(&costs[0].0));
+    let limit = input_bend.max(0.1) + 1e-3;
+    for (file, _) in &costs[1..] {
+        let (bend, cards) = worst_card_bend(&out.join(file));
+        eprintln!(
+            "{file}: {cards} cards, worst bend {bend:.3} of the diagonal (input {input_bend:.3})"
+        );
+        assert!(
+            bend <= limit,
+            "{file}: a card bends {bend:.3} of its diagonal, more than {limit:.3}"
+        );
+    }
+}
+
+/// Pixels a LOD's wood may lie from where an input branch was and still draw it: the wood is
+/// simplified within about a pixel, and a collapsed joint's branch leans where it sways.
+const BRANCH_TOLERANCE_PX: f32 = 2.0;
+
+/// No LOD drops a branch that is at least half a pixel wide at its size unless its wood is
+/// held to its triangle share: for every LOD of the chain in `out` (its report's pixel size)
+/// and every branch of `input` that wide (a piece of its wood, as wide as
+/// `frond_scene::wood::WoodMesh::piece_thickness` estimates), at least half the branch's
+/// vertices lie within [`BRANCH_TOLERANCE_PX`] of the LOD's wood, read back from its file at
+/// rest; or, where one does not, the report says branches were dropped and the LOD's wood is
+/// within its share of the triangles. Returns how many (LOD, branch) pairs were checked and
+/// how many of them were dropped.
+fn assert_no_visible_branch_dropped(input: &Path, out: &Path) -> (usize, usize) {
+    let options = ImportOptions::default();
+    let tree = import(input, &options).expect("the input reads");
+    let wood = WoodMesh::from_tree_part(&tree, Part::Wood);
+    let pieces = wood.pieces();
+    let thickness: Vec<f32> = pieces.iter().map(|p| wood.piece_thickness(p)).collect();
+    let stem = input.file_stem().and_then(|s| s.to_str()).expect("a stem");
+    let report = lod_report(out, stem);
+    let (mut checked, mut dropped) = (0, 0);
+    for lod in report.lods.iter().skip(1) {
+        let pixel = lod.pixel.expect("a built LOD's pixel");
+        let lod_tree = import(&out.join(&lod.file), &options).expect("the LOD reads back");
+        let lod_wood = WoodMesh::from_tree_part(&lod_tree, Part::Wood);
+        let triangles: Vec<[Vec3; 3]> = lod_wood
+            .primitives
+            .iter()
+            .flat_map(|p| p.indices.chunks_exact(3))
+            .map(|t| [0, 1, 2].map(|k| lod_wood.positions[t[k] as usize]))
+            .collect();
+        let bvh = SurfaceBvh::new(triangles);
+        for (piece, &width) in pieces.iter().zip(&thickness) {
+            if width < 0.5 * pixel {
+                continue;
+            }
+            checked += 1;
+            let vertices: Vec<Vec3> = piece
+                .iter()
+                .flat_map(|&(p, t)| &wood.primitives[p].indices[3 * t..3 * t + 3])
+                .map(|&v| wood.positions[v as usize])
+                .collect();
+            let near = vertices
+                .iter()
+                .filter(|&&v| bvh.distance(v) <= BRANCH_TOLERANCE_PX * pixel)
+                .count();
+            if 2 * near >= vertices.len() {
+                continue;
+            }
+            dropped += 1;
+            let share = lod.budget.as_ref().map_or(0, |b| b.wood_triangles);
+            assert!(
+                lod.dropped.wood_pieces > 0 && lod.wood_triangles <= share,
+                "{}: a branch {:.2} px wide is dropped ({near} of its {} vertices near the \
+                 wood) though the wood ({} triangles) is under its share ({share})",
+                lod.file,
+                width / pixel,
+                vertices.len(),
+                lod.wood_triangles
+            );
+        }
+    }
+    (checked, dropped)
+}
+
+/// A slender broadleaf (`frond sample --preset slender`: a trunk under a pixel wide at 60 px)
+/// keeps every branch at least half a pixel wide at every LOD, its trunk among them, and its
+/// chain keeps every rule the others do.
+#[test]
+fn the_slender_trunk_keeps_its_trunk_at_every_lod() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tree = dir.path().join("slender.glb");
+    let path = tree.to_str().expect("utf-8");
+    frond_ok(&["sample", "--preset", "slender", "--seed", "3", "-o", path]);
+    check(&tree, "slender");
+    let out = tempfile::tempdir().expect("tempdir");
+    frond_lod(&tree, out.path(), &[]);
+    let (branches, dropped) = assert_no_visible_branch_dropped(&tree, out.path());
+    assert!(
+        branches > 0,
+        "the trunk is at least half a pixel wide at 60 px"
+    );
+    assert_eq!(dropped, 0, "of {branches}");
 }

@@ -443,6 +443,9 @@ pub struct LodSettings {
     pub epsilon: Option<Length>,
     /// Most triangles each LOD keeps of the one before it.
     pub triangle_ratio: f32,
+    /// Skin joints every LOD may keep (None: one per 2 pixels of its height).
+    #[serde(default)]
+    pub max_joints: Option<usize>,
     /// Coverage error each LOD should stay within at its own screen height.
     pub max_error: f32,
     /// Measure each LOD's error after writing it.
@@ -512,6 +515,7 @@ impl LodSettings {
             pixel_error: 1.0,
             epsilon: None,
             triangle_ratio: 0.5,
+            max_joints: None,
             max_error: DEFAULT_MAX_ERROR,
             measure: true,
             preview: true,
@@ -601,6 +605,7 @@ impl LodSettings {
             animation: self.animation.billboards(),
             seed: self.sampling.seed,
             triangle_ratio: self.triangle_ratio,
+            max_joints: self.max_joints,
             cost_budgets: self.cost_budgets,
             samples: self.sampling.samples,
             clip: self.sampling.clip.clone(),

@@ -72,6 +72,9 @@ pub struct ChainRequest {
     pub seed: u64,
     /// Most triangles a LOD keeps of the one before it (0.5: half).
     pub triangle_ratio: f32,
+    /// Skin joints every LOD may keep, in place of one per 2 pixels of its height (still
+    /// within the hard limits and the monotone rule); for experiments.
+    pub max_joints: Option<usize>,
     /// Hold every LOD to the cost budgets (the monotone rule and the screen-size budgets);
     /// false builds each at its screen size's ε and texel density alone, for experiments,
     /// within the hard limits only.
@@ -223,9 +226,13 @@ pub fn build_chain(
             level.epsilon
         ));
         let budget = if req.cost_budgets {
-            spent.budget_for(level, req.triangle_ratio)
+            spent.budget_for(level, req.triangle_ratio, req.max_joints)
         } else {
-            LodBudget::hard_limits_only(spent.animation.joints)
+            let joints = spent
+                .animation
+                .joints
+                .min(req.max_joints.unwrap_or(usize::MAX));
+            LodBudget::hard_limits_only(joints.max(1))
         };
         let lod = billboard_lod(
             renderer,
@@ -286,8 +293,8 @@ impl Spent {
     }
 
     /// The budget of the next LOD at `level`; `ratio` is the most triangles it may keep of
-    /// this one's.
-    fn budget_for(&self, level: &LodLevel, ratio: f32) -> LodBudget {
+    /// this one's, `joints` the most joints in place of [`joints_for_screen`]'s.
+    fn budget_for(&self, level: &LodLevel, ratio: f32, joints: Option<usize>) -> LodBudget {
         let h = level.screen_height;
         let triangles = (((self.triangles as f64) * f64::from(ratio.clamp(0.0, 1.0))).floor()
             as usize)
@@ -296,7 +303,7 @@ impl Spent {
         let mut budget = LodBudget {
             triangles,
             wood_triangles: (triangles as f64 * self.wood_share).floor() as usize,
-            joints: self.animation.joints.min(joints_for_screen(h)),
+            joints: (self.animation.joints).min(joints.unwrap_or_else(|| joints_for_screen(h))),
             channels: self.animation.channels,
             texture_bytes: self.input_texture_bytes.min(4 * texels),
             alpha_tested_area: self.input_drawn_area,
@@ -510,19 +517,21 @@ struct WoodLod {
     min_width: f32,
 }
 
-/// The wood within `max_triangles`: branches narrower than `min_width` (the wood's error, or
-/// half a pixel at the far end, where narrower a branch covers under half the pixels it
-/// crosses) dropped and the rest simplified within `error` to fit ([`simplify_wood`]); where
-/// simplifying cannot reach the budget (every branch keeps a few triangles however coarse),
-/// the thinnest branches go next, the width doubled up to [`THIN_TRIES`] times: a far LOD
-/// keeps its trunk and limbs and its foliage keeps its billboards.
+/// The wood within `max_triangles`: branches narrower than `min_width` (half a pixel, where
+/// narrower a branch covers under half the pixels it crosses) dropped and the rest simplified
+/// within `error` to fit ([`simplify_wood`]); where simplifying cannot reach the budget (every
+/// branch keeps a few triangles however coarse), the thinnest branches go next, the width
+/// doubled up to [`THIN_TRIES`] times: a LOD keeps its trunk and limbs and its foliage keeps
+/// its cards or billboards (taking triangles from them for thin branches cost more coverage
+/// than it kept: docs/experiments.md).
 fn wood_within(wood: &WoodMesh, min_width: f32, error: f32, max_triangles: usize) -> WoodLod {
     let mut thickness = min_width;
     let mut doublings = 0;
     loop {
         let (kept, thin) = wood.without_thin_pieces(thickness);
         let (mesh, e) = simplify_wood(&kept, error, max_triangles);
-        if doublings == THIN_TRIES || mesh.triangles() <= max_triangles || kept.triangles() == 0 {
+        let fits = mesh.triangles() <= max_triangles;
+        if doublings == THIN_TRIES || fits || kept.triangles() == 0 {
             return WoodLod {
                 mesh,
                 error: e,
@@ -617,15 +626,11 @@ fn billboard_lod(
     });
     let t0 = Instant::now();
     // Branches too thin to see go first; what is left is simplified to its share. Triangles the
-    // wood does not need go to the foliage. At the far end a trunk is about a pixel wide: it
-    // stays while half a pixel wide. Nearer, branches under the wood's error go (half a pixel
-    // there costs the default chain's build time for little error: docs/experiments.md).
+    // wood does not need go to the foliage. A branch half a pixel wide still covers half the
+    // pixels it crosses: every branch stays while at least half a pixel wide (the trunk of a
+    // slender tree is no wider than a pixel or two at 60 px).
     let impostor = is_impostor_class(level.screen_height);
-    let min_width = if impostor {
-        0.5 * level.pixel
-    } else {
-        level.wood_error
-    };
+    let min_width = 0.5 * level.pixel;
     let wood_lod = wood_within(wood, min_width, level.wood_error, lod_budget.wood_triangles);
     let t1 = Instant::now();
     let wood_sizes = lod_image_sizes(

@@ -36,6 +36,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::contract::{AnimatedBillboardCloud, RigidMotion};
+use crate::skin_fit::SkinFit;
+use crate::wood_skins::{InputSkins, KeptJoints, refit_skins, used_vertices};
 
 /// What a LOD may spend on animation.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -292,6 +294,8 @@ enum Merge {
 struct Merger<'a> {
     rig: &'a Rig,
     frames: &'a RigFrames<'a>,
+    /// The rig's motion at the samples weights are fitted over.
+    fit: SkinFit,
     tree: &'a Tree,
     /// Surviving node of each rig node (itself while it survives; None: the world).
     target: Vec<Option<usize>>,
@@ -381,9 +385,14 @@ impl Merger<'_> {
     /// centres at rest), at most [`NEAREST_JOINTS`]: the nodes whose motion can fit `n`'s,
     /// since a tree's motion varies smoothly through its crown.
     fn nearest_joints(&self, n: usize) -> Vec<Option<usize>> {
-        let centre = self.carried[n].centre();
+        self.joints_nearest(self.carried[n].centre(), n)
+    }
+
+    /// The surviving joints other than `except` whose carried points lie nearest `centre`
+    /// (box centres at rest), at most [`NEAREST_JOINTS`].
+    fn joints_nearest(&self, centre: Vec3, except: usize) -> Vec<Option<usize>> {
         let mut near: Vec<(f32, usize)> = (0..self.target.len())
-            .filter(|&c| c != n && self.joint[c] && self.target[c] == Some(c))
+            .filter(|&c| c != except && self.joint[c] && self.target[c] == Some(c))
             .filter(|&c| !self.carried[c].is_empty())
             .map(|c| (self.carried[c].centre().distance_squared(centre), c))
             .collect();
@@ -393,6 +402,43 @@ impl Merger<'_> {
             near.truncate(k);
         }
         near.into_iter().map(|(_, c)| Some(c)).collect()
+    }
+
+    /// The kept joints a vertex of rig node `b` may be fitted over once `b` is collapsed: the
+    /// joint `b` resolves to, the surviving joints nearest `b`'s points, `b`'s surviving
+    /// ancestors that are joints, and the world while something follows it. Only joints the
+    /// merges kept: fitting adds no joint.
+    fn candidate_pool(&self, b: usize) -> Vec<u32> {
+        let survivor = |c: usize| self.joint[c] && self.target[c] == Some(c);
+        let mut pool: Vec<Option<usize>> = Vec::new();
+        let resolved = self.resolve(Some(b));
+        pool.extend(resolved.map(Some));
+        let centre = match (self.carried[b].is_empty(), resolved) {
+            (false, _) => Some(self.carried[b].centre()),
+            (true, Some(r)) if !self.carried[r].is_empty() => Some(self.carried[r].centre()),
+            _ => None,
+        };
+        if let Some(centre) = centre {
+            pool.extend(self.joints_nearest(centre, resolved.unwrap_or(b)));
+        }
+        let mut a = self.rig.nodes[b].parent;
+        while let Some(c) = a {
+            if survivor(c) {
+                pool.push(Some(c));
+            }
+            a = self.rig.nodes[c].parent;
+        }
+        if self.static_used {
+            pool.push(None);
+        }
+        let mut out: Vec<u32> = Vec::with_capacity(pool.len());
+        for c in pool {
+            let c = c.map_or(NO_BONE, |c| c as u32);
+            if !out.contains(&c) {
+                out.push(c);
+            }
+        }
+        out
     }
 
     /// Where a point carried by rig node `n` at rest goes with the collapses made: the
@@ -527,6 +573,7 @@ pub fn apply_joint_budget(
     let mut merger = Merger {
         rig: &rig,
         frames,
+        fit: SkinFit::new(frames),
         tree,
         target: (0..n).map(Some).collect(),
         carried: carrying.carried,
@@ -562,14 +609,7 @@ impl Carrying {
         let mut carried = vec![Box3::EMPTY; n];
         let mut joint = vec![false; n];
         let mut static_used = false;
-        let mut used = vec![false; wood.positions.len()];
-        for p in &wood.primitives {
-            for &i in &p.indices {
-                if let Some(u) = used.get_mut(i as usize) {
-                    *u = true;
-                }
-            }
-        }
+        let used = used_vertices(wood);
         for (v, (bones, w)) in wood.bones.iter().zip(&wood.weights).enumerate() {
             if !used.get(v).copied().unwrap_or(false) {
                 continue;
@@ -824,6 +864,7 @@ fn apply(merger: &Merger, cloud: &mut AnimatedBillboardCloud, wood: &mut WoodMes
         }
         b.follows = merger.resolve(b.follows);
     }
+    let before = InputSkins::of(wood);
     place_wood(merger, wood);
     for (bones, weights) in wood.bones.iter_mut().zip(wood.weights.iter_mut()) {
         let mut merged: Vec<(u32, f32)> = Vec::with_capacity(4);
@@ -851,6 +892,19 @@ fn apply(merger: &Merger, cloud: &mut AnimatedBillboardCloud, wood: &mut WoodMes
             weights[k] = w;
         }
     }
+    fit_wood_skins(merger, wood, &before);
+}
+
+/// Refits the skins of the wood's vertices (and cards' corners) whose joints the merges
+/// removed, over the joints they kept ([`crate::wood_skins`]). `before` is the wood as it was
+/// before the merges.
+fn fit_wood_skins(merger: &Merger, wood: &mut WoodMesh, before: &InputSkins) {
+    let n = merger.target.len();
+    let kept = KeptJoints {
+        pools: (0..n).map(|b| merger.candidate_pool(b)).collect(),
+        removed: (0..n).map(|b| merger.target[b] != Some(b)).collect(),
+    };
+    refit_skins(&merger.fit, &kept, wood, before);
 }
 
 /// Moves each wood vertex (and card corner) to the blend of its bones' placements by weight,
@@ -1110,5 +1164,53 @@ mod tests {
         assert!(w.bones.iter().all(|b| b[0] == 2), "{:?}", w.bones);
         assert_eq!(cloud.billboards[0].follows, Some(2));
         assert!(cloud.billboards[0].motion.is_some());
+    }
+
+    /// A static root with children each translating over a one-second clip: child `i` by
+    /// `moves[i]` at times 0, ½ and 1 (back where it started).
+    fn translating(moves: &[Vec3]) -> Rig {
+        let mut r = rig(&vec![[0.0; 3]; moves.len()]);
+        for (ch, m) in r.clips[0].channels.iter_mut().zip(moves) {
+            ch.property = Property::Translation;
+            ch.values = vec![Vec4::ZERO, m.extend(0.0), Vec4::ZERO];
+        }
+        for n in &mut r.nodes[1..] {
+            n.rest.translation = Vec3::ZERO;
+        }
+        r
+    }
+
+    #[test]
+    fn a_collapsed_nodes_vertices_blend_the_kept_joints_that_bracket_its_motion() {
+        // Child 3 moves halfway between children 1 and 2, close to the still root; with three
+        // joints allowed it goes, its motion being the smallest to lose, and its wood, fitted
+        // over the kept joints, follows ½·1 + ½·2 exactly where the rigid rule would leave it
+        // on the root, still.
+        let (a, b) = (Vec3::X, Vec3::new(-1.0, 0.2, 0.0));
+        let mut w = wood(&[
+            (1, Vec3::ZERO),
+            (2, Vec3::ZERO),
+            (3, Vec3::new(0.0, 1.0, 0.0)),
+            (0, Vec3::new(0.0, -1.0, 0.0)),
+        ]);
+        let merges = budget(translating(&[a, b, 0.5 * (a + b)]), &mut w, 3, 0.001);
+        assert_eq!(merges.nodes_collapsed_for_budget, 1, "{merges:?}");
+        for v in 6..9 {
+            let (bones, weights) = (w.bones[v], w.weights[v]);
+            let on = |j: u32| {
+                (0..4)
+                    .filter(|&k| bones[k] == j)
+                    .map(|k| weights[k])
+                    .sum::<f32>()
+            };
+            assert!(
+                (on(1) - 0.5).abs() < 0.01 && (on(2) - 0.5).abs() < 0.01,
+                "{bones:?} {weights:?}"
+            );
+        }
+        for v in 0..6 {
+            assert_eq!(w.weights[v], [1.0, 0.0, 0.0, 0.0]);
+            assert_eq!(w.bones[v][0], [1, 2][v / 3]);
+        }
     }
 }

@@ -18,8 +18,11 @@ mod part_mesh;
 pub mod report;
 pub mod screen_budget;
 pub mod section_value;
+pub mod simplex_fit;
+pub mod skin_fit;
 pub mod switching;
 pub mod texture_budget;
+pub mod wood_skins;
 
 use frond_skeleton::BoneDescriptionKind;
 use frond_spectral::description::SpectralKind;

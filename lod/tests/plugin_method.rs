@@ -79,6 +79,7 @@ fn a_method_registered_by_one_line_is_parsed_built_and_reported() {
         epsilon: None,
         animation: BillboardAnimation::Joints,
         seed: 1,
+        max_joints: None,
         triangle_ratio: 0.5,
         cost_budgets: true,
         samples: 8,

@@ -12,7 +12,7 @@ use serde_json::json;
 
 use crate::gltf_writer::*;
 
-/// Size presets: foliage triangles of about 2k, 20k, 200k and 1M.
+/// Presets: foliage triangles of about 2k, 20k, 200k and 1M, and a slender broadleaf.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Preset {
     /// About 1,000 leaf quads on two branch levels.
@@ -23,6 +23,10 @@ pub enum Preset {
     Large,
     /// About 500,000 leaf quads on four branch levels.
     Xlarge,
+    /// A slender broadleaf: about 3,000 large leaves on two branch levels round a trunk a
+    /// tenth as thick as the others' (under a pixel wide when the tree is 60 px tall), whose
+    /// branches are thinner still: a tree a LOD chain can thin out by dropping its wood.
+    Slender,
 }
 
 impl Preset {
@@ -33,6 +37,7 @@ impl Preset {
             "medium" => Preset::Medium,
             "large" => Preset::Large,
             "xlarge" => Preset::Xlarge,
+            "slender" => Preset::Slender,
             _ => return None,
         })
     }
@@ -43,6 +48,7 @@ impl Preset {
             Preset::Medium => 10_000,
             Preset::Large => 100_000,
             Preset::Xlarge => 500_000,
+            Preset::Slender => 3_000,
         }
     }
     /// Branching levels below the trunk and children per branch at each level.
@@ -52,6 +58,14 @@ impl Preset {
             Preset::Medium => &[8, 4, 3],
             Preset::Large => &[10, 5, 4],
             Preset::Xlarge => &[12, 5, 4, 3],
+            Preset::Slender => &[6, 3],
+        }
+    }
+    /// Radius of the trunk at its base, world units (the tree is about 12 units tall).
+    fn trunk_radius(self) -> f32 {
+        match self {
+            Preset::Slender => 0.08,
+            _ => 0.45,
         }
     }
 }
@@ -194,7 +208,7 @@ fn perpendicular(d: Vec3) -> Vec3 {
 pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::ImageError> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let branching = preset.branching();
-    let (branches, mut bones) = grow_branches(branching, &mut rng);
+    let (branches, mut bones) = grow_branches(branching, preset.trunk_radius(), &mut rng);
     let key_times = wind_keys(&mut bones, &mut rng);
     let wood = wood_tubes(&branches);
     let leaves = leaf_cards(preset, branching, &branches, &bones, &mut rng);
@@ -227,7 +241,11 @@ pub fn generate(preset: Preset, seed: u64) -> Result<GeneratedTree, image::Image
 /// each level, and gives every branch its bones ([`bones_per_branch`], evenly spaced along it,
 /// each the child of the one before and the first the child of the parent branch's bone it
 /// hangs from). Returns the branches and the bones (without keys).
-fn grow_branches(branching: &[usize], rng: &mut ChaCha8Rng) -> (Vec<Branch>, Vec<GenBone>) {
+fn grow_branches(
+    branching: &[usize],
+    trunk_radius: f32,
+    rng: &mut ChaCha8Rng,
+) -> (Vec<Branch>, Vec<GenBone>) {
     let trunk_len = 8.0f32;
     let mut branches = vec![Branch {
         level: 0,
@@ -239,7 +257,7 @@ fn grow_branches(branching: &[usize], rng: &mut ChaCha8Rng) -> (Vec<Branch>, Vec
         )
         .normalize(),
         length: trunk_len,
-        radius: 0.45,
+        radius: trunk_radius,
         parent_bone: None,
         bones: Vec::new(),
     }];
@@ -451,6 +469,7 @@ fn leaf_cards(
         Preset::Medium => 0.6,
         Preset::Large => 0.3,
         Preset::Xlarge => 0.16,
+        Preset::Slender => 0.7,
     };
     let mut leaves = PrimitiveDesc {
         normals: Some(Vec::new()),

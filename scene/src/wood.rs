@@ -426,6 +426,29 @@ impl WoodMesh {
         }
     }
 
+    /// The thickness of `piece` (one of [`WoodMesh::pieces`]) as a tube's diameter,
+    /// `area / (π · length)`, its length the diagonal of its bounds
+    /// ([`WoodMesh::without_thin_pieces`] drops pieces by it).
+    pub fn piece_thickness(&self, piece: &[(usize, usize)]) -> f32 {
+        let corners = |&(p, t): &(usize, usize)| {
+            let i = &self.primitives[p].indices[3 * t..3 * t + 3];
+            [0, 1, 2].map(|k| self.positions[i[k] as usize])
+        };
+        let area: f32 = piece
+            .iter()
+            .map(|pt| {
+                let [a, b, c] = corners(pt);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum();
+        let length = crate::model::Bounds::of(piece.iter().flat_map(corners)).diagonal();
+        if length > 0.0 {
+            area / (std::f32::consts::PI * length)
+        } else {
+            0.0
+        }
+    }
+
     /// The triangles of the pieces at least `min_thickness` thick and of the thinner ones, per
     /// primitive, and how many pieces are thinner ([`WoodMesh::without_thin_pieces`] says how
     /// thickness is estimated).
@@ -444,24 +467,7 @@ impl WoodMesh {
         let (mut kept, mut thin) = (empty(), empty());
         let mut thin_pieces = 0;
         for piece in &self.pieces() {
-            let corners = |&(p, t): &(usize, usize)| {
-                let i = &self.primitives[p].indices[3 * t..3 * t + 3];
-                [0, 1, 2].map(|k| self.positions[i[k] as usize])
-            };
-            let area: f32 = piece
-                .iter()
-                .map(|pt| {
-                    let [a, b, c] = corners(pt);
-                    0.5 * (b - a).cross(c - a).length()
-                })
-                .sum();
-            let length = crate::model::Bounds::of(piece.iter().flat_map(corners)).diagonal();
-            let thickness = if length > 0.0 {
-                area / (std::f32::consts::PI * length)
-            } else {
-                0.0
-            };
-            let to = if thickness < min_thickness {
+            let to = if self.piece_thickness(piece) < min_thickness {
                 thin_pieces += 1;
                 &mut thin
             } else {

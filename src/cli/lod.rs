@@ -57,6 +57,11 @@ pub struct LodArgs {
     /// search widens ε and the wood is simplified further until a LOD fits.
     #[arg(long, default_value_t = 0.5, value_parser = parse_ratio)]
     pub triangle_ratio: f32,
+    /// Skin joints every LOD may keep, 1–256 (default: one per 2 pixels of its screen height).
+    /// Never more than the LOD before it or the input has, nor 8 at the far end; for
+    /// experiments with the joint budget.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=256))]
+    pub max_joints: Option<u16>,
     /// Coverage error each LOD should stay within, seen at its own screen height (frond eval's
     /// `coverage.animated.mean` at `--screen-height H`): the covered area it misses or adds
     /// over the input's, each pixel counted by the fraction of it covered. Measured on the
@@ -163,6 +168,7 @@ impl LodArgs {
             pixel_error: self.pixel_error,
             epsilon: self.epsilon,
             triangle_ratio: self.triangle_ratio,
+            max_joints: self.max_joints.map(usize::from),
             max_error: self.max_error,
             measure: !self.no_measure,
             preview: !self.no_preview,

@@ -11,7 +11,8 @@ use frond_scene::generator::generate;
 /// `frond sample`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct SampleArgs {
-    /// Size: small (~2k foliage triangles), medium (~20k), large (~200k), xlarge (~1M).
+    /// Size: small (~2k foliage triangles), medium (~20k), large (~200k), xlarge (~1M), or
+    /// slender (~6k, large leaves round a trunk under a pixel wide when the tree is 60 px tall).
     #[arg(long, value_enum, default_value = "small")]
     pub preset: SampleSize,
     /// Random seed: same preset and seed, same bytes.

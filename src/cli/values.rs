@@ -224,6 +224,8 @@ pub enum SampleSize {
     Large,
     /// ~1M.
     Xlarge,
+    /// ~6k, large leaves round a trunk under a pixel wide at 60 px.
+    Slender,
 }
 
 impl From<SampleSize> for Preset {
@@ -233,6 +235,7 @@ impl From<SampleSize> for Preset {
             SampleSize::Medium => Preset::Medium,
             SampleSize::Large => Preset::Large,
             SampleSize::Xlarge => Preset::Xlarge,
+            SampleSize::Slender => Preset::Slender,
         }
     }
 }

@@ -22,6 +22,7 @@ use frond_scene::wood::{NO_BONE, WoodMesh};
 use frond_scene::{AlphaMode, Tree};
 
 use super::coverage::card_vertices;
+use crate::simplex_fit::{fit_on_simplices, objective, project_to_simplex};
 
 /// Directions of the triangle's sides searched: every 360/64 = 5.6°.
 const DIRECTIONS: usize = 64;
@@ -562,30 +563,8 @@ fn fit_skins(
         }
     }
     let mut x = combined_corner_weights(mesh, card, &region.triangle, &bones);
-    // The Frobenius norm bounds the largest eigenvalue: a safe step.
-    let lipschitz = h.iter().map(|v| v * v).sum::<f64>().sqrt();
-    if lipschitz > 0.0 {
-        let (mut y, mut previous, mut momentum) = (x.clone(), x.clone(), 1.0f64);
-        for _ in 0..FIT_ITERATIONS {
-            for a in 0..n {
-                let g: f64 = (0..n).map(|b| h[a * n + b] * y[b]).sum::<f64>() - c[a];
-                x[a] = y[a] - g / lipschitz;
-            }
-            for i in 0..3 {
-                project_to_simplex(&mut x[i * nb..(i + 1) * nb]);
-            }
-            let next = 0.5 * (1.0 + (1.0 + 4.0 * momentum * momentum).sqrt());
-            for a in 0..n {
-                y[a] = x[a] + (momentum - 1.0) / next * (x[a] - previous[a]);
-            }
-            momentum = next;
-            previous.clone_from(&x);
-        }
-    }
-    // The residual x·Hx − 2c·x + Σ|t|², per sample and frame.
-    let quadratic: f64 = (0..n)
-        .map(|a| x[a] * ((0..n).map(|b| h[a * n + b] * x[b]).sum::<f64>() - 2.0 * c[a]))
-        .sum();
+    fit_on_simplices(&h, &c, &mut x, nb, FIT_ITERATIONS, 0.0);
+    let quadratic = objective(&h, &c, &x);
     let count = (samples.len() * motion.frames.len()) as f64;
     let miss = ((quadratic + targets).max(0.0) / count).sqrt() as f32;
     Some((
@@ -639,23 +618,6 @@ fn strongest_four(bones: &[u32], weights: &[f64]) -> Skin {
         out.1[k] = v / total;
     }
     out
-}
-
-/// `x` replaced by its nearest point of the probability simplex (non-negative, summing to 1):
-/// the sort-and-threshold projection.
-fn project_to_simplex(x: &mut [f64]) {
-    let mut sorted: Vec<f64> = x.to_vec();
-    sorted.sort_by(|a, b| b.total_cmp(a));
-    let mut sum = 0.0;
-    let mut theta = 0.0;
-    for (k, &v) in sorted.iter().enumerate() {
-        sum += v;
-        let t = (sum - 1.0) / (k + 1) as f64;
-        if v - t > 0.0 {
-            theta = t;
-        }
-    }
-    x.iter_mut().for_each(|v| *v = (*v - theta).max(0.0));
 }
 
 /// The smallest triangle (texture coordinates) holding every texel of `material`'s base-colour
