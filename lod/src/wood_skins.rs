@@ -88,8 +88,8 @@ impl KeptJoints {
 }
 
 /// Refits the skins of `wood` (after the joint budget's rigid rule: vertices at their
-/// placements, joints resolved to kept ones) piece by piece ([`piece_skins`]); `input` is the
-/// wood before the merges.
+/// placements, joints resolved to kept ones) piece by piece, by the rule the module states;
+/// `input` is the wood before the merges.
 pub fn refit_skins(fit: &SkinFit, kept: &KeptJoints, wood: &mut WoodMesh, input: &InputSkins) {
     let used = used_vertices(wood);
     let nv = wood.positions.len().min(input.positions.len());
