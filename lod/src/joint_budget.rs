@@ -1183,19 +1183,37 @@ mod tests {
     #[test]
     fn a_collapsed_nodes_vertices_blend_the_kept_joints_that_bracket_its_motion() {
         // Child 3 moves halfway between children 1 and 2, close to the still root; with three
-        // joints allowed it goes, its motion being the smallest to lose, and its wood, fitted
-        // over the kept joints, follows ½·1 + ½·2 exactly where the rigid rule would leave it
-        // on the root, still.
+        // joints allowed it goes, its motion being the smallest to lose, and its branch (a
+        // strip of six triangles), fitted over the kept joints, follows ½·1 + ½·2 exactly
+        // where the rigid rule would leave it on the root, still.
         let (a, b) = (Vec3::X, Vec3::new(-1.0, 0.2, 0.0));
         let mut w = wood(&[
             (1, Vec3::ZERO),
             (2, Vec3::ZERO),
-            (3, Vec3::new(0.0, 1.0, 0.0)),
             (0, Vec3::new(0.0, -1.0, 0.0)),
         ]);
+        let branch = w.positions.len();
+        for k in 0..8 {
+            w.positions.push(Vec3::new(
+                0.1 * (k / 2) as f32,
+                1.0 + 0.1 * (k % 2) as f32,
+                0.0,
+            ));
+            w.normals.push(Vec3::Z);
+            w.uvs.push(glam::Vec2::ZERO);
+            w.bones.push([3; 4]);
+            w.weights.push([1.0, 0.0, 0.0, 0.0]);
+        }
+        let strip: Vec<u32> = (0..6u32)
+            .flat_map(|t| [t, t + 1, t + 2].map(|i| branch as u32 + i))
+            .collect();
+        w.primitives.push(WoodPrimitive {
+            material: 0,
+            indices: strip,
+        });
         let merges = budget(translating(&[a, b, 0.5 * (a + b)]), &mut w, 3, 0.001);
         assert_eq!(merges.nodes_collapsed_for_budget, 1, "{merges:?}");
-        for v in 6..9 {
+        for v in branch..branch + 8 {
             let (bones, weights) = (w.bones[v], w.weights[v]);
             let on = |j: u32| {
                 (0..4)
