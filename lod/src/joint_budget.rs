@@ -24,6 +24,10 @@
 //! grow as nodes absorb others), every merge under half a pixel regardless of the budget (motion
 //! nobody can see is not worth a joint), then more until the budget holds. The order does not
 //! depend on the budget, so a smaller budget merges a superset of what a larger one does.
+//!
+//! Last, each wood vertex and card corner that followed a removed node gets skin weights
+//! fitted over the kept joints near it ([`crate::wood_skins`]), where they follow its input
+//! path more closely than the rigid placement does.
 
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};

@@ -5,11 +5,11 @@
 //! The joint budget's rigid rule moves what a removed joint carried to its placement in one
 //! kept joint (where it sits relative to that joint over the loop); the fit starts from there.
 //! A fit at the input's own rest position can do better still (a point halfway between two
-//! swaying joints is their blend exactly where it was modelled), so both rest positions are
-//! tried, one for a whole connected piece (a branch, a card): mixing them would tear a piece
-//! at rest. A card also stays a card: its corners may not bend more than [`MAX_CARD_BEND`] of
-//! its diagonal away from its best rigid motion, and one blend for all its corners (an affine
-//! motion: flat) is the fallback.
+//! swaying joints is their blend exactly where it was modelled), so a branch tries both rest
+//! positions, one for the whole connected piece: mixing them would tear it at rest. A card
+//! stays a card: its corners may not bend more than [`MAX_CARD_BEND`] of its diagonal away
+//! from its best rigid motion, and one blend for all its corners (an affine motion: flat),
+//! fitted at either rest position, is the fallback.
 
 use frond_scene::Bounds;
 use frond_scene::wood::{NO_BONE, WoodMesh};
@@ -134,12 +134,14 @@ struct Choice {
     miss: f64,
 }
 
-/// The skins of piece `vs` (of `triangles` triangles) of `wood` (a branch, a card): of the rigid rule's skins, each
-/// vertex's own fit at the placed rest positions, and each vertex's own fit at the input's
-/// (plus, for a card, one blend fitted for all its corners at either), the one that follows
-/// the input most closely; a card's must bend at most [`MAX_CARD_BEND`] of its diagonal (the
-/// least bent when none does). Each vertex's fit starts from the rigid rule's skin, so the
-/// choice never follows the input less closely than the rigid rule does.
+/// The skins of piece `vs` (of `triangles` triangles) of `wood`. A branch: of the rigid rule's
+/// skins, each vertex's own fit at the placed rest positions and each vertex's own fit at the
+/// input's, the one that follows the input most closely. A card (at most
+/// [`CARD_TRIANGLES`]): of the rigid rule's skins and its corners' own fits at the placed rest,
+/// the closest that bends at most [`MAX_CARD_BEND`] of its diagonal; failing both, one blend
+/// fitted for all its corners at either rest; failing all, the least bent. Each vertex's fit
+/// starts from the rigid rule's skin, so a branch never follows the input less closely than
+/// the rigid rule does.
 fn piece_skins(
     fit: &SkinFit,
     kept: &KeptJoints,
