@@ -61,9 +61,10 @@ pub fn fit_on_simplices(
 /// active-set method (Nocedal & Wright, "Numerical Optimization", §16.5): the equality-
 /// constrained minimum over the weights left free, a step back to the simplex where it
 /// leaves it, and a weight freed where its multiplier says the objective falls. Starts from
-/// `x` (on the simplex). For the few weights of one vertex this is exact where projected
-/// gradient crawls along the flat directions two similar joints give. A tiny ridge keeps
-/// joints with identical paths solvable.
+/// `x` (on the simplex). For the few weights of one vertex it ends in a handful of small
+/// solves at the exact minimum, where projected gradient needs an iteration count and a step
+/// from a bound on the largest eigenvalue. A tiny ridge keeps joints with identical paths
+/// solvable.
 pub fn solve_on_simplex(h: &[f64], c: &[f64], x: &mut [f64]) {
     let n = x.len();
     if n == 0 || h.len() != n * n || c.len() != n {
