@@ -117,7 +117,9 @@ fn assert_cheaper_each_step(input: &FileCost, costs: &[(String, FileCost)]) {
     }
 }
 
-fn check(tree: &Path, name: &str) {
+/// Checks the default chain of `tree`: its costs, its cards' bend and its branches; returns
+/// how many (LOD, branch) pairs at least half a pixel wide there are and how many were dropped.
+fn check(tree: &Path, name: &str) -> (usize, usize) {
     let out = tempfile::tempdir().expect("tempdir");
     let input = file_cost(tree, &InputLimits::default()).expect("input cost");
     let costs = chain_costs(tree, out.path(), &[]);
@@ -136,6 +138,7 @@ fn check(tree: &Path, name: &str) {
         "{name}: {branches} (LOD, branch) pairs at least half a pixel wide, {dropped} dropped \
          within the wood's share"
     );
+    let counts = (branches, dropped);
     for (file, c) in &costs {
         eprintln!(
             "{file}: {} triangles, {} joints, {} channels, {} B texture, {} B file",
@@ -146,6 +149,7 @@ fn check(tree: &Path, name: &str) {
             c.file_bytes
         );
     }
+    counts
 }
 
 #[test]
@@ -437,44 +441,23 @@ fn worst_card_bend(file: &Path) -> (f32, usize) {
     (worst, cards.len())
 }
 
-/// The vertices of each card of `tree`: its foliage triangles in pieces over shared vertices,
-/// those of at most four triangles.
+/// The vertices of each card of `tree` (indices into its vertices): the pieces of its foliage
+/// mesh of at most four triangles.
 fn foliage_cards(tree: &frond_scene::Tree) -> Vec<Vec<usize>> {
-    let mut parent: Vec<usize> = (0..tree.vertices.len()).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
-    let foliage: Vec<&frond_scene::Triangle> = tree
-        .triangles
-        .iter()
-        .filter(|t| t.part == frond_scene::Part::Foliage && !t.degenerate)
-        .collect();
-    for t in &foliage {
-        let a = find(&mut parent, t.v[0] as usize);
-        for &v in &t.v[1..] {
-            let b = find(&mut parent, v as usize);
-            parent[b] = a;
-        }
-    }
-    let mut pieces: std::collections::BTreeMap<usize, (usize, Vec<usize>)> = Default::default();
-    for t in &foliage {
-        let root = find(&mut parent, t.v[0] as usize);
-        let piece = pieces.entry(root).or_default();
-        piece.0 += 1;
-        for &v in &t.v {
-            if !piece.1.contains(&(v as usize)) {
-                piece.1.push(v as usize);
-            }
-        }
-    }
-    pieces
-        .into_values()
-        .filter(|(triangles, _)| *triangles <= 4)
-        .map(|(_, vs)| vs)
+    let (mesh, source) = WoodMesh::from_tree_part_mapped(tree, Part::Foliage);
+    mesh.pieces()
+        .into_iter()
+        .filter(|piece| piece.len() <= 4)
+        .map(|piece| {
+            let mut vs: Vec<usize> = piece
+                .iter()
+                .flat_map(|&(p, t)| &mesh.primitives[p].indices[3 * t..3 * t + 3])
+                .map(|&v| source[v as usize] as usize)
+                .collect();
+            vs.sort_unstable();
+            vs.dedup();
+            vs
+        })
         .collect()
 }
 
@@ -570,10 +553,7 @@ fn the_slender_trunk_keeps_its_trunk_at_every_lod() {
     let tree = dir.path().join("slender.glb");
     let path = tree.to_str().expect("utf-8");
     frond_ok(&["sample", "--preset", "slender", "--seed", "3", "-o", path]);
-    check(&tree, "slender");
-    let out = tempfile::tempdir().expect("tempdir");
-    frond_lod(&tree, out.path(), &[]);
-    let (branches, dropped) = assert_no_visible_branch_dropped(&tree, out.path());
+    let (branches, dropped) = check(&tree, "slender");
     assert!(
         branches > 0,
         "the trunk is at least half a pixel wide at 60 px"

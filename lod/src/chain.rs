@@ -303,7 +303,10 @@ impl Spent {
         let mut budget = LodBudget {
             triangles,
             wood_triangles: (triangles as f64 * self.wood_share).floor() as usize,
-            joints: (self.animation.joints).min(joints.unwrap_or_else(|| joints_for_screen(h))),
+            joints: self
+                .animation
+                .joints
+                .min(joints.unwrap_or_else(|| joints_for_screen(h))),
             channels: self.animation.channels,
             texture_bytes: self.input_texture_bytes.min(4 * texels),
             alpha_tested_area: self.input_drawn_area,

@@ -298,8 +298,6 @@ enum Merge {
 struct Merger<'a> {
     rig: &'a Rig,
     frames: &'a RigFrames<'a>,
-    /// The rig's motion at the samples weights are fitted over.
-    fit: SkinFit,
     tree: &'a Tree,
     /// Surviving node of each rig node (itself while it survives; None: the world).
     target: Vec<Option<usize>>,
@@ -577,7 +575,6 @@ pub fn apply_joint_budget(
     let mut merger = Merger {
         rig: &rig,
         frames,
-        fit: SkinFit::new(frames),
         tree,
         target: (0..n).map(Some).collect(),
         carried: carrying.carried,
@@ -868,7 +865,8 @@ fn apply(merger: &Merger, cloud: &mut AnimatedBillboardCloud, wood: &mut WoodMes
         }
         b.follows = merger.resolve(b.follows);
     }
-    let before = InputSkins::of(wood);
+    let removed = (0..merger.target.len()).any(|b| merger.target[b] != Some(b));
+    let before = removed.then(|| InputSkins::of(wood));
     place_wood(merger, wood);
     for (bones, weights) in wood.bones.iter_mut().zip(wood.weights.iter_mut()) {
         let mut merged: Vec<(u32, f32)> = Vec::with_capacity(4);
@@ -896,7 +894,9 @@ fn apply(merger: &Merger, cloud: &mut AnimatedBillboardCloud, wood: &mut WoodMes
             weights[k] = w;
         }
     }
-    fit_wood_skins(merger, wood, &before);
+    if let Some(before) = before {
+        fit_wood_skins(merger, wood, &before);
+    }
 }
 
 /// Refits the skins of the wood's vertices (and cards' corners) whose joints the merges
@@ -908,7 +908,7 @@ fn fit_wood_skins(merger: &Merger, wood: &mut WoodMesh, before: &InputSkins) {
         pools: (0..n).map(|b| merger.candidate_pool(b)).collect(),
         removed: (0..n).map(|b| merger.target[b] != Some(b)).collect(),
     };
-    refit_skins(&merger.fit, &kept, wood, before);
+    refit_skins(&SkinFit::new(merger.frames), &kept, wood, before);
 }
 
 /// Moves each wood vertex (and card corner) to the blend of its bones' placements by weight,

@@ -563,7 +563,7 @@ fn fit_skins(
         }
     }
     let mut x = combined_corner_weights(mesh, card, &region.triangle, &bones);
-    fit_on_simplices(&h, &c, &mut x, nb, FIT_ITERATIONS, 0.0);
+    fit_on_simplices(&h, &c, &mut x, nb, FIT_ITERATIONS);
     let quadratic = objective(&h, &c, &x);
     let count = (samples.len() * motion.frames.len()) as f64;
     let miss = ((quadratic + targets).max(0.0) / count).sqrt() as f32;
