@@ -504,13 +504,7 @@ fn assert_no_visible_branch_dropped(input: &Path, out: &Path) -> (usize, usize) 
         let pixel = lod.pixel.expect("a built LOD's pixel");
         let lod_tree = import(&out.join(&lod.file), &options).expect("the LOD reads back");
         let lod_wood = WoodMesh::from_tree_part(&lod_tree, Part::Wood);
-        let triangles: Vec<[Vec3; 3]> = lod_wood
-            .primitives
-            .iter()
-            .flat_map(|p| p.indices.chunks_exact(3))
-            .map(|t| [0, 1, 2].map(|k| lod_wood.positions[t[k] as usize]))
-            .collect();
-        let bvh = SurfaceBvh::new(triangles);
+        let bvh = SurfaceBvh::new(lod_wood.triangle_corners());
         for (piece, &width) in pieces.iter().zip(&thickness) {
             if width < 0.5 * pixel {
                 continue;

@@ -493,6 +493,16 @@ impl WoodMesh {
         self.primitives.iter().map(|p| p.indices.len() / 3).sum()
     }
 
+    /// Every triangle's corners at rest, primitive by primitive (what a surface-distance BVH
+    /// is built from).
+    pub fn triangle_corners(&self) -> Vec<[Vec3; 3]> {
+        self.primitives
+            .iter()
+            .flat_map(|p| p.indices.chunks_exact(3))
+            .map(|t| [0, 1, 2].map(|k| self.positions[t[k] as usize]))
+            .collect()
+    }
+
     /// Bones (Tree::bones indices) with non-zero weight on some vertex that some triangle uses,
     /// ascending.
     pub fn used_bones(&self) -> Vec<u32> {
@@ -1244,13 +1254,7 @@ mod tests {
 
     /// Largest distance from the original's vertices to the simplified surface.
     fn forward(original: &WoodMesh, simplified: &WoodMesh) -> f32 {
-        let tris: Vec<[Vec3; 3]> = simplified
-            .primitives
-            .iter()
-            .flat_map(|p| p.indices.chunks_exact(3))
-            .map(|t| [0, 1, 2].map(|k| simplified.positions[t[k] as usize]))
-            .collect();
-        let bvh = SurfaceBvh::new(tris);
+        let bvh = SurfaceBvh::new(simplified.triangle_corners());
         original
             .positions
             .iter()
